@@ -1,0 +1,51 @@
+"""ament_python package setup for youbot_dynamics.
+
+A plain ``pip install .`` makes the environment a valid ament prefix: the resource index
+marker, ``share/youbot_dynamics/`` (package.xml, urdf/, config/) and the executables under
+``lib/youbot_dynamics/`` (shipped as data files from ``scripts/`` so that they keep their run
+bit, because pip puts console scripts in ``bin/``). colcon honours setup.cfg and puts the
+console scripts in ``lib/youbot_dynamics/`` as well.
+"""
+from pathlib import Path
+
+from setuptools import find_packages, setup
+
+PACKAGE = "youbot_dynamics"
+HERE = Path(__file__).parent
+
+
+def tree(folder: str) -> list[tuple[str, list[str]]]:
+    """data_files entries that install every file below ``folder`` under share/PACKAGE."""
+    entries: dict[str, list[str]] = {}
+    for path in sorted((HERE / folder).rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts:
+            relative = path.relative_to(HERE)
+            entries.setdefault(f"share/{PACKAGE}/{relative.parent}", []).append(str(relative))
+    return sorted(entries.items())
+
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(exclude=["test", "test.*"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml"]),
+        *tree("urdf"),
+        *tree("config"),
+        (f"lib/{PACKAGE}", sorted(str(p.relative_to(HERE)) for p in (HERE / "scripts").iterdir())),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="youbot_dynamics developers",
+    maintainer_email="dev@youbot-dynamics.invalid",
+    description="youBot dynamics service: screw kinematics, RNEA/ABA with friction, integrators, logs",
+    license="BSD-3-Clause",
+    python_requires=">=3.11",
+    tests_require=["pytest"],
+    entry_points={
+        "console_scripts": [
+            "youbot-dynamics = youbot_dynamics.cli:main",
+        ],
+    },
+)

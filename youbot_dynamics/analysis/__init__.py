@@ -1,0 +1,1 @@
+"""analysis/: work-precision sweeps, references, stability probes, plots."""

@@ -1,0 +1,1 @@
+"""dynamics/: rigid-body algorithms over Pinocchio, joint friction, contact, constraints."""

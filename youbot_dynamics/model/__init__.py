@@ -1,0 +1,1 @@
+"""model/: URDF -> Robot (immutable), rotations, screw axes and product of exponentials."""

@@ -1,0 +1,1 @@
+"""ros/: thin rclpy nodes. Parameters in, messages out. No physics here."""

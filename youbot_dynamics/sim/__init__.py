@@ -1,0 +1,1 @@
+"""sim/: state, integrators with statistics, events, scenes, the simulator loop."""

@@ -1,0 +1,1 @@
+"""systems/: classic test systems written as equations (squeezer, woodpecker, ...)."""
