@@ -1,0 +1,72 @@
+"""Adaptive and implicit integrators from scipy.integrate, driven one step at a time so that
+every step is counted: Dormand-Prince 5(4) (RK45), DOP853, Radau IIA (order 5) and BDF.
+
+Counters: ``nfev``, ``njev``, ``nlu`` come from the solver. For the explicit Runge-Kutta
+pairs every attempted step costs ``n_stages`` evaluations, so rejected steps are counted
+exactly from the evaluations spent inside each ``step()`` call. scipy does not report
+rejected steps or Newton iterations for Radau and BDF: those counters are ``None``.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from scipy.integrate import BDF, DOP853, RK45, Radau
+
+from youbot_dynamics.sim.integration import DivergenceError, IntegrationError, IntegratorStats
+
+SCIPY_SOLVERS = {"rk45": RK45, "dop853": DOP853, "radau": Radau, "bdf": BDF}
+EXPLICIT = ("rk45", "dop853")
+
+#: scipy's message when the step size underflows: the step size has collapsed.
+STEP_COLLAPSE = "Required step size is less than spacing between numbers."
+
+
+class ScipyStepper:
+    """One scipy ``OdeSolver`` step per ``advance``; dense output for ``interpolate``."""
+
+    def __init__(self, method: str, rhs: Callable[[float, np.ndarray], np.ndarray],
+                 t0: float, x0: np.ndarray, t_end: float, rtol: float, atol,
+                 jac, max_step: float, min_step: float | None) -> None:
+        self.method, self.min_step = method, min_step
+        options = {} if method in EXPLICIT or jac is None else {"jac": jac}
+        self.solver = SCIPY_SOLVERS[method](rhs, t0, np.array(x0, dtype=float), t_end,
+                                            rtol=rtol, atol=atol, max_step=max_step,
+                                            **options)
+        self.t, self.x = t0, self.solver.y
+        self.steps = self.rejected = 0
+        self.dense = None
+
+    def advance(self, t_target: float) -> None:
+        solver = self.solver
+        evals_before = solver.nfev
+        message = solver.step()
+        if solver.status == "failed":
+            reason = message or "solver failed"
+            if reason == STEP_COLLAPSE:
+                raise DivergenceError(solver.t, self.method, solver.step_size or 0.0,
+                                      "step size collapsed")
+            raise IntegrationError(f"{self.method} failed at t={solver.t:.6g} s: {reason}")
+        self.steps += 1
+        if self.method in EXPLICIT:
+            self.rejected += (solver.nfev - evals_before) // solver.n_stages - 1
+        if self.min_step is not None and solver.step_size < self.min_step \
+                and solver.status == "running":
+            raise DivergenceError(solver.t, self.method, solver.step_size,
+                                  f"step size collapsed below min_step={self.min_step:g} s")
+        self.t, self.x, self.dense = solver.t, solver.y, None
+
+    def interpolate(self, t: float) -> np.ndarray:
+        if self.dense is None:
+            self.dense = self.solver.dense_output()
+        return self.dense(t)
+
+    def finish(self, stats: IntegratorStats) -> None:
+        solver = self.solver
+        stats.steps, stats.rhs_evals, stats.jac_evals = self.steps, solver.nfev, solver.njev
+        if self.method in EXPLICIT:
+            stats.rejected_steps = self.rejected
+            stats.nonlinear_iterations = stats.nonlinear_convergence_failures = 0
+        else:
+            stats.rejected_steps = stats.nonlinear_iterations = None
+            stats.nonlinear_convergence_failures = None

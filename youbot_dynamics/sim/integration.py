@@ -1,0 +1,265 @@
+"""What every integrator backend shares: statistics, events, the solution, typed errors,
+the divergence checks and the one output/event loop that drives a stepper.
+
+A backend supplies a *stepper* (see :class:`Stepper`): ``advance`` takes one step (or, for
+fixed-step methods without events, the steps up to the next output time) and
+``interpolate`` gives the state anywhere inside the last step. :func:`drive` does the rest:
+outputs at the requested times, event location by Brent's method on ``interpolate``,
+terminal events, and the checks that make divergence loud.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from typing import Callable, Protocol, Sequence
+
+import numpy as np
+from scipy.optimize import brentq
+
+from youbot_dynamics.errors import UserInputError
+
+#: Counters a backend may not expose: ``None`` means "not reported by this backend".
+COUNTERS = ("steps", "rhs_evals", "jac_evals", "rejected_steps", "nonlinear_iterations",
+            "nonlinear_convergence_failures", "events")
+
+
+@dataclass
+class IntegratorStats:
+    """Cost of one run (or, after ``+=``, of several segments of a hybrid run).
+
+    A counter is ``None`` when the backend does not report it (for example scikit-sundae
+    exposes no error-test failures), never a made-up zero. Times in seconds.
+    """
+
+    integrator: str
+    steps: int | None = 0
+    rhs_evals: int | None = 0
+    jac_evals: int | None = 0
+    rejected_steps: int | None = 0
+    nonlinear_iterations: int | None = 0
+    nonlinear_convergence_failures: int | None = 0
+    events: int | None = 0
+    wall_time: float = 0.0
+    simulated_time: float = 0.0
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second (inf for an instantaneous run)."""
+        return self.simulated_time / self.wall_time if self.wall_time > 0 else math.inf
+
+    def as_dict(self) -> dict:
+        """Every field plus ``real_time_factor``."""
+        result = {f.name: getattr(self, f.name) for f in fields(self)}
+        result["real_time_factor"] = self.real_time_factor
+        return result
+
+    def merge(self, other: IntegratorStats) -> IntegratorStats:
+        """Add ``other``'s counters and times to this one (a counter unknown in either
+        stays unknown); returns self."""
+        for name in COUNTERS:
+            mine, theirs = getattr(self, name), getattr(other, name)
+            setattr(self, name, None if mine is None or theirs is None else mine + theirs)
+        self.wall_time += other.wall_time
+        self.simulated_time += other.simulated_time
+        return self
+
+    def __iadd__(self, other: IntegratorStats) -> IntegratorStats:
+        return self.merge(other)
+
+
+@dataclass(frozen=True)
+class Event:
+    """A state event: the zero crossing of ``function(t, x)``, located by root finding.
+
+    ``direction``: +1 rising only, -1 falling only, 0 both. ``terminal``: stop the run.
+    """
+
+    name: str
+    function: Callable[[float, np.ndarray], float]
+    direction: int = 0
+    terminal: bool = True
+
+
+@dataclass
+class EventRecord:
+    """An event that occurred: its time (s), its name and the state there."""
+
+    time: float
+    name: str
+    state: np.ndarray
+
+
+@dataclass
+class Solution:
+    """A run's trajectory at the output times and its statistics.
+
+    If a terminal event stopped the run, ``t``/``x`` end with the event time and state and
+    ``terminated_by`` names the event. ``xp`` holds y' at the output times for ``ida``.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    stats: IntegratorStats
+    state_names: tuple[str, ...]
+    events: list[EventRecord] = field(default_factory=list)
+    terminated_by: str | None = None
+    xp: np.ndarray | None = None
+
+
+class IntegrationError(RuntimeError):
+    """The solver failed for a reason other than divergence; the message is the solver's."""
+
+
+class DivergenceError(IntegrationError):
+    """The solution diverged: non-finite state, a bound exceeded, a monitor's complaint or a
+    collapsed step size. Says when (``time``, s), with what (``integrator``, ``step_size``,
+    s), why (``reason``) and which state components (``components``: name -> value)."""
+
+    def __init__(self, time: float, integrator: str, step_size: float, reason: str,
+                 components: dict[str, float] | None = None) -> None:
+        self.time = time
+        self.integrator = integrator
+        self.step_size = step_size
+        self.reason = reason
+        self.components = dict(components or {})
+        listed = ", ".join(f"{name}={value:.6g}" for name, value in self.components.items())
+        super().__init__(f"{integrator} diverged at t={time:.6g} s (step {step_size:.3g} s): "
+                         f"{reason}" + (f": {listed}" if listed else ""))
+
+
+def state_names_or_default(state_names: Sequence[str] | None, size: int) -> tuple[str, ...]:
+    """The given component names (checked against the state size) or x[0], x[1], ..."""
+    if state_names is None:
+        return tuple(f"x[{i}]" for i in range(size))
+    names = tuple(state_names)
+    if len(names) != size:
+        raise UserInputError(f"state_names has {len(names)} names but the state has {size} "
+                             "components")
+    return names
+
+
+class StateCheck:
+    """Divergence checks: non-finite state and ``bounds`` after every step, ``monitor`` at
+    output times. Each failure raises :class:`DivergenceError` naming the components."""
+
+    def __init__(self, integrator: str, names: tuple[str, ...], bounds: np.ndarray | None,
+                 monitor: Callable[[float, np.ndarray], str | None] | None) -> None:
+        self.integrator = integrator
+        self.names = names
+        self.bounds = None if bounds is None else np.broadcast_to(
+            np.asarray(bounds, dtype=float), (len(names),))
+        self.monitor = monitor
+
+    def _fail(self, t: float, h: float, reason: str, mask: np.ndarray | None,
+              x: np.ndarray) -> None:
+        indices = [] if mask is None else np.flatnonzero(mask)[:8]
+        raise DivergenceError(t, self.integrator, h, reason,
+                              {self.names[i]: float(x[i]) for i in indices})
+
+    def step(self, t: float, x: np.ndarray, h: float) -> None:
+        """After a step of size h (s) reaching (t, x): non-finite values and bounds."""
+        if not math.isfinite(x.sum()):
+            bad = ~np.isfinite(x)
+            if bad.any():
+                self._fail(t, h, "non-finite state", bad, x)
+        if self.bounds is not None:
+            over = np.abs(x) > self.bounds
+            if over.any():
+                self._fail(t, h, "state outside its bounds", over, x)
+
+    def output(self, t: float, x: np.ndarray, h: float) -> None:
+        """At an output time: the user's monitor."""
+        if self.monitor is not None:
+            reason = self.monitor(t, x)
+            if reason:
+                self._fail(t, h, reason, None, x)
+
+
+class Stepper(Protocol):
+    """What :func:`drive` needs from a backend."""
+
+    t: float
+    x: np.ndarray
+
+    def advance(self, t_target: float) -> None:
+        """Step towards ``t_target`` (never beyond the run's end); updates t and x."""
+
+    def interpolate(self, t: float) -> np.ndarray:
+        """The state at t inside the last step (t_previous <= t <= self.t)."""
+
+    def finish(self, stats: IntegratorStats) -> None:
+        """Copy the backend's counters into stats."""
+
+
+def crossed(g_old: float, g_new: float, direction: int) -> bool:
+    """Whether an event function crossed zero between two steps in the given direction."""
+    rising = g_old < 0.0 <= g_new
+    falling = g_old > 0.0 >= g_new
+    return (direction >= 0 and rising) or (direction <= 0 and falling)
+
+
+def locate_crossings(events: Sequence[Event], g_old: list[float], g_new: list[float],
+                     t_a: float, t_b: float,
+                     state_at: Callable[[float], np.ndarray]) -> list[tuple[float, int]]:
+    """Times of the zero crossings in [t_a, t_b], earliest first, by Brent's method on
+    g(t, state_at(t)); t located to 4 eps |t| + 1e-14 s."""
+    found = []
+    for i, event in enumerate(events):
+        if crossed(g_old[i], g_new[i], event.direction):
+            xtol = 4 * np.finfo(float).eps * max(abs(t_a), abs(t_b)) + 1e-14
+            root = brentq(lambda t, f=event.function: f(t, state_at(t)), t_a, t_b, xtol=xtol)
+            found.append((root, i))
+    return sorted(found)
+
+
+def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequence[Event],
+          check: StateCheck, names: tuple[str, ...],
+          derivative_at: Callable[[float], np.ndarray] | None = None) -> Solution:
+    """Run ``stepper`` over ``t_eval`` with outputs, events and checks; returns the Solution.
+
+    ``derivative_at`` (IDA) gives y' at an output time just after ``interpolate`` there.
+    The caller sets ``stats.wall_time`` around the whole run (solver set-up included).
+    """
+    stats = IntegratorStats(integrator)
+    t_out, x_out = [float(t_eval[0])], [stepper.x.copy()]
+    xp_out = [] if derivative_at is None else [derivative_at(float(t_eval[0]))]
+    records: list[EventRecord] = []
+    terminated_by = None
+    g_old = [e.function(stepper.t, stepper.x) for e in events]
+    k, n_out = 1, len(t_eval)
+
+    def emit(t: float, x: np.ndarray, h: float) -> None:
+        check.output(t, x, h)
+        t_out.append(t)
+        x_out.append(x)
+        if derivative_at is not None:
+            xp_out.append(derivative_at(t))
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        while k < n_out and terminated_by is None:
+            t_a = stepper.t
+            stepper.advance(float(t_eval[k]))
+            t_b, h = stepper.t, stepper.t - t_a
+            check.step(t_b, stepper.x, h)
+            stop_at = t_b
+            if events:
+                g_new = [e.function(t_b, stepper.x) for e in events]
+                for t_r, i in locate_crossings(events, g_old, g_new, t_a, t_b,
+                                               stepper.interpolate):
+                    records.append(EventRecord(t_r, events[i].name, stepper.interpolate(t_r)))
+                    if events[i].terminal:
+                        terminated_by, stop_at = events[i].name, t_r
+                        break
+                g_old = g_new
+            while k < n_out and t_eval[k] <= stop_at:
+                t_k = float(t_eval[k])
+                x_k = stepper.x.copy() if t_k == t_b else stepper.interpolate(t_k)
+                emit(t_k, x_k, h)
+                k += 1
+            if terminated_by is not None and t_out[-1] < stop_at:
+                emit(stop_at, records[-1].state.copy(), h)
+    stepper.finish(stats)
+    stats.events = len(records)
+    stats.simulated_time = t_out[-1] - t_out[0]
+    return Solution(np.asarray(t_out), np.asarray(x_out), stats, names, records,
+                    terminated_by, None if derivative_at is None else np.asarray(xp_out))

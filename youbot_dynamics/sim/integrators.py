@@ -1,0 +1,142 @@
+"""Integrators behind one interface, each run returning its statistics.
+
+Names (command line and scenes): ``euler``, ``symplectic_euler``, ``rk4`` (fixed step,
+hand-written loops, sim/fixed_step.py); ``rk45`` (Dormand-Prince 5(4)), ``dop853``,
+``radau``, ``bdf`` (scipy.integrate, sim/adaptive.py); ``cvode_bdf``, ``cvode_adams`` and
+``ida`` (SUNDIALS through scikit-sundae, sim/sundials.py).
+
+:func:`integrate` solves x' = rhs(t, x); :func:`integrate_dae` solves F(t, y, y') = 0 with
+IDA. Both return a :class:`Solution` with outputs at ``t_eval`` (which starts with t0 and
+ends with t_end), the located events and :class:`IntegratorStats`. Divergence is never
+silent: see :class:`DivergenceError`.
+"""
+from __future__ import annotations
+
+import time
+from typing import Callable, Sequence
+
+import numpy as np
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.sim.adaptive import SCIPY_SOLVERS, ScipyStepper
+from youbot_dynamics.sim.fixed_step import FIXED_STEP_METHODS, FixedStepStepper
+from youbot_dynamics.sim.integration import (DivergenceError, Event, EventRecord,
+                                             IntegrationError, IntegratorStats, Solution,
+                                             StateCheck, drive, state_names_or_default)
+from youbot_dynamics.sim.sundials import CVODE_METHODS, CvodeStepper, IdaStepper
+
+__all__ = ["INTEGRATORS", "FIXED_STEP", "IntegratorStats", "Event", "EventRecord", "Solution",
+           "IntegrationError", "DivergenceError", "integrate", "integrate_dae"]
+
+INTEGRATORS: tuple[str, ...] = ("euler", "symplectic_euler", "rk4", "rk45", "dop853", "radau",
+                                "bdf", "cvode_bdf", "cvode_adams", "ida")
+FIXED_STEP: tuple[str, ...] = tuple(FIXED_STEP_METHODS)
+
+Rhs = Callable[[float, np.ndarray], np.ndarray]
+
+
+def checked_times(t_eval) -> np.ndarray:
+    """t_eval as a float array: at least two strictly increasing finite times."""
+    times = np.asarray(t_eval, dtype=float).ravel()
+    if times.size < 2 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
+        raise UserInputError("t_eval must hold at least two strictly increasing finite times "
+                             f"(start first, end last), got {times!r}")
+    return times
+
+
+def checked_positive(name: str, value) -> None:
+    """A step size or tolerance must be positive (every component of an array)."""
+    if value is None or not np.all(np.asarray(value, dtype=float) > 0):
+        raise UserInputError(f"{name} must be positive, got {value!r}")
+
+
+def checked_state(name: str, value) -> np.ndarray:
+    """An initial state as a 1-D float array."""
+    state = np.array(value, dtype=float).ravel()
+    if state.size == 0 or not np.all(np.isfinite(state)):
+        raise UserInputError(f"{name} must be a non-empty finite vector, got {value!r}")
+    return state
+
+
+def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
+              rtol: float = 1e-6, atol: float | np.ndarray = 1e-8,
+              jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
+              events: Sequence[Event] = (), state_names: Sequence[str] | None = None,
+              n_positions: int | None = None, bounds: np.ndarray | None = None,
+              monitor: Callable[[float, np.ndarray], str | None] | None = None,
+              max_step: float = np.inf, min_step: float | None = None) -> Solution:
+    """Solve x' = rhs(t, x) from x0 at t_eval[0], with outputs at t_eval (s).
+
+    Fixed-step methods need ``dt`` (s); adaptive ones use ``rtol``/``atol`` (``jac``, the
+    Jacobian d rhs / dx, is used by the implicit ones). ``symplectic_euler`` needs
+    ``n_positions``: x = [q (n), v (n), extra] with dq/dt = v. ``bounds``: |x_i| <= bounds_i
+    or DivergenceError; ``monitor(t, x)`` is called at output times and a returned string
+    is a DivergenceError. Adaptive steps below ``min_step`` (s) are a DivergenceError.
+    """
+    start = time.perf_counter()
+    if integrator not in INTEGRATORS or integrator == "ida":
+        hint = " (use integrate_dae for ida)" if integrator == "ida" else ""
+        raise UserInputError(f"unknown ODE integrator {integrator!r}{hint}; valid names: "
+                             + ", ".join(name for name in INTEGRATORS if name != "ida"))
+    times = checked_times(t_eval)
+    x = checked_state("x0", x0)
+    names = state_names_or_default(state_names, x.size)
+    check = StateCheck(integrator, names, bounds, monitor)
+    if integrator in FIXED_STEP:
+        checked_positive("dt", dt)
+        n = 0 if n_positions is None else int(n_positions)
+        if integrator == "symplectic_euler" and not 0 < 2 * n <= x.size:
+            raise UserInputError("symplectic_euler needs n_positions with 0 < 2*n_positions "
+                                 f"<= state size {x.size}, got {n_positions!r}")
+        stepper = FixedStepStepper(integrator, rhs, times[0], x, float(dt), n, bool(events),
+                                   check)
+    else:
+        checked_positive("rtol", rtol)
+        checked_positive("atol", atol)
+        checked_positive("max_step", max_step)
+        if integrator in SCIPY_SOLVERS:
+            stepper = ScipyStepper(integrator, rhs, times[0], x, times[-1], rtol, atol, jac,
+                                   max_step, min_step)
+        else:
+            stepper = CvodeStepper(CVODE_METHODS[integrator], integrator, rhs, times[0], x,
+                                   times[-1], rtol, atol, jac, max_step, min_step)
+    solution = drive(stepper, integrator, times, events, check, names)
+    solution.stats.wall_time = time.perf_counter() - start
+    return solution
+
+
+def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray], y0, yp0,
+                  t_eval, *, algebraic: Sequence[bool], rtol: float = 1e-6,
+                  atol: float | np.ndarray = 1e-8,
+                  exclude_from_error_test: Sequence[bool] | None = None,
+                  events: Sequence[Event] = (), state_names: Sequence[str] | None = None,
+                  jac: Callable | None = None, bounds: np.ndarray | None = None,
+                  monitor: Callable[[float, np.ndarray], str | None] | None = None
+                  ) -> Solution:
+    """Solve the DAE residual(t, y, y') = 0 with SUNDIALS IDA (integrator ``ida``).
+
+    ``algebraic[i]`` marks y_i as algebraic (no y_i' in the equations). y0, yp0 must be
+    consistent. ``exclude_from_error_test[i]`` leaves y_i out of the local error test
+    (index-3 multibody forms: Lagrange multipliers and velocities). ``jac(t, y, yp, cj)``
+    returns dF/dy + cj dF/dy'. Events see (t, y). Solution.xp holds y' at the outputs.
+    """
+    start = time.perf_counter()
+    times = checked_times(t_eval)
+    y, yp = checked_state("y0", y0), checked_state("yp0", yp0)
+    names = state_names_or_default(state_names, y.size)
+    flags = [np.asarray(algebraic, dtype=bool).ravel()]
+    if exclude_from_error_test is not None:
+        flags.append(np.asarray(exclude_from_error_test, dtype=bool).ravel())
+    if yp.size != y.size or any(f.size != y.size for f in flags):
+        raise UserInputError(f"y0 has {y.size} components but yp0 has {yp.size} and "
+                             f"algebraic/exclude_from_error_test have "
+                             f"{[f.size for f in flags]}")
+    checked_positive("rtol", rtol)
+    checked_positive("atol", atol)
+    check = StateCheck("ida", names, bounds, monitor)
+    stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0],
+                         flags[1] if len(flags) > 1 else None, rtol, atol, jac)
+    solution = drive(stepper, "ida", times, events, check, names,
+                     derivative_at=stepper.derivative_at)
+    solution.stats.wall_time = time.perf_counter() - start
+    return solution

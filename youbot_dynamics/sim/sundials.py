@@ -1,0 +1,119 @@
+"""SUNDIALS CVODE (BDF and Adams-Moulton) and IDA through scikit-sundae, one internal step
+per ``advance`` (``method='onestep'`` with ``tstop`` = t_end) so that steps are counted;
+states between steps come from SUNDIALS' own interpolation (``method='normal'`` with a time
+inside the last step, which takes no step and evaluates nothing).
+
+scikit-sundae 1.2 reports only right-hand-side (residual) and Jacobian evaluations, so
+rejected steps (error-test failures) and nonlinear iterations are ``None``. It does not
+expose IDASetSuppressAlg either: components excluded from the error test get an absolute
+tolerance of EXCLUDED_ATOL, which takes them out of the error test but also loosens the
+Newton convergence test on them.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from sksundae.cvode import CVODE
+from sksundae.ida import IDA
+
+from youbot_dynamics.sim.integration import DivergenceError, IntegrationError, IntegratorStats
+
+CVODE_METHODS = {"cvode_bdf": "BDF", "cvode_adams": "Adams"}
+#: SUNDIALS flags meaning the step size collapsed (error or convergence test failures at
+#: the minimum step, or accuracy beyond machine precision): divergence, not a usage error.
+COLLAPSE_FLAGS = (-2, -3, -4)
+EXCLUDED_ATOL = 1e6
+
+
+class SundialsStepper:
+    """Shared stepping for CVODE and IDA: one new internal step per ``advance``."""
+
+    def __init__(self, name: str, solver, t0: float, t_end: float, initial) -> None:
+        self.name, self.solver, self.t_end = name, solver, t_end
+        self.t, self.x = t0, np.array(initial.y, dtype=float)
+        self.h = 0.0
+        self.steps = 0
+        self.last = initial
+
+    def checked(self, result):
+        """The solver's result, or the typed error for its failure flag."""
+        if not result.success:
+            if result.status in COLLAPSE_FLAGS:
+                raise DivergenceError(float(self.t), self.name, self.h,
+                                      f"step size collapsed: {result.message}")
+            raise IntegrationError(f"{self.name} failed at t={self.t:.6g} s "
+                                   f"(flag {result.status}): {result.message}")
+        return result
+
+    def advance(self, t_target: float) -> None:
+        # After an interpolation SUNDIALS first returns its current step end again.
+        result = self.last
+        while result.t <= self.t:
+            result = self.checked(self.solver.step(self.t_end, method="onestep",
+                                                   tstop=self.t_end))
+        self.steps += 1
+        self.h = float(result.t) - self.t
+        self.t, self.x, self.last = float(result.t), np.array(result.y), result
+
+    def interpolate(self, t: float) -> np.ndarray:
+        self.last = self.checked(self.solver.step(t, method="normal"))
+        return np.array(self.last.y)
+
+    def finish(self, stats: IntegratorStats) -> None:
+        stats.steps = self.steps
+        stats.rhs_evals, stats.jac_evals = int(self.last.nfev), int(self.last.njev)
+        stats.rejected_steps = stats.nonlinear_iterations = None
+        stats.nonlinear_convergence_failures = None
+
+
+def common_options(rtol: float, atol, max_step: float, min_step: float | None) -> dict:
+    """Options shared by CVODE and IDA (SUNDIALS uses 0 for 'no limit')."""
+    return {"rtol": rtol, "atol": atol, "max_step": 0.0 if np.isinf(max_step) else max_step,
+            "min_step": min_step or 0.0, "max_num_steps": 100_000}
+
+
+class CvodeStepper(SundialsStepper):
+    """CVODE with method 'BDF' or 'Adams'; ``jac(t, x)`` is d rhs / dx if given."""
+
+    def __init__(self, method: str, name: str, rhs: Callable, t0: float, x0: np.ndarray,
+                 t_end: float, rtol: float, atol, jac, max_step: float,
+                 min_step: float | None) -> None:
+        def rhsfn(t, y, yp):
+            yp[:] = rhs(t, y)
+
+        options = common_options(rtol, atol, max_step, min_step)
+        if jac is not None:
+            def jacfn(t, y, yp, jj):
+                jj[:, :] = jac(t, y)
+            options["jacfn"] = jacfn
+        solver = CVODE(rhsfn, method=method, **options)
+        super().__init__(name, solver, t0, t_end, solver.init_step(t0, x0))
+
+
+class IdaStepper(SundialsStepper):
+    """IDA on residual(t, y, y') = 0; ``jac(t, y, yp, cj)`` = dF/dy + cj dF/dy' if given."""
+
+    def __init__(self, residual: Callable, t0: float, y0: np.ndarray, yp0: np.ndarray,
+                 t_end: float, algebraic: np.ndarray, excluded: np.ndarray | None,
+                 rtol: float, atol, jac) -> None:
+        def resfn(t, y, yp, res):
+            res[:] = residual(t, y, yp)
+
+        if excluded is not None and excluded.any():
+            atol = np.broadcast_to(np.asarray(atol, dtype=float), y0.shape).copy()
+            atol[excluded] = EXCLUDED_ATOL
+        options = common_options(rtol, atol, np.inf, None)
+        options["algebraic_idx"] = np.flatnonzero(algebraic) if algebraic.any() else None
+        if jac is not None:
+            def jacfn(t, y, yp, res, cj, jj):
+                jj[:, :] = jac(t, y, yp, cj)
+            options["jacfn"] = jacfn
+        solver = IDA(resfn, **options)
+        super().__init__("ida", solver, t0, t_end, solver.init_step(t0, y0, yp0))
+
+    def derivative_at(self, t: float) -> np.ndarray:
+        """y' at t: the last result's when it is at t, else IDA's interpolation."""
+        if float(self.last.t) != t:
+            self.interpolate(t)
+        return np.array(self.last.yp)
