@@ -1,0 +1,184 @@
+"""One .mcap file in rosbag2 form, written from rosbags typestore messages.
+
+The file is what ``ros2 bag record -s mcap`` writes (Jazzy): profile ``ros2``; one schema
+per type named ``pkg/msg/Type`` with encoding ``ros2msg`` (the root .msg text, then each
+dependency after a line of 80 ``=`` and ``MSG: pkg/Type``); channels with message encoding
+``cdr`` and metadata ``offered_qos_profiles`` (YAML, Jazzy style) and ``topic_type_hash``
+(RIHS01); CDR from the rosbags serializer; log and publish times in nanoseconds; a summary
+with statistics, chunk indexes and message indexes. A single .mcap file plays with
+``ros2 bag play``. Written with ``mcap.writer.Writer`` rather than rosbags' rosbag2 Writer,
+which makes a folder, cannot set publish time apart from log time, and omits
+``topic_type_hash``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import TracebackType
+from typing import IO
+
+import yaml
+from mcap.writer import CompressionType, Writer
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.messages import TYPESTORE
+
+DEFAULT_DEPTH = 10
+"""History depth offered for ordinary topics (rclpy's default publisher depth)."""
+
+_INFINITE_DURATION = {"sec": 9223372036, "nsec": 854775807}
+"""RMW_DURATION_INFINITE as rosbag2 (Jazzy) writes an unset deadline, lifespan, lease."""
+
+
+def offered_qos_yaml(*, latched: bool) -> str:
+    """The ``offered_qos_profiles`` YAML of a topic, as rosbag2 (Jazzy) writes it.
+
+    Reliable, keep-last; ``latched`` topics (/tf_static) are transient-local with depth 1
+    as tf2's static broadcaster offers them, the others volatile with depth 10.
+    """
+    profile = {
+        "history": "keep_last",
+        "depth": 1 if latched else DEFAULT_DEPTH,
+        "reliability": "reliable",
+        "durability": "transient_local" if latched else "volatile",
+        "deadline": dict(_INFINITE_DURATION),
+        "lifespan": dict(_INFINITE_DURATION),
+        "liveliness": "automatic",
+        "liveliness_lease_duration": dict(_INFINITE_DURATION),
+        "avoid_ros_namespace_conventions": False,
+    }
+    return yaml.safe_dump([profile], sort_keys=False, default_flow_style=False).strip()
+
+
+def ros2msg_schema(msgtype: str) -> bytes:
+    """The ``ros2msg`` schema text of ``msgtype`` (root definition, then dependencies)."""
+    text, _ = TYPESTORE.generate_msgdef(msgtype, ros_version=2)
+    return text.encode()
+
+
+class McapLogger:
+    """Writes one rosbag2-form .mcap file; a context manager.
+
+    Usage::
+
+        with McapLogger("out/run.mcap") as log:
+            log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
+            log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", latched=True)
+            log.write("/joint_states", messages.joint_state(...), log_time_ns=t_ns)
+
+    Messages are rosbags typestore instances (see ``io.messages``); times are integer
+    nanoseconds. ``close`` finalises the file (summary, statistics, footer) and may be
+    called more than once; the ROS node calls it on shutdown and from its SIGINT/SIGTERM
+    handling.
+    """
+
+    def __init__(self, path: str | Path, *, compression: CompressionType = CompressionType.ZSTD):
+        """Create (or overwrite) ``path``; the parent folder is created if missing."""
+        self.path = Path(path)
+        if self.path.suffix != ".mcap":
+            raise UserInputError(f"MCAP log path {self.path} must end in .mcap")
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._stream: IO[bytes] | None = self.path.open("wb")
+        self._writer = Writer(self._stream, compression=compression)
+        self._writer.start(profile="ros2", library="youbot_dynamics (mcap-python)")
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, tuple[int, str]] = {}
+        self._sequences: dict[str, int] = {}
+
+    @property
+    def closed(self) -> bool:
+        """True once the file is finalised."""
+        return self._stream is None
+
+    @property
+    def topics(self) -> dict[str, str]:
+        """Message type of each added topic."""
+        return {topic: msgtype for topic, (_, msgtype) in self._channels.items()}
+
+    def add_topic(self, topic: str, msgtype: str, *, latched: bool = False) -> None:
+        """Declare ``topic`` carrying ``msgtype`` (``pkg/msg/Type``).
+
+        ``latched`` offers transient-local durability (for /tf_static). Adding a topic
+        twice with the same type does nothing; with another type it is an error.
+        """
+        self._check_open()
+        if topic in self._channels:
+            if self._channels[topic][1] != msgtype:
+                raise UserInputError(
+                    f"{self.path}: topic {topic} already has type {self._channels[topic][1]},"
+                    f" cannot add it as {msgtype}"
+                )
+            return
+        if msgtype not in TYPESTORE.fielddefs:
+            raise UserInputError(f"{self.path}: unknown message type {msgtype!r} for {topic}")
+        if msgtype not in self._schemas:
+            self._schemas[msgtype] = self._writer.register_schema(
+                name=msgtype, encoding="ros2msg", data=ros2msg_schema(msgtype)
+            )
+        metadata = {
+            "offered_qos_profiles": offered_qos_yaml(latched=latched),
+            "topic_type_hash": TYPESTORE.hash_rihs01(msgtype),
+        }
+        channel = self._writer.register_channel(
+            topic=topic, message_encoding="cdr", schema_id=self._schemas[msgtype], metadata=metadata
+        )
+        self._channels[topic] = (channel, msgtype)
+        self._sequences[topic] = 0
+
+    def write(
+        self,
+        topic: str,
+        message: object,
+        log_time_ns: int,
+        publish_time_ns: int | None = None,
+    ) -> None:
+        """Serialise ``message`` to CDR and append it on ``topic``.
+
+        ``log_time_ns`` is the receive (log) time, ``publish_time_ns`` the send time
+        (defaults to the log time); both integer nanoseconds >= 0.
+        """
+        self._check_open()
+        if topic not in self._channels:
+            raise UserInputError(f"{self.path}: topic {topic} was not added before writing")
+        channel, msgtype = self._channels[topic]
+        actual = getattr(message, "__msgtype__", type(message).__name__)
+        if actual != msgtype:
+            raise UserInputError(f"{self.path}: topic {topic} carries {msgtype}, got {actual}")
+        publish_time_ns = log_time_ns if publish_time_ns is None else publish_time_ns
+        for label, value in (("log time", log_time_ns), ("publish time", publish_time_ns)):
+            if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**64:
+                raise UserInputError(f"{self.path}: {label} on {topic} must be ns >= 0, got {value!r}")
+        data = TYPESTORE.serialize_cdr(message, msgtype)
+        self._sequences[topic] += 1
+        self._writer.add_message(
+            channel_id=channel,
+            log_time=log_time_ns,
+            data=bytes(data),
+            publish_time=publish_time_ns,
+            sequence=self._sequences[topic],
+        )
+
+    def close(self) -> None:
+        """Finalise the file (summary, statistics, footer); later calls do nothing."""
+        if self._stream is None:
+            return
+        stream, self._stream = self._stream, None
+        try:
+            self._writer.finish()
+        finally:
+            stream.close()
+
+    def _check_open(self) -> None:
+        if self._stream is None:
+            raise RuntimeError(f"{self.path}: MCAP log already closed")
+
+    def __enter__(self) -> McapLogger:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
