@@ -123,19 +123,30 @@ def paced(
     where ``t_k = log_time_ns(item_k)`` and ``start`` is the clock when the first item is
     yielded; ``rate`` 2.0 plays twice as fast as recorded. ``rate=None`` yields everything
     at once (as fast as possible). If the consumer falls behind, items are yielded without
-    sleeping until it catches up; items recorded out of order are not delayed.
+    sleeping until it catches up; items recorded out of order are not delayed. A rate that
+    is not positive and finite raises ``UserInputError`` at the call.
     """
     if rate is not None and not (math.isfinite(rate) and rate > 0.0):
         raise UserInputError(f"replay rate must be a positive finite number, got {rate}")
+    if rate is None:
+        return iter(items)
+    return _paced(items, rate, log_time_ns, clock, sleep)
+
+
+def _paced(
+    items: Iterable[Item],
+    rate: float,
+    log_time_ns: Callable[[Item], int],
+    clock: Callable[[], float],
+    sleep: Callable[[float], None],
+) -> Iterator[Item]:
     start_clock = start_ns = None
     for item in items:
-        if rate is not None:
-            stamp_ns = log_time_ns(item)
-            if start_ns is None:
-                start_clock, start_ns = clock(), stamp_ns
-            else:
-                due = start_clock + (stamp_ns - start_ns) / NS_PER_S / rate
-                wait = due - clock()
-                if wait > 0.0:
-                    sleep(wait)
+        stamp_ns = log_time_ns(item)
+        if start_ns is None:
+            start_clock, start_ns = clock(), stamp_ns
+        else:
+            wait = start_clock + (stamp_ns - start_ns) / NS_PER_S / rate - clock()
+            if wait > 0.0:
+                sleep(wait)
         yield item
