@@ -1,0 +1,178 @@
+"""Rerun recordings, read back with rerun.chunk.RrdReader.
+
+Checks the entity paths, that samples sit only on the simulated-time timeline, sample
+counts, the logged values, and the joint transforms against the rotation the URDF axis
+gives (a quaternion about z or y of half the joint angle, computed here independently).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from pathlib import Path
+from xml.etree import ElementTree
+
+import numpy as np
+import pytest
+from rerun.chunk import RrdReader
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.rerun_log import RerunLogger
+
+TINY_URDF = """<?xml version="1.0"?>
+<robot name="tiny">
+  <link name="base_link"><visual><geometry><box size="0.2 0.2 0.1"/></geometry></visual></link>
+  <link name="link_1"><visual><geometry><cylinder radius="0.03" length="0.3"/></geometry></visual></link>
+  <link name="link_2"><visual><geometry><sphere radius="0.05"/></geometry></visual></link>
+  <link name="tool"/>
+  <joint name="joint_1" type="revolute"><parent link="base_link"/><child link="link_1"/>
+    <origin xyz="0 0 0.1" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="joint_2" type="revolute"><parent link="link_1"/><child link="link_2"/>
+    <origin xyz="0 0 0.3" rpy="0 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="10" velocity="2"/></joint>
+  <joint name="tool_joint" type="fixed"><parent link="link_2"/><child link="tool"/>
+    <origin xyz="0 0 0.1"/></joint>
+</robot>
+"""
+JOINTS = ["joint_1", "joint_2"]
+AXES = {"joint_1": 2, "joint_2": 1}  # index of the joint axis in x, y, z
+ORIGINS = {"joint_1": [0.0, 0.0, 0.1], "joint_2": [0.0, 0.0, 0.3]}
+CHILDREN = {"joint_1": "link_1", "joint_2": "link_2"}
+N_LIVE, N_BATCH = 12, 25
+DT = 0.004
+
+
+@pytest.fixture(scope="module")
+def urdf(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("urdf") / "tiny.urdf"
+    path.write_text(TINY_URDF)
+    return path
+
+
+def trajectory(n: int, start: int = 0) -> dict[str, np.ndarray]:
+    k = np.arange(start, start + n)
+    t = k * DT
+    q = np.stack([np.sin(3.0 * t), 0.5 * np.cos(2.0 * t)], axis=1)
+    return {
+        "t": t,
+        "q": q,
+        "v": np.stack([3.0 * np.cos(3.0 * t), -np.sin(2.0 * t)], axis=1),
+        "tau": q * 2.5 + 0.125,
+        "energy": 1.0 + t / 3.0,
+        "ee": np.stack([np.cos(t), np.sin(t), 0.5 + t], axis=1),
+    }
+
+
+@pytest.fixture(scope="module")
+def recording(urdf: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
+    """N_LIVE samples through log_sample, then N_BATCH through log_trajectory."""
+    path = tmp_path_factory.mktemp("rrd") / "run.rrd"
+    live, batch = trajectory(N_LIVE), trajectory(N_BATCH, start=N_LIVE)
+    with RerunLogger(path, urdf, recording_name="tiny test run") as log:
+        for i in range(N_LIVE):
+            log.log_sample(live["t"][i], JOINTS, live["q"][i], live["v"][i], live["tau"][i],
+                           live["energy"][i], live["ee"][i])
+        log.log_trajectory(batch["t"], JOINTS, batch["q"], batch["v"], batch["tau"],
+                           batch["energy"], batch["ee"])
+    data = {key: np.concatenate([live[key], batch[key]]) for key in live}
+    return path, data
+
+
+def read_rows(path: Path) -> tuple[dict[str, list[dict]], dict[str, list[dict]], set[str]]:
+    """Temporal and static rows per entity path, and every timeline name seen."""
+    temporal: dict[str, list[dict]] = defaultdict(list)
+    static: dict[str, list[dict]] = defaultdict(list)
+    timelines: set[str] = set()
+    for chunk in RrdReader(path).stream():
+        timelines.update(chunk.timeline_names)
+        columns = chunk.to_record_batch().to_pydict()
+        rows = [dict(zip(columns, values)) for values in zip(*columns.values())]
+        (static if chunk.is_static else temporal)[chunk.entity_path].extend(rows)
+    return temporal, static, timelines
+
+
+def seconds(row: dict) -> float:
+    return row["sim_time"].total_seconds()
+
+
+def test_entities_timeline_and_sample_counts(recording) -> None:
+    path, data = recording
+    temporal, static, timelines = read_rows(path)
+    n = N_LIVE + N_BATCH
+    assert timelines == {"sim_time"}  # no wall-clock log_time or log_tick
+    assert any(entity.startswith("/tiny/visual_geometries/link_1") for entity in static)
+    assert len(static["/tf_static"]) == 3  # the URDF loader's joint transforms
+    counts = {entity: len(rows) for entity, rows in temporal.items()}
+    assert counts == {
+        "/joint_transforms": n * len(JOINTS),
+        "/joints/q": n, "/joints/v": n, "/joints/tau": n, "/energy": n, "/ee/position": n,
+    }
+    assert static["/__properties"][0]["RecordingInfo:name"] == ["tiny test run"]
+    for entity in ("/joints/q", "/joints/v", "/joints/tau"):
+        assert [row["SeriesLines:names"] for row in static[entity]] == [JOINTS]
+
+
+def test_time_series_values(recording) -> None:
+    path, data = recording
+    temporal, static, _ = read_rows(path)
+    for key, entity in (("q", "/joints/q"), ("v", "/joints/v"), ("tau", "/joints/tau")):
+        rows = sorted(temporal[entity], key=seconds)
+        assert [seconds(r) for r in rows] == pytest.approx(data["t"].tolist(), abs=1e-9)
+        assert np.array([r["Scalars:scalars"] for r in rows]) == pytest.approx(data[key], abs=0)
+    energy = sorted(temporal["/energy"], key=seconds)
+    assert [r["Scalars:scalars"][0] for r in energy] == data["energy"].tolist()
+    ee = sorted(temporal["/ee/position"], key=seconds)
+    # Rerun stores positions as float32
+    assert np.array_equal([r["Points3D:positions"][0] for r in ee], data["ee"].astype(np.float32))
+    (path_row,) = [r for r in static["/ee/path"] if "LineStrips3D:strips" in r]
+    assert np.array_equal(path_row["LineStrips3D:strips"][0], data["ee"].astype(np.float32))
+
+
+def test_joint_transforms_follow_q(recording) -> None:
+    path, data = recording
+    temporal, _, _ = read_rows(path)
+    rows = temporal["/joint_transforms"]
+    for j, joint in enumerate(JOINTS):
+        mine = sorted((r for r in rows if r["Transform3D:child_frame"] == [CHILDREN[joint]]), key=seconds)
+        assert len(mine) == len(data["t"])
+        for row, q in zip(mine, data["q"][:, j]):
+            expected = [0.0, 0.0, 0.0, math.cos(q / 2)]
+            expected[AXES[joint]] = math.sin(q / 2)
+            assert row["Transform3D:quaternion"][0] == pytest.approx(expected, abs=1e-6)
+            assert np.array_equal(row["Transform3D:translation"][0], np.float32(ORIGINS[joint]))
+
+
+def test_refuses_unknown_joints_nan_and_missing_urdf(urdf: Path, tmp_path: Path) -> None:
+    with pytest.raises(UserInputError, match="missing.urdf"):
+        RerunLogger(tmp_path / "x.rrd", tmp_path / "missing.urdf", recording_name="x")
+    with RerunLogger(tmp_path / "y.rrd", urdf, recording_name="y") as log:
+        with pytest.raises(UserInputError, match="tool_joint"):
+            log.log_sample(0.0, ["tool_joint"], [0.0], [0.0], [0.0], 0.0, [0, 0, 0])
+        with pytest.raises(ValueError, match=r"Rerun v\[1\]"):
+            log.log_sample(0.0, JOINTS, [0.0, 0.0], [0.0, math.nan], [0.0, 0.0], 0.0, [0, 0, 0])
+        with pytest.raises(ValueError, match="Rerun energy"):
+            log.log_sample(0.0, JOINTS, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], math.inf, [0, 0, 0])
+    log.close()
+    assert log.closed
+    with pytest.raises(RuntimeError, match="closed"):
+        log.log_sample(0.0, JOINTS, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], 0.0, [0, 0, 0])
+
+
+def test_youbot_urdf_loads_and_animates(tmp_path: Path) -> None:
+    urdf = Path(__file__).resolve().parents[1] / "urdf" / "youbot.urdf"
+    if not urdf.is_file():
+        pytest.skip("urdf/youbot.urdf not present")
+    arm = [f"arm_joint_{i}" for i in range(1, 6)]
+    with RerunLogger(tmp_path / "youbot.rrd", urdf, recording_name="youbot") as log:
+        for k in range(3):
+            log.log_sample(k * 0.01, arm, [0.1 * k] * 5, [0.0] * 5, [0.0] * 5, 1.0, [0.3, 0.0, 0.4])
+    temporal, static, _ = read_rows(tmp_path / "youbot.rrd")
+    children = {
+        joint.get("name"): joint.find("child").get("link")
+        for joint in ElementTree.parse(urdf).getroot().iter("joint")
+    }
+    rows = temporal["/joint_transforms"]
+    assert len(rows) == 3 * len(arm)
+    assert {r["Transform3D:child_frame"][0] for r in rows} == {children[name] for name in arm}
+    assert len(static["/tf_static"]) == len(children)

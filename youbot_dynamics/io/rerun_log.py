@@ -1,0 +1,199 @@
+"""A Rerun recording (.rrd) of a run, written headless.
+
+Layout of the recording (Rerun 0.41):
+
+- the robot, by Rerun's built-in URDF loader (``log_file_from_path``, static): geometry
+  under ``/<robot name>/...`` and the joint transforms at q = 0 on ``/tf_static``;
+- ``/joint_transforms``: one ``Transform3D`` per moving joint per sample, with
+  ``parent_frame``/``child_frame`` set to the URDF link names (computed by
+  ``rerun.urdf.UrdfJoint``), which is how Rerun >= 0.28 animates a loaded URDF; joints not
+  named in a sample keep their last (initially zero) position;
+- ``/ee/position``: the end-effector position per sample (``Points3D``, one point, metres,
+  in the URDF root link's frame) and, on close, ``/ee/path``: the whole path as one static
+  ``LineStrips3D``;
+- ``/joints/q``, ``/joints/v``, ``/joints/tau``: ``Scalars`` with one series per joint
+  (rad or m, rad/s or m/s, N m or N), series named by a static ``SeriesLines``;
+  ``/energy``: total mechanical energy (J).
+
+Every sample sits on the ``sim_time`` timeline (a duration: simulated seconds). The
+wall-clock ``log_time`` and ``log_tick`` timelines are disabled and no start time is sent,
+so the content depends only on the data (Rerun's row ids still differ between runs).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from types import TracebackType
+
+import numpy as np
+import rerun as rr
+from rerun.urdf import UrdfJoint, UrdfTree
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.messages import finite_array
+
+TIMELINE = "sim_time"
+JOINT_TRANSFORMS = "/joint_transforms"
+EE_POSITION = "/ee/position"
+EE_PATH = "/ee/path"
+SERIES = {"q": "/joints/q", "v": "/joints/v", "tau": "/joints/tau"}
+ENERGY = "/energy"
+
+
+class RerunLogger:
+    """Writes one .rrd file for a run of the robot in ``urdf_path``; a context manager.
+
+    ``log_sample`` appends one sample (for a running node); ``log_trajectory`` appends many
+    at once with ``send_columns`` (for offline runs). ``close`` (idempotent) writes the
+    end-effector path and disconnects so the file gets its footer. Joint names given to
+    either must be URDF joints; values must be finite (``MessageFieldError`` otherwise).
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        urdf_path: str | Path,
+        *,
+        recording_name: str,
+        application_id: str = "youbot_dynamics",
+        recording_id: str | None = None,
+        ee_frame: str | None = None,
+    ) -> None:
+        """Start the recording at ``path`` and log the robot from ``urdf_path``.
+
+        ``ee_frame`` is the frame the end-effector positions are given in (default: the
+        URDF root link).
+        """
+        self.path = Path(path)
+        urdf_path = Path(urdf_path)
+        if not urdf_path.is_file():
+            raise UserInputError(f"Rerun log: URDF {urdf_path} does not exist")
+        try:
+            self._tree = UrdfTree.from_file_path(urdf_path)
+        except Exception as error:  # the Rust parser raises plain exceptions
+            raise UserInputError(f"Rerun log: URDF {urdf_path} cannot be parsed ({error})") from error
+        self.urdf_path = urdf_path
+        self._joints: dict[str, UrdfJoint] = {
+            joint.name: joint for joint in self._tree.joints() if joint.joint_type != "fixed"
+        }
+        self._series_names: tuple[str, ...] | None = None
+        self._ee_path: list[np.ndarray] = []
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._rec: rr.RecordingStream | None = rr.RecordingStream(
+            application_id, recording_id=recording_id, send_properties=False
+        )
+        self._rec.save(self.path)
+        self._rec.set_log_time_enabled(False)
+        self._rec.set_log_tick_enabled(False)
+        self._rec.send_recording_name(recording_name)
+        self._rec.log_file_from_path(urdf_path, static=True)
+        self.ee_frame = ee_frame or self._tree.root_link().name
+        self._rec.log(EE_POSITION, rr.CoordinateFrame(self.ee_frame), static=True)
+        self._rec.log(EE_PATH, rr.CoordinateFrame(self.ee_frame), static=True)
+
+    @property
+    def closed(self) -> bool:
+        """True once the recording is finalised."""
+        return self._rec is None
+
+    def log_sample(
+        self,
+        t: float,
+        joint_names: Sequence[str],
+        q: Sequence[float],
+        v: Sequence[float],
+        tau: Sequence[float],
+        energy: float,
+        ee_position: Sequence[float],
+    ) -> None:
+        """Log one sample at simulated time ``t`` (s): joint positions ``q``, velocities
+        ``v``, efforts ``tau`` (ordered as ``joint_names``), total energy (J) and the
+        end-effector position (m, in ``ee_frame``); the joint transforms follow ``q``."""
+        rec = self._recording()
+        n = len(joint_names)
+        joints = self._resolve(joint_names)
+        arrays = {key: finite_array(value, f"Rerun {key}", n) for key, value in
+                  (("q", q), ("v", v), ("tau", tau))}
+        (energy,) = finite_array([energy], "Rerun energy")
+        ee = finite_array(ee_position, "Rerun ee_position", 3)
+        rec.set_time(TIMELINE, duration=float(finite_array([t], "Rerun t")[0]))
+        for joint, value in zip(joints, arrays["q"]):
+            rec.log(JOINT_TRANSFORMS, joint.compute_transform(float(value), clamp=False))
+        for key, entity in SERIES.items():
+            rec.log(entity, rr.Scalars(arrays[key]))
+        rec.log(ENERGY, rr.Scalars(energy))
+        rec.log(EE_POSITION, rr.Points3D([ee]))
+        self._ee_path.append(ee)
+
+    def log_trajectory(
+        self,
+        t: Sequence[float],
+        joint_names: Sequence[str],
+        q: np.ndarray,
+        v: np.ndarray,
+        tau: np.ndarray,
+        energy: Sequence[float],
+        ee_position: np.ndarray,
+    ) -> None:
+        """Log N samples at once: ``t`` (N,) in s; ``q``, ``v``, ``tau`` (N, n) ordered as
+        ``joint_names``; ``energy`` (N,) in J; ``ee_position`` (N, 3) in m."""
+        rec = self._recording()
+        times = finite_array(t, "Rerun t")
+        count, n = times.size, len(joint_names)
+        joints = self._resolve(joint_names)
+        arrays = {key: finite_array(value, f"Rerun {key}", count * n).reshape(count, n)
+                  for key, value in (("q", q), ("v", v), ("tau", tau))}
+        energies = finite_array(energy, "Rerun energy", count)
+        ee = finite_array(ee_position, "Rerun ee_position", count * 3).reshape(count, 3)
+        index = [rr.TimeColumn(TIMELINE, duration=times)]
+        for joint, values in zip(joints, arrays["q"].T):
+            columns = joint.compute_transform_columns(values.tolist(), clamp=False)
+            rec.send_columns(JOINT_TRANSFORMS, indexes=index, columns=columns)
+        for key, entity in SERIES.items():
+            rec.send_columns(entity, indexes=index, columns=rr.Scalars.columns(scalars=arrays[key]))
+        rec.send_columns(ENERGY, indexes=index, columns=rr.Scalars.columns(scalars=energies))
+        points = rr.Points3D.columns(positions=ee).partition([1] * count)
+        rec.send_columns(EE_POSITION, indexes=index, columns=points)
+        self._ee_path.extend(ee)
+
+    def close(self) -> None:
+        """Log the end-effector path and finalise the file; later calls do nothing."""
+        if self._rec is None:
+            return
+        rec, self._rec = self._rec, None
+        if self._ee_path:
+            rec.log(EE_PATH, rr.LineStrips3D([np.array(self._ee_path)]), static=True)
+        rec.flush()
+        rec.disconnect()
+
+    def _recording(self) -> rr.RecordingStream:
+        if self._rec is None:
+            raise RuntimeError(f"{self.path}: Rerun recording already closed")
+        return self._rec
+
+    def _resolve(self, joint_names: Sequence[str]) -> list[UrdfJoint]:
+        """The URDF joints named, in order; names the series on first use."""
+        names = tuple(joint_names)
+        unknown = [name for name in names if name not in self._joints]
+        if unknown:
+            raise UserInputError(
+                f"Rerun log: joints {unknown} are not moving joints of {self.urdf_path}"
+                f" (known: {sorted(self._joints)})"
+            )
+        if names != self._series_names:
+            for entity in SERIES.values():
+                self._rec.log(entity, rr.SeriesLines(names=list(names)), static=True)
+            self._series_names = names
+        return [self._joints[name] for name in names]
+
+    def __enter__(self) -> RerunLogger:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
