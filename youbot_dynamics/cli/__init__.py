@@ -15,6 +15,7 @@ from youbot_dynamics.errors import UserInputError
 
 COMMAND_MODULES = (
     "youbot_dynamics.cli.model_commands",
+    "youbot_dynamics.cli.pendulum_commands",
 )
 
 

@@ -35,6 +35,7 @@ class ScipyStepper:
                                             **options)
         self.t, self.x = t0, self.solver.y
         self.steps = self.rejected = 0
+        self.h = 0.0
         self.dense = None
 
     def advance(self, t_target: float) -> None:
@@ -54,6 +55,7 @@ class ScipyStepper:
                 and solver.status == "running":
             raise DivergenceError(solver.t, self.method, solver.step_size,
                                   f"step size collapsed below min_step={self.min_step:g} s")
+        self.h = solver.t - solver.t_old
         self.t, self.x, self.dense = solver.t, solver.y, None
 
     def interpolate(self, t: float) -> np.ndarray:

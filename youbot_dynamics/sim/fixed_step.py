@@ -60,12 +60,13 @@ class FixedStepStepper:
         self.t, self.x = t0, np.array(x0, dtype=float)
         self.t_previous, self.x_previous = t0, self.x
         self.steps = self.extra_evals = 0
+        self.h = 0.0
 
     def advance(self, t_target: float) -> None:
         step, rhs, dt, n, check = self.step_function, self.rhs, self.dt, self.n, self.check
         t, x = self.t, self.x
         tolerance = 1e-9 * dt
-        steps = 0
+        steps, h = 0, self.h
         while t < t_target:
             remaining = t_target - t
             h = remaining if remaining <= dt + tolerance else dt
@@ -76,7 +77,7 @@ class FixedStepStepper:
             check.step(t, x, h)
             if self.single_steps:
                 break
-        self.t, self.x = t, x
+        self.t, self.x, self.h = t, x, h
         self.steps += steps
 
     def interpolate(self, t: float) -> np.ndarray:

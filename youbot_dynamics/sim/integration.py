@@ -140,7 +140,8 @@ def state_names_or_default(state_names: Sequence[str] | None, size: int) -> tupl
 
 class StateCheck:
     """Divergence checks: non-finite state and ``bounds`` after every step, ``monitor`` at
-    output times. Each failure raises :class:`DivergenceError` naming the components."""
+    output times. Each failure raises :class:`DivergenceError` naming the offending
+    components (all of them, up to eight, for a monitor's complaint)."""
 
     def __init__(self, integrator: str, names: tuple[str, ...], bounds: np.ndarray | None,
                  monitor: Callable[[float, np.ndarray], str | None] | None) -> None:
@@ -150,9 +151,8 @@ class StateCheck:
             np.asarray(bounds, dtype=float), (len(names),))
         self.monitor = monitor
 
-    def _fail(self, t: float, h: float, reason: str, mask: np.ndarray | None,
-              x: np.ndarray) -> None:
-        indices = [] if mask is None else np.flatnonzero(mask)[:8]
+    def _fail(self, t: float, h: float, reason: str, mask: np.ndarray, x: np.ndarray) -> None:
+        indices = np.flatnonzero(mask)[:8]
         raise DivergenceError(t, self.integrator, h, reason,
                               {self.names[i]: float(x[i]) for i in indices})
 
@@ -172,7 +172,7 @@ class StateCheck:
         if self.monitor is not None:
             reason = self.monitor(t, x)
             if reason:
-                self._fail(t, h, reason, None, x)
+                self._fail(t, h, reason, np.ones(len(x), dtype=bool), x)
 
 
 class Stepper(Protocol):
@@ -180,6 +180,7 @@ class Stepper(Protocol):
 
     t: float
     x: np.ndarray
+    h: float  # the last step's size, s
 
     def advance(self, t_target: float) -> None:
         """Step towards ``t_target`` (never beyond the run's end); updates t and x."""
@@ -239,7 +240,7 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
         while k < n_out and terminated_by is None:
             t_a = stepper.t
             stepper.advance(float(t_eval[k]))
-            t_b, h = stepper.t, stepper.t - t_a
+            t_b, h = stepper.t, stepper.h
             check.step(t_b, stepper.x, h)
             stop_at = t_b
             if events:

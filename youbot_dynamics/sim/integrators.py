@@ -83,6 +83,10 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
     names = state_names_or_default(state_names, x.size)
     check = StateCheck(integrator, names, bounds, monitor)
     if integrator in FIXED_STEP:
+        if dt is None:
+            adaptive = [name for name in INTEGRATORS if name not in FIXED_STEP + ("ida",)]
+            raise UserInputError(f"integrator {integrator!r} takes fixed steps: give dt (s), "
+                                 f"or use an adaptive one: {', '.join(adaptive)}")
         checked_positive("dt", dt)
         n = 0 if n_positions is None else int(n_positions)
         if integrator == "symplectic_euler" and not 0 < 2 * n <= x.size:
@@ -116,8 +120,9 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
     """Solve the DAE residual(t, y, y') = 0 with SUNDIALS IDA (integrator ``ida``).
 
     ``algebraic[i]`` marks y_i as algebraic (no y_i' in the equations). y0, yp0 must be
-    consistent. ``exclude_from_error_test[i]`` leaves y_i out of the local error test
-    (index-3 multibody forms: Lagrange multipliers and velocities). ``jac(t, y, yp, cj)``
+    consistent. ``exclude_from_error_test`` (IDASetSuppressAlg, for index-3 forms) is not
+    available through scikit-sundae 1.2: any True entry raises NotImplementedError (see
+    sim/sundials.py); all-False or None is accepted. ``jac(t, y, yp, cj)``
     returns dF/dy + cj dF/dy'. Events see (t, y). Solution.xp holds y' at the outputs.
     """
     start = time.perf_counter()
@@ -131,11 +136,14 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
         raise UserInputError(f"y0 has {y.size} components but yp0 has {yp.size} and "
                              f"algebraic/exclude_from_error_test have "
                              f"{[f.size for f in flags]}")
+    if len(flags) > 1 and flags[1].any():
+        raise NotImplementedError(
+            "exclude_from_error_test needs IDASetSuppressAlg, which scikit-sundae 1.2 does "
+            "not expose; use an index-2 (stabilised) or index-1 formulation instead")
     checked_positive("rtol", rtol)
     checked_positive("atol", atol)
     check = StateCheck("ida", names, bounds, monitor)
-    stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0],
-                         flags[1] if len(flags) > 1 else None, rtol, atol, jac)
+    stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0], rtol, atol, jac)
     solution = drive(stepper, "ida", times, events, check, names,
                      derivative_at=stepper.derivative_at)
     solution.stats.wall_time = time.perf_counter() - start

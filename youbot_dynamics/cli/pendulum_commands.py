@@ -1,0 +1,115 @@
+"""Sub-commands `pendulum` (simulate the elastic pendulum with any integrator) and
+`pendulum-study` (the seed's tables beside ours)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError
+from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, SEED_STATE0,
+                                                      SEED_T_END, STABLE_BOUND,
+                                                      STABLE_ENERGY_ERROR, STATE_NAMES,
+                                                      elastic_pendulum_study,
+                                                      simulate_elastic_pendulum)
+
+
+def parse_state0(text: str) -> tuple[float, ...]:
+    """'x,y,vx,vy' -> four floats; UserInputError naming --state0 otherwise."""
+    try:
+        values = tuple(float(part) for part in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 4:
+        raise UserInputError(f"--state0 must be four comma-separated numbers x,y,vx,vy, "
+                             f"got {text!r}")
+    return values
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add `pendulum` and `pendulum-study`."""
+    run = subparsers.add_parser("pendulum", help="simulate the elastic pendulum",
+                                description="Simulate the elastic pendulum (unit mass, "
+                                "length, gravity) and print the final state, the energy "
+                                "error and the integrator statistics.")
+    run.add_argument("--k", type=float, default=10.0, help="spring stiffness (default 10)")
+    run.add_argument("--state0", default=",".join(f"{v:g}" for v in SEED_STATE0),
+                     help="x,y,vx,vy at t=0 (default the seed's 1.2,0,0,0)")
+    run.add_argument("--t-end", type=float, default=SEED_T_END, help="end time, s")
+    run.add_argument("--integrator", default="cvode_bdf",
+                     help=f"one of {', '.join(n for n in INTEGRATORS if n != 'ida')}")
+    run.add_argument("--dt", type=float, help="step size for fixed-step integrators, s")
+    run.add_argument("--rtol", type=float, default=1e-6, help="relative tolerance")
+    run.add_argument("--atol", type=float, default=1e-6, help="absolute tolerance")
+    run.add_argument("--json", action="store_true", help="print JSON")
+    run.set_defaults(run=run_pendulum)
+    study = subparsers.add_parser("pendulum-study", help="the seed's elastic-pendulum tables",
+                                  description="Reproduce the seed's elastic-pendulum tables "
+                                  "with our integrators, seed figures beside ours.")
+    study.add_argument("--json", action="store_true", help="print JSON")
+    study.set_defaults(run=run_study)
+
+
+def run_pendulum(args: argparse.Namespace) -> int:
+    """Simulate and print final state, energy error and statistics."""
+    if args.dt is not None and args.integrator not in FIXED_STEP:
+        raise UserInputError(f"--dt applies to fixed-step integrators only, not "
+                             f"{args.integrator!r}; use --rtol/--atol")
+    try:
+        solution, energy_error = simulate_elastic_pendulum(
+            args.k, parse_state0(args.state0), args.t_end, args.integrator, dt=args.dt,
+            rtol=args.rtol, atol=args.atol)
+    except IntegrationError as error:
+        print(f"youbot-dynamics pendulum: {error}", file=sys.stderr)
+        return 1
+    final = dict(zip(STATE_NAMES, map(float, solution.x[-1])))
+    if args.json:
+        print(json.dumps({"k": args.k, "t_end": float(solution.t[-1]), "final_state": final,
+                          "energy_error": energy_error, "stats": solution.stats.as_dict()}))
+        return 0
+    print(f"elastic pendulum k={args.k:g}, {args.integrator}, t={solution.t[-1]:g} s")
+    print("final state: " + ", ".join(f"{name}={value:.9g}" for name, value in final.items()))
+    print(f"energy error max|E-E0|: {energy_error:.3e}")
+    for name, value in solution.stats.as_dict().items():
+        print(f"  {name:32s} {value if isinstance(value, str) else format_number(value)}")
+    return 0
+
+
+def format_number(value) -> str:
+    """A counter or figure for a table cell ('-' when not reported)."""
+    if value is None:
+        return "-"
+    if isinstance(value, int):
+        return str(value)
+    return f"{value:.3g}"
+
+
+TABLE_TITLES = {
+    "euler_stability": f"Explicit Euler on [0, {SEED_T_END:g}] from x0 = 1.2 (stable: finite, "
+                       f"|state| <= {STABLE_BOUND:g} and max|E-E0| < {STABLE_ENERGY_ERROR:g}; "
+                       f"accurate: max|E-E0| < {ACCURATE_ENERGY_ERROR:g})",
+    "cvode_statistics": "Statistics at rtol = atol = 1e-6 from x0 = 1.2 on [0, 20]",
+    "energy_error": "Energy error max|E-E0| versus step size / tolerance",
+}
+COLUMNS = ("integrator", "k", "setting", "verdict", "energy_error", "steps", "rhs_evals",
+           "jac_evals", "wall_time", "seed")
+TEXT_COLUMNS = ("integrator", "setting", "verdict", "seed")
+
+
+def run_study(args: argparse.Namespace) -> int:
+    """Print the study's tables (markdown) or JSON rows."""
+    rows = elastic_pendulum_study()
+    if args.json:
+        print(json.dumps([row.as_dict() for row in rows]))
+        return 0
+    for table, title in TABLE_TITLES.items():
+        print(f"\n{title}\n")
+        print("| " + " | ".join(COLUMNS) + " |")
+        print("|" + "---|" * len(COLUMNS))
+        for row in rows:
+            if row.table == table:
+                cells = [(getattr(row, c) or "-") if c in TEXT_COLUMNS
+                         else format_number(getattr(row, c)) for c in COLUMNS]
+                print("| " + " | ".join(cells) + " |")
+    return 0
