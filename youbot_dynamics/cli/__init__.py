@@ -14,6 +14,7 @@ import sys
 from youbot_dynamics.errors import UserInputError
 
 COMMAND_MODULES = (
+    "youbot_dynamics.cli.study_commands",
     "youbot_dynamics.cli.model_commands",
     "youbot_dynamics.cli.pendulum_commands",
 )

@@ -201,3 +201,30 @@ class Woodpecker:
         t_eval = np.linspace(0.0, t_end, max(n_out, 1) + 1)
         return simulate_hybrid(self.modes(), mode0, x0, t_eval, integrator, rtol=rtol,
                                atol=atol, state_names=STATE_NAMES, **options)
+
+
+def plot_woodpecker(woodpecker: Woodpecker, solution: HybridSolution, path: str) -> None:
+    """Save a PNG (matplotlib, Agg) of z, phiS, phiB, lambda1, lambda2 and the mode index
+    (I = 1, II = 2, III = 3) over time."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lambdas = np.array([woodpecker.constraint_forces(mode, x)
+                        for mode, x in zip(solution.mode, solution.x)])
+    index = [MODES.index(mode) + 1 for mode in solution.mode]
+    rows = [("z (m)", solution.x[:, 0]), ("phiS (rad)", solution.x[:, 1]),
+            ("phiB (rad)", solution.x[:, 2]), ("lambda1 (N)", lambdas[:, 0]),
+            ("lambda2 (N)", lambdas[:, 1]), ("mode", index)]
+    figure, axes = plt.subplots(len(rows), 1, sharex=True, figsize=(9, 11))
+    for axis, (label, values) in zip(axes, rows):
+        axis.plot(solution.t, values, linewidth=0.8)
+        axis.set_ylabel(label)
+        axis.grid(True, alpha=0.3)
+    axes[-1].set_yticks([1, 2, 3], MODES)
+    axes[-1].set_xlabel("t (s)")
+    axes[0].set_title(f"Woodpecker toy: {solution.count(BEAK)} beak hits, "
+                      f"{solution.stats.integrator}")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)

@@ -1,0 +1,85 @@
+"""The hybrid-system loop against analytic switching times: a bouncing ball (impacts that
+reset the velocity in the same mode) and a thermostat (two modes with different dynamics)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from youbot_dynamics.sim.events import Mode, Transition, simulate_hybrid
+from youbot_dynamics.sim.integrators import IntegrationError
+
+G, HEIGHT, RESTITUTION = 9.81, 1.0, 0.8
+
+
+def bouncing_ball(restitution: float = RESTITUTION, condition=None) -> list[Mode]:
+    """x = (height, velocity); at height 0 falling, v -> -e v."""
+    def bounce(t, x):
+        x[1] = -restitution * x[1]
+        return "flight", x
+    return [Mode("flight", lambda t, x: np.array([x[1], -G]),
+                 (Transition("bounce", lambda t, x: x[0], bounce, -1, condition),),
+                 jac=lambda t, x: np.array([[0.0, 1.0], [0.0, 0.0]]))]
+
+
+def analytic_bounce_times(n: int) -> np.ndarray:
+    """t_1 = sqrt(2 h / g); then the flights last 2 e^k v_1 / g."""
+    v1 = math.sqrt(2 * G * HEIGHT)
+    times = [v1 / G]
+    for k in range(1, n):
+        times.append(times[-1] + 2 * RESTITUTION ** k * v1 / G)
+    return np.array(times)
+
+
+@pytest.mark.parametrize("integrator", ["dop853", "cvode_adams", "ida"])
+def test_bounce_times_match_the_analytic_ones(integrator):
+    expected = analytic_bounce_times(8)
+    t_end = expected[-1] + RESTITUTION ** 8 * expected[0]  # half-way through flight 9
+    solution = simulate_hybrid(bouncing_ball(), "flight", [HEIGHT, 0.0], [0.0, t_end],
+                               integrator, rtol=1e-10, atol=1e-12)
+    times = np.array([s.time for s in solution.switches])
+    assert len(times) == 8
+    np.testing.assert_allclose(times, expected, rtol=1e-8)
+    for switch in solution.switches:
+        assert switch.state_before[0] == pytest.approx(0.0, abs=1e-9)
+        assert switch.state_after[1] == pytest.approx(-RESTITUTION * switch.state_before[1])
+    assert solution.stats.events == 8
+    assert solution.stats.simulated_time == pytest.approx(t_end)
+    # both sides of every switch are in the output, at the same time
+    for switch in solution.switches:
+        at = np.flatnonzero(solution.t == switch.time)
+        assert len(at) == 2 and solution.x[at[1], 1] == switch.state_after[1]
+
+
+def test_thermostat_switches_between_two_modes_at_the_analytic_times():
+    """Heating x' = 2 - x until x = 1.5, cooling x' = -x until x = 0.5: each phase lasts
+    ln 3 exactly."""
+    modes = [Mode("on", lambda t, x: 2.0 - x,
+                  (Transition("hot", lambda t, x: x[0] - 1.5, lambda t, x: ("off", x), 1),)),
+             Mode("off", lambda t, x: -x,
+                  (Transition("cold", lambda t, x: x[0] - 0.5, lambda t, x: ("on", x), -1),))]
+    t_eval = np.linspace(0.0, 5.5 * math.log(3.0), 200)
+    solution = simulate_hybrid(modes, "on", [0.5], t_eval, "rk45", rtol=1e-10, atol=1e-12)
+    times = [s.time for s in solution.switches]
+    np.testing.assert_allclose(times, math.log(3.0) * np.arange(1, 6), rtol=1e-8)
+    assert [s.kind for s in solution.switches] == ["hot", "cold"] * 2 + ["hot"]
+    on = np.array(solution.mode) == "on"
+    assert np.all(solution.x[on, 0] <= 1.5 + 1e-9) and np.all(solution.x[~on, 0] >= 0.5 - 1e-9)
+    # outputs at every requested time, plus two samples per switch
+    assert solution.t.size == t_eval.size + 2 * len(times)
+
+
+def test_a_false_condition_passes_the_crossing_over():
+    solution = simulate_hybrid(bouncing_ball(condition=lambda t, x: x[1] < -100.0), "flight",
+                               [HEIGHT, 0.0], np.linspace(0.0, 1.0, 11), "dop853",
+                               rtol=1e-10, atol=1e-12)
+    assert solution.switches == [] and solution.stats.events == 1
+    t = solution.t[-1]
+    assert solution.x[-1, 0] == pytest.approx(HEIGHT - 0.5 * G * t ** 2, abs=1e-9)
+
+
+def test_a_zeno_run_raises_instead_of_looping():
+    with pytest.raises(IntegrationError, match="more than 20 guard crossings"):
+        simulate_hybrid(bouncing_ball(0.5), "flight", [HEIGHT, 0.0], [0.0, 5.0], "dop853",
+                        max_switches=20)

@@ -1,0 +1,96 @@
+"""Sub-commands for the classic studies: ``woodpecker`` (the hybrid woodpecker toy) and
+``lagrange`` (equations of motion by computer algebra)."""
+from __future__ import annotations
+
+import argparse
+import json
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.sim.integrators import INTEGRATORS, FIXED_STEP, IntegratorStats
+
+#: Columns of the statistics tables, as in the seed's tables 15 and 16.
+STAT_COLUMNS = (("steps", "steps"), ("rhs_evals", "f-evals"), ("jac_evals", "J-evals"),
+                ("events", "state events"), ("wall_time", "CPU time (s)"))
+
+
+def positive(text: str) -> float:
+    """An argparse type: a positive float."""
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def stats_table(rows: dict[str, dict]) -> str:
+    """A text table: one row per run (name -> statistics dict), the seed's columns."""
+    header = f"{'run':<24}" + "".join(f"{title:>14}" for _, title in STAT_COLUMNS)
+    lines = [header]
+    for name, stats in rows.items():
+        cells = []
+        for key, _ in STAT_COLUMNS:
+            value = stats.get(key)
+            text = "-" if value is None else (str(value) if isinstance(value, int)
+                                               else format(value, ".4g"))
+            cells.append(f"{text:>14}")
+        lines.append(f"{name:<24}" + "".join(cells))
+    return "\n".join(lines)
+
+
+def woodpecker_summary(solution, stats: IntegratorStats) -> dict:
+    """The woodpecker run's figures as plain data."""
+    from youbot_dynamics.systems.woodpecker import BEAK
+    return {
+        "beak_hits": solution.count(BEAK),
+        "switches": [{"time": s.time, "kind": s.kind, "from": s.mode_before,
+                      "to": s.mode_after} for s in solution.switches],
+        "final_state": dict(zip(solution.state_names, solution.x[-1].tolist())),
+        "final_mode": solution.mode[-1],
+        "stats": stats.as_dict(),
+    }
+
+
+def run_woodpecker(args: argparse.Namespace) -> int:
+    from youbot_dynamics.systems.woodpecker import (SEED_BEAK_HITS, SEED_FIGURES, Woodpecker,
+                                                    plot_woodpecker)
+    if args.integrator in FIXED_STEP and args.dt is None:
+        raise UserInputError(f"--integrator {args.integrator} is fixed-step: give --dt")
+    woodpecker = Woodpecker()
+    options = {} if args.dt is None else {"dt": args.dt}
+    solution = woodpecker.simulate(args.t_end, args.integrator, rtol=args.rtol,
+                                   atol=args.rtol * 1e-2,
+                                   n_out=int(args.t_end * 2000) if args.plot else 0,
+                                   **options)
+    summary = woodpecker_summary(solution, solution.stats)
+    if args.plot:
+        plot_woodpecker(woodpecker, solution, args.plot)
+        summary["plot"] = args.plot
+    if args.json:
+        summary["seed"] = {"beak_hits": SEED_BEAK_HITS, **SEED_FIGURES}
+        print(json.dumps(summary, indent=2))
+        return 0
+    print(f"woodpecker toy over [0, {args.t_end:g}] s with {args.integrator} "
+          f"(rtol {args.rtol:g}): {summary['beak_hits']} beak hits "
+          f"(seed over 2 s: {SEED_BEAK_HITS})")
+    for switch in summary["switches"]:
+        print(f"  t = {switch['time']:.6f} s  {switch['kind']:<12} "
+              f"{switch['from']} -> {switch['to']}")
+    print(f"final mode {summary['final_mode']}, state "
+          + ", ".join(f"{k}={v:.6g}" for k, v in summary["final_state"].items()))
+    print(stats_table({f"{args.integrator} (ours)": summary["stats"], **SEED_FIGURES}))
+    if args.plot:
+        print(f"plot written to {args.plot}")
+    return 0
+
+
+def register(subparsers) -> None:
+    """Add the ``woodpecker`` and ``lagrange`` sub-commands."""
+    parser = subparsers.add_parser("woodpecker", help="the woodpecker toy: state events, "
+                                   "impacts, beak hits and statistics")
+    parser.add_argument("--t-end", type=positive, default=2.0, help="end time (s)")
+    parser.add_argument("--integrator", choices=INTEGRATORS, default="dop853")
+    parser.add_argument("--rtol", type=positive, default=1e-6,
+                        help="relative tolerance (atol = rtol/100)")
+    parser.add_argument("--dt", type=positive, help="step (s) for fixed-step integrators")
+    parser.add_argument("--plot", metavar="PNG", help="write a plot of the run")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.set_defaults(run=run_woodpecker)
