@@ -66,10 +66,11 @@ def trajectory(n: int, start: int = 0) -> dict[str, np.ndarray]:
 
 @pytest.fixture(scope="module")
 def recording(urdf: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
-    """N_LIVE samples through log_sample, then N_BATCH through log_trajectory."""
+    """N_LIVE samples through log_sample (in batches of 5 and a remainder), then N_BATCH
+    through log_trajectory."""
     path = tmp_path_factory.mktemp("rrd") / "run.rrd"
     live, batch = trajectory(N_LIVE), trajectory(N_BATCH, start=N_LIVE)
-    with RerunLogger(path, urdf, recording_name="tiny test run") as log:
+    with RerunLogger(path, urdf, recording_name="tiny test run", batch_size=5) as log:
         for i in range(N_LIVE):
             log.log_sample(live["t"][i], JOINTS, live["q"][i], live["v"][i], live["tau"][i],
                            live["energy"][i], live["ee"][i])
@@ -146,6 +147,10 @@ def test_joint_transforms_follow_q(recording) -> None:
 def test_refuses_unknown_joints_nan_and_missing_urdf(urdf: Path, tmp_path: Path) -> None:
     with pytest.raises(UserInputError, match="missing.urdf"):
         RerunLogger(tmp_path / "x.rrd", tmp_path / "missing.urdf", recording_name="x")
+    broken = tmp_path / "broken.urdf"
+    broken.write_text(TINY_URDF.replace('<child link="link_2"/>', '<child link="nowhere"/>'))
+    with pytest.raises(UserInputError, match="broken.urdf cannot be parsed"):
+        RerunLogger(tmp_path / "z.rrd", broken, recording_name="z")
     with RerunLogger(tmp_path / "y.rrd", urdf, recording_name="y") as log:
         with pytest.raises(UserInputError, match="tool_joint"):
             log.log_sample(0.0, ["tool_joint"], [0.0], [0.0], [0.0], 0.0, [0, 0, 0])

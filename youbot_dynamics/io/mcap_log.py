@@ -147,7 +147,9 @@ class McapLogger:
         publish_time_ns = log_time_ns if publish_time_ns is None else publish_time_ns
         for label, value in (("log time", log_time_ns), ("publish time", publish_time_ns)):
             if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**64:
-                raise UserInputError(f"{self.path}: {label} on {topic} must be ns >= 0, got {value!r}")
+                raise UserInputError(
+                    f"{self.path}: {label} on {topic} must be integer ns >= 0, got {value!r}"
+                )
         data = TYPESTORE.serialize_cdr(message, msgtype)
         self._sequences[topic] += 1
         self._writer.add_message(

@@ -58,15 +58,30 @@ def finite_array(values: Iterable[float], field_name: str, length: int | None = 
     """Return ``values`` as a float64 vector, checking that every entry is finite.
 
     ``length``, when given, is the required number of entries. Raises ``MessageFieldError``
-    naming ``field_name`` (and the index) otherwise.
+    naming ``field_name`` (and the index) otherwise. For long vectors; see ``finite_floats``.
     """
     array = np.asarray(values, dtype=np.float64).reshape(-1)
     if length is not None and array.size != length:
         raise MessageFieldError(field_name, f"has {array.size} entries, expected {length}")
-    bad = np.flatnonzero(~np.isfinite(array))
-    if bad.size:
-        raise MessageFieldError(f"{field_name}[{bad[0]}]", f"is {array[bad[0]]}, not finite")
+    if not np.isfinite(array).all():
+        index = int(np.flatnonzero(~np.isfinite(array))[0])
+        raise _not_finite(field_name, index, array[index])
     return array
+
+
+def finite_floats(values: Iterable[float], field_name: str, length: int) -> list[float]:
+    """``finite_array`` for short fixed-length fields (xyz, quaternions), without numpy."""
+    floats = [float(value) for value in values]
+    if len(floats) != length:
+        raise MessageFieldError(field_name, f"has {len(floats)} entries, expected {length}")
+    for index, value in enumerate(floats):
+        if not math.isfinite(value):
+            raise _not_finite(field_name, index, value)
+    return floats
+
+
+def _not_finite(field_name: str, index: int, value: float) -> MessageFieldError:
+    return MessageFieldError(f"{field_name}[{index}]", f"is {value}, not finite")
 
 
 def time(stamp_ns: int) -> Time:
@@ -88,11 +103,11 @@ def header(stamp_ns: int, frame_id: str) -> Header:
 
 def unit_quaternion(quaternion_xyzw: Sequence[float], field_name: str) -> Quaternion:
     """geometry_msgs/Quaternion from (x, y, z, w), which must be finite and of unit norm."""
-    x, y, z, w = finite_array(quaternion_xyzw, field_name, 4)
+    x, y, z, w = finite_floats(quaternion_xyzw, field_name, 4)
     norm = math.sqrt(x * x + y * y + z * z + w * w)
     if abs(norm - 1.0) > UNIT_QUATERNION_TOLERANCE:
         raise MessageFieldError(field_name, f"has norm {norm}, expected a unit quaternion")
-    return Quaternion(x=float(x), y=float(y), z=float(z), w=float(w))
+    return Quaternion(x=x, y=y, z=z, w=w)
 
 
 def joint_state(
@@ -128,9 +143,9 @@ def pose_stamped(
     quaternion_xyzw: Sequence[float],
 ) -> PoseStamped:
     """geometry_msgs/PoseStamped: position (m) and orientation of a frame in ``frame_id``."""
-    x, y, z = finite_array(position_xyz, "PoseStamped.pose.position", 3)
+    x, y, z = finite_floats(position_xyz, "PoseStamped.pose.position", 3)
     orientation = unit_quaternion(quaternion_xyzw, "PoseStamped.pose.orientation")
-    pose = Pose(position=Point(x=float(x), y=float(y), z=float(z)), orientation=orientation)
+    pose = Pose(position=Point(x=x, y=y, z=z), orientation=orientation)
     return PoseStamped(header=header(stamp_ns, frame_id), pose=pose)
 
 
@@ -142,10 +157,9 @@ def transform_stamped(
     quaternion_xyzw: Sequence[float],
 ) -> TransformStamped:
     """geometry_msgs/TransformStamped: pose (m, unit quaternion) of ``child`` in ``parent``."""
-    x, y, z = finite_array(translation, f"TransformStamped[{child}].translation", 3)
+    x, y, z = finite_floats(translation, f"TransformStamped[{child}].translation", 3)
     rotation = unit_quaternion(quaternion_xyzw, f"TransformStamped[{child}].rotation")
-    translation_msg = Vector3(x=float(x), y=float(y), z=float(z))
-    transform = Transform(translation=translation_msg, rotation=rotation)
+    transform = Transform(translation=Vector3(x=x, y=y, z=z), rotation=rotation)
     return TransformStamped(
         header=header(stamp_ns, parent), child_frame_id=str(child), transform=transform
     )

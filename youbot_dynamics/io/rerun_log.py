@@ -25,13 +25,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
+from typing import NamedTuple
 
 import numpy as np
 import rerun as rr
 from rerun.urdf import UrdfJoint, UrdfTree
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.io.messages import finite_array
+from youbot_dynamics.io.messages import finite_array, finite_floats
 
 TIMELINE = "sim_time"
 JOINT_TRANSFORMS = "/joint_transforms"
@@ -39,6 +40,22 @@ EE_POSITION = "/ee/position"
 EE_PATH = "/ee/path"
 SERIES = {"q": "/joints/q", "v": "/joints/v", "tau": "/joints/tau"}
 ENERGY = "/energy"
+DEFAULT_BATCH_SIZE = 250
+"""Samples ``log_sample`` buffers before sending them in one batch."""
+
+
+class Samples(NamedTuple):
+    """Samples of a run: t (N,) s; q, v, tau (N, n); energy (N,) J; ee (N, 3) m.
+
+    ``log_sample`` buffers one sample per instance (floats and lists).
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    tau: np.ndarray
+    energy: np.ndarray
+    ee: np.ndarray
 
 
 class RerunLogger:
@@ -59,6 +76,7 @@ class RerunLogger:
         application_id: str = "youbot_dynamics",
         recording_id: str | None = None,
         ee_frame: str | None = None,
+        batch_size: int = DEFAULT_BATCH_SIZE,
     ) -> None:
         """Start the recording at ``path`` and log the robot from ``urdf_path``.
 
@@ -72,12 +90,16 @@ class RerunLogger:
         try:
             self._tree = UrdfTree.from_file_path(urdf_path)
         except Exception as error:  # the Rust parser raises plain exceptions
-            raise UserInputError(f"Rerun log: URDF {urdf_path} cannot be parsed ({error})") from error
+            message = f"Rerun log: URDF {urdf_path} cannot be parsed ({error})"
+            raise UserInputError(message) from error
         self.urdf_path = urdf_path
         self._joints: dict[str, UrdfJoint] = {
             joint.name: joint for joint in self._tree.joints() if joint.joint_type != "fixed"
         }
+        self.batch_size = max(1, int(batch_size))
         self._series_names: tuple[str, ...] | None = None
+        self._pending: list[Samples] = []
+        self._pending_names: tuple[str, ...] = ()
         self._ee_path: list[np.ndarray] = []
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._rec: rr.RecordingStream | None = rr.RecordingStream(
@@ -109,22 +131,29 @@ class RerunLogger:
     ) -> None:
         """Log one sample at simulated time ``t`` (s): joint positions ``q``, velocities
         ``v``, efforts ``tau`` (ordered as ``joint_names``), total energy (J) and the
-        end-effector position (m, in ``ee_frame``); the joint transforms follow ``q``."""
-        rec = self._recording()
-        n = len(joint_names)
-        joints = self._resolve(joint_names)
-        arrays = {key: finite_array(value, f"Rerun {key}", n) for key, value in
-                  (("q", q), ("v", v), ("tau", tau))}
-        (energy,) = finite_array([energy], "Rerun energy")
-        ee = finite_array(ee_position, "Rerun ee_position", 3)
-        rec.set_time(TIMELINE, duration=float(finite_array([t], "Rerun t")[0]))
-        for joint, value in zip(joints, arrays["q"]):
-            rec.log(JOINT_TRANSFORMS, joint.compute_transform(float(value), clamp=False))
-        for key, entity in SERIES.items():
-            rec.log(entity, rr.Scalars(arrays[key]))
-        rec.log(ENERGY, rr.Scalars(energy))
-        rec.log(EE_POSITION, rr.Points3D([ee]))
-        self._ee_path.append(ee)
+        end-effector position (m, in ``ee_frame``); the joint transforms follow ``q``.
+
+        Samples are checked at once and sent in batches of ``batch_size`` (one Rerun call
+        per entity per batch instead of one per sample); ``close`` sends the rest.
+        """
+        self._recording()
+        names = tuple(joint_names)
+        self._resolve(names)
+        n = len(names)
+        row = Samples(
+            t=finite_floats([t], "Rerun t", 1)[0],
+            q=finite_floats(q, "Rerun q", n),
+            v=finite_floats(v, "Rerun v", n),
+            tau=finite_floats(tau, "Rerun tau", n),
+            energy=finite_floats([energy], "Rerun energy", 1)[0],
+            ee=finite_floats(ee_position, "Rerun ee_position", 3),
+        )
+        if names != self._pending_names:
+            self._flush()
+            self._pending_names = names
+        self._pending.append(row)
+        if len(self._pending) >= self.batch_size:
+            self._flush()
 
     def log_trajectory(
         self,
@@ -138,32 +167,31 @@ class RerunLogger:
     ) -> None:
         """Log N samples at once: ``t`` (N,) in s; ``q``, ``v``, ``tau`` (N, n) ordered as
         ``joint_names``; ``energy`` (N,) in J; ``ee_position`` (N, 3) in m."""
-        rec = self._recording()
+        self._recording()
+        names = tuple(joint_names)
+        self._resolve(names)
         times = finite_array(t, "Rerun t")
-        count, n = times.size, len(joint_names)
-        joints = self._resolve(joint_names)
-        arrays = {key: finite_array(value, f"Rerun {key}", count * n).reshape(count, n)
-                  for key, value in (("q", q), ("v", v), ("tau", tau))}
-        energies = finite_array(energy, "Rerun energy", count)
-        ee = finite_array(ee_position, "Rerun ee_position", count * 3).reshape(count, 3)
-        index = [rr.TimeColumn(TIMELINE, duration=times)]
-        for joint, values in zip(joints, arrays["q"].T):
-            columns = joint.compute_transform_columns(values.tolist(), clamp=False)
-            rec.send_columns(JOINT_TRANSFORMS, indexes=index, columns=columns)
-        for key, entity in SERIES.items():
-            rec.send_columns(entity, indexes=index, columns=rr.Scalars.columns(scalars=arrays[key]))
-        rec.send_columns(ENERGY, indexes=index, columns=rr.Scalars.columns(scalars=energies))
-        points = rr.Points3D.columns(positions=ee).partition([1] * count)
-        rec.send_columns(EE_POSITION, indexes=index, columns=points)
-        self._ee_path.extend(ee)
+        count, n = times.size, len(names)
+        samples = Samples(
+            t=times,
+            q=finite_array(q, "Rerun q", count * n).reshape(count, n),
+            v=finite_array(v, "Rerun v", count * n).reshape(count, n),
+            tau=finite_array(tau, "Rerun tau", count * n).reshape(count, n),
+            energy=finite_array(energy, "Rerun energy", count),
+            ee=finite_array(ee_position, "Rerun ee_position", count * 3).reshape(count, 3),
+        )
+        self._flush()
+        self._send(names, samples)
 
     def close(self) -> None:
-        """Log the end-effector path and finalise the file; later calls do nothing."""
+        """Send pending samples, log the end-effector path and finalise the file; later
+        calls do nothing."""
         if self._rec is None:
             return
+        self._flush()
         rec, self._rec = self._rec, None
         if self._ee_path:
-            rec.log(EE_PATH, rr.LineStrips3D([np.array(self._ee_path)]), static=True)
+            rec.log(EE_PATH, rr.LineStrips3D([np.concatenate(self._ee_path)]), static=True)
         rec.flush()
         rec.disconnect()
 
@@ -172,20 +200,40 @@ class RerunLogger:
             raise RuntimeError(f"{self.path}: Rerun recording already closed")
         return self._rec
 
-    def _resolve(self, joint_names: Sequence[str]) -> list[UrdfJoint]:
-        """The URDF joints named, in order; names the series on first use."""
-        names = tuple(joint_names)
+    def _resolve(self, names: tuple[str, ...]) -> list[UrdfJoint]:
+        """The URDF joints named, in order."""
         unknown = [name for name in names if name not in self._joints]
         if unknown:
             raise UserInputError(
                 f"Rerun log: joints {unknown} are not moving joints of {self.urdf_path}"
                 f" (known: {sorted(self._joints)})"
             )
+        return [self._joints[name] for name in names]
+
+    def _flush(self) -> None:
+        """Send the samples buffered by ``log_sample``."""
+        if self._pending:
+            rows, self._pending = self._pending, []
+            self._send(self._pending_names, Samples(*(np.array(column) for column in zip(*rows))))
+
+    def _send(self, names: tuple[str, ...], samples: Samples) -> None:
+        """Send checked samples (arrays as in ``log_trajectory``) with ``send_columns``."""
+        rec = self._recording()
         if names != self._series_names:
             for entity in SERIES.values():
-                self._rec.log(entity, rr.SeriesLines(names=list(names)), static=True)
+                rec.log(entity, rr.SeriesLines(names=list(names)), static=True)
             self._series_names = names
-        return [self._joints[name] for name in names]
+        index = [rr.TimeColumn(TIMELINE, duration=samples.t)]
+        for joint, values in zip(self._resolve(names), samples.q.T):
+            columns = joint.compute_transform_columns(values.tolist(), clamp=False)
+            rec.send_columns(JOINT_TRANSFORMS, indexes=index, columns=columns)
+        for field, entity in SERIES.items():
+            scalars = rr.Scalars.columns(scalars=getattr(samples, field))
+            rec.send_columns(entity, indexes=index, columns=scalars)
+        rec.send_columns(ENERGY, indexes=index, columns=rr.Scalars.columns(scalars=samples.energy))
+        points = rr.Points3D.columns(positions=samples.ee).partition([1] * len(samples.t))
+        rec.send_columns(EE_POSITION, indexes=index, columns=points)
+        self._ee_path.append(samples.ee)
 
     def __enter__(self) -> RerunLogger:
         return self
