@@ -61,10 +61,12 @@ class Samples(NamedTuple):
 class RerunLogger:
     """Writes one .rrd file for a run of the robot in ``urdf_path``; a context manager.
 
-    ``log_sample`` appends one sample (for a running node); ``log_trajectory`` appends many
-    at once with ``send_columns`` (for offline runs). ``close`` (idempotent) writes the
-    end-effector path and disconnects so the file gets its footer. Joint names given to
-    either must be URDF joints; values must be finite (``MessageFieldError`` otherwise).
+    ``log_sample`` appends one sample (for a running node; buffered and sent every
+    ``batch_size`` samples); ``log_trajectory`` appends many at once (for offline runs).
+    Both send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
+    is buffered, writes the end-effector path and disconnects so the file gets its footer.
+    Joint names must be moving URDF joints (``UserInputError`` otherwise); values must be
+    finite (``MessageFieldError``, a ValueError naming the field, otherwise).
     """
 
     def __init__(
