@@ -1,0 +1,263 @@
+"""Joint friction laws, each written once, and the per-robot :class:`JointFriction`.
+
+Sign and units: every law returns the friction torque (N m, revolute) or force (N,
+prismatic) that the joint must overcome, positive along the joint velocity v (rad/s or
+m/s). It RESISTS motion, so the torque a motor applies is
+
+    tau_applied = RNEA(q, v, a) + tau_friction,     a = ABA(q, v, tau_applied - tau_friction),
+
+and the power friction takes out of the mechanism is v . tau_friction >= 0 (for the
+memoryless laws). Parameters below are per joint; "torque" reads "force" for prismatic
+joints and "rad" reads "m".
+
+Laws (``law`` names in a scene's friction spec, parameter keys in brackets):
+
+- ``viscous``   F = b v                                                  [damping]
+- ``coulomb``   F = F_c tanh(v / v_s) + b v           [coulomb, damping, velocity_scale]
+- ``stribeck``  F = g(v) tanh(v / v_s) + b v,
+                g(v) = F_c + (F_s - F_c) exp(-(v / v_st)^2)
+                                 [coulomb, static, stribeck_velocity, damping, velocity_scale]
+- ``lugre``     dz/dt = v - sigma0 |v| z / g(v),   F = sigma0 z + sigma1 dz/dt + sigma2 v
+                (Canudas de Wit et al. 1995; z is the mean bristle deflection in rad or m)
+                                 [sigma0, sigma1, sigma2, coulomb, static, stribeck_velocity]
+
+b in N m s/rad, F_c (Coulomb level) and F_s (static, break-away level) in N m, v_s (the
+regularisation scale: the tanh replaces sign(v), smooth for integrators; F reaches 76 % of
+F_c at |v| = v_s) and v_st (Stribeck velocity) in rad/s, sigma0 (bristle stiffness) in
+N m/rad, sigma1 (bristle damping) and sigma2 (viscous) in N m s/rad. ``velocity_scale`` may
+be left out; it then takes the robot-wide default. At constant v the LuGre force settles to
+g(v) sign(v) + sigma2 v, the Stribeck curve without regularisation.
+
+Defaults come from the URDF's ``<dynamics damping friction>``: law ``coulomb`` with
+b = damping and F_c = friction on every joint.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.robot import Robot
+
+#: Default regularisation scale v_s of the Coulomb term, rad/s (or m/s).
+DEFAULT_VELOCITY_SCALE = 1e-2
+
+Vector = np.ndarray
+
+
+# ---------------------------------------------------------------------------------------
+# The laws: each formula once. Arguments broadcast (scalars or arrays per joint).
+# ---------------------------------------------------------------------------------------
+def viscous(v: Vector, damping: Vector) -> Vector:
+    """Viscous friction b v (N m)."""
+    return damping * v
+
+
+def coulomb(v: Vector, level: Vector, velocity_scale: Vector) -> Vector:
+    """Regularised Coulomb friction F_c tanh(v / v_s) (N m): odd in v, |F| < F_c."""
+    return level * np.tanh(v / velocity_scale)
+
+
+def stribeck_curve(v: Vector, coulomb_level: Vector, static: Vector, stribeck_velocity: Vector) -> Vector:
+    """Stribeck curve g(v) = F_c + (F_s - F_c) exp(-(v / v_st)^2) (N m), even in v."""
+    return coulomb_level + (static - coulomb_level) * np.exp(-np.square(v / stribeck_velocity))
+
+
+def stribeck(v: Vector, coulomb_level: Vector, static: Vector, stribeck_velocity: Vector,
+             velocity_scale: Vector) -> Vector:
+    """Regularised Stribeck friction g(v) tanh(v / v_s) (N m), without its viscous part."""
+    return coulomb(v, stribeck_curve(v, coulomb_level, static, stribeck_velocity), velocity_scale)
+
+
+def lugre_bristle_rate(v: Vector, z: Vector, sigma0: Vector, coulomb_level: Vector, static: Vector,
+                       stribeck_velocity: Vector) -> Vector:
+    """LuGre bristle dynamics dz/dt = v - sigma0 |v| z / g(v) (rad/s)."""
+    return v - sigma0 * np.abs(v) * z / stribeck_curve(v, coulomb_level, static, stribeck_velocity)
+
+
+def lugre(v: Vector, z: Vector, sigma0: Vector, sigma1: Vector, sigma2: Vector, coulomb_level: Vector,
+          static: Vector, stribeck_velocity: Vector) -> Vector:
+    """LuGre friction sigma0 z + sigma1 dz/dt + sigma2 v (N m)."""
+    rate = lugre_bristle_rate(v, z, sigma0, coulomb_level, static, stribeck_velocity)
+    return sigma0 * z + sigma1 * rate + sigma2 * v
+
+
+# ---------------------------------------------------------------------------------------
+# Per-robot friction
+# ---------------------------------------------------------------------------------------
+#: Parameter keys of each law in a friction spec.
+LAW_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "viscous": ("damping",),
+    "coulomb": ("coulomb", "damping", "velocity_scale"),
+    "stribeck": ("coulomb", "static", "stribeck_velocity", "damping", "velocity_scale"),
+    "lugre": ("sigma0", "sigma1", "sigma2", "coulomb", "static", "stribeck_velocity"),
+}
+#: Parameters that must be > 0 (the others must be >= 0); all must be finite.
+_POSITIVE = ("velocity_scale", "stribeck_velocity", "sigma0")
+
+
+#: The function of each nonlinear law and the parameters it takes after v (and z), in order.
+LAW_FUNCTIONS: dict[str, tuple[Callable[..., Vector], tuple[str, ...]]] = {
+    "coulomb": (coulomb, ("coulomb", "velocity_scale")),
+    "stribeck": (stribeck, ("coulomb", "static", "stribeck_velocity", "velocity_scale")),
+    "lugre": (lugre, ("sigma0", "sigma1", "sigma2", "coulomb", "static", "stribeck_velocity")),
+}
+
+
+@dataclass(frozen=True)
+class LawGroup:
+    """The joints that use one nonlinear law and its parameters as arrays over those joints.
+
+    ``joints`` holds indices into the joint-coordinate vector, or is None when the group is
+    every joint in order (no indexing needed). ``arguments`` are the parameter arrays in the
+    order ``function`` takes them.
+    """
+
+    law: str
+    function: Callable[..., Vector]
+    joints: np.ndarray | None
+    parameters: Mapping[str, np.ndarray]
+    arguments: tuple[np.ndarray, ...]
+
+
+@dataclass(frozen=True)
+class JointFriction:
+    """Friction of every moving joint of a robot: immutable, built once, vectorised per law.
+
+    ``torque(v, z)`` is tau_friction (N m or N, positive along v, see the module docstring);
+    ``state_derivative(v, z)`` is dz/dt of the extra states z: one LuGre bristle deflection
+    per LuGre joint, in joint order, named ``state_names``. Without LuGre joints there are
+    no extra states and z may be None. ``damping`` (N m s/rad) is the viscous coefficient of
+    every joint (zero on LuGre joints); ``memoryless`` the Coulomb and Stribeck groups.
+    """
+
+    joint_names: tuple[str, ...]
+    laws: tuple[str, ...]
+    damping: np.ndarray
+    memoryless: tuple[LawGroup, ...]
+    lugre: LawGroup | None
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        joints = () if self.lugre is None else self.lugre.joints
+        return tuple(f"{self.joint_names[i]}/lugre_z" for i in joints)
+
+    @property
+    def n_states(self) -> int:
+        return 0 if self.lugre is None else len(self.lugre.joints)
+
+    @classmethod
+    def from_urdf(cls, robot: Robot, *, velocity_scale: float = DEFAULT_VELOCITY_SCALE) -> JointFriction:
+        """The URDF default: viscous damping plus regularised Coulomb friction per joint."""
+        return cls.from_spec(robot, None, velocity_scale=velocity_scale)
+
+    @classmethod
+    def from_spec(cls, robot: Robot, spec: Mapping[str, Mapping[str, Any]] | None = None, *,
+                  velocity_scale: float = DEFAULT_VELOCITY_SCALE, where: str = "friction") -> JointFriction:
+        """URDF defaults overridden per joint by name, e.g.
+        ``{"arm_joint_1": {"law": "lugre", "sigma0": 1e3, ...}}``; ``velocity_scale`` (rad/s)
+        is v_s wherever an entry does not give its own.
+
+        Raises UserInputError (prefixed by ``where``, e.g. the scene file and key) for an
+        unknown joint, an unknown law, a missing, unknown or out-of-range parameter.
+        """
+        per_joint = [{"law": "coulomb", "coulomb": j.friction, "damping": j.damping,
+                      "velocity_scale": velocity_scale} for j in robot.joints]
+        for name, entry in (spec or {}).items():
+            if name not in robot.joint_names:
+                raise UserInputError(f"{where}: unknown joint '{name}'; moving joints of robot "
+                                     f"'{robot.name}': {', '.join(robot.joint_names)}")
+            per_joint[robot.joint_index(name)] = _checked_entry(entry, f"{where}: joint '{name}'",
+                                                                velocity_scale)
+        laws = tuple(entry["law"] for entry in per_joint)
+        groups = {law: _group(law, laws, per_joint) for law in LAW_FUNCTIONS if law in laws}
+        damping = _frozen(np.array([entry.get("damping", 0.0) for entry in per_joint]))
+        return cls(joint_names=robot.joint_names, laws=laws, damping=damping,
+                   memoryless=tuple(g for law, g in groups.items() if law != "lugre"),
+                   lugre=groups.get("lugre"))
+
+    def torque(self, v: Vector, z: Vector | None = None) -> Vector:
+        """tau_friction (N m or N) at joint velocities v, bristle states z (LuGre joints)."""
+        tau = viscous(v, self.damping)
+        for group in self.memoryless:
+            if group.joints is None:
+                tau += group.function(v, *group.arguments)
+            else:
+                tau[group.joints] += group.function(v[group.joints], *group.arguments)
+        if self.lugre is not None:
+            joints = self.lugre.joints
+            tau[joints] += lugre(v[joints], self._bristles(z), *self.lugre.arguments)
+        return tau
+
+    def state_derivative(self, v: Vector, z: Vector | None = None) -> Vector:
+        """dz/dt of the LuGre bristle states (rad/s or m/s), ordered as ``state_names``."""
+        if self.lugre is None:
+            return np.zeros(0)
+        p = self.lugre.parameters
+        return lugre_bristle_rate(v[self.lugre.joints], self._bristles(z), p["sigma0"], p["coulomb"],
+                                  p["static"], p["stribeck_velocity"])
+
+    def steady_state_bristles(self, v: Vector) -> Vector:
+        """Bristle states with dz/dt = 0 at joint velocities v: g(v) sign(v) / sigma0."""
+        if self.lugre is None:
+            return np.zeros(0)
+        p, vj = self.lugre.parameters, v[self.lugre.joints]
+        return np.sign(vj) * stribeck_curve(vj, p["coulomb"], p["static"], p["stribeck_velocity"]) / p["sigma0"]
+
+    def _bristles(self, z: Vector | None) -> Vector:
+        if z is None or np.shape(z) != (self.n_states,):
+            raise UserInputError(f"friction: expected {self.n_states} LuGre bristle states "
+                                 f"({', '.join(self.state_names)}), got {None if z is None else np.shape(z)}")
+        return z
+
+
+def _group(law: str, laws: tuple[str, ...], per_joint: list[dict[str, Any]]) -> LawGroup:
+    joints = np.array([i for i, name in enumerate(laws) if name == law], dtype=int)
+    function, keys = LAW_FUNCTIONS[law]
+    parameters = {key: _frozen(np.array([per_joint[i][key] for i in joints], dtype=float)) for key in keys}
+    everywhere = joints.size == len(laws) and law != "lugre"  # sorted indices: all joints in order
+    return LawGroup(law, function, None if everywhere else _frozen(joints), parameters,
+                    tuple(parameters[key] for key in keys))
+
+
+def _checked_entry(entry: Mapping[str, Any], where: str, velocity_scale: float) -> dict[str, Any]:
+    """One joint's friction spec, checked: a known law, its parameters, nothing else."""
+    if not isinstance(entry, Mapping) or "law" not in entry:
+        raise UserInputError(f"{where}: needs a mapping with key 'law' (one of {', '.join(LAW_PARAMETERS)})")
+    law = entry["law"]
+    if law not in LAW_PARAMETERS:
+        raise UserInputError(f"{where}: unknown friction law '{law}' (key 'law'); "
+                             f"valid laws: {', '.join(LAW_PARAMETERS)}")
+    keys = LAW_PARAMETERS[law]
+    checked: dict[str, Any] = {"law": law}
+    if "velocity_scale" in keys:
+        checked["velocity_scale"] = velocity_scale
+    for key, value in entry.items():
+        if key == "law":
+            continue
+        if key not in keys:
+            raise UserInputError(f"{where}: unknown parameter '{key}' for law '{law}'; "
+                                 f"its parameters: {', '.join(keys)}")
+        try:
+            checked[key] = float(value)
+        except (TypeError, ValueError):
+            raise UserInputError(f"{where}: parameter '{key}' must be a number, got {value!r}") from None
+    for key in keys:
+        if key not in checked:
+            raise UserInputError(f"{where}: law '{law}' needs parameter '{key}' "
+                                 f"(its parameters: {', '.join(keys)})")
+        value = checked[key]
+        if not np.isfinite(value) or value < 0.0 or (key in _POSITIVE and value == 0.0):
+            bound = "> 0" if key in _POSITIVE else ">= 0"
+            raise UserInputError(f"{where}: parameter '{key}' must be finite and {bound}, got {value}")
+    if law == "lugre" and min(checked["coulomb"], checked["static"]) == 0.0:
+        raise UserInputError(f"{where}: law 'lugre' needs 'coulomb' and 'static' > 0 "
+                             "(the Stribeck curve g(v) divides dz/dt)")
+    return checked
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array.setflags(write=False)
+    return array

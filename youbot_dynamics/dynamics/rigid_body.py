@@ -1,0 +1,79 @@
+"""Rigid-body dynamics of a Robot with joint friction, over Pinocchio.
+
+Equations of motion, joint coordinates in Pinocchio's order (rad, m; SI units throughout):
+
+    M(q) a + C(q, v) v + g(q) = tau - tau_friction(v, z),
+
+tau the applied joint torques (N m) or forces (N), tau_friction from
+:class:`~youbot_dynamics.dynamics.friction.JointFriction` (positive along v, it resists),
+z the friction's extra states (LuGre bristles; None without LuGre joints). Gravity is the
+model's (``model.gravity``, default 9.81 m/s^2 along -z of the root frame). M includes the
+model's ``armature`` (rotor inertia seen at the joint), as Pinocchio's algorithms do.
+
+Friction is applied here and only here: Pinocchio 4.1 stores the URDF's
+``<dynamics damping friction>`` in ``model.damping`` and ``model.friction`` but its rnea,
+aba, crba and nonLinearEffects do not use them (test_rigid_body checks that), so nothing is
+counted twice and the Robot's model needs no change.
+
+``data`` is a Pinocchio Data of ``robot.model`` (``robot.model.createData()``), the caller's
+scratch space; each call overwrites it. Returned arrays are fresh (not views of ``data``).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.model.robot import Robot
+
+Vector = np.ndarray
+
+
+def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vector,
+                     friction: JointFriction | None = None, z: Vector | None = None) -> Vector:
+    """tau = RNEA(q, v, a) + tau_friction(v, z): joint torques (N m) or forces (N) giving
+    accelerations a (rad/s^2, m/s^2) at positions q and velocities v."""
+    tau = pin.rnea(robot.model, data, q, v, a)
+    if friction is not None:
+        tau += friction.torque(v, z)
+    return tau
+
+
+def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Vector,
+                     friction: JointFriction | None = None, z: Vector | None = None) -> Vector:
+    """a = ABA(q, v, tau - tau_friction(v, z)): joint accelerations (rad/s^2, m/s^2) under
+    applied torques tau (N m, N)."""
+    if friction is not None:
+        tau = tau - friction.torque(v, z)
+    return pin.aba(robot.model, data, q, v, tau)
+
+
+def mass_matrix(robot: Robot, data: pin.Data, q: Vector) -> Vector:
+    """Joint-space mass matrix M(q) (kg m^2, kg), full and symmetric, armature included."""
+    mass = pin.crba(robot.model, data, q)
+    return np.triu(mass) + np.triu(mass, 1).T  # crba fills at least the upper triangle
+
+
+def gravity_torque(robot: Robot, data: pin.Data, q: Vector) -> Vector:
+    """g(q) (N m, N): the torques that hold the robot still against gravity."""
+    return pin.computeGeneralizedGravity(robot.model, data, q)
+
+
+def bias_torque(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> Vector:
+    """C(q, v) v + g(q) (N m, N): Coriolis, centrifugal and gravity torques."""
+    return pin.nonLinearEffects(robot.model, data, q, v)
+
+
+def kinetic_energy(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> float:
+    """T = v . M(q) v / 2 (J), armature included.
+
+    Not pin.computeKineticEnergy: in Pinocchio 4.1 it leaves out the armature of
+    RevoluteUnaligned joints (such as the youBot's arm_joint_1, axis -z).
+    """
+    return 0.5 * float(v @ mass_matrix(robot, data, q) @ v)
+
+
+def potential_energy(robot: Robot, data: pin.Data, q: Vector) -> float:
+    """V(q) = -sum_i m_i gravity . c_i (J), c_i the centre of mass of link i in the root
+    frame; zero with every centre of mass at the root's height (gravity along -z)."""
+    return float(pin.computePotentialEnergy(robot.model, data, q))
