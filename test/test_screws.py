@@ -1,0 +1,240 @@
+"""Screw axes from the URDF and product-of-exponentials kinematics against the seed exercise
+(youbot_facts.md section 5) and Pinocchio's frame placements and frame Jacobians."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from youbot_dynamics import default_urdf
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.lie import exp_se3
+from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
+from youbot_dynamics.model.screws import (fkin_body, fkin_space, jacobian_body, jacobian_space,
+                                          screw_chain)
+
+N_CONFIGURATIONS = 1000
+TOLERANCE = 1e-12
+
+# ---- the seed's exercise, written as a URDF ----------------------------------------------
+L1, L2, L3, L4, L5 = 1.0, 2.0, 2.0, 1.0, 1.5
+W2, W3, W4, W5 = 1.0, 1.0, 1.0, 0.5
+SEED_S = np.array([[0, 0, 1, 0, 0, 0],
+                   [1, 0, 0, 0, L1, 0],
+                   [1, 0, 0, 0, L1 + L2, 0],
+                   [1, 0, 0, 0, L1 + L2 + L3, 0],
+                   [0, 0, 1, 0, W2 - W3 + W4 - W5, 0],
+                   [0, 0, 0, 1, 0, 0]], dtype=float).T
+SEED_M = np.array([[1, 0, 0, -W2 + W3 - W4 + W5], [0, 0, -1, 0],
+                   [0, 1, 0, L1 + L2 + L3 + L4 + L5], [0, 0, 0, 1]], dtype=float)
+SEED_THETA = (math.pi, -math.pi / 4, -math.pi / 4, -1.057, 0.0, 0.0)
+SEED_X, SEED_Y = 0.499999999999987, -4.64293092352121  # printed by the seed
+
+
+def _link(name: str) -> str:
+    return (f'<link name="{name}"><inertial><mass value="1"/>'
+            '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>')
+
+
+def _joint(name: str, kind: str, parent: str, child: str, xyz: str, rpy: str = "0 0 0",
+           axis: str = "1 0 0") -> str:
+    limit = '<limit lower="-10" upper="10" effort="10" velocity="1"/>' if kind in ("revolute", "prismatic") else ""
+    return (f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/>{limit}</joint>')
+
+
+def seed_urdf() -> str:
+    """The seed's 6-joint chain: revolutes about z, x, x, x, z, a prismatic along x; the
+    last joint frame is turned +90 degrees about x so that M has the seed's rotation."""
+    joints = [("j1", "revolute", "0 0 0", "0 0 0", "0 0 1"),
+              ("j2", "revolute", f"0 0 {L1}", "0 0 0", "1 0 0"),
+              ("j3", "revolute", f"0 0 {L2}", "0 0 0", "1 0 0"),
+              ("j4", "revolute", f"0 0 {L3}", "0 0 0", "1 0 0"),
+              ("j5", "revolute", f"{-W2 + W3 - W4 + W5} 0 {L4}", "0 0 0", "0 0 1"),
+              ("j6", "prismatic", f"0 0 {L5}", f"{math.pi / 2!r} 0 0", "1 0 0")]
+    links = [f"l{i}" for i in range(7)]
+    body = [_link(name) for name in links]
+    body += [_joint(name, kind, links[i], links[i + 1], xyz, rpy, axis)
+             for i, (name, kind, xyz, rpy, axis) in enumerate(joints)]
+    return f'<robot name="seed">{"".join(body)}</robot>'
+
+
+def offset_arm_urdf() -> str:
+    """A second robot unlike the youBot: 6 moving joints with offsets, a prismatic joint, a
+    continuous joint, a skew axis, non-trivial rpy origins, fixed joints in between and a
+    side branch."""
+    links = ["base", "a1", "a2", "a3", "a3b", "a4", "a5", "a6", "tool", "side"]
+    joints = [
+        ("q1", "revolute", "base", "a1", "0.05 -0.02 0.3", "0.1 -0.2 0.3", "0 0 1"),
+        ("q2", "revolute", "a1", "a2", "0.1 0.07 0.02", "1.2 0.4 -0.7", "0 1 0"),
+        ("q3", "prismatic", "a2", "a3", "0.4 -0.05 0.1", "-0.3 0.8 0.2", "0.6 0 0.8"),
+        ("fix", "fixed", "a3", "a3b", "0.02 0.03 -0.04", "0.5 -1.1 2.0", "1 0 0"),
+        ("q4", "revolute", "a3b", "a4", "0.3 0.01 -0.06", "-1.4 0.2 0.9", "1 0 0"),
+        ("q5", "continuous", "a4", "a5", "0 0.12 0.25", "0.7 0.7 -0.7", "0 0 1"),
+        ("q6", "revolute", "a5", "a6", "0.08 0 0.05", "2.5 -0.3 1.0", "1 1 1"),
+        ("tool_joint", "fixed", "a6", "tool", "0.01 0.02 0.15", "0.3 0.2 0.1", "1 0 0"),
+        ("side_joint", "revolute", "a2", "side", "0 0.2 0", "0 0 0.5", "0 0 1"),
+    ]
+    body = [_link(name) for name in links]
+    body += [_joint(*joint) for joint in joints]
+    return f'<robot name="offset_arm">{"".join(body)}</robot>'
+
+
+# ---- helpers -----------------------------------------------------------------------------
+def _swap(jacobian: np.ndarray) -> np.ndarray:
+    """Pinocchio rows (v, omega) -> ours (omega, v)."""
+    return np.vstack([jacobian[3:], jacobian[:3]])
+
+
+def _max_errors(robot: Robot, link: str, configurations: np.ndarray) -> dict[str, float]:
+    """Largest deviations of our FK and Jacobians from Pinocchio's over the configurations."""
+    chain = screw_chain(robot, link)
+    data = robot.model.createData()
+    frame = robot.frame_id(link)
+    space, body = fkin_space(chain, configurations), fkin_body(chain, configurations)
+    j_space, j_body = jacobian_space(chain, configurations), jacobian_body(chain, configurations)
+    others = np.setdiff1d(np.arange(robot.nv), chain.joints)
+    errors = dict.fromkeys(("fkin_space", "fkin_body", "jacobian_space", "jacobian_body", "others"), 0.0)
+    for k, q in enumerate(configurations):
+        pin.framesForwardKinematics(robot.model, data, q)
+        placement = data.oMf[frame].homogeneous
+        world = _swap(pin.computeFrameJacobian(robot.model, data, q, frame, pin.WORLD))
+        local = _swap(pin.computeFrameJacobian(robot.model, data, q, frame, pin.LOCAL))
+        for key, ours, reference in (("fkin_space", space[k], placement), ("fkin_body", body[k], placement),
+                                     ("jacobian_space", j_space[k], world[:, chain.joints]),
+                                     ("jacobian_body", j_body[k], local[:, chain.joints])):
+            errors[key] = max(errors[key], float(np.abs(ours - reference).max(initial=0.0)))
+        # Joints outside the chain do not move the link.
+        errors["others"] = max(errors["others"], float(np.abs(world[:, others]).max(initial=0.0)))
+    return errors
+
+
+def _random_configurations(robot: Robot, seed: int) -> np.ndarray:
+    """Uniform in [-pi, pi] rad for rotating joints, [-0.5, 0.5] m for prismatic ones."""
+    scale = np.array([0.5 if j.type == "prismatic" else math.pi for j in robot.joints])
+    return np.random.default_rng(seed).uniform(-1.0, 1.0, (N_CONFIGURATIONS, robot.nv)) * scale
+
+
+@pytest.fixture(scope="module")
+def youbot() -> Robot:
+    return load_robot(default_urdf())
+
+
+# ---- the seed exercise -------------------------------------------------------------------
+def test_seed_exercise_screw_axes_and_home() -> None:
+    robot = load_robot(seed_urdf())
+    chain = screw_chain(robot)
+    assert chain.link == "l6" and chain.joint_names == ("j1", "j2", "j3", "j4", "j5", "j6")
+    np.testing.assert_allclose(chain.S, SEED_S, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(chain.M, SEED_M, rtol=0, atol=1e-15)
+
+
+def test_seed_exercise_end_effector_position() -> None:
+    robot = load_robot(seed_urdf())
+    chain = screw_chain(robot)
+    q = np.array(SEED_THETA)
+    for transform in (fkin_space(chain, q), fkin_body(chain, q)):
+        # The seed prints 15 significant digits of its own (rounded) computation.
+        assert abs(transform[0, 3] - SEED_X) < 1e-13
+        assert abs(transform[1, 3] - SEED_Y) < 1e-13
+    # The seed's own formula with the seed's S and M, through exp_se3.
+    reference = SEED_M
+    for i in reversed(range(6)):
+        reference = exp_se3(SEED_S[:, i] * SEED_THETA[i]) @ reference
+    np.testing.assert_allclose(fkin_space(chain, q), reference, rtol=0, atol=1e-14)
+    assert abs(fkin_space(chain, q)[0, 3] - 0.5) < 1e-14  # exact: -W2+W3-W4+W5 rotated by pi
+
+
+def test_seed_exercise_matches_pinocchio() -> None:
+    robot = load_robot(seed_urdf())
+    errors = _max_errors(robot, "l6", _random_configurations(robot, 1))
+    assert max(errors.values()) < TOLERANCE, errors
+
+
+# ---- agreement with Pinocchio ------------------------------------------------------------
+@pytest.mark.parametrize("link", ["gripper_palm_link", "arm_link_3", "gripper_finger_link_l",
+                                  "gripper_finger_link_r", "wheel_link_fl", "wheel_link_br"])
+def test_youbot_matches_pinocchio(youbot: Robot, link: str) -> None:
+    errors = _max_errors(youbot, link, _random_configurations(youbot, 2))
+    assert max(errors.values()) < TOLERANCE, errors
+
+
+@pytest.mark.parametrize("link", ["tool", "a3b", "side"])
+def test_offset_arm_matches_pinocchio(link: str) -> None:
+    robot = load_robot(offset_arm_urdf())
+    errors = _max_errors(robot, link, _random_configurations(robot, 3))
+    assert max(errors.values()) < TOLERANCE, errors
+
+
+def test_offset_arm_chain_structure() -> None:
+    robot = load_robot(offset_arm_urdf())
+    chain = screw_chain(robot, "tool")
+    assert chain.joint_names == ("q1", "q2", "q3", "q4", "q5", "q6")
+    assert [robot.joint_names[i] for i in chain.joints] == list(chain.joint_names)
+    np.testing.assert_allclose(np.linalg.norm(chain.S[:3, 2]), 0.0)  # prismatic: omega = 0
+    np.testing.assert_allclose(np.linalg.norm(chain.S[3:, 2]), 1.0)
+    np.testing.assert_allclose(np.linalg.norm(chain.S[:3, [0, 1, 3, 4, 5]], axis=0), 1.0)
+    # Side branch: only q1, q2 and its own joint.
+    assert screw_chain(robot, "side").joint_names == ("q1", "q2", "side_joint")
+
+
+def test_root_link_has_no_joints(youbot: Robot) -> None:
+    chain = screw_chain(youbot, youbot.root_link)
+    q = np.zeros((3, youbot.nv))
+    np.testing.assert_array_equal(fkin_space(chain, q), np.broadcast_to(np.eye(4), (3, 4, 4)))
+    assert jacobian_space(chain, q).shape == (3, 6, 0)
+
+
+def test_body_axes_and_single_configuration(youbot: Robot) -> None:
+    chain = screw_chain(youbot)
+    assert chain.link == "gripper_palm_link"
+    assert chain.joint_names == tuple(f"arm_joint_{i}" for i in range(1, 6))
+    q = _random_configurations(youbot, 4)[:5]
+    for k in range(5):  # one configuration at a time gives the batch's values
+        np.testing.assert_allclose(fkin_space(chain, q[k]), fkin_space(chain, q)[k], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(jacobian_body(chain, q[k]), jacobian_body(chain, q)[k], rtol=0, atol=1e-15)
+    with pytest.raises(UserInputError, match="11 values"):
+        fkin_space(chain, np.zeros(5))
+
+
+def test_locked_robot_keeps_screw_kinematics(youbot: Robot) -> None:
+    """Locked joints are folded into the fixed part: same pose as the full robot."""
+    locked_values = {"arm_joint_1": 0.7, "arm_joint_4": 1.1, "gripper_finger_joint_l": 0.004}
+    moving = [n for n in youbot.joint_names if n not in locked_values]
+    reduced = keep_joints(youbot, moving, locked_values)
+    q_reduced = _random_configurations(reduced, 5)[:50]
+    q_full = np.zeros((50, youbot.nv))
+    for i, name in enumerate(reduced.joint_names):
+        q_full[:, youbot.joint_index(name)] = q_reduced[:, i]
+    for name, value in locked_values.items():
+        q_full[:, youbot.joint_index(name)] = value
+    for link in ("gripper_palm_link", "gripper_finger_link_l"):
+        np.testing.assert_allclose(fkin_space(screw_chain(reduced, link), q_reduced),
+                                   fkin_space(screw_chain(youbot, link), q_full), rtol=0, atol=1e-14)
+        assert max(_max_errors(reduced, link, q_reduced).values()) < TOLERANCE
+
+
+# ---- the singular, fully stretched youBot --------------------------------------------------
+def test_stretched_youbot_jacobians_rank_four(youbot: Robot) -> None:
+    """Arm straight up (joints 2, 3, 4 undo the origin pitches 65, 146, -102.5 degrees): the
+    three pitch axes lie in one plane through one vertical line, so they span only 2 twist
+    directions; with joints 1 and 5 (vertical, parallel, not collinear) the 5-joint
+    Jacobian has rank 4 of 5, and the finger's 6-joint chain too (its slide is horizontal,
+    already spanned)."""
+    stretched = youbot.vector({"arm_joint_1": 2.9496, "arm_joint_2": math.radians(65),
+                               "arm_joint_3": math.radians(-146), "arm_joint_4": math.radians(102.5),
+                               "arm_joint_5": 2.9234})
+    chain = screw_chain(youbot)
+    pose = fkin_space(chain, stretched)
+    np.testing.assert_allclose(pose[:3, 2], [0, 0, 1], atol=1e-15)  # palm z straight up
+    for link, n in (("gripper_palm_link", 5), ("gripper_finger_link_l", 6)):
+        chain = screw_chain(youbot, link)
+        for jacobian in (jacobian_space(chain, stretched), jacobian_body(chain, stretched)):
+            assert jacobian.shape == (6, n) and np.all(np.isfinite(jacobian))
+            singular = np.linalg.svd(jacobian, compute_uv=False)
+            assert singular[3] > 1e-2 and singular[4] < 1e-12, singular
+        assert max(_max_errors(youbot, link, stretched[None, :]).values()) < TOLERANCE
+    generic = np.linalg.svd(jacobian_space(screw_chain(youbot), stretched + 0.3), compute_uv=False)
+    assert generic[4] > 1e-3
