@@ -1,0 +1,100 @@
+"""Lagrange's equations by sympy: energy balance, friction decay, sensitive dependence and
+a cross-check of the 2-link arm against Pinocchio's RNEA."""
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import sympy as sp
+
+from youbot_dynamics.sim.integrators import integrate
+from youbot_dynamics.systems.lagrange import SEED_INITIAL, equilibrium, model
+
+
+def seed_state(name: str) -> np.ndarray:
+    q0, u0 = SEED_INITIAL[name]
+    return np.r_[q0, u0]
+
+
+@pytest.mark.parametrize("name", ["2d", "3d"])
+def test_power_balance_dE_dt_equals_minus_friction_power(name):
+    """dE/dt along the derived equations is -c |q'|^2 (sympy gradient of E, numeric M^-1 f)."""
+    m = model(name)
+    p = m.parameter_values({"c": 0.7})
+    gradient = sp.lambdify((m.q, m.u, m.parameters),
+                           [sp.diff(m.energy, s) for s in m.q + m.u], "numpy")
+    rhs = m.rhs(p)
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        x = rng.uniform(-1.0, 1.0, 6)
+        dE = np.dot(gradient(x[:3], x[3:], p), rhs(0.0, x))
+        assert dE == pytest.approx(-0.7 * np.dot(x[3:], x[3:]), rel=1e-10, abs=1e-12)
+
+
+@pytest.mark.parametrize("name", ["2d", "3d"])
+def test_energy_is_conserved_without_friction(name):
+    m = model(name)
+    p = m.parameter_values()
+    solution = integrate(m.rhs(p), seed_state(name), np.linspace(0.0, 10.0, 501), "dop853",
+                         rtol=1e-12, atol=1e-12)
+    energy = m.energy_of(solution.x, p)
+    assert np.abs(energy - energy[0]).max() / abs(energy[0]) < 1e-8
+
+
+@pytest.mark.parametrize("name", ["2d", "3d"])
+def test_friction_decays_the_energy_monotonically_to_the_hanging_equilibrium(name):
+    m = model(name)
+    p = m.parameter_values({"c": 1.0})
+    solution = integrate(m.rhs(p), seed_state(name), np.linspace(0.0, 30.0, 601), "dop853",
+                         rtol=1e-9, atol=1e-11)
+    energy = m.energy_of(solution.x, p)
+    rest = np.r_[equilibrium(name, p), 0.0, 0.0, 0.0]
+    minimum = m.energy_of(rest, p)[0]
+    assert np.all(np.diff(energy) <= 1e-12)
+    assert (energy[-1] - minimum) < 1e-6 * (energy[0] - minimum)
+    np.testing.assert_allclose(solution.x[-1], rest, atol=1e-3)
+    # the equilibrium is one: no generalised force there
+    assert np.allclose(m.rhs(p)(0.0, rest), 0.0, atol=1e-12)
+
+
+def test_3d_sensitive_dependence_on_the_initial_state():
+    """(0.5, 0.1, 0.5) at rest versus q1 = 0.6: q2 agrees early, then the curves part."""
+    m = model("3d")
+    p = m.parameter_values()
+    times = np.linspace(0.0, 1.5, 1501)
+    runs = [integrate(m.rhs(p), [q1, 0.1, 0.5, 0.0, 0.0, 0.0], times, "dop853", rtol=1e-11,
+                      atol=1e-12).x[:, 1] for q1 in (0.5, 0.6)]
+    gap = np.abs(runs[0] - runs[1])
+    assert gap[times <= 0.7].max() < 0.01
+    assert gap.max() > 0.5
+    parted = times[np.argmax(gap > 0.1)]
+    assert 0.7 < parted < 1.2
+
+
+def pinocchio_planar_arm(m1, l1, m2, l2, g) -> pin.Model:
+    """Two revolute-z joints with uniform rods along x, gravity -g y."""
+    model_ = pin.Model()
+    model_.gravity.linear = np.array([0.0, -g, 0.0])
+    parent = 0
+    for mass, length, offset in ((m1, l1, 0.0), (m2, l2, l1)):
+        placement = pin.SE3(np.eye(3), np.array([offset, 0.0, 0.0]))
+        parent = model_.addJoint(parent, pin.JointModelRZ(), placement, f"joint{parent + 1}")
+        rod_inertia = np.diag([0.0, 1.0, 1.0]) * mass * length ** 2 / 12
+        model_.appendBodyToJoint(parent, pin.Inertia(mass, np.array([length / 2, 0, 0]),
+                                                     rod_inertia), pin.SE3.Identity())
+    return model_
+
+
+def test_planar_arm_matches_pinocchio_rnea():
+    arm = model("arm")
+    p = arm.parameter_values()
+    values = dict(zip(map(str, arm.parameters), p))
+    reference = pinocchio_planar_arm(values["m1"], values["l1"], values["m2"], values["l2"],
+                                     values["g"])
+    data = reference.createData()
+    rng = np.random.default_rng(7)
+    for _ in range(10):
+        q, v, a = (rng.uniform(-3.0, 3.0, 2) for _ in range(3))
+        expected = pin.rnea(reference, data, q, v, a)
+        np.testing.assert_allclose(arm.inverse_dynamics(q, v, a, p), expected, atol=1e-10,
+                                   rtol=1e-10)

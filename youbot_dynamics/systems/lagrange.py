@@ -1,0 +1,207 @@
+"""Lagrange's equations by computer algebra (seed: KTH report; benchmarks.md section 4):
+sympy.physics.mechanics derives M(q) q'' = f(q, q') from the Lagrangian T - V, joint
+friction enters as the generalised force Q_i = -c q_i', and lambdify turns M, f and the
+energy T + V into numpy functions (derivations and code are cached per model).
+
+Models (angles in rad, lengths in m, masses in kg; z up, gravity -g z):
+
+- ``2d``: a uniform rod (m1, l) pivoted at O swings in the vertical x-z plane (q1 from
+  the downward vertical); at its end A a light rod is hinged (q2, relative to the first);
+  a bead m2 slides on it at distance l0 + q3 from A, held by a spring (k, rest length l0).
+- ``3d``: a uniform rod OA (m1, l) turns about the horizontal axis x through O (q1 from
+  the downward vertical); a massless rod AB (length l2) hangs from a ball joint at A,
+  oriented by q2 about the rod's y axis (out of the rod's swing plane) then q3 about the
+  new x axis; a particle m2 at B.
+- ``arm``: a planar 2-link arm (uniform links m1, l1 and m2, l2, revolute joints about z,
+  q from the x axis, gravity -g y), for the cross-check against Pinocchio's RNEA.
+
+Chosen parameter values (the seed gives none): see DEFAULTS. For ``3d`` a light particle on
+a long arm (m2 = 0.1 kg, l2 = 1 m, rod 1 kg, 0.5 m) makes the seed's chaos test show: from
+(0.5, 0.1, 0.5) at rest versus q1 = 0.6 the q2 curves agree to 0.01 rad up to t = 0.78 s
+and differ by 0.5 rad at 0.91 s.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache, cached_property
+from typing import Callable
+
+import numpy as np
+import sympy as sp
+from sympy.physics import mechanics as me
+
+from youbot_dynamics.errors import UserInputError
+
+#: Parameter values used unless given (SI). c is the joint friction coefficient.
+DEFAULTS = {
+    "2d": {"m1": 1.0, "l": 1.0, "m2": 0.5, "l0": 0.5, "k": 40.0, "g": 9.81, "c": 0.0},
+    "3d": {"m1": 1.0, "l": 0.5, "m2": 0.1, "l2": 1.0, "g": 9.81, "c": 0.0},
+    "arm": {"m1": 1.3, "l1": 0.7, "m2": 0.9, "l2": 0.5, "g": 9.81, "c": 0.0},
+}
+#: The seed's initial states (q, q').
+SEED_INITIAL = {"2d": ((0.8, 0.0, 0.0), (0.0, 0.0, 0.0)),
+                "3d": ((0.5, 0.1, 0.5), (0.0, 0.0, 0.0))}
+
+
+@dataclass(frozen=True)
+class LagrangeModel:
+    """Equations of motion M(q) q'' = f(q, q') of one model, as sympy expressions in the
+    plain symbols ``q``, ``u`` (= q') and ``parameters``, with their numeric versions."""
+
+    name: str
+    q: tuple[sp.Symbol, ...]
+    u: tuple[sp.Symbol, ...]
+    parameters: tuple[sp.Symbol, ...]
+    mass_matrix: sp.Matrix
+    forcing: sp.Matrix
+    energy: sp.Expr
+
+    @cached_property
+    def numeric(self) -> tuple[Callable, Callable, Callable]:
+        """(M(q, p), f(q, u, p), E(q, u, p)) as numpy functions."""
+        args = (self.q, self.u, self.parameters)
+        return (sp.lambdify(args, self.mass_matrix, "numpy", cse=True),
+                sp.lambdify(args, self.forcing, "numpy", cse=True),
+                sp.lambdify(args, self.energy, "numpy", cse=True))
+
+    def parameter_values(self, overrides: dict[str, float] | None = None) -> tuple[float, ...]:
+        """The DEFAULTS for this model with ``overrides`` (name -> value) applied."""
+        values = dict(DEFAULTS[self.name])
+        unknown = set(overrides or {}) - set(values)
+        if unknown:
+            raise UserInputError(f"model {self.name!r} has no parameter(s) "
+                                 f"{sorted(unknown)}; it has {sorted(values)}")
+        values.update(overrides or {})
+        return tuple(float(values[str(s)]) for s in self.parameters)
+
+    def rhs(self, p: tuple[float, ...]) -> Callable[[float, np.ndarray], np.ndarray]:
+        """x' = (q', M^-1 f) for x = (q, q') with parameter values p."""
+        mass, forcing, _ = self.numeric
+        n = len(self.q)
+
+        def rhs(t: float, x: np.ndarray) -> np.ndarray:
+            q, u = x[:n], x[n:]
+            acceleration = np.linalg.solve(mass(q, u, p), forcing(q, u, p).ravel())
+            return np.concatenate((u, acceleration))
+        return rhs
+
+    def energy_of(self, x: np.ndarray, p: tuple[float, ...]) -> np.ndarray:
+        """Total energy T + V (J) at states x ((2n,) or (m, 2n))."""
+        x = np.atleast_2d(x)
+        n = len(self.q)
+        _, _, energy = self.numeric
+        return np.array([energy(row[:n], row[n:], p) for row in x])
+
+    def inverse_dynamics(self, q, u, acceleration, p: tuple[float, ...]) -> np.ndarray:
+        """Generalised forces tau = M(q) q'' - f(q, q') that produce the given motion."""
+        mass, forcing, _ = self.numeric
+        return mass(q, u, p) @ np.asarray(acceleration) - forcing(q, u, p).ravel()
+
+    def equations(self) -> list[str]:
+        """Short text of each equation: sum_j M_ij q_j'' = f_i."""
+        qdd = sp.symbols(" ".join(f"{s}''" for s in self.q))
+        lines = []
+        for i in range(len(self.q)):
+            left = sum(sp.simplify(self.mass_matrix[i, j]) * qdd[j]
+                       for j in range(len(self.q)))
+            lines.append(f"{sp.sstr(left)} = {sp.sstr(sp.simplify(self.forcing[i]))}")
+        return lines
+
+
+def lagranges_method(frame: me.ReferenceFrame, q: list, bodies: list,
+                     extra_potential: sp.Expr, parameters: tuple[sp.Symbol, ...],
+                     friction: sp.Symbol, name: str) -> LagrangeModel:
+    """Lagrange's equations for ``bodies`` (each with ``potential_energy`` set) in
+    ``frame`` plus ``extra_potential``, with Q_i = -friction q_i'; returns the model in
+    plain symbols (q'(t) -> u, q(t) -> q)."""
+    lagrangian = me.Lagrangian(frame, *bodies) - extra_potential
+    method = me.LagrangesMethod(lagrangian, q, frame=frame)
+    method.form_lagranges_equations()
+    qd = [qi.diff(me.dynamicsymbols._t) for qi in q]
+    kinetic = sum(body.kinetic_energy(frame) for body in bodies)
+    potential = sum(body.potential_energy for body in bodies) + extra_potential
+    q_plain = sp.symbols(" ".join(str(qi.func) for qi in q))
+    u_plain = sp.symbols(" ".join(f"u{str(qi.func)[1:]}" for qi in q))
+    plain = dict(zip(qd, u_plain)) | dict(zip(q, q_plain))
+
+    def to_plain(expression):
+        return me.msubs(expression, plain)
+
+    forcing = method.forcing - friction * sp.Matrix(qd)
+    return LagrangeModel(name, tuple(q_plain), tuple(u_plain), parameters,
+                         to_plain(method.mass_matrix), to_plain(forcing),
+                         to_plain(kinetic + potential))
+
+
+def rod(name: str, frame: me.ReferenceFrame, center: me.Point, mass: sp.Symbol,
+        length: sp.Expr, axis: me.Vector) -> me.RigidBody:
+    """A uniform thin rod along ``axis`` of ``frame``: inertia m l^2 / 12 about the two
+    axes normal to it, through its center."""
+    normal = mass * length ** 2 / 12
+    inertia = normal * (me.outer(frame.x, frame.x) + me.outer(frame.y, frame.y)
+                        + me.outer(frame.z, frame.z) - me.outer(axis, axis))
+    return me.RigidBody(name, center, frame, mass, (inertia, center))
+
+
+@cache
+def model(name: str) -> LagrangeModel:
+    """The derived model ``2d``, ``3d`` or ``arm`` (cached)."""
+    if name not in DEFAULTS:
+        raise UserInputError(f"unknown Lagrange model {name!r}; choose from {sorted(DEFAULTS)}")
+    symbols = sp.symbols(" ".join(DEFAULTS[name]), positive=True)
+    p = dict(zip(DEFAULTS[name], symbols))
+    g, c = p["g"], p["c"]
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    if name == "2d":
+        q1, q2, q3 = q = list(me.dynamicsymbols("q1 q2 q3"))
+        A_frame = N.orientnew("A", "Axis", (q1, N.y))
+        B_frame = A_frame.orientnew("B", "Axis", (q2, N.y))
+        center = O.locatenew("Ac", -p["l"] / 2 * A_frame.z)
+        A = O.locatenew("A", -p["l"] * A_frame.z)
+        bead = A.locatenew("P", -(p["l0"] + q3) * B_frame.z)
+        for point in (center, A, bead):
+            point.set_vel(N, point.pos_from(O).dt(N))
+        body = rod("rod", A_frame, center, p["m1"], p["l"], A_frame.z)
+        particle = me.Particle("bead", bead, p["m2"])
+        spring = p["k"] * q3 ** 2 / 2
+    elif name == "3d":
+        q1, q2, q3 = q = list(me.dynamicsymbols("q1 q2 q3"))
+        A_frame = N.orientnew("A", "Axis", (q1, N.x))
+        B_frame = A_frame.orientnew("B", "Body", (q2, q3, 0), "YXZ")
+        center = O.locatenew("Ac", -p["l"] / 2 * A_frame.z)
+        A = O.locatenew("A", -p["l"] * A_frame.z)
+        tip = A.locatenew("B", -p["l2"] * B_frame.z)
+        for point in (center, A, tip):
+            point.set_vel(N, point.pos_from(O).dt(N))
+        body = rod("rod", A_frame, center, p["m1"], p["l"], A_frame.z)
+        particle = me.Particle("tip", tip, p["m2"])
+        spring = sp.S.Zero
+    else:
+        q1, q2 = q = list(me.dynamicsymbols("q1 q2"))
+        L1 = N.orientnew("L1", "Axis", (q1, N.z))
+        L2 = L1.orientnew("L2", "Axis", (q2, N.z))
+        c1 = O.locatenew("c1", p["l1"] / 2 * L1.x)
+        elbow = O.locatenew("E", p["l1"] * L1.x)
+        c2 = elbow.locatenew("c2", p["l2"] / 2 * L2.x)
+        for point in (c1, c2):
+            point.set_vel(N, point.pos_from(O).dt(N))
+        link1 = rod("link1", L1, c1, p["m1"], p["l1"], L1.x)
+        link2 = rod("link2", L2, c2, p["m2"], p["l2"], L2.x)
+        link1.potential_energy = p["m1"] * g * c1.pos_from(O).dot(N.y)
+        link2.potential_energy = p["m2"] * g * c2.pos_from(O).dot(N.y)
+        return lagranges_method(N, q, [link1, link2], sp.S.Zero, tuple(symbols), c, name)
+    body.potential_energy = p["m1"] * g * center.pos_from(O).dot(N.z)
+    particle.potential_energy = p["m2"] * g * particle.point.pos_from(O).dot(N.z)
+    return lagranges_method(N, q, [body, particle], spring, tuple(symbols), c, name)
+
+
+def equilibrium(name: str, p: tuple[float, ...]) -> np.ndarray:
+    """The hanging equilibrium q* (potential minimum) of ``2d`` or ``3d``: everything
+    hanging straight down; in ``2d`` the spring stretched by the bead's weight,
+    q3 = m2 g / k."""
+    if name == "2d":
+        values = dict(zip(DEFAULTS["2d"], p))
+        return np.array([0.0, 0.0, values["m2"] * values["g"] / values["k"]])
+    return np.zeros(3)
