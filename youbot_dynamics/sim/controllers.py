@@ -1,0 +1,105 @@
+"""Joint-torque controllers for the simulator: none, gravity-compensated PD, computed torque.
+
+Every controller maps (t, q, v) to a joint torque (N m, or N for prismatic joints) in the
+reduced Robot's joint order, clipped to the URDF effort limits. A controller tracks the
+desired (q_d, v_d, a_d) of a :class:`PointToPointTrajectory`, or holds its set point when
+it has none. Controllers are memoryless (no integral state), so they add no continuous
+state. The PD controller knows gravity only; computed torque knows the rigid-body model and feeds
+the friction model forward along the desired motion (it cannot see the bristle states).
+
+- ``NoController``: tau = 0 (a free fall).
+- ``GravityCompensatedPD``: tau = g(q) + Kp (q_d - q) + Kd (v_d - v), gains in N m/rad and
+  N m s/rad.
+- ``ComputedTorque``: tau = M(q) (a_d + Kp e + Kd e') + C(q, v) v + g(q) (RNEA), e = q_d - q,
+  plus the friction model's torque at the desired velocity, tau_f(v_d) (LuGre bristles at
+  their steady state for v_d) as feedforward; gains in 1/s^2 and 1/s (each joint's error
+  obeys e'' + Kd e' + Kp e = 0 when the model is exact and no limit is hit).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.dynamics.rigid_body import gravity_torque, inverse_dynamics
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+
+
+@dataclass(frozen=True)
+class Reference:
+    """What the controller tracks: a trajectory, or a constant set point ``hold`` (rad)."""
+
+    hold: np.ndarray
+    trajectory: PointToPointTrajectory | None = None
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Desired position, velocity and acceleration at t (s)."""
+        if self.trajectory is None:
+            zero = np.zeros_like(self.hold)
+            return self.hold, zero, zero
+        return self.trajectory.evaluate(t)
+
+
+class NoController:
+    """Zero torque."""
+
+    kind = "none"
+
+    def __init__(self, robot: Robot) -> None:
+        self.zero = np.zeros(robot.nv)
+
+    def torque(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return self.zero
+
+
+class GravityCompensatedPD:
+    """tau = g(q) + Kp (q_d - q) + Kd (v_d - v), clipped to the effort limits."""
+
+    kind = "pd"
+
+    def __init__(self, robot: Robot, reference: Reference, kp: np.ndarray, kd: np.ndarray) -> None:
+        self.robot, self.data = robot, robot.model.createData()
+        self.reference, self.kp, self.kd = reference, np.asarray(kp), np.asarray(kd)
+        self.limit = np.asarray(robot.effort_limit)
+
+    def torque(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        q_d, v_d, _ = self.reference.at(t)
+        gravity = gravity_torque(self.robot, self.data, q)
+        return np.clip(gravity + self.kp * (q_d - q) + self.kd * (v_d - v), -self.limit, self.limit)
+
+
+class ComputedTorque:
+    """tau = RNEA(q, v, a_d + Kp e + Kd e'), clipped to the effort limits."""
+
+    kind = "computed_torque"
+
+    def __init__(self, robot: Robot, reference: Reference, kp: np.ndarray, kd: np.ndarray,
+                 friction: JointFriction | None) -> None:
+        self.robot, self.data = robot, robot.model.createData()
+        self.reference, self.kp, self.kd = reference, np.asarray(kp), np.asarray(kd)
+        self.friction = friction
+        self.limit = np.asarray(robot.effort_limit)
+
+    def torque(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        q_d, v_d, a_d = self.reference.at(t)
+        a_command = a_d + self.kp * (q_d - q) + self.kd * (v_d - v)
+        tau = inverse_dynamics(self.robot, self.data, q, v, a_command)
+        if self.friction is not None:
+            tau += self.friction.torque(v_d, self.friction.steady_state_bristles(v_d))
+        return np.clip(tau, -self.limit, self.limit)
+
+
+Controller = NoController | GravityCompensatedPD | ComputedTorque
+
+
+def make_controller(kind: str, robot: Robot, reference: Reference, kp: np.ndarray,
+                    kd: np.ndarray, friction: JointFriction | None) -> Controller:
+    """The controller of the given kind (``none``, ``pd``, ``computed_torque``); ``friction``
+    is the plant's friction model (used by computed torque)."""
+    if kind == "none":
+        return NoController(robot)
+    if kind == "pd":
+        return GravityCompensatedPD(robot, reference, kp, kd)
+    return ComputedTorque(robot, reference, kp, kd, friction)

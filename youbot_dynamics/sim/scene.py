@@ -1,0 +1,461 @@
+"""Scene files (config/scenes/*.yaml) -> validated, immutable :class:`Scene`.
+
+A scene says what a simulation contains and nothing more; the simulator builds only that.
+Keys (units SI, angles rad; joint values are mappings by joint name)::
+
+    name: arm_swing                 # default: the file's stem
+    description: text
+    robot: path/to/robot.urdf       # relative to the scene file, else to the package share;
+                                    # default: the packaged youBot
+    moving: [arm_joint_1, ...]      # joints that move; every other joint is locked
+    locked: {joint: value}          # locked joints' values (default 0)
+    initial: {q: {joint: rad}, v: {joint: rad/s}}     # default 0
+    gravity: [0, 0, -9.81]          # m/s^2 in the world frame
+    friction:
+      default: urdf | none          # joints not listed: the URDF's damping/friction, or none
+      joints: {joint: {law: viscous|coulomb|stribeck|lugre, <parameters>}}
+    controller:
+      type: none | pd | computed_torque
+      kp: 100 or {joint: value}     # 1/s^2 (computed_torque) or N m/rad (pd)
+      kd: 20 or {joint: value}      # 1/s (computed_torque) or N m s/rad (pd)
+      trajectory:
+        waypoints: [{joint: rad}, ...]    # targets after the initial pose; an unnamed joint
+                                          # keeps its previous value
+        v_max: value or {joint: rad/s}    # default: the URDF velocity limits
+        a_max: value or {joint: rad/s^2}
+        dwell: 0.0                        # s at each waypoint
+    integrator:
+      method: rk45 | ... | auto     # see sim.integrators.INTEGRATORS
+      dt: s                         # fixed-step methods only
+      rtol: 1e-6                    # adaptive methods
+      atol: 1e-8
+      target_error: rad             # auto only: final joint-space error to meet
+      energy_tolerance: J           # conservative scenes: allowed energy growth
+    duration: s
+    outputs: {rate: Hz, record: [q, v, z, tau, energy, ee_position]}
+    contacts: []                    # reserved for the contact issue: must be empty
+    free_bodies: []                 # reserved for the contact issue: must be empty
+
+Every mistake is a :class:`SceneError` naming the file, the key (dotted path) and the value.
+PyYAML reads ``1e-6`` (no dot) as a string: numbers given that way are accepted.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping
+
+import numpy as np
+import yaml
+
+from youbot_dynamics import default_urdf, package_share
+from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
+from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS
+
+CONTROLLERS = ("none", "pd", "computed_torque")
+RECORDABLE = ("q", "v", "z", "tau", "energy", "ee_position")
+FRICTION_DEFAULTS = ("urdf", "none")
+RESERVED_SECTIONS = ("contacts", "free_bodies")
+TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "gravity", "friction",
+            "controller", "integrator", "duration", "outputs", *RESERVED_SECTIONS)
+
+
+class SceneError(UserInputError):
+    """A scene file that cannot be used: names the file, the key and the value."""
+
+    def __init__(self, source: str, key: str, problem: str, value: Any = None) -> None:
+        self.source, self.key, self.value = source, key, value
+        shown = "" if value is None else f" (got {value!r})"
+        super().__init__(f"{source}: {key}: {problem}{shown}")
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.array(array, dtype=float)
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True)
+class TrajectorySpec:
+    """Waypoints (k, n) in moving-joint order, after the initial pose; limits (n,)."""
+
+    waypoints: np.ndarray
+    v_max: np.ndarray
+    a_max: np.ndarray
+    dwell: float
+
+
+@dataclass(frozen=True)
+class ControllerSpec:
+    """Controller kind, gains (n,) and the optional trajectory (None: hold the initial q)."""
+
+    type: str
+    kp: np.ndarray
+    kd: np.ndarray
+    trajectory: TrajectorySpec | None
+
+
+@dataclass(frozen=True)
+class IntegratorSpec:
+    """Integrator name (or ``auto``) and its accuracy settings."""
+
+    method: str
+    dt: float | None = None
+    rtol: float = 1e-6
+    atol: float = 1e-8
+    target_error: float | None = None
+    energy_tolerance: float = 1e-2
+
+    def describe(self) -> str:
+        """``rk4 dt=0.001`` or ``rk45 rtol=1e-06 atol=1e-08`` or ``auto target_error=...``."""
+        if self.method == "auto":
+            return f"auto target_error={self.target_error:g}"
+        if self.method in FIXED_STEP:
+            return f"{self.method} dt={self.dt:g}"
+        return f"{self.method} rtol={self.rtol:g} atol={self.atol:g}"
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """Output rate (Hz) and what to record."""
+
+    rate: float
+    record: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. Joint arrays are in ``moving`` order (the reduced Robot's order).
+
+    ``friction`` maps a moving joint to its spec (law and parameters) for the joints the
+    scene lists; the others follow ``friction_default``. ``content_hash`` is the SHA-256 of
+    the file's bytes (the key of per-scene caches).
+    """
+
+    name: str
+    description: str
+    source: str
+    content_hash: str
+    robot_path: str
+    moving: tuple[str, ...]
+    locked: Mapping[str, float]
+    q0: np.ndarray
+    v0: np.ndarray
+    gravity: np.ndarray
+    friction_default: str
+    friction: Mapping[str, Mapping[str, Any]]
+    controller: ControllerSpec
+    integrator: IntegratorSpec
+    duration: float
+    outputs: OutputSpec
+
+    @property
+    def output_times(self) -> np.ndarray:
+        """Output times from 0 to ``duration`` at ``outputs.rate`` (the end always included)."""
+        times = np.arange(0.0, self.duration, 1.0 / self.outputs.rate)
+        keep = times < self.duration - 1e-9 / self.outputs.rate
+        return np.append(times[keep], self.duration)
+
+    def robot(self) -> Robot:
+        """The reduced Robot: only the moving joints, the others locked at their values."""
+        return keep_joints(load_robot(self.robot_path), self.moving, self.locked)
+
+    def joint_friction(self, robot: Robot) -> JointFriction | None:
+        """The friction of the reduced Robot's joints, or None for a scene without any
+        (``default: none`` and no joint listed): then the simulator computes none."""
+        spec = dict(self.friction)
+        if self.friction_default == "none":
+            if not spec:
+                return None
+            spec.update({n: {"law": "viscous", "damping": 0.0} for n in robot.joint_names if n not in spec})
+        return JointFriction.from_spec(robot, spec, where=f"{self.source}: friction.joints")
+
+    def with_integrator(self, method: str | None = None, *, dt: float | None = None,
+                        rtol: float | None = None, atol: float | None = None,
+                        target_error: float | None = None) -> Scene:
+        """The same scene with other integrator settings (validated like the file's)."""
+        current = dataclasses.asdict(self.integrator)
+        changes = {"method": method, "dt": dt, "rtol": rtol, "atol": atol, "target_error": target_error}
+        if method is not None and method not in FIXED_STEP:
+            current["dt"] = None
+        current.update({k: v for k, v in changes.items() if v is not None})
+        return dataclasses.replace(self, integrator=_integrator(_Reader(self.source), current, "integrator"))
+
+    def with_duration(self, duration: float) -> Scene:
+        """The same scene over another duration (s)."""
+        return dataclasses.replace(self, duration=_Reader(self.source).positive(duration, "duration"))
+
+
+# ---------------------------------------------------------------------------------------
+# Finding and loading
+# ---------------------------------------------------------------------------------------
+def scene_dir() -> Path:
+    """The packaged scenes: config/scenes under the package share."""
+    return package_share() / "config" / "scenes"
+
+
+def find_scene(name_or_path: str | Path) -> Path:
+    """A scene file from a path, or a packaged scene's name (``arm_swing``)."""
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    packaged = scene_dir() / f"{name_or_path}.yaml"
+    if packaged.is_file():
+        return packaged
+    available = ", ".join(sorted(p.stem for p in scene_dir().glob("*.yaml")))
+    raise UserInputError(f"scene not found: {name_or_path!r} is neither a file nor a packaged "
+                         f"scene (packaged: {available or 'none'})")
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """Read, validate and freeze a scene (see the module docstring for the keys)."""
+    path = find_scene(name_or_path)
+    raw = path.read_bytes()
+    source = str(path)
+    reader = _Reader(source)
+    try:
+        data = yaml.safe_load(raw.decode("utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        raise SceneError(source, "(file)", f"not valid YAML: {error}") from None
+    data = reader.mapping(data if data is not None else {}, "(top level)", TOP_KEYS)
+    for section in RESERVED_SECTIONS:
+        if data.get(section):
+            raise SceneError(source, section, "not supported yet (reserved for contacts and free "
+                             "bodies): leave it out or empty", data[section])
+    robot_path = _robot_path(reader, path, data.get("robot"))
+    try:
+        full = load_robot(robot_path)
+    except UserInputError as error:
+        raise SceneError(source, "robot", str(error), data.get("robot")) from None
+
+    moving = reader.joint_list(data.get("moving", list(full.joint_names)), "moving", full)
+    locked_raw = reader.joint_values(data.get("locked", {}), "locked", full)
+    for name in locked_raw:
+        if name in moving:
+            raise SceneError(source, f"locked.{name}", "joint is also listed under 'moving'", name)
+    locked = {n: locked_raw.get(n, 0.0) for n in full.joint_names if n not in moving}
+    for name, value in locked.items():
+        reader.within_limits(full, name, value, f"locked.{name}")
+    robot = keep_joints(full, moving, locked)
+
+    initial = reader.mapping(data.get("initial", {}), "initial", ("q", "v"))
+    q0 = _moving_vector(reader, robot, initial.get("q", {}), "initial.q", 0.0)
+    for name, value in zip(robot.joint_names, q0):
+        reader.within_limits(robot, name, value, f"initial.q.{name}")
+    v0 = _moving_vector(reader, robot, initial.get("v", {}), "initial.v", 0.0)
+    gravity = reader.vector3(data.get("gravity", [0.0, 0.0, -9.81]), "gravity")
+
+    friction = reader.mapping(data.get("friction", {}), "friction", ("default", "joints"))
+    friction_default = friction.get("default", "urdf")
+    if friction_default not in FRICTION_DEFAULTS:
+        raise SceneError(source, "friction.default", f"expected one of {', '.join(FRICTION_DEFAULTS)}",
+                         friction_default)
+    joint_friction = {}
+    for name, spec in reader.mapping(friction.get("joints", {}), "friction.joints").items():
+        key = f"friction.joints.{name}"
+        if name not in robot.joint_names:
+            raise SceneError(source, key, "not a moving joint of the scene "
+                             f"(moving: {', '.join(robot.joint_names)})", name)
+        spec = dict(reader.mapping(spec, key))
+        if "law" not in spec:
+            raise SceneError(source, f"{key}.law", "missing: give the friction law")
+        for parameter, value in spec.items():
+            if parameter != "law":
+                spec[parameter] = reader.number(value, f"{key}.{parameter}")
+        joint_friction[name] = MappingProxyType(spec)
+
+    controller = _controller(reader, robot, data.get("controller", {"type": "none"}), q0)
+    integrator = _integrator(reader, data.get("integrator", {"method": "rk45"}), "integrator")
+    duration = reader.positive(data.get("duration", 1.0), "duration")
+    outputs = reader.mapping(data.get("outputs", {}), "outputs", ("rate", "record"))
+    record = tuple(outputs.get("record", ("q", "v", "energy")))
+    for i, item in enumerate(record):
+        if item not in RECORDABLE:
+            raise SceneError(source, f"outputs.record[{i}]", f"expected one of {', '.join(RECORDABLE)}", item)
+
+    scene = Scene(
+        name=str(data.get("name", path.stem)), description=str(data.get("description", "")),
+        source=source, content_hash=hashlib.sha256(raw).hexdigest(), robot_path=str(robot_path),
+        moving=robot.joint_names, locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0),
+        gravity=_frozen(gravity), friction_default=friction_default,
+        friction=MappingProxyType(joint_friction), controller=controller, integrator=integrator,
+        duration=duration, outputs=OutputSpec(reader.positive(outputs.get("rate", 100.0), "outputs.rate"), record))
+    scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
+    return scene
+
+
+def _robot_path(reader: _Reader, scene_path: Path, value: Any) -> Path:
+    if value is None:
+        return default_urdf()
+    for base in (scene_path.parent, package_share()):
+        candidate = (base / str(value)).resolve()
+        if candidate.is_file():
+            return candidate
+    raise SceneError(reader.source, "robot", f"file not found next to the scene ({scene_path.parent}) "
+                     f"or in the package share ({package_share()})", value)
+
+
+def _moving_vector(reader: _Reader, robot: Robot, value: Any, key: str, default: float) -> np.ndarray:
+    values = reader.joint_values(value, key, robot)
+    return np.array([values.get(name, default) for name in robot.joint_names])
+
+
+def _per_joint(reader: _Reader, robot: Robot, value: Any, key: str, default: np.ndarray | None) -> np.ndarray:
+    """A scalar for every joint, or a mapping by joint name (missing: ``default``)."""
+    if value is None:
+        if default is None:
+            raise SceneError(reader.source, key, "missing: give a value or a mapping by joint name")
+        return default.copy()
+    if isinstance(value, Mapping):
+        values = reader.joint_values(value, key, robot)
+        missing = [n for n in robot.joint_names if n not in values]
+        if missing and default is None:
+            raise SceneError(reader.source, key, f"no value for joint(s) {', '.join(missing)}")
+        out = np.array([values.get(n, np.nan) for n in robot.joint_names])
+        return np.where(np.isnan(out), default if default is not None else np.nan, out)
+    return np.full(robot.nv, reader.number(value, key))
+
+
+def _controller(reader: _Reader, robot: Robot, value: Any, q0: np.ndarray) -> ControllerSpec:
+    data = reader.mapping(value, "controller", ("type", "kp", "kd", "trajectory"))
+    kind = data.get("type", "none")
+    if kind not in CONTROLLERS:
+        raise SceneError(reader.source, "controller.type", f"expected one of {', '.join(CONTROLLERS)}", kind)
+    zero = np.zeros(robot.nv)
+    if kind == "none":
+        for key in ("kp", "kd", "trajectory"):
+            if key in data:
+                raise SceneError(reader.source, f"controller.{key}", "not used by controller type 'none'", data[key])
+        return ControllerSpec("none", _frozen(zero), _frozen(zero), None)
+    kp = _per_joint(reader, robot, data.get("kp"), "controller.kp", None)
+    kd = _per_joint(reader, robot, data.get("kd"), "controller.kd", None)
+    for key, gains in (("kp", kp), ("kd", kd)):
+        if np.any(gains < 0):
+            raise SceneError(reader.source, f"controller.{key}", "gains must be >= 0", gains.tolist())
+    trajectory = None
+    if "trajectory" in data:
+        trajectory = _trajectory(reader, robot, data["trajectory"], q0)
+    return ControllerSpec(kind, _frozen(kp), _frozen(kd), trajectory)
+
+
+def _trajectory(reader: _Reader, robot: Robot, value: Any, q0: np.ndarray) -> TrajectorySpec:
+    key = "controller.trajectory"
+    data = reader.mapping(value, key, ("waypoints", "v_max", "a_max", "dwell"))
+    waypoints_raw = data.get("waypoints")
+    if not isinstance(waypoints_raw, list) or not waypoints_raw:
+        raise SceneError(reader.source, f"{key}.waypoints", "expected a non-empty list of "
+                         "{joint: value} mappings", waypoints_raw)
+    points, previous = [], q0
+    for i, waypoint in enumerate(waypoints_raw):
+        where = f"{key}.waypoints[{i}]"
+        values = reader.joint_values(waypoint, where, robot)
+        point = np.array([values.get(n, p) for n, p in zip(robot.joint_names, previous)])
+        for name, q in values.items():
+            reader.within_limits(robot, name, q, f"{where}.{name}")
+        points.append(point)
+        previous = point
+    v_max = _per_joint(reader, robot, data.get("v_max"), f"{key}.v_max", np.array(robot.velocity_limit))
+    a_max = _per_joint(reader, robot, data.get("a_max"), f"{key}.a_max", None)
+    for name, limits in (("v_max", v_max), ("a_max", a_max)):
+        if not np.all((limits > 0) & np.isfinite(limits)):
+            raise SceneError(reader.source, f"{key}.{name}", "limits must be positive and finite", limits.tolist())
+    dwell = reader.number(data.get("dwell", 0.0), f"{key}.dwell")
+    if dwell < 0:
+        raise SceneError(reader.source, f"{key}.dwell", "must be >= 0 s", dwell)
+    return TrajectorySpec(_frozen(points), _frozen(v_max), _frozen(a_max), dwell)
+
+
+def _integrator(reader: _Reader, value: Any, key: str) -> IntegratorSpec:
+    data = dict(reader.mapping(value, key, ("method", "dt", "rtol", "atol", "target_error", "energy_tolerance")))
+    method = data.get("method", "rk45")
+    if method not in (*INTEGRATORS, "auto"):
+        raise SceneError(reader.source, f"{key}.method", f"expected auto or one of {', '.join(INTEGRATORS)}", method)
+    numbers = {name: reader.number(data[name], f"{key}.{name}") for name in
+               ("dt", "rtol", "atol", "target_error", "energy_tolerance") if data.get(name) is not None}
+    for name, number in numbers.items():
+        if number < 0:
+            raise SceneError(reader.source, f"{key}.{name}", "must not be negative", number)
+        if number == 0 and name != "energy_tolerance":
+            raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
+    if method in FIXED_STEP and "dt" not in numbers:
+        raise SceneError(reader.source, f"{key}.dt", f"missing: fixed-step method {method!r} needs dt (s)")
+    if method not in FIXED_STEP and "dt" in numbers:
+        raise SceneError(reader.source, f"{key}.dt", f"only for fixed-step methods "
+                         f"({', '.join(FIXED_STEP)}); {method!r} uses rtol/atol", numbers["dt"])
+    if method == "auto" and "target_error" not in numbers:
+        raise SceneError(reader.source, f"{key}.target_error", "missing: method 'auto' needs the target "
+                         "final joint-space error (rad)")
+    return IntegratorSpec(method, **numbers)
+
+
+class _Reader:
+    """Typed access to parsed YAML with errors naming the file, the key and the value."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def mapping(self, value: Any, key: str, allowed: tuple[str, ...] | None = None) -> Mapping[str, Any]:
+        if not isinstance(value, Mapping):
+            raise SceneError(self.source, key, "expected a mapping", value)
+        if allowed is not None:
+            for name in value:
+                if name not in allowed:
+                    prefix = "" if key == "(top level)" else f"{key}."
+                    raise SceneError(self.source, f"{prefix}{name}", "unknown key; known keys: "
+                                     + ", ".join(allowed), name)
+        return value
+
+    def number(self, value: Any, key: str) -> float:
+        if isinstance(value, bool):
+            raise SceneError(self.source, key, "expected a number", value)
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise SceneError(self.source, key, "expected a number", value) from None
+        if not math.isfinite(number):
+            raise SceneError(self.source, key, "expected a finite number", value)
+        return number
+
+    def positive(self, value: Any, key: str) -> float:
+        number = self.number(value, key)
+        if number <= 0:
+            raise SceneError(self.source, key, "must be positive", value)
+        return number
+
+    def vector3(self, value: Any, key: str) -> np.ndarray:
+        if not isinstance(value, (list, tuple)) or len(value) != 3:
+            raise SceneError(self.source, key, "expected a list of 3 numbers", value)
+        return np.array([self.number(x, f"{key}[{i}]") for i, x in enumerate(value)])
+
+    def joint_list(self, value: Any, key: str, robot: Robot) -> tuple[str, ...]:
+        if not isinstance(value, list) or not value:
+            raise SceneError(self.source, key, "expected a non-empty list of joint names", value)
+        for i, name in enumerate(value):
+            self._joint(robot, name, f"{key}[{i}]")
+        if len(set(value)) != len(value):
+            raise SceneError(self.source, key, "a joint is listed twice", value)
+        return tuple(value)
+
+    def joint_values(self, value: Any, key: str, robot: Robot) -> dict[str, float]:
+        values = self.mapping(value, key)
+        out = {}
+        for name, number in values.items():
+            self._joint(robot, name, f"{key}.{name}")
+            out[name] = self.number(number, f"{key}.{name}")
+        return out
+
+    def within_limits(self, robot: Robot, name: str, value: float, key: str) -> None:
+        joint = robot.joints[robot.joint_index(name)]
+        if not joint.lower - 1e-12 <= value <= joint.upper + 1e-12:
+            raise SceneError(self.source, key, f"outside the joint limits [{joint.lower:g}, {joint.upper:g}]", value)
+
+    def _joint(self, robot: Robot, name: Any, key: str) -> None:
+        if name not in robot.joint_names:
+            raise SceneError(self.source, key, f"not a moving joint of {robot.source} "
+                             f"(joints: {', '.join(robot.joint_names)})", name)

@@ -1,0 +1,317 @@
+"""The simulator: a Scene compiled into a right-hand side and driven by an integrator.
+
+From a :class:`~youbot_dynamics.sim.scene.Scene` it builds only what the scene names: the
+reduced Robot (locked joints removed from the model and the state), the scene's gravity,
+the joint friction (none at all for a frictionless scene; LuGre bristle states only for
+LuGre joints), the controller and its trajectory, the state layout and the divergence
+checks. The state is x = [q, v, z] (see :mod:`youbot_dynamics.sim.state`) and
+
+    dq/dt = v,   dv/dt = ABA(q, v, tau(t, q, v) - tau_friction(v, z)),   dz/dt = LuGre(v, z).
+
+Two ways to drive it:
+
+- ``Simulator(scene).run()`` -> :class:`SimulationResult`: the whole scene from its
+  initial state, outputs at the scene's rate, statistics and the energy error.
+- Step-wise, for a ROS node or any outer loop: ``reset()``, then repeatedly
+  ``advance(t_next, tau_command=None)`` -> :class:`Snapshot`; ``tau_command`` (joint order
+  of ``joint_names``, N m) replaces the scene's controller until the next call (zero-order
+  hold, clipped to the effort limits). The current ``t``, ``q``, ``v``, ``z``, ``tau``,
+  ``energy`` and ``ee_pose`` are properties; ``stats`` sums the statistics of every call.
+  Each ``advance`` restarts the integrator at the current state (adaptive methods start
+  with a fresh step-size guess).
+
+Divergence is a :class:`~youbot_dynamics.sim.integrators.DivergenceError`: a non-finite
+state, a joint velocity beyond ``VELOCITY_LIMIT_FACTOR`` x its limit, a step size that
+collapses, or, in a conservative scene (no friction, no controller), a total energy that
+grows by more than the scene's ``integrator.energy_tolerance`` (J, checked at outputs).
+"""
+from __future__ import annotations
+
+import csv
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy, potential_energy
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.sim.controllers import Reference, make_controller
+from youbot_dynamics.sim.integrators import (FIXED_STEP, IntegratorStats, Solution, integrate,
+                                             integrate_dae)
+from youbot_dynamics.sim.scene import IntegratorSpec, Scene
+from youbot_dynamics.sim.state import StateLayout
+from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+
+#: A joint velocity beyond this multiple of its URDF limit is divergence.
+VELOCITY_LIMIT_FACTOR = 100.0
+
+
+def robot_with_gravity(robot: Robot, gravity: np.ndarray) -> Robot:
+    """The same Robot with another gravity vector (m/s^2, root frame) on a model copy."""
+    gravity = np.asarray(gravity, dtype=float)
+    if np.array_equal(robot.model.gravity.linear, gravity):
+        return robot
+    model = pin.Model(robot.model)
+    model.gravity = pin.Motion(gravity, np.zeros(3))
+    return dataclasses.replace(robot, model=model)
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The simulation at one instant: t (s), q (rad, m), v (rad/s, m/s), z (LuGre bristle
+    deflections), tau (applied joint torque, N m or N), energy (kinetic + potential, J) and
+    ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m)."""
+
+    t: float
+    joint_names: tuple[str, ...]
+    q: np.ndarray
+    v: np.ndarray
+    z: np.ndarray
+    tau: np.ndarray
+    energy: float
+    ee_pose: np.ndarray
+
+
+@dataclass
+class SimulationResult:
+    """A run: states x (k, n) at times t (k,), named by ``layout``; ``series`` holds the
+    recorded extras (``tau`` (k, nv), ``energy`` (k,), ``ee_position`` (k, 3)); ``stats``
+    the integrator's statistics. ``energy_error`` (J) is max |E(t) - E(0)| in a conservative
+    scene, None otherwise (friction or a controller change the energy)."""
+
+    scene: str
+    integrator: IntegratorSpec
+    layout: StateLayout
+    t: np.ndarray
+    x: np.ndarray
+    series: dict[str, np.ndarray]
+    stats: IntegratorStats
+    conservative: bool
+    energy_error: float | None
+
+    @property
+    def final_state(self) -> dict[str, float]:
+        """The last state by component name (``q[arm_joint_1]`` ...)."""
+        return dict(zip(self.layout.names, map(float, self.x[-1])))
+
+    def columns(self, record: tuple[str, ...]) -> tuple[list[str], np.ndarray]:
+        """Column names and the (k, m) table of t and the recorded quantities."""
+        names, blocks = ["t"], [self.t[:, None]]
+        for item in record:
+            if item in ("q", "v", "z"):
+                part = self.layout.slice(item)
+                names += list(self.layout.names[part])
+                blocks.append(self.x[:, part])
+            elif item == "tau":
+                names += [f"tau[{n}]" for n in self.layout.joint_names]
+                blocks.append(self.series["tau"])
+            elif item == "energy":
+                names.append("energy")
+                blocks.append(self.series["energy"][:, None])
+            elif item == "ee_position":
+                names += ["ee_x", "ee_y", "ee_z"]
+                blocks.append(self.series["ee_position"])
+        return names, np.hstack(blocks)
+
+    def write_csv(self, path: str | Path, record: tuple[str, ...]) -> None:
+        """The trajectory as CSV (SI units; one row per output time)."""
+        names, table = self.columns(record)
+        with open(path, "w", newline="", encoding="utf-8") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(names)
+            writer.writerows(table.tolist())
+
+
+class Simulator:
+    """A compiled scene: model, friction, controller, state layout, rhs and checks."""
+
+    def __init__(self, scene: Scene, integrator: IntegratorSpec | None = None) -> None:
+        self.scene = scene
+        self.integrator = integrator or scene.integrator
+        if self.integrator.method == "auto":
+            raise UserInputError(f"{scene.source}: integrator.method: 'auto' must be resolved first "
+                                 "(youbot_dynamics.analysis.work_precision.resolve_integrator)")
+        self.robot = robot_with_gravity(scene.robot(), scene.gravity)
+        self.data = self.robot.model.createData()
+        self.friction = scene.joint_friction(self.robot)
+        lugre = [] if self.friction is None else \
+            [name for name, law in zip(self.friction.joint_names, self.friction.laws) if law == "lugre"]
+        self.layout = StateLayout.for_joints(self.robot.joint_names, {"z": lugre})
+        spec = scene.controller
+        trajectory = None if spec.trajectory is None else PointToPointTrajectory.through(
+            np.vstack([scene.q0, spec.trajectory.waypoints]), spec.trajectory.v_max,
+            spec.trajectory.a_max, spec.trajectory.dwell)
+        self.trajectory = trajectory
+        self.controller = make_controller(spec.type, self.robot, Reference(scene.q0, trajectory), spec.kp, spec.kd,
+                                          self.friction)
+        self.conservative = self.friction is None and spec.type == "none"
+        self.effort_limit = np.asarray(self.robot.effort_limit)
+        self.ee_frame = self.robot.frame_id(self.robot.end_effector)
+        self.bounds = self.layout.velocity_bounds(self.robot.velocity_limit, VELOCITY_LIMIT_FACTOR)
+        self._q, self._v, self._z = (self.layout.slice(s) for s in ("q", "v", "z"))
+        self.reset()
+
+    # ---- the model ----------------------------------------------------------------------
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return self.robot.joint_names
+
+    @property
+    def state_dim(self) -> int:
+        return self.layout.size
+
+    def initial_state(self) -> np.ndarray:
+        """x0 from the scene: q0, v0 and LuGre bristles at their steady state for v0."""
+        z0 = self.friction.steady_state_bristles(self.scene.v0) if self.friction is not None else np.zeros(0)
+        return self.layout.pack(q=self.scene.q0, v=self.scene.v0, **({"z": z0} if z0.size else {}))
+
+    def derivative(self, t: float, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """dx/dt under applied joint torques tau (N m, N)."""
+        q, v, z = x[self._q], x[self._v], x[self._z]
+        dx = np.empty_like(x)
+        dx[self._q] = v
+        dx[self._v] = forward_dynamics(self.robot, self.data, q, v, tau, self.friction, z if z.size else None)
+        if z.size:
+            dx[self._z] = self.friction.state_derivative(v, z)
+        return dx
+
+    def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
+        """dx/dt with the scene's controller (what the integrators call)."""
+        return self.derivative(t, x, self.controller.torque(t, x[self._q], x[self._v]))
+
+    def rhs_cost(self) -> dict[str, int | str]:
+        """What one rhs evaluation computes, by count: the state dimension, the model's
+        degrees of freedom and bodies (ABA is O(nv) over them), the friction laws evaluated
+        and the controller's extra rigid-body pass (RNEA or gravity: O(nv))."""
+        laws = () if self.friction is None else sorted(set(self.friction.laws))
+        return {"state_dim": self.layout.size, "nv": self.robot.model.nv,
+                "bodies": self.robot.model.nbodies, "lugre_states": self.layout.size - 2 * self.robot.nv,
+                "friction_laws": ",".join(laws) or "none", "controller": self.controller.kind,
+                "rigid_body_passes": 1 + (self.controller.kind != "none")}
+
+    def energy_of(self, x: np.ndarray) -> float:
+        """Kinetic plus potential energy (J) of state x."""
+        q, v = x[self._q], x[self._v]
+        return kinetic_energy(self.robot, self.data, q, v) + potential_energy(self.robot, self.data, q)
+
+    def ee_pose_of(self, q: np.ndarray) -> np.ndarray:
+        """4x4 pose of the end-effector link in the root frame at joint positions q."""
+        pin.framesForwardKinematics(self.robot.model, self.data, q)
+        return self.data.oMf[self.ee_frame].homogeneous.copy()
+
+    def clipped(self, tau: np.ndarray) -> np.ndarray:
+        """A torque command in joint order, clipped to the effort limits."""
+        tau = self.robot.vector(tau, what="tau_command")
+        return np.clip(tau, -self.effort_limit, self.effort_limit)
+
+    # ---- integration ----------------------------------------------------------------------
+    def solve(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None = None) -> Solution:
+        """Integrate from x0 at t_eval[0] with outputs at t_eval (s), with the divergence
+        checks; ``tau_command`` (held) replaces the controller."""
+        rhs = self.rhs if tau_command is None else (lambda t, x: self.derivative(t, x, tau_command))
+        spec, names = self.integrator, self.layout.names
+        monitor = self._energy_monitor(self.energy_of(x0)) if self.conservative and tau_command is None else None
+        if spec.method == "ida":
+            def residual(t: float, y: np.ndarray, yp: np.ndarray) -> np.ndarray:
+                return yp - rhs(t, y)
+
+            return integrate_dae(residual, x0, rhs(t_eval[0], x0), t_eval, algebraic=[False] * x0.size,
+                                 rtol=spec.rtol, atol=spec.atol, state_names=names, bounds=self.bounds,
+                                 monitor=monitor)
+        return integrate(rhs, x0, t_eval, spec.method, dt=spec.dt, rtol=spec.rtol, atol=spec.atol,
+                         state_names=names, n_positions=self.robot.nv, bounds=self.bounds, monitor=monitor)
+
+    def _energy_monitor(self, energy0: float):
+        tolerance = self.integrator.energy_tolerance
+
+        def monitor(t: float, x: np.ndarray) -> str | None:
+            growth = self.energy_of(x) - energy0
+            if growth > tolerance:
+                return (f"energy grew by {growth:.3g} J (tolerance {tolerance:g} J, "
+                        "integrator.energy_tolerance) in a conservative scene")
+            return None
+
+        return monitor
+
+    def run(self, t_eval: np.ndarray | None = None) -> SimulationResult:
+        """The scene from its initial state over ``t_eval`` (default: the scene's output
+        times); leaves the step-wise state at the end of the run."""
+        times = self.scene.output_times if t_eval is None else np.asarray(t_eval, dtype=float)
+        x0 = self.initial_state()
+        solution = self.solve(x0, times)
+        series = self._series(solution, set(self.scene.outputs.record) | ({"energy"} if self.conservative else set()))
+        energy_error = float(np.max(np.abs(series["energy"] - series["energy"][0]))) if self.conservative else None
+        self.t, self.x = float(solution.t[-1]), solution.x[-1].copy()
+        self.stats = solution.stats
+        self._tau = self.controller.torque(self.t, self.x[self._q], self.x[self._v]).copy()
+        return SimulationResult(self.scene.name, self.integrator, self.layout, solution.t, solution.x,
+                                series, solution.stats, self.conservative, energy_error)
+
+    def _series(self, solution: Solution, wanted: set[str]) -> dict[str, np.ndarray]:
+        series = {}
+        if "tau" in wanted:
+            series["tau"] = np.array([self.controller.torque(t, x[self._q], x[self._v])
+                                      for t, x in zip(solution.t, solution.x)])
+        if "energy" in wanted:
+            series["energy"] = np.array([self.energy_of(x) for x in solution.x])
+        if "ee_position" in wanted:
+            series["ee_position"] = np.array([self.ee_pose_of(x[self._q])[:3, 3] for x in solution.x])
+        return series
+
+    # ---- step-wise API -------------------------------------------------------------------
+    def reset(self, q: np.ndarray | None = None, v: np.ndarray | None = None) -> Snapshot:
+        """Back to t = 0 at the scene's initial state (or the given q, v in joint order)."""
+        x = self.initial_state()
+        if q is not None:
+            x[self._q] = self.robot.vector(q, what="reset q")
+        if v is not None:
+            x[self._v] = self.robot.vector(v, what="reset v")
+        self.t, self.x = 0.0, x
+        self.stats = IntegratorStats(self.integrator.method)
+        self._tau = self.controller.torque(0.0, x[self._q], x[self._v]).copy()
+        return self.snapshot()
+
+    def advance(self, t_next: float, tau_command=None) -> Snapshot:
+        """Integrate from the current time to ``t_next`` (s); ``tau_command`` (sequence in
+        joint order or mapping by joint name, N m) replaces the controller until then."""
+        if not t_next > self.t:
+            raise UserInputError(f"advance: t_next={t_next!r} s must be after the current time {self.t:.9g} s")
+        command = None if tau_command is None else self.clipped(tau_command)
+        solution = self.solve(self.x, np.array([self.t, float(t_next)]), command)
+        self.t, self.x = float(solution.t[-1]), solution.x[-1].copy()
+        self.stats += solution.stats
+        self._tau = command if command is not None else \
+            self.controller.torque(self.t, self.x[self._q], self.x[self._v]).copy()
+        return self.snapshot()
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.x[self._q].copy()
+
+    @property
+    def v(self) -> np.ndarray:
+        return self.x[self._v].copy()
+
+    @property
+    def z(self) -> np.ndarray:
+        return self.x[self._z].copy()
+
+    @property
+    def tau(self) -> np.ndarray:
+        """The joint torque applied at the current time (N m, N)."""
+        return np.array(self._tau)
+
+    @property
+    def energy(self) -> float:
+        return self.energy_of(self.x)
+
+    @property
+    def ee_pose(self) -> np.ndarray:
+        return self.ee_pose_of(self.x[self._q])
+
+    def snapshot(self) -> Snapshot:
+        """The current instant."""
+        return Snapshot(self.t, self.joint_names, self.q, self.v, self.z, self.tau, self.energy, self.ee_pose)
