@@ -1,0 +1,111 @@
+"""Helpers shared by the sub-commands: robot loading, joint-value parsing, output.
+
+Joint values on the command line come either in model order (``--q 0.1,0.2,...``, one per
+moving joint, Pinocchio's order as ``info`` lists it) or by name
+(``--q arm_joint_1=0.1,arm_joint_3=-0.5``, unnamed joints 0). Output is a readable table,
+or JSON with ``--json``: positions in metres, quaternions as (x, y, z, w), rotation
+matrices row-major (a list of rows), angles in rad, infinite limits as null.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+from youbot_dynamics import default_urdf
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.lie import quaternion_from_matrix
+from youbot_dynamics.model.robot import Robot, load_robot
+
+
+class CommandError(UserInputError):
+    """A bad command-line argument: one line, exit status 2."""
+
+
+def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
+    """--urdf and --json, which every model sub-command takes."""
+    parser.add_argument("--urdf", help="URDF file (default: the packaged youBot)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+def add_joint_argument(parser: argparse.ArgumentParser, flag: str, meaning: str) -> None:
+    """A joint-vector option such as --q, in model order or by name (default all zeros)."""
+    parser.add_argument(flag, default="", metavar="VALUES",
+                        help=f"{meaning}: comma-separated in model order, or name=value pairs "
+                        "(unnamed joints 0; default all 0)")
+
+
+def robot_from(args: argparse.Namespace) -> Robot:
+    """The robot of --urdf, or the packaged youBot."""
+    return load_robot(args.urdf if args.urdf else default_urdf())
+
+
+def joint_vector(robot: Robot, text: str, flag: str = "--q") -> np.ndarray:
+    """Parse '0.1,0.2,...' (model order, exactly nv values) or 'name=value,...' (by name)."""
+    parts = [part.strip() for part in text.split(",") if part.strip()]
+    if not parts:
+        return np.zeros(robot.nv)
+    by_name = ["=" in part for part in parts]
+    if any(by_name) and not all(by_name):
+        raise CommandError(f"{flag}: give either all values in order or all as name=value, "
+                           f"not a mix: {text!r}")
+    try:
+        if all(by_name):
+            pairs = [part.split("=", 1) for part in parts]
+            return robot.vector({name.strip(): _number(value, flag) for name, value in pairs})
+        return robot.vector([_number(part, flag) for part in parts])
+    except CommandError:
+        raise
+    except UserInputError as error:
+        raise CommandError(f"{flag}: {error}") from None
+
+
+def _number(text: str, flag: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise CommandError(f"{flag}: {text.strip()!r} is not a number") from None
+    if not math.isfinite(value):
+        raise CommandError(f"{flag}: {text.strip()!r} is not a finite number")
+    return value
+
+
+def pose_record(transform: np.ndarray) -> dict[str, Any]:
+    """A 4x4 pose as JSON-ready data: position (m), quaternion (x, y, z, w), rotation rows."""
+    return {"position": transform[:3, 3].tolist(),
+            "quaternion_xyzw": quaternion_from_matrix(transform[:3, :3]).tolist(),
+            "rotation": transform[:3, :3].tolist()}
+
+
+def finite_or_none(value: float) -> float | None:
+    """JSON has no infinity: unbounded limits become null."""
+    return float(value) if math.isfinite(value) else None
+
+
+def print_json(record: dict[str, Any]) -> None:
+    print(json.dumps(record, indent=2, allow_nan=False))
+
+
+def number(value: float) -> str:
+    """A figure for a table cell."""
+    return f"{value + 0.0:.9g}" if math.isfinite(value) else ("inf" if value > 0 else "-inf")
+
+
+def matrix_text(matrix: np.ndarray, indent: str = "  ") -> str:
+    """A matrix, one row per line, fixed-point columns."""
+    return "\n".join(indent + "  ".join(f"{x + 0.0:13.9f}" for x in row) for row in matrix)
+
+
+def table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """Columns aligned; text cells left, numbers (formatted with :func:`number`) right."""
+    rows = [list(row) for row in rows]
+    cells = [[cell if isinstance(cell, str) else number(float(cell)) for cell in row] for row in rows]
+    widths = [max([len(h), *(len(row[i]) for row in cells)]) for i, h in enumerate(header)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths)).rstrip()]
+    for raw, row in zip(rows, cells):
+        lines.append("  ".join(c.ljust(w) if isinstance(r, str) else c.rjust(w)
+                               for r, c, w in zip(raw, row, widths)).rstrip())
+    return "\n".join(lines)

@@ -1,0 +1,217 @@
+"""Sub-commands on a robot model: `info`, `fk`, `screws`, `jacobian`, `id`, `fd`.
+
+Kinematics (`fk`, `screws`, `jacobian --kind space|body`) are our screw-axis
+product-of-exponentials computations from the URDF; `jacobian --kind world|local|
+local_world_aligned` is Pinocchio's frame Jacobian in Pinocchio's convention; `id` and `fd`
+are Pinocchio's RNEA / ABA with the URDF's joint friction (youbot_dynamics.dynamics).
+"""
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+import pinocchio as pin
+
+from youbot_dynamics.cli.common import (add_joint_argument, add_robot_arguments, finite_or_none,
+                                        joint_vector, matrix_text, number, pose_record, print_json,
+                                        robot_from, table)
+from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.dynamics.rigid_body import forward_dynamics, inverse_dynamics
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.model.screws import (fkin_space, jacobian_body, jacobian_space,
+                                          screw_chain)
+
+TWIST_ROWS = ("wx", "wy", "wz", "vx", "vy", "vz")  # ours: (omega, v)
+PINOCCHIO_ROWS = ("vx", "vy", "vz", "wx", "wy", "wz")  # Pinocchio Motion: (v, omega)
+PINOCCHIO_FRAMES = {"world": pin.WORLD, "local": pin.LOCAL,
+                    "local_world_aligned": pin.LOCAL_WORLD_ALIGNED}
+JACOBIAN_KINDS = {
+    "space": "space Jacobian J_s (PoE): rows (omega, v), twist in the root frame at its origin",
+    "body": "body Jacobian J_b (PoE): rows (omega, v), twist in the frame itself",
+    "world": "Pinocchio frame Jacobian, WORLD: rows (v, omega), equals J_s reordered",
+    "local": "Pinocchio frame Jacobian, LOCAL: rows (v, omega), equals J_b reordered",
+    "local_world_aligned": "Pinocchio frame Jacobian, LOCAL_WORLD_ALIGNED: rows (v, omega), "
+                           "velocity of the frame origin in root-frame axes",
+}
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the model sub-commands."""
+    info = subparsers.add_parser("info", help="joints, limits, friction, fidelity report",
+                                 description="Joints in model order with limits, damping and "
+                                 "friction, and what of the URDF the model ignores.")
+    add_robot_arguments(info)
+    info.set_defaults(run=run_info)
+
+    fk = subparsers.add_parser("fk", help="pose of a frame (PoE forward kinematics)",
+                               description="Pose of a link frame in the root frame.")
+    _kinematics_arguments(fk)
+    fk.set_defaults(run=run_fk)
+
+    screws = subparsers.add_parser("screws", help="screw axes S_i and home pose M",
+                                   description="Space-frame screw axes (omega, v) and home "
+                                   "configuration M of the chain to a link, from the URDF.")
+    add_robot_arguments(screws)
+    screws.add_argument("--frame", help="link at the end of the chain (default: end effector)")
+    screws.set_defaults(run=run_screws)
+
+    jacobian = subparsers.add_parser("jacobian", help="space, body or Pinocchio frame Jacobian",
+                                     description="Jacobian of a link frame. Kinds: " + "; ".join(
+                                         f"{k}: {v}" for k, v in JACOBIAN_KINDS.items()))
+    _kinematics_arguments(jacobian)
+    jacobian.add_argument("--kind", choices=tuple(JACOBIAN_KINDS), default="space",
+                          help="which Jacobian (default space)")
+    jacobian.set_defaults(run=run_jacobian)
+
+    inverse = subparsers.add_parser("id", help="inverse dynamics: torques from q, v, a",
+                                    description="tau = RNEA(q, v, a) + tau_friction(v) (N m, N).")
+    _dynamics_arguments(inverse, "--a", "joint accelerations, rad/s^2 or m/s^2")
+    inverse.set_defaults(run=run_inverse_dynamics)
+
+    forward = subparsers.add_parser("fd", help="forward dynamics: accelerations from q, v, tau",
+                                    description="a = ABA(q, v, tau - tau_friction(v)) "
+                                    "(rad/s^2, m/s^2).")
+    _dynamics_arguments(forward, "--tau", "joint torques / forces, N m or N")
+    forward.set_defaults(run=run_forward_dynamics)
+
+
+def _kinematics_arguments(parser: argparse.ArgumentParser) -> None:
+    add_robot_arguments(parser)
+    parser.add_argument("--frame", help="link frame (default: the end effector)")
+    add_joint_argument(parser, "--q", "joint positions, rad or m")
+
+
+def _dynamics_arguments(parser: argparse.ArgumentParser, flag: str, meaning: str) -> None:
+    add_robot_arguments(parser)
+    add_joint_argument(parser, "--q", "joint positions, rad or m")
+    add_joint_argument(parser, "--v", "joint velocities, rad/s or m/s")
+    add_joint_argument(parser, flag, meaning)
+    parser.add_argument("--no-friction", action="store_true",
+                        help="leave out the URDF's joint friction (default: damping and "
+                        "regularised Coulomb friction from <dynamics>)")
+
+
+# ---- info ---------------------------------------------------------------------------------
+def run_info(args: argparse.Namespace) -> int:
+    robot = robot_from(args)
+    if args.json:
+        print_json({"name": robot.name, "source": robot.source, "nq": robot.model.nq,
+                    "nv": robot.nv, "root_link": robot.root_link,
+                    "end_effector": robot.end_effector,
+                    "joints": [{"name": j.name, "type": j.type, "lower": finite_or_none(j.lower),
+                                "upper": finite_or_none(j.upper),
+                                "velocity_limit": finite_or_none(j.velocity_limit),
+                                "effort_limit": finite_or_none(j.effort_limit),
+                                "damping": j.damping, "friction": j.friction}
+                               for j in robot.joints],
+                    "links": list(robot.link_names), "fidelity": list(robot.fidelity)})
+        return 0
+    print(f"robot '{robot.name}' from {robot.source}: {robot.nv} moving joints, "
+          f"root link {robot.root_link}, end effector {robot.end_effector}")
+    print(table(("joint", "type", "lower", "upper", "velocity", "effort", "damping", "friction"),
+                [(j.name, j.type, j.lower, j.upper, j.velocity_limit, j.effort_limit, j.damping,
+                  j.friction) for j in robot.joints]))
+    print("units: rad, rad/s, N m, N m s/rad (revolute); m, m/s, N, N s/m (prismatic)")
+    print("fidelity report (what the model ignores or approximates):")
+    for note in robot.fidelity or ("nothing",):
+        print(f"  - {note}")
+    return 0
+
+
+# ---- kinematics ---------------------------------------------------------------------------
+def _frame(robot: Robot, args: argparse.Namespace) -> str:
+    link = args.frame or robot.end_effector
+    robot.chain_to(link)  # UserInputError naming the links when unknown
+    return link
+
+
+def run_fk(args: argparse.Namespace) -> int:
+    robot = robot_from(args)
+    link = _frame(robot, args)
+    q = joint_vector(robot, args.q)
+    record = {"frame": link, "reference_frame": robot.root_link, **pose_record(fkin_space(screw_chain(robot, link), q))}
+    if args.json:
+        print_json({**record, "q": dict(zip(robot.joint_names, q.tolist()))})
+        return 0
+    print(f"pose of {link} in {robot.root_link} (PoE forward kinematics)")
+    print("position (m):            " + "  ".join(number(x) for x in record["position"]))
+    print("quaternion (x, y, z, w): " + "  ".join(number(x) for x in record["quaternion_xyzw"]))
+    print("rotation matrix:")
+    print(matrix_text(np.array(record["rotation"])))
+    return 0
+
+
+def run_screws(args: argparse.Namespace) -> int:
+    robot = robot_from(args)
+    chain = screw_chain(robot, _frame(robot, args))
+    if args.json:
+        print_json({"frame": chain.link, "reference_frame": robot.root_link, "order": "omega, v",
+                    "joints": list(chain.joint_names),
+                    "S": [chain.S[:, i].tolist() for i in range(chain.n)],
+                    "B": [chain.B[:, i].tolist() for i in range(chain.n)],
+                    "M": chain.M.tolist()})
+        return 0
+    print(f"space screw axes S_i = (omega, v) of the chain {robot.root_link} -> {chain.link}, "
+          f"in {robot.root_link} (v in m)")
+    print(table(("joint", *TWIST_ROWS), [(name, *chain.S[:, i]) for i, name in enumerate(chain.joint_names)]))
+    print(f"home configuration M (pose of {chain.link} at q = 0):")
+    print(matrix_text(chain.M))
+    return 0
+
+
+def run_jacobian(args: argparse.Namespace) -> int:
+    robot = robot_from(args)
+    link = _frame(robot, args)
+    q = joint_vector(robot, args.q)
+    if args.kind in PINOCCHIO_FRAMES:
+        data = robot.model.createData()
+        matrix = pin.computeFrameJacobian(robot.model, data, q, robot.frame_id(link),
+                                          PINOCCHIO_FRAMES[args.kind])
+        rows, columns = PINOCCHIO_ROWS, robot.joint_names
+    else:
+        chain = screw_chain(robot, link)
+        matrix = (jacobian_space if args.kind == "space" else jacobian_body)(chain, q)
+        rows, columns = TWIST_ROWS, chain.joint_names
+    if args.json:
+        print_json({"frame": link, "kind": args.kind, "convention": JACOBIAN_KINDS[args.kind],
+                    "rows": list(rows), "columns": list(columns), "matrix": matrix.tolist()})
+        return 0
+    print(f"{link}: {JACOBIAN_KINDS[args.kind]}; columns: joints")
+    print(table(("", *columns), [(name, *matrix[i]) for i, name in enumerate(rows)]))
+    return 0
+
+
+# ---- dynamics -----------------------------------------------------------------------------
+def _dynamics_inputs(args: argparse.Namespace, flag: str) -> tuple[Robot, np.ndarray, np.ndarray,
+                                                                    np.ndarray, JointFriction | None]:
+    robot = robot_from(args)
+    q, v = joint_vector(robot, args.q, "--q"), joint_vector(robot, args.v, "--v")
+    third = joint_vector(robot, getattr(args, flag.lstrip("-")), flag)
+    friction = None if args.no_friction else JointFriction.from_urdf(robot)
+    return robot, q, v, third, friction
+
+
+def _print_joint_values(args: argparse.Namespace, robot: Robot, key: str, values: np.ndarray,
+                        unit: str, inputs: dict[str, np.ndarray]) -> None:
+    if args.json:
+        print_json({key: dict(zip(robot.joint_names, values.tolist())),
+                    "friction": not args.no_friction,
+                    **{name: dict(zip(robot.joint_names, x.tolist())) for name, x in inputs.items()}})
+        return
+    print(f"{key} ({unit}), {'without' if args.no_friction else 'with'} URDF joint friction")
+    print(table(("joint", *inputs, key), [(name, *(x[i] for x in inputs.values()), values[i])
+                                          for i, name in enumerate(robot.joint_names)]))
+
+
+def run_inverse_dynamics(args: argparse.Namespace) -> int:
+    robot, q, v, a, friction = _dynamics_inputs(args, "--a")
+    tau = inverse_dynamics(robot, robot.model.createData(), q, v, a, friction)
+    _print_joint_values(args, robot, "tau", tau, "N m or N", {"q": q, "v": v, "a": a})
+    return 0
+
+
+def run_forward_dynamics(args: argparse.Namespace) -> int:
+    robot, q, v, tau, friction = _dynamics_inputs(args, "--tau")
+    a = forward_dynamics(robot, robot.model.createData(), q, v, tau, friction)
+    _print_joint_values(args, robot, "a", a, "rad/s^2 or m/s^2", {"q": q, "v": v, "tau": tau})
+    return 0
