@@ -39,8 +39,7 @@ from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.controllers import Reference, make_controller
-from youbot_dynamics.sim.integrators import (FIXED_STEP, IntegratorStats, Solution, integrate,
-                                             integrate_dae)
+from youbot_dynamics.sim.integrators import IntegratorStats, Solution, integrate, integrate_dae
 from youbot_dynamics.sim.scene import IntegratorSpec, Scene
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
