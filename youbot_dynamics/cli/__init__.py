@@ -17,6 +17,7 @@ COMMAND_MODULES = (
     "youbot_dynamics.cli.study_commands",
     "youbot_dynamics.cli.model_commands",
     "youbot_dynamics.cli.pendulum_commands",
+    "youbot_dynamics.cli.sim_commands",
 )
 
 

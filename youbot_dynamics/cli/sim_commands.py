@@ -1,0 +1,112 @@
+"""Sub-commands `simulate` (run a scene) and `work-precision` (speed versus accuracy on a
+scene, with an optional recommendation for a target error)."""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+
+from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
+from youbot_dynamics.cli.common import CommandError
+from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError
+from youbot_dynamics.sim.scene import Scene, load_scene
+from youbot_dynamics.sim.simulator import Simulator
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add `simulate` and `work-precision`."""
+    run = subparsers.add_parser("simulate", help="simulate a scene",
+                                description="Simulate a scene (a packaged name such as arm_swing, "
+                                "or a YAML path) and print the final state by joint name, the "
+                                "integrator statistics and the energy error.")
+    run.add_argument("--scene", required=True, metavar="NAME_OR_PATH")
+    run.add_argument("--integrator", help=f"override: one of {', '.join(INTEGRATORS)}")
+    run.add_argument("--dt", type=float, help="step size of a fixed-step integrator, s")
+    run.add_argument("--rtol", type=float, help="relative tolerance of an adaptive integrator")
+    run.add_argument("--atol", type=float, help="absolute tolerance of an adaptive integrator")
+    run.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
+    run.add_argument("--output", metavar="FILE.csv", help="write the trajectory as CSV")
+    run.add_argument("--json", action="store_true", help="print JSON")
+    run.set_defaults(run=run_simulate)
+    study = subparsers.add_parser("work-precision", help="speed versus accuracy on a scene",
+                                  description="Sweep every integrator over step sizes or "
+                                  "tolerances against a tight reference; write CSV, markdown "
+                                  "and PNG; with --target-error recommend the cheapest setting.")
+    study.add_argument("--scene", required=True, metavar="NAME_OR_PATH")
+    study.add_argument("--target-error", type=float, help="final joint-space error to meet, rad")
+    study.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
+    study.add_argument("--out", default="out/work_precision", metavar="DIR", help="output folder")
+    study.add_argument("--json", action="store_true", help="print JSON")
+    study.set_defaults(run=run_work_precision)
+
+
+def scene_from(args: argparse.Namespace) -> Scene:
+    """The scene with the command line's overrides applied (checked like the file's)."""
+    scene = load_scene(args.scene)
+    if getattr(args, "duration", None) is not None:
+        scene = scene.with_duration(args.duration)
+    override = [getattr(args, name, None) for name in ("integrator", "dt", "rtol", "atol")]
+    if any(value is not None for value in override):
+        method = args.integrator or scene.integrator.method
+        if args.dt is not None and method not in FIXED_STEP:
+            raise CommandError(f"--dt applies to fixed-step integrators ({', '.join(FIXED_STEP)}), "
+                               f"not {method!r}; use --rtol/--atol")
+        if method in FIXED_STEP and (args.rtol is not None or args.atol is not None):
+            raise CommandError(f"--rtol/--atol apply to adaptive integrators, not {method!r}; use --dt")
+        scene = scene.with_integrator(args.integrator, dt=args.dt, rtol=args.rtol, atol=args.atol)
+    return scene
+
+
+def run_simulate(args: argparse.Namespace) -> int:
+    """Run the scene; print final state, statistics and energy error (or JSON)."""
+    scene = scene_from(args)
+    simulator = Simulator(scene, resolve_integrator(scene, progress=not args.json))
+    try:
+        result = simulator.run()
+    except IntegrationError as error:
+        print(f"youbot-dynamics simulate: {error}", file=sys.stderr)
+        return 1
+    if args.output:
+        result.write_csv(args.output, scene.outputs.record)
+    cost = simulator.rhs_cost()
+    if args.json:
+        print(json.dumps({"scene": scene.name, "integrator": result.integrator.describe(),
+                          "t_end": float(result.t[-1]), "final_state": result.final_state,
+                          "energy_error": result.energy_error, "conservative": result.conservative,
+                          "rhs_cost": cost, "stats": result.stats.as_dict()}))
+        return 0
+    print(f"scene {scene.name}: {result.integrator.describe()}, t = {result.t[-1]:g} s, "
+          f"state dimension {cost['state_dim']} (nv {cost['nv']}, friction {cost['friction_laws']}, "
+          f"controller {cost['controller']})")
+    print("final state:")
+    for name, value in result.final_state.items():
+        print(f"  {name:28s} {value: .9g}")
+    print("energy error max|E-E0|: " + (f"{result.energy_error:.3e} J" if result.conservative
+                                        else "n/a (friction or a controller changes the energy)"))
+    print("statistics:")
+    for name, value in result.stats.as_dict().items():
+        shown = "-" if value is None else value if isinstance(value, (str, int)) else f"{value:.4g}"
+        print(f"  {name:32s} {shown}")
+    if args.output:
+        print(f"trajectory written to {args.output}")
+    return 0
+
+
+def run_work_precision(args: argparse.Namespace) -> int:
+    """Sweep, write the files, print where they are and the recommendation."""
+    scene = scene_from(args)
+    study = work_precision(scene, args.out, target_error=args.target_error, progress=not args.json)
+    best = study.best
+    if args.json:
+        print(json.dumps({"scene": scene.name, "reference": study.reference.spec.describe(),
+                          "reference_error_estimate": study.reference.error_estimate,
+                          "files": [str(f) for f in study.files],
+                          "recommendation": None if best is None else best.spec.describe(),
+                          "points": [{k: None if isinstance(v, float) and math.isnan(v) else v
+                                      for k, v in dataclasses.asdict(p).items()} for p in study.points]}))
+        return 0
+    print(study.files[1].read_text(encoding="utf-8"))
+    print("written: " + ", ".join(str(f) for f in study.files))
+    return 0
