@@ -35,7 +35,8 @@ def add_joint_argument(parser: argparse.ArgumentParser, flag: str, meaning: str)
     """A joint-vector option such as --q, in model order or by name (default all zeros)."""
     parser.add_argument(flag, default="", metavar="VALUES",
                         help=f"{meaning}: comma-separated in model order, or name=value pairs "
-                        "(unnamed joints 0; default all 0)")
+                        f"(unnamed joints 0; default all 0); write {flag}=-0.1,... when the "
+                        "first value is negative")
 
 
 def robot_from(args: argparse.Namespace) -> Robot:
