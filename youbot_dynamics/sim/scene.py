@@ -174,7 +174,7 @@ class Scene:
             if not spec:
                 return None
             spec.update({n: {"law": "viscous", "damping": 0.0} for n in robot.joint_names if n not in spec})
-        return JointFriction.from_spec(robot, spec, where=f"{self.source}: friction.joints")
+        return JointFriction.from_spec(robot, spec, where="joint friction")
 
     def with_integrator(self, method: str | None = None, *, dt: float | None = None,
                         rtol: float | None = None, atol: float | None = None,
@@ -286,7 +286,10 @@ def load_scene(name_or_path: str | Path) -> Scene:
         gravity=_frozen(gravity), friction_default=friction_default,
         friction=MappingProxyType(joint_friction), controller=controller, integrator=integrator,
         duration=duration, outputs=OutputSpec(reader.positive(outputs.get("rate", 100.0), "outputs.rate"), record))
-    scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
+    try:
+        scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
+    except UserInputError as error:
+        raise SceneError(source, "friction.joints", str(error)) from None
     return scene
 
 
