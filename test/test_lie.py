@@ -18,11 +18,6 @@ AXES = [np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]),
 V = np.array([0.3, -1.2, 0.7])
 
 
-def _rotation_angle(r: np.ndarray) -> float:
-    """Angle of R^T R' style residuals, robust near 0."""
-    return float(np.linalg.norm(pin.log3(r)))
-
-
 def test_skew_is_cross_product() -> None:
     a, b = np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.4, -7.0])
     np.testing.assert_array_equal(skew(a) @ b, np.cross(a, b))
