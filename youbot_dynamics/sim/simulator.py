@@ -13,7 +13,8 @@ Two ways to drive it:
 - ``Simulator(scene).run()`` -> :class:`SimulationResult`: the whole scene from its
   initial state, outputs at the scene's rate, statistics and the energy error.
 - Step-wise, for a ROS node or any outer loop: ``reset()``, then repeatedly
-  ``advance(t_next, tau_command=None)`` -> :class:`Snapshot`; ``tau_command`` (joint order
+  ``advance(t_next, tau_command=None)`` -> :class:`Snapshot` (or ``advance_through(times,
+  ...)`` -> one per time); ``tau_command`` (joint order
   of ``joint_names``, N m) replaces the scene's controller until the next call (zero-order
   hold, clipped to the effort limits). The current ``t``, ``q``, ``v``, ``z``, ``tau``,
   ``energy`` and ``ee_pose`` are properties; ``stats`` sums the statistics of every call.
@@ -276,15 +277,26 @@ class Simulator:
     def advance(self, t_next: float, tau_command=None) -> Snapshot:
         """Integrate from the current time to ``t_next`` (s); ``tau_command`` (sequence in
         joint order or mapping by joint name, N m) replaces the controller until then."""
-        if not t_next > self.t:
-            raise UserInputError(f"advance: t_next={t_next!r} s must be after the current time {self.t:.9g} s")
+        return self.advance_through([t_next], tau_command)[-1]
+
+    def advance_through(self, times, tau_command=None) -> list[Snapshot]:
+        """``advance`` with a snapshot at each of ``times`` (s, increasing, after the current
+        time) from ONE integrator run (cheaper than one ``advance`` per time: no restart in
+        between); ``tau_command`` is held over all of them."""
+        times = np.asarray(times, dtype=float).reshape(-1)
+        if not times.size or not times[0] > self.t or np.any(np.diff(times) <= 0.0):
+            raise UserInputError(f"advance: times {times.tolist()} s must increase from after the "
+                                 f"current time {self.t:.9g} s")
         command = None if tau_command is None else self.clipped(tau_command)
-        solution = self.solve(self.x, np.array([self.t, float(t_next)]), command)
-        self.t, self.x = float(solution.t[-1]), solution.x[-1].copy()
+        solution = self.solve(self.x, np.concatenate([[self.t], times]), command)
         self.stats += solution.stats
-        self._tau = command if command is not None else \
-            self.controller.torque(self.t, self.x[self._q], self.x[self._v]).copy()
-        return self.snapshot()
+        snapshots = []
+        for t, x in zip(solution.t[1:], solution.x[1:]):
+            self.t, self.x = float(t), x.copy()
+            self._tau = command if command is not None else \
+                self.controller.torque(self.t, self.x[self._q], self.x[self._v]).copy()
+            snapshots.append(self.snapshot())
+        return snapshots
 
     @property
     def q(self) -> np.ndarray:

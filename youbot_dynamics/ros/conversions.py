@@ -1,0 +1,111 @@
+"""rosbags typestore messages <-> rclpy messages, by field name, recursively.
+
+``io.messages`` builds every message the node sends as a rosbags object (checked, finite);
+``to_rclpy`` turns it into the rclpy message of the same type to publish it, and
+``from_rclpy`` turns a received rclpy message into the rosbags object of the same type (plain
+dataclasses and numpy arrays), so nothing below ros/ sees rclpy. Both handle nested
+messages, sequences of messages, numeric arrays (numpy on the rosbags side, array.array or
+numpy on the rclpy side) and strings. A conversion plan is built once per type and cached.
+"""
+from __future__ import annotations
+
+import array
+import importlib
+from functools import lru_cache
+from typing import Any, Callable
+
+import numpy as np
+
+from youbot_dynamics.io.messages import TYPESTORE
+
+_TYPECODES = {"float64": "d", "float32": "f", "int8": "b", "uint8": "B", "int16": "h", "uint16": "H",
+              "int32": "i", "uint32": "I", "int64": "q", "uint64": "Q"}
+"""array.array type codes of the numeric types rclpy stores sequences in."""
+
+
+def rclpy_class(msgtype: str) -> type:
+    """The rclpy message class of ``pkg/msg/Type`` (imports ``pkg.msg``)."""
+    package, kind, name = msgtype.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+
+def rosbags_class(msgtype: str) -> type:
+    """The rosbags typestore class of ``pkg/msg/Type``."""
+    return TYPESTORE.types[msgtype]
+
+
+def _fields(msgtype: str) -> list[tuple[str, tuple]]:
+    """(name, rosbags field description) of each field of ``msgtype``."""
+    return list(TYPESTORE.fielddefs[msgtype][1])
+
+
+def _element_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any] | None:
+    """Converter of one base or nested element; None when the value passes unchanged."""
+    node_type, detail = description
+    if node_type.name == "NAME":
+        return _to_rclpy_plan(detail) if to_ros else _from_rclpy_plan(detail)
+    return None
+
+
+def _field_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any] | None:
+    node_type, detail = description
+    if node_type.name in ("BASE", "NAME"):
+        return _element_converter(description, to_ros)
+    element, _count = detail
+    inner = _element_converter(element, to_ros)
+    if inner is not None:
+        return lambda values: [inner(value) for value in values]
+    base = element[1][0] if element[0].name == "BASE" else None
+    if base in _TYPECODES:
+        if to_ros:
+            code = _TYPECODES[base]
+            if node_type.name == "SEQUENCE":
+                return lambda values: array.array(code, np.ascontiguousarray(values, dtype=base).tobytes())
+            return lambda values: np.asarray(values, dtype=base)
+        return lambda values: np.asarray(values, dtype=base)
+    return list
+
+
+@lru_cache(maxsize=None)
+def _to_rclpy_plan(msgtype: str) -> Callable[[Any], Any]:
+    cls = rclpy_class(msgtype)
+    plan = [(name, _field_converter(description, True)) for name, description in _fields(msgtype)]
+
+    def convert(message: Any) -> Any:
+        out = cls()
+        for name, converter in plan:
+            value = getattr(message, name)
+            setattr(out, name, value if converter is None else converter(value))
+        return out
+
+    return convert
+
+
+@lru_cache(maxsize=None)
+def _from_rclpy_plan(msgtype: str) -> Callable[[Any], Any]:
+    cls = rosbags_class(msgtype)
+    plan = [(name, _field_converter(description, False)) for name, description in _fields(msgtype)]
+
+    def convert(message: Any) -> Any:
+        return cls(**{name: getattr(message, name) if converter is None else converter(getattr(message, name))
+                      for name, converter in plan})
+
+    return convert
+
+
+def msgtype_of(message: Any) -> str:
+    """``pkg/msg/Type`` of a rosbags or rclpy message."""
+    if hasattr(message, "__msgtype__"):
+        return message.__msgtype__
+    module = type(message).__module__.split(".")
+    return f"{module[0]}/{module[1]}/{type(message).__name__}"
+
+
+def to_rclpy(message: Any) -> Any:
+    """The rclpy message equal to the rosbags message ``message``."""
+    return _to_rclpy_plan(message.__msgtype__)(message)
+
+
+def from_rclpy(message: Any) -> Any:
+    """The rosbags message equal to the rclpy message ``message``."""
+    return _from_rclpy_plan(msgtype_of(message))(message)

@@ -1,0 +1,245 @@
+"""Checking what arrives from outside before the simulator sees it: effort commands,
+joint-state samples and joint trajectories, matched by joint NAME, never by position.
+
+Plain Python (no ROS): the node hands the fields of a message over as sequences and gets
+back either clean arrays in the robot's joint order or an :class:`InputRejected` naming the
+kind of problem (one of ``REJECTION_KINDS``) and what was wrong. :class:`InputCounters`
+counts each kind, for /diagnostics. Effort commands beyond the URDF effort limit are not
+rejected but clamped (counted as ``clamped``).
+
+Times are seconds of the node's clock (simulated time when the node drives /clock).
+A message stamp of 0 means "not stamped": the receive time stands in for it.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline, CubicSpline
+
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.sim.controllers import Reference
+
+REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_joint",
+                   "missing_joint", "out_of_limits", "stale", "bad_timing", "no_controller")
+"""Kinds of rejected input, as counted in /diagnostics."""
+
+TIMEOUT_ACTIONS = ("hold", "zero_torque")
+"""What the simulator applies once the last effort command is older than the timeout:
+``hold`` hands control back to the scene's controller (its set point or trajectory; zero
+torque in a scene without a controller), ``zero_torque`` applies zero torque."""
+
+
+class InputRejected(ValueError):
+    """Input that cannot be used: ``kind`` is one of ``REJECTION_KINDS``."""
+
+    def __init__(self, kind: str, detail: str) -> None:
+        super().__init__(f"{kind}: {detail}")
+        self.kind = kind
+
+
+@dataclass
+class InputCounters:
+    """How many inputs were rejected, by kind, and how many effort commands were clamped."""
+
+    rejected: dict[str, int] = field(default_factory=lambda: dict.fromkeys(REJECTION_KINDS, 0))
+    clamped: int = 0
+    accepted: int = 0
+
+    def reject(self, error: InputRejected) -> None:
+        self.rejected[error.kind] += 1
+
+    def as_values(self) -> dict[str, int]:
+        """Flat key/value pairs for a diagnostic status."""
+        return {"accepted": self.accepted, "clamped": self.clamped,
+                **{f"rejected.{kind}": count for kind, count in self.rejected.items()},
+                "rejected.total": sum(self.rejected.values())}
+
+
+def _names(names: Sequence[str], known: Sequence[str], moving: Sequence[str]) -> list[str]:
+    names = [str(n) for n in names]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise InputRejected("duplicate_joint", f"joint(s) named twice: {', '.join(duplicates)}")
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise InputRejected("unknown_joint", f"no joint(s) {', '.join(unknown)} in the robot "
+                            f"(moving joints: {', '.join(moving)})")
+    return names
+
+
+def _values(values: Sequence[float], label: str, count: int) -> np.ndarray:
+    array = np.asarray(values, dtype=float).reshape(-1)
+    if array.size != count:
+        raise InputRejected("length_mismatch", f"{label} has {array.size} entries for {count} joint names")
+    if not np.isfinite(array).all():
+        index = int(np.flatnonzero(~np.isfinite(array))[0])
+        raise InputRejected("non_finite", f"{label}[{index}] is {array[index]}")
+    return array
+
+
+def _check_stamp(stamp: float, now: float, timeout: float, what: str) -> None:
+    if stamp > 0.0 and stamp < now - timeout:
+        raise InputRejected("stale", f"{what} stamped {stamp:.6f} s is older than the "
+                            f"{timeout:g} s timeout (now {now:.6f} s)")
+
+
+class EffortCommands:
+    """Effort commands (N m, N) by joint name, held until ``timeout`` seconds have passed.
+
+    ``accept`` checks one command: names unique and moving joints of the robot, one finite
+    effort per name, stamp (s) not older than the timeout; efforts beyond the URDF limit are
+    clamped. Joints a command does not name keep their previous command (0 at first).
+    ``torque(now)`` is the command to apply at time ``now``, or None once the command is
+    stale and ``on_timeout`` is ``hold`` (the scene's controller takes over).
+    """
+
+    def __init__(self, robot: Robot, timeout: float, on_timeout: str,
+                 counters: InputCounters | None = None) -> None:
+        if on_timeout not in TIMEOUT_ACTIONS:
+            raise ValueError(f"on_timeout must be one of {TIMEOUT_ACTIONS}, got {on_timeout!r}")
+        if not (math.isfinite(timeout) and timeout > 0.0):
+            raise ValueError(f"command timeout must be positive and finite, got {timeout}")
+        self.robot, self.timeout, self.on_timeout = robot, float(timeout), on_timeout
+        self.counters = counters if counters is not None else InputCounters()
+        self.limit = np.asarray(robot.effort_limit)
+        self.clear()
+
+    def clear(self) -> None:
+        """Forget every command (after a reset)."""
+        self.command = np.zeros(self.robot.nv)
+        self.received_at: float | None = None
+
+    def accept(self, names: Sequence[str], efforts: Sequence[float], stamp: float, now: float) -> np.ndarray:
+        """Check a command received at ``now`` (s); returns the clamped efforts in joint
+        order. Raises (and counts) :class:`InputRejected`; a clamped command is counted."""
+        try:
+            names = _names(names, self.robot.joint_names, self.robot.joint_names)
+            values = _values(efforts, "effort", len(names))
+            _check_stamp(stamp, now, self.timeout, "effort command")
+        except InputRejected as error:
+            self.counters.reject(error)
+            raise
+        command = self.command.copy()
+        for name, value in zip(names, values):
+            command[self.robot.joint_index(name)] = value
+        clamped = np.clip(command, -self.limit, self.limit)
+        if not np.array_equal(clamped, command):
+            self.counters.clamped += 1
+        self.counters.accepted += 1
+        self.command, self.received_at = clamped, float(now)
+        return clamped.copy()
+
+    def active(self, now: float) -> bool:
+        """True while the last command is younger than the timeout."""
+        return self.received_at is not None and now - self.received_at <= self.timeout
+
+    def torque(self, now: float) -> np.ndarray | None:
+        """The torque to apply at ``now`` (joint order) or None for the scene's controller."""
+        if self.active(now):
+            return self.command
+        if self.received_at is not None and self.on_timeout == "zero_torque":
+            return np.zeros(self.robot.nv)
+        return None
+
+
+@dataclass(frozen=True)
+class JointSample:
+    """One checked joint-state sample: t (s), q (rad, m) and v (rad/s, m/s) in joint order."""
+
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+
+
+def joint_sample(robot: Robot, known: Sequence[str], names: Sequence[str], position: Sequence[float],
+                 velocity: Sequence[float], t: float) -> JointSample:
+    """Check a sensor_msgs/JointState: every moving joint named once with a finite position
+    and velocity. Names of ``known`` joints that do not move (locked wheels, fingers) are
+    ignored; names unknown to the robot are rejected."""
+    names = _names(names, known, robot.joint_names)
+    q = _values(position, "position", len(names))
+    v = _values(velocity, "velocity", len(names))
+    missing = [n for n in robot.joint_names if n not in names]
+    if missing:
+        raise InputRejected("missing_joint", f"no sample for joint(s) {', '.join(missing)}")
+    index = [names.index(n) for n in robot.joint_names]
+    return JointSample(float(t), q[index], v[index])
+
+
+class SampledTrajectory:
+    """A joint trajectory through timed points, as a tracking controller's reference.
+
+    ``times`` (k,) s of simulated time, strictly increasing; ``positions`` (k, n) and, when
+    given, ``velocities`` (k, n) in joint order. Between points: cubic Hermite interpolation
+    through the given velocities, or a cubic spline starting and ending at rest when there
+    are none. Before the first point the first point, after the last the last (at rest).
+    Duck-types :class:`~youbot_dynamics.sim.trajectory.PointToPointTrajectory` (``evaluate``).
+    """
+
+    def __init__(self, times: np.ndarray, positions: np.ndarray, velocities: np.ndarray | None) -> None:
+        self.times = np.asarray(times, dtype=float)
+        self.positions = np.asarray(positions, dtype=float)
+        if velocities is None:
+            self.spline = CubicSpline(self.times, self.positions, bc_type="clamped")
+        else:
+            self.spline = CubicHermiteSpline(self.times, self.positions, np.asarray(velocities, dtype=float))
+        self.rate, self.acceleration = self.spline.derivative(1), self.spline.derivative(2)
+
+    def evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Desired position, velocity and acceleration (n,) at time t (s)."""
+        if t <= self.times[0] or t >= self.times[-1]:
+            point = self.positions[0] if t <= self.times[0] else self.positions[-1]
+            return point.copy(), np.zeros(point.size), np.zeros(point.size)
+        return self.spline(t), self.rate(t), self.acceleration(t)
+
+
+def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[float, Sequence[float],
+                     Sequence[float]]], start: float, q_now: np.ndarray) -> SampledTrajectory:
+    """Check a trajectory_msgs/JointTrajectory and make it a reference in simulated time.
+
+    ``points`` are (time_from_start (s), positions, velocities (may be empty)); ``start`` is
+    the time (s) the trajectory starts at (its stamp, or the receive time). Joints not named
+    hold ``q_now``; the current position ``q_now`` is prepended at ``start`` when the first
+    point comes later, so the reference starts where the robot is. Positions must lie
+    within the joint limits; times must increase strictly.
+    """
+    names = _names(names, robot.joint_names, robot.joint_names)
+    if not points:
+        raise InputRejected("length_mismatch", "trajectory has no points")
+    times, rows, rates = [], [], []
+    with_velocity = all(len(point[2]) for point in points)
+    for k, (time_from_start, positions, velocities) in enumerate(points):
+        if not math.isfinite(time_from_start) or time_from_start < 0.0:
+            raise InputRejected("bad_timing", f"points[{k}].time_from_start is {time_from_start}")
+        row, rate = np.array(q_now, dtype=float), np.zeros(robot.nv)
+        index = [robot.joint_index(n) for n in names]
+        row[index] = _values(positions, f"points[{k}].positions", len(names))
+        if with_velocity:
+            rate[index] = _values(velocities, f"points[{k}].velocities", len(names))
+        outside = [n for n, value in zip(robot.joint_names, row)
+                   if not robot.lower[robot.joint_index(n)] <= value <= robot.upper[robot.joint_index(n)]]
+        if outside:
+            raise InputRejected("out_of_limits", f"points[{k}] outside the joint limits of {', '.join(outside)}")
+        times.append(start + time_from_start)
+        rows.append(row)
+        rates.append(rate)
+    if np.any(np.diff(times) <= 0.0):
+        raise InputRejected("bad_timing", "time_from_start must increase strictly from point to point")
+    if times[0] > start:
+        times, rows, rates = [start, *times], [np.asarray(q_now, dtype=float), *rows], [np.zeros(robot.nv), *rates]
+    if len(times) == 1:
+        times, rows, rates = [times[0], times[0] + 1e-9], rows * 2, rates * 2
+    return SampledTrajectory(np.array(times), np.array(rows), np.array(rates) if with_velocity else None)
+
+
+def follow(controller, trajectory: SampledTrajectory) -> None:
+    """Make a simulator's tracking controller (pd or computed_torque) follow ``trajectory``.
+
+    Raises :class:`InputRejected` (``no_controller``) for a scene without one.
+    """
+    if controller.kind == "none":
+        raise InputRejected("no_controller", "the scene has no tracking controller (controller.type: none)")
+    controller.reference = Reference(trajectory.positions[-1].copy(), trajectory)

@@ -1,0 +1,61 @@
+"""Frames a running simulation reports: the pose of every link relative to its parent (for
+/tf and /tf_static) and the end-effector pose from the screw-axis kinematics (for /ee_pose).
+
+Each URDF joint of the Robot's tree is an edge parent -> child. A fixed joint (locked ones
+included, with their value folded into the origin) gives a constant transform (/tf_static);
+a moving joint gives origin @ motion(q): a rotation of q (rad) about the joint axis for
+revolute and continuous joints, a translation of q (m) along it for prismatic joints.
+Poses are 4x4 homogeneous matrices (m); quaternions are (x, y, z, w).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from youbot_dynamics.model.lie import exp_so3, quaternion_from_matrix
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.model.screws import fkin_space, screw_chain
+
+
+class LinkTransform(NamedTuple):
+    """Pose of ``child`` in ``parent``: translation (3,) m and quaternion (x, y, z, w)."""
+
+    parent: str
+    child: str
+    translation: np.ndarray
+    quaternion_xyzw: np.ndarray
+
+
+def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTransform:
+    return LinkTransform(parent, child, transform[:3, 3].copy(), quaternion_from_matrix(transform[:3, :3]))
+
+
+class LinkFrames:
+    """Parent -> child transforms of every link of ``robot`` and the pose of ``ee_link``
+    (default: ``robot.end_effector``) in the root link's frame."""
+
+    def __init__(self, robot: Robot, ee_link: str | None = None) -> None:
+        self.robot = robot
+        self.root_link = robot.root_link
+        self.chain = screw_chain(robot, ee_link)
+        self.ee_link = self.chain.link
+        self.static = tuple(_link_transform(j.parent, j.child, j.origin) for j in robot.tree if j.type == "fixed")
+        self._moving = tuple((j, robot.joint_index(j.name)) for j in robot.tree if j.type != "fixed")
+
+    def moving(self, q: np.ndarray) -> list[LinkTransform]:
+        """Transforms across the moving joints at joint positions q (joint order)."""
+        out = []
+        for joint, index in self._moving:
+            motion = np.eye(4)
+            if joint.type == "prismatic":
+                motion[:3, 3] = joint.axis * q[index]
+            else:
+                motion[:3, :3] = exp_so3(joint.axis * q[index])
+            out.append(_link_transform(joint.parent, joint.child, joint.origin @ motion))
+        return out
+
+    def ee_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """End-effector position (3,) m and quaternion (x, y, z, w) in the root link frame."""
+        pose = fkin_space(self.chain, q)
+        return pose[:3, 3].copy(), quaternion_from_matrix(pose[:3, :3])
