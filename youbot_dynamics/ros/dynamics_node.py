@@ -1,0 +1,222 @@
+"""The ``dynamics_node``: a thin rclpy adapter around :mod:`youbot_dynamics.ros.session`.
+
+simulate mode publishes /clock, /joint_states, /ee_pose and /diagnostics, subscribes
+/joint_commands (sensor_msgs/JointState efforts by joint name) and /joint_trajectory
+(trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
+(std_srvs/SetBool). inverse mode subscribes /joint_states and publishes /computed_torques,
+/ee_pose and /diagnostics. Parameters: :mod:`youbot_dynamics.ros.parameters`.
+
+Timing (simulate): a steady-clock timer paces the samples at ``publish_rate x time_scale``
+per wall second; a late tick publishes the samples that are due (up to ``MAX_CATCH_UP``),
+so the average rate holds while the simulation keeps up. Simulated time itself advances by
+fixed increments, independent of the wall clock.
+
+Run: ``ros2 run youbot_dynamics dynamics_node --ros-args --params-file config/dynamics_node.yaml``
+or ``python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing``.
+SIGINT and SIGTERM finalise the logs before the process ends.
+"""
+from __future__ import annotations
+
+import signal
+import sys
+import time
+
+import rclpy
+import rclpy.executors
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import InvalidParameterValueException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.signals import SignalHandlerOptions
+from sensor_msgs.msg import JointState
+from std_srvs.srv import SetBool, Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
+from youbot_dynamics.ros.parameters import check_choice, declare_all
+from youbot_dynamics.ros.qos import RELIABLE_DEEP
+from youbot_dynamics.ros.session import PUBLISHED, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
+from youbot_dynamics.sim.commands import InputRejected
+from youbot_dynamics.sim.scene import load_scene
+
+MAX_CATCH_UP = 20
+"""Most samples one late timer tick publishes; further behind, the pacing restarts (the
+real-time factor then drops below the requested time scale)."""
+WARN_THROTTLE = 2.0
+"""Seconds between repeated warnings about bad input."""
+
+
+def _stamp_ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+class DynamicsNode(Node):
+    """The node; ``finished`` turns true once ``duration`` simulated seconds have run."""
+
+    def __init__(self, **node_options) -> None:
+        super().__init__("dynamics_node", **node_options)
+        self.params = declare_all(self)
+        p = self.params
+        scene = load_scene(p["scene"])
+        logs = {"mcap_path": p["mcap_path"] or None, "rrd_path": p["rrd_path"] or None,
+                "frame_id": p["frame_id"], "ee_link": p["ee_link"]}
+        if p["mode"] == "simulate":
+            self.session = SimulationSession(
+                scene, p["publish_rate"], command_timeout=p["command_timeout"], on_timeout=p["on_timeout"],
+                samples_per_solve=max(1, round(p["solve_horizon"] * p["publish_rate"])), **logs)
+        else:
+            self.session = InverseSession(scene, filter_time_constant=p["acceleration_filter"], **logs)
+        self.finished = False
+        self.publishers_ = {topic: self.create_publisher(rclpy_class(TOPIC_TYPES[topic]), topic, RELIABLE_DEEP)
+                            for topic in PUBLISHED[p["mode"]]}
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        if p["mode"] == "simulate":
+            self.create_subscription(JointState, "/joint_commands", self._on_command, RELIABLE_DEEP)
+            self.create_subscription(JointTrajectory, "/joint_trajectory", self._on_trajectory, RELIABLE_DEEP)
+            self.create_service(Trigger, "~/reset", self._on_reset)
+            self.create_service(SetBool, "~/pause", self._on_pause)
+            self._restart_pacing()
+            self.create_timer(1.0 / p["publish_rate"], self._on_tick, clock=steady)
+        else:
+            self.create_subscription(JointState, "/joint_states", self._on_joint_state, RELIABLE_DEEP)
+        self._diagnostics_mark = (time.monotonic(), self.session.t)
+        self.create_timer(p["diagnostics_period"], self._on_diagnostics, clock=steady)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.get_logger().info(f"{p['mode']} {scene.name} ({scene.source}); logs: "
+                               f"{', '.join(map(str, self.session.recorder.paths)) or 'none'}")
+
+    # ---- output ------------------------------------------------------------------------
+    def _publish(self, outputs: Outputs) -> None:
+        for topic, message in outputs:
+            self.publishers_[topic].publish(to_rclpy(message))
+
+    def _restart_pacing(self) -> None:
+        self._pace_start, self._pace_k0 = time.monotonic(), self.session.k
+
+    def _on_tick(self) -> None:
+        session, p = self.session, self.params
+        if self.finished or session.paused or session.failure:
+            return
+        scale = self.get_parameter("time_scale").value
+        due = MAX_CATCH_UP if scale == 0.0 else \
+            int((time.monotonic() - self._pace_start) * p["publish_rate"] * scale) - (session.k - self._pace_k0)
+        if due > MAX_CATCH_UP:
+            self._restart_pacing()
+            due = MAX_CATCH_UP
+        for _ in range(max(0, due)):
+            self._publish(session.step())
+            if session.failure:
+                self.get_logger().error(session.failure)
+                return
+            if p["duration"] and session.t >= p["duration"] - 1e-12:
+                self._finish()
+                return
+
+    def _finish(self) -> None:
+        self._publish(self.session.diagnostics(self._real_time_factor()))
+        self.session.close()
+        self.finished = True
+
+    def _real_time_factor(self) -> float:
+        """Simulated seconds per wall second since the last /diagnostics."""
+        now, t = time.monotonic(), self.session.t
+        start, t0 = self._diagnostics_mark
+        self._diagnostics_mark = (now, t)
+        return (t - t0) / (now - start) if now > start else 0.0
+
+    def _on_diagnostics(self) -> None:
+        if not self.finished:
+            self._publish(self.session.diagnostics(self._real_time_factor()))
+
+    # ---- input -------------------------------------------------------------------------
+    def _rejected(self, topic: str, error: InputRejected) -> None:
+        self.get_logger().warning(f"{topic}: ignored ({error}); keeping the last good state",
+                                  throttle_duration_sec=WARN_THROTTLE)
+
+    def _on_command(self, msg: JointState) -> None:
+        before = self.session.counters.clamped
+        try:
+            self.session.effort_command(list(msg.name), msg.effort, _stamp_ns(msg.header.stamp))
+        except InputRejected as error:
+            self._rejected("/joint_commands", error)
+            return
+        if self.session.counters.clamped > before:
+            self.get_logger().warning("/joint_commands: efforts beyond the URDF effort limits were clamped",
+                                      throttle_duration_sec=WARN_THROTTLE)
+
+    def _on_trajectory(self, msg: JointTrajectory) -> None:
+        points = [(point.time_from_start.sec + point.time_from_start.nanosec * 1e-9, point.positions,
+                   point.velocities) for point in msg.points]
+        try:
+            self.session.trajectory(list(msg.joint_names), points, _stamp_ns(msg.header.stamp))
+        except InputRejected as error:
+            self._rejected("/joint_trajectory", error)
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        try:
+            self._publish(self.session.joint_state(list(msg.name), msg.position, msg.velocity,
+                                                   _stamp_ns(msg.header.stamp)))
+        except InputRejected as error:
+            self._rejected("/joint_states", error)
+
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        self._publish(self.session.reset())
+        self._restart_pacing()
+        response.success, response.message = True, f"reset {self.session.scene.name} to t = 0"
+        return response
+
+    def _on_pause(self, request: SetBool.Request, response: SetBool.Response) -> SetBool.Response:
+        self.session.paused = bool(request.data)
+        self._restart_pacing()
+        response.success, response.message = True, "paused" if request.data else "running"
+        return response
+
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        for parameter in parameters:
+            problem = check_choice(parameter.name, parameter.value)
+            if problem:
+                return SetParametersResult(successful=False, reason=problem)
+        commands = getattr(self.session, "commands", None)
+        for parameter in parameters:
+            if parameter.name == "time_scale":
+                self._restart_pacing()
+            elif commands is not None and parameter.name == "command_timeout":
+                commands.timeout = float(parameter.value)
+            elif commands is not None and parameter.name == "on_timeout":
+                commands.on_timeout = parameter.value
+        return SetParametersResult(successful=True)
+
+    def close(self) -> None:
+        """Finalise the logs (idempotent)."""
+        self.session.close()
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the node until ``duration`` is reached, SIGINT or SIGTERM; logs are finalised."""
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = []
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda number, frame: stop.append(number))
+    try:
+        node = DynamicsNode()
+    except (UserInputError, InvalidParameterValueException) as error:
+        print(f"dynamics_node: error: {error}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    executor = rclpy.executors.SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        while not stop and not node.finished and rclpy.ok():
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        node.close()
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,313 @@
+"""What the dynamics node does, without rclpy: step the simulator (simulate mode) or compute
+torques from joint states (inverse mode), build the messages through ``io.messages`` and log
+them through ``io`` (MCAP in rosbag2 form, Rerun). The node only moves messages in and out.
+
+Every output is a list of ``(topic, message)`` (rosbags objects) that the caller publishes;
+everything published is also logged, plus /tf (every moving link, per sample) and
+/tf_static (every fixed link, once, latched). Stamps and log times are simulated time in
+integer nanoseconds, so two runs of a scene log identical payloads.
+
+Simulate mode advances simulated time by fixed increments: sample k is at exactly
+``k * round(1e9 / publish_rate)`` ns, whatever the wall clock does.
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
+from youbot_dynamics.io import messages
+from youbot_dynamics.io.mcap_log import McapLogger
+from youbot_dynamics.io.rerun_log import RerunLogger
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
+                                          InputRejected, follow, joint_sample, joint_trajectory)
+from youbot_dynamics.sim.frames import LinkFrames
+from youbot_dynamics.sim.integrators import DivergenceError
+from youbot_dynamics.sim.inverse import AccelerationEstimator, InverseDynamics
+from youbot_dynamics.sim.scene import Scene
+from youbot_dynamics.sim.simulator import Simulator, Snapshot, robot_with_gravity
+
+NS_PER_S = messages.NS_PER_S
+Outputs = list[tuple[str, object]]
+
+TOPIC_TYPES = {
+    "/joint_states": "sensor_msgs/msg/JointState",
+    "/computed_torques": "sensor_msgs/msg/JointState",
+    "/ee_pose": "geometry_msgs/msg/PoseStamped",
+    "/clock": "rosgraph_msgs/msg/Clock",
+    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+    "/tf": "tf2_msgs/msg/TFMessage",
+    "/tf_static": "tf2_msgs/msg/TFMessage",
+}
+"""Every topic the node publishes or logs, with its type."""
+
+PUBLISHED = {"simulate": ("/clock", "/joint_states", "/ee_pose", "/diagnostics"),
+             "inverse": ("/computed_torques", "/ee_pose", "/diagnostics")}
+"""Topics published over ROS per mode (/tf and /tf_static are logged only: tf2_msgs has no
+rclpy wheel)."""
+
+
+class Recorder:
+    """The logs of one node run: an MCAP (``mcap_path``) and a Rerun recording (``rrd_path``);
+    either may be None. ``close`` finalises both and may be called more than once."""
+
+    def __init__(self, mode: str, scene: Scene, mcap_path: str | Path | None,
+                 rrd_path: str | Path | None, root_frame: str) -> None:
+        self.mcap = McapLogger(mcap_path) if mcap_path else None
+        if self.mcap is not None:
+            for topic in (*PUBLISHED[mode], "/tf", "/tf_static"):
+                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic == "/tf_static")
+        self.rerun = RerunLogger(rrd_path, scene.robot_path, recording_name=f"{scene.name} ({mode})",
+                                 ee_frame=root_frame) if rrd_path else None
+
+    @property
+    def paths(self) -> list[Path]:
+        return [log.path for log in (self.mcap, self.rerun) if log is not None]
+
+    def write(self, outputs: Outputs, stamp_ns: int) -> None:
+        """Log messages at ``stamp_ns`` (log and publish time)."""
+        if self.mcap is not None and not self.mcap.closed:
+            for topic, message in outputs:
+                self.mcap.write(topic, message, stamp_ns)
+
+    def sample(self, t: float, names: Sequence[str], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+               energy: float, ee_position: np.ndarray) -> None:
+        """One Rerun sample at simulated time t (s)."""
+        if self.rerun is not None and not self.rerun.closed:
+            self.rerun.log_sample(t, names, q, v, tau, energy, ee_position)
+
+    def close(self) -> None:
+        for log in (self.mcap, self.rerun):
+            if log is not None:
+                log.close()
+
+
+class _Frames:
+    """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame``."""
+
+    def __init__(self, robot: Robot, root_frame: str, ee_link: str | None) -> None:
+        self.links = LinkFrames(robot, ee_link or None)
+        self.root_frame = root_frame or robot.root_link
+
+    def tf_static(self) -> object:
+        transforms = [messages.transform_stamped(0, t.parent, t.child, t.translation, t.quaternion_xyzw)
+                      for t in self.links.static]
+        if self.root_frame != self.links.root_link:
+            transforms.insert(0, messages.transform_stamped(0, self.root_frame, self.links.root_link,
+                                                            (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
+        return messages.tf_message(transforms)
+
+    def tf(self, stamp_ns: int, q: np.ndarray) -> object:
+        return messages.tf_message(messages.transform_stamped(stamp_ns, t.parent, t.child, t.translation,
+                                                              t.quaternion_xyzw) for t in self.links.moving(q))
+
+    def ee_pose(self, stamp_ns: int, q: np.ndarray) -> tuple[object, np.ndarray]:
+        position, quaternion = self.links.ee_pose(q)
+        return messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion), position
+
+
+class SimulationSession:
+    """A scene simulated step by step at ``publish_rate`` (Hz) samples per simulated second
+    (the same scene, rate and ``samples_per_solve`` give the same samples, bit for bit).
+
+    Inputs: ``effort_command`` (sensor_msgs/JointState fields), ``trajectory``
+    (trajectory_msgs/JointTrajectory fields), ``reset``, ``paused``. Each ``step`` advances
+    simulated time by one increment and returns the messages to publish. A divergence pauses
+    the session (``failure`` says why); it never yields non-finite output.
+    """
+
+    mode = "simulate"
+
+    def __init__(self, scene: Scene, publish_rate: float, *, command_timeout: float = 0.5,
+                 on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
+                 mcap_path: str | Path | None = None, rrd_path: str | Path | None = None) -> None:
+        self.scene = scene
+        self.simulator = Simulator(scene)
+        self.robot = self.simulator.robot
+        self.step_ns = max(1, round(NS_PER_S / publish_rate))
+        self.samples_per_solve = max(1, int(samples_per_solve))
+        self.counters = InputCounters()
+        self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters)
+        self.frames = _Frames(self.robot, frame_id, ee_link)
+        self.recorder = Recorder(self.mode, scene, mcap_path, rrd_path, self.frames.root_frame)
+        self._scene_reference = getattr(self.simulator.controller, "reference", None)
+        self.paused = False
+        self.failure: str | None = None
+        self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
+        self.reset()
+
+    @property
+    def t(self) -> float:
+        """Simulated time (s)."""
+        return self.k * self.step_ns / NS_PER_S
+
+    @property
+    def stamp_ns(self) -> int:
+        return self.k * self.step_ns
+
+    def reset(self) -> Outputs:
+        """Back to the scene's initial state at t = 0; forgets commands and trajectories."""
+        self.simulator.reset()
+        self.commands.clear()
+        if self._scene_reference is not None:
+            self.simulator.controller.reference = self._scene_reference
+        self.k, self.failure, self.wall_time, self._pending = 0, None, 0.0, []
+        self.energy0 = self.simulator.energy
+        self.energy_error = 0.0
+        return self._outputs(self.simulator.snapshot())
+
+    def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int) -> None:
+        """Accept an effort command (raises and counts :class:`InputRejected`)."""
+        self.commands.accept(names, efforts, stamp_ns / NS_PER_S, self.t)
+
+    def trajectory(self, names: Sequence[str], points: Sequence[tuple[float, Sequence[float], Sequence[float]]],
+                   stamp_ns: int) -> None:
+        """Follow a joint trajectory from its stamp (or now, if unstamped or past)."""
+        try:
+            start = max(stamp_ns / NS_PER_S, self.t)
+            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start, self.simulator.q))
+        except InputRejected as error:
+            self.counters.reject(error)
+            raise
+        self.counters.accepted += 1
+        self.commands.clear()
+
+    def step(self) -> Outputs:
+        """Advance one increment; returns the messages to publish (none when paused or failed).
+
+        The simulator runs ``samples_per_solve`` increments per integrator call and the
+        samples are handed out one per step, so a command or trajectory takes effect at the
+        next such block (a latency of at most ``samples_per_solve`` increments)."""
+        if self.paused or self.failure is not None:
+            return []
+        if not self._pending:
+            times = (self.k + 1 + np.arange(self.samples_per_solve)) * self.step_ns / NS_PER_S
+            start = time.perf_counter()
+            try:
+                self._pending = self.simulator.advance_through(times, self.commands.torque(self.t))[::-1]
+            except DivergenceError as error:
+                self.failure = f"diverged after t = {self.t:.6f} s: {error}"
+                return []
+            finally:
+                self.wall_time += time.perf_counter() - start
+        self.k += 1
+        return self._outputs(self._pending.pop())
+
+    def _outputs(self, snapshot: Snapshot) -> Outputs:
+        stamp, q = self.stamp_ns, snapshot.q
+        self.snapshot = snapshot
+        if self.simulator.conservative:
+            self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
+        try:
+            pose, position = self.frames.ee_pose(stamp, q)
+            outputs = [("/clock", messages.clock(stamp)),
+                       ("/joint_states", messages.joint_state(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau)),
+                       ("/ee_pose", pose)]
+            self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q))], stamp)
+        except messages.MessageFieldError as error:
+            self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
+            return []
+        self.recorder.sample(self.t, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy, position)
+        return outputs
+
+    def diagnostics(self, real_time_factor: float) -> Outputs:
+        """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
+        energy (J), input counters; level ERROR after a divergence, WARN when paused."""
+        stats = {f"integrator.{key}": value for key, value in self.simulator.stats.as_dict().items()
+                 if value is not None and (not isinstance(value, float) or math.isfinite(value))}
+        values = {"sim_time": self.t, "real_time_factor": real_time_factor if math.isfinite(real_time_factor) else -1.0,
+                  "energy": self.snapshot.energy, "energy_error": self.energy_error,
+                  "paused": self.paused, "command": self._command_source(), **stats, **self.counters.as_values()}
+        level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
+        return self._diagnostic_outputs(level, text, values)
+
+    def _command_source(self) -> str:
+        if self.commands.active(self.t):
+            return "effort_command"
+        if self.commands.received_at is not None and self.commands.on_timeout == "zero_torque":
+            return "zero_torque (command timed out)"
+        return f"scene controller ({self.simulator.controller.kind})"
+
+    def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
+        status = messages.diagnostic_status(f"dynamics_node: {self.scene.name} ({self.mode})", level, text or "",
+                                            hardware_id=self.robot.name, values=values)
+        outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
+        self.recorder.write(outputs, self.stamp_ns)
+        return outputs
+
+    def close(self) -> None:
+        self.recorder.close()
+
+
+class InverseSession:
+    """Torques from measured joint states: accelerations by central differences (see
+    :mod:`youbot_dynamics.sim.inverse`), tau = RNEA + friction of the scene's robot."""
+
+    mode = "inverse"
+
+    def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
+                 ee_link: str = "", mcap_path: str | Path | None = None,
+                 rrd_path: str | Path | None = None) -> None:
+        self.scene = scene
+        self.robot = robot_with_gravity(scene.robot(), scene.gravity)
+        self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
+        self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
+        self.estimator = AccelerationEstimator(filter_time_constant)
+        self.counters = InputCounters()
+        self.frames = _Frames(self.robot, frame_id, ee_link)
+        self.recorder = Recorder(self.mode, scene, mcap_path, rrd_path, self.frames.root_frame)
+        self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
+        self.stamp_ns, self.samples = 0, 0
+        self.failure: str | None = None
+
+    @property
+    def t(self) -> float:
+        """Time (s) of the last sample torques were computed for."""
+        return self.stamp_ns / NS_PER_S
+
+    def joint_state(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
+                    stamp_ns: int) -> Outputs:
+        """Take one /joint_states sample; returns /computed_torques and /ee_pose of the
+        previous sample once three are known. Raises and counts :class:`InputRejected`."""
+        try:
+            sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns / NS_PER_S)
+            estimate = self.estimator.push(sample)
+        except InputRejected as error:
+            self.counters.reject(error)
+            raise
+        self.counters.accepted += 1
+        if estimate is None:
+            return []
+        middle, a = estimate
+        stamp = round(middle.t * NS_PER_S)
+        tau = self.dynamics.torque(middle.q, middle.v, a)
+        try:
+            pose, position_ee = self.frames.ee_pose(stamp, middle.q)
+            outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
+                                                                  middle.v, tau)), ("/ee_pose", pose)]
+        except messages.MessageFieldError as error:
+            self.counters.reject(InputRejected("non_finite", str(error)))
+            return []
+        self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, middle.q))], stamp)
+        data = self.dynamics.data
+        energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
+        self.recorder.sample(middle.t, self.robot.joint_names, middle.q, middle.v, tau, energy, position_ee)
+        self.stamp_ns, self.samples = stamp, self.samples + 1
+        return outputs
+
+    def diagnostics(self, real_time_factor: float) -> Outputs:
+        """/diagnostics now: samples processed and input counters."""
+        values = {"torques_published": self.samples, **self.counters.as_values()}
+        status = messages.diagnostic_status(f"dynamics_node: {self.scene.name} ({self.mode})", "OK", "running",
+                                            hardware_id=self.robot.name, values=values)
+        outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
+        self.recorder.write(outputs, self.stamp_ns)
+        return outputs
+
+    def close(self) -> None:
+        self.recorder.close()
