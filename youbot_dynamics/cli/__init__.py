@@ -18,6 +18,7 @@ COMMAND_MODULES = (
     "youbot_dynamics.cli.model_commands",
     "youbot_dynamics.cli.pendulum_commands",
     "youbot_dynamics.cli.sim_commands",
+    "youbot_dynamics.cli.ros_commands",
 )
 
 

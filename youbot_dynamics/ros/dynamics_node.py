@@ -193,18 +193,22 @@ class DynamicsNode(Node):
         self.session.close()
 
 
-def main(args: list[str] | None = None) -> int:
-    """Run the node until ``duration`` is reached, SIGINT or SIGTERM; logs are finalised."""
+def run(args: list[str] | None = None, overrides: dict[str, object] | None = None) -> tuple[int, DynamicsNode | None]:
+    """Run the node until ``duration`` is reached, SIGINT or SIGTERM, and finalise the logs.
+
+    ``args`` are command-line arguments (``--ros-args ...``), ``overrides`` parameter values
+    that beat them. Returns the exit status (2: bad parameters) and the finished node.
+    """
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = []
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda number, frame: stop.append(number))
     try:
-        node = DynamicsNode()
+        node = DynamicsNode(parameter_overrides=[Parameter(k, value=v) for k, v in (overrides or {}).items()])
     except (UserInputError, InvalidParameterValueException) as error:
         print(f"dynamics_node: error: {error}", file=sys.stderr)
         rclpy.try_shutdown()
-        return 2
+        return 2, None
     executor = rclpy.executors.SingleThreadedExecutor()
     executor.add_node(node)
     try:
@@ -215,7 +219,12 @@ def main(args: list[str] | None = None) -> int:
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
-    return 0
+    return 0, node
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point of the ``dynamics_node`` executable."""
+    return run(args)[0]
 
 
 if __name__ == "__main__":

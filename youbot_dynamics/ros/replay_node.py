@@ -1,0 +1,112 @@
+"""The ``replay_node``: publishes a recorded bag's messages on their topics.
+
+A bag is a single .mcap file or a rosbag2 folder with metadata.yaml (read by
+:func:`youbot_dynamics.io.bag_reader.read_bag`). Messages go out in log-time order with the
+recorded spacing scaled by ``rate`` (1.0: as recorded), or as fast as possible
+(``rate`` 0). Unless the bag has its own /clock, the node drives /clock with each message's
+log time, so nodes with use_sim_time follow the bag. Topics recorded latched (/tf_static)
+are offered transient-local. Types without an rclpy message package (tf2_msgs with these
+wheels) are skipped with a warning.
+
+Run: ``ros2 run youbot_dynamics replay_node --ros-args -p bag:=out/run.mcap -p rate:=0.0``
+or ``youbot-dynamics replay BAG [--rate R | --fast]``.
+"""
+from __future__ import annotations
+
+import signal
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import rclpy
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from rosgraph_msgs.msg import Clock
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io import messages
+from youbot_dynamics.io.bag_reader import bag_topics, paced, read_bag
+from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
+from youbot_dynamics.ros.qos import RELIABLE_DEEP, profile
+
+
+class ReplayNode(Node):
+    """Publishers for the topics of ``bag`` (all, or those named in ``topics``)."""
+
+    def __init__(self, bag: str | Path = "", rate: float = 1.0, topics: Sequence[str] = (), **node_options) -> None:
+        super().__init__("replay_node", **node_options)
+        bag = self.declare_parameter("bag", str(bag), ParameterDescriptor(
+            description="bag to replay: a .mcap file or a rosbag2 folder", read_only=True)).value
+        self.rate = self.declare_parameter("rate", float(rate), ParameterDescriptor(
+            description="playback speed (1.0: as recorded); 0: as fast as possible", read_only=True,
+            floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)])).value
+        wanted = self.declare_parameter("topics", list(topics) or [""], ParameterDescriptor(
+            description="topics to replay (empty: all)", read_only=True)).value
+        self.wait_for = self.declare_parameter("wait_for", "", ParameterDescriptor(
+            description="before replaying, wait up to 30 s for a subscriber on this topic ('' : do not wait)",
+            read_only=True)).value
+        if not bag:
+            raise UserInputError("replay_node: parameter bag is empty: give a .mcap file or a rosbag2 folder")
+        self.bag = Path(bag)
+        wanted = {topic for topic in wanted if topic}
+        self.publishers_ = {}
+        for topic in bag_topics(self.bag):
+            if wanted and topic.topic not in wanted:
+                continue
+            try:
+                cls = rclpy_class(topic.msgtype)
+            except (ImportError, AttributeError):
+                self.get_logger().warning(f"{topic.topic}: no rclpy message {topic.msgtype} here; not replayed")
+                continue
+            self.publishers_[topic.topic] = self.create_publisher(cls, topic.topic, profile(topic.latched))
+        self.clock = None if "/clock" in self.publishers_ else self.create_publisher(Clock, "/clock", RELIABLE_DEEP)
+
+    def wait_for_subscribers(self, topic: str, count: int = 1, timeout: float = 10.0) -> bool:
+        """Wait (wall s) until ``topic`` has ``count`` matched subscriptions."""
+        deadline = time.monotonic() + timeout
+        while self.publishers_[topic].get_subscription_count() < count:
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.01)
+        return True
+
+    def replay(self, keep_going: Callable[[], bool] = lambda: True) -> int:
+        """Publish the bag's messages (paced by ``rate``); returns how many were published."""
+        count = 0
+        for item in paced(read_bag(self.bag), rate=self.rate or None):
+            if not keep_going():
+                break
+            publisher = self.publishers_.get(item.topic)
+            if publisher is None:
+                continue
+            if self.clock is not None:
+                self.clock.publish(to_rclpy(messages.clock(item.log_time_ns)))
+            publisher.publish(to_rclpy(item.message))
+            count += 1
+        return count
+
+
+def main(args: list[str] | None = None) -> int:
+    """Replay the bag of parameter ``bag`` once; SIGINT/SIGTERM stop it."""
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = []
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda number, frame: stop.append(number))
+    try:
+        node = ReplayNode()
+        if node.wait_for and not node.wait_for_subscribers(node.wait_for, timeout=30.0):
+            node.get_logger().warning(f"no subscriber on {node.wait_for} after 30 s; replaying anyway")
+        count = node.replay(lambda: not stop)
+        node.get_logger().info(f"replayed {count} messages from {node.bag}")
+    except UserInputError as error:
+        print(f"replay_node: error: {error}", file=sys.stderr)
+        return 2
+    finally:
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
