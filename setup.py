@@ -46,6 +46,8 @@ setup(
     entry_points={
         "console_scripts": [
             "youbot-dynamics = youbot_dynamics.cli:main",
+            "dynamics_node = youbot_dynamics.ros.dynamics_node:main",
+            "replay_node = youbot_dynamics.ros.replay_node:main",
         ],
     },
 )

@@ -4,16 +4,18 @@
 Each URDF joint of the Robot's tree is an edge parent -> child. A fixed joint (locked ones
 included, with their value folded into the origin) gives a constant transform (/tf_static);
 a moving joint gives origin @ motion(q): a rotation of q (rad) about the joint axis for
-revolute and continuous joints, a translation of q (m) along it for prismatic joints.
+revolute and continuous joints, a translation of q (m) along it for prismatic joints
+(computed on quaternions: this runs for every link at every published sample).
 Poses are 4x4 homogeneous matrices (m); quaternions are (x, y, z, w).
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 
-from youbot_dynamics.model.lie import exp_so3, quaternion_from_matrix
+from youbot_dynamics.model.lie import quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.model.screws import fkin_space, screw_chain
 
@@ -25,6 +27,14 @@ class LinkTransform(NamedTuple):
     child: str
     translation: np.ndarray
     quaternion_xyzw: np.ndarray
+
+
+def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product a b of quaternions (x, y, z, w): the rotation b, then a."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return np.array([aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz])
 
 
 def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTransform:
@@ -41,18 +51,26 @@ class LinkFrames:
         self.chain = screw_chain(robot, ee_link)
         self.ee_link = self.chain.link
         self.static = tuple(_link_transform(j.parent, j.child, j.origin) for j in robot.tree if j.type == "fixed")
-        self._moving = tuple((j, robot.joint_index(j.name)) for j in robot.tree if j.type != "fixed")
+        self._moving = tuple((j, robot.joint_index(j.name), quaternion_from_matrix(j.origin[:3, :3]))
+                             for j in robot.tree if j.type != "fixed")
 
     def moving(self, q: np.ndarray) -> list[LinkTransform]:
-        """Transforms across the moving joints at joint positions q (joint order)."""
+        """Transforms across the moving joints at joint positions q (joint order).
+
+        Revolute: the child origin stays at the joint origin and the rotation is the
+        origin's quaternion times (axis sin(q/2), cos(q/2)); prismatic: the child moves by
+        q along the axis (rotated into the parent frame) and keeps the origin's rotation."""
         out = []
-        for joint, index in self._moving:
-            motion = np.eye(4)
+        for joint, index, origin_xyzw in self._moving:
+            value = float(q[index])
             if joint.type == "prismatic":
-                motion[:3, 3] = joint.axis * q[index]
+                translation = joint.origin[:3, 3] + joint.origin[:3, :3] @ (joint.axis * value)
+                out.append(LinkTransform(joint.parent, joint.child, translation, origin_xyzw))
             else:
-                motion[:3, :3] = exp_so3(joint.axis * q[index])
-            out.append(_link_transform(joint.parent, joint.child, joint.origin @ motion))
+                half = 0.5 * value
+                turn = np.array([*(joint.axis * math.sin(half)), math.cos(half)])
+                out.append(LinkTransform(joint.parent, joint.child, joint.origin[:3, 3],
+                                         quaternion_product(origin_xyzw, turn)))
         return out
 
     def ee_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
