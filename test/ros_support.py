@@ -1,0 +1,105 @@
+"""Helpers for tests with real ROS 2 traffic: isolated contexts, spinning, collecting.
+
+Isolation: ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (set here, inherited by subprocesses)
+and a domain id per test from :func:`domain_id`, distinct across pytest-xdist workers.
+"""
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+
+import rclpy  # noqa: E402
+from rclpy.context import Context  # noqa: E402
+from rclpy.executors import MultiThreadedExecutor  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+
+from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
+from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
+
+WAIT = 30.0
+"""Generous upper bound (s) on any wait for discovery or messages."""
+
+
+def domain_id(test_offset: int) -> int:
+    """A domain id for test number ``test_offset`` (0..29) on this xdist worker (ids 110..229)."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
+    index = int(worker[2:]) if worker[2:].isdigit() else 0
+    return 110 + (index % 4) * 30 + test_offset % 30
+
+
+@contextmanager
+def ros_context(test_offset: int) -> Iterator[tuple[Context, int]]:
+    """An initialised rclpy context in its own domain; shut down afterwards."""
+    domain = domain_id(test_offset)
+    context = Context()
+    rclpy.init(context=context, domain_id=domain)
+    try:
+        yield context, domain
+    finally:
+        context.try_shutdown()
+
+
+@contextmanager
+def spinning(context: Context, *nodes: Node) -> Iterator[MultiThreadedExecutor]:
+    """Spin ``nodes`` in a daemon thread while the block runs; destroy them afterwards."""
+    executor = MultiThreadedExecutor(context=context)
+    for node in nodes:
+        executor.add_node(node)
+    thread = threading.Thread(target=executor.spin, daemon=True)
+    thread.start()
+    try:
+        yield executor
+    finally:
+        executor.shutdown()
+        thread.join(timeout=WAIT)
+        for node in nodes:
+            node.destroy_node()
+
+
+def wait_until(predicate: Callable[[], bool], timeout: float = WAIT, what: str = "condition") -> None:
+    """Poll ``predicate`` until true; AssertionError naming ``what`` after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(0.01)
+
+
+class Collector(Node):
+    """Subscribes to topics and keeps every message as a rosbags object, in arrival order."""
+
+    def __init__(self, context: Context, topics: dict[str, str], name: str = "collector") -> None:
+        super().__init__(name, context=context)
+        self.received: dict[str, list] = {topic: [] for topic in topics}
+        self._lock = threading.Lock()
+        for topic, msgtype in topics.items():
+            self.create_subscription(rclpy_class(msgtype), topic,
+                                     lambda msg, topic=topic: self._keep(topic, msg), RELIABLE_DEEP)
+
+    def _keep(self, topic: str, msg: object) -> None:
+        with self._lock:
+            self.received[topic].append(from_rclpy(msg))
+
+    def messages(self, topic: str) -> list:
+        with self._lock:
+            return list(self.received[topic])
+
+    def count(self, topic: str) -> int:
+        with self._lock:
+            return len(self.received[topic])
+
+
+def stamp_ns(message: object) -> int:
+    """Header stamp of a rosbags message (ns)."""
+    stamp = message.header.stamp
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def diagnostic_values(array: object) -> dict[str, str]:
+    """Key/values of the first status of a DiagnosticArray."""
+    return {kv.key: kv.value for kv in array.status[0].values}

@@ -1,0 +1,147 @@
+"""Input checks of the node without ROS: effort commands, joint samples, trajectories; the
+inverse-mode acceleration estimate; link frames against Pinocchio."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from youbot_dynamics.model.lie import matrix_from_quaternion
+from youbot_dynamics.sim.commands import (EffortCommands, InputCounters, InputRejected, follow, joint_sample,
+                                          joint_trajectory)
+from youbot_dynamics.sim.frames import LinkFrames
+from youbot_dynamics.sim.inverse import AccelerationEstimator
+from youbot_dynamics.sim.commands import JointSample
+from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.sim.simulator import Simulator
+
+
+@pytest.fixture(scope="module")
+def simulator() -> Simulator:
+    return Simulator(load_scene("arm_ptp"))
+
+
+@pytest.fixture()
+def commands(simulator: Simulator) -> EffortCommands:
+    return EffortCommands(simulator.robot, timeout=0.5, on_timeout="zero_torque")
+
+
+def test_effort_command_by_name_is_put_in_joint_order(commands: EffortCommands, simulator: Simulator) -> None:
+    names = list(simulator.joint_names)
+    out = commands.accept(names[::-1], [0.5, 0.4, 0.3, 0.2, 0.1], stamp=0.0, now=1.0)
+    assert out.tolist() == [0.1, 0.2, 0.3, 0.4, 0.5]
+    # a partial command changes only the named joint
+    out = commands.accept([names[2]], [-0.7], stamp=0.0, now=1.1)
+    assert out.tolist() == [0.1, 0.2, -0.7, 0.4, 0.5]
+    assert commands.counters.accepted == 2 and sum(commands.counters.rejected.values()) == 0
+
+
+@pytest.mark.parametrize(("names", "efforts", "stamp", "kind"), [
+    (["arm_joint_1"], [math.nan], 0.0, "non_finite"),
+    (["arm_joint_1"], [math.inf], 0.0, "non_finite"),
+    (["arm_joint_1", "arm_joint_2"], [1.0], 0.0, "length_mismatch"),
+    (["arm_joint_9"], [1.0], 0.0, "unknown_joint"),
+    (["wheel_joint_fl"], [1.0], 0.0, "unknown_joint"),   # in the URDF but locked in the scene
+    (["arm_joint_1", "arm_joint_1"], [1.0, 2.0], 0.0, "duplicate_joint"),
+    (["arm_joint_1"], [1.0], 3.0, "stale"),               # stamped 7 s before now, timeout 0.5 s
+])
+def test_bad_effort_commands_are_rejected_counted_and_change_nothing(
+        commands: EffortCommands, names, efforts, stamp, kind) -> None:
+    commands.accept(["arm_joint_3"], [0.25], stamp=0.0, now=10.0)
+    with pytest.raises(InputRejected) as error:
+        commands.accept(names, efforts, stamp=stamp, now=10.0)
+    assert error.value.kind == kind
+    assert commands.counters.rejected[kind] == 1
+    assert commands.torque(10.0).tolist() == [0.0, 0.0, 0.25, 0.0, 0.0]
+
+
+def test_efforts_beyond_the_urdf_limit_are_clamped_and_counted(commands: EffortCommands, simulator: Simulator) -> None:
+    limit = np.asarray(simulator.robot.effort_limit)
+    out = commands.accept(["arm_joint_1", "arm_joint_4"], [1e3, -1e3], stamp=0.0, now=0.0)
+    assert out[0] == limit[0] and out[3] == -limit[3]
+    assert commands.counters.clamped == 1
+
+
+@pytest.mark.parametrize(("on_timeout", "after"), [("zero_torque", [0.0] * 5), ("hold", None)])
+def test_timeout_action(simulator: Simulator, on_timeout: str, after) -> None:
+    commands = EffortCommands(simulator.robot, timeout=0.5, on_timeout=on_timeout)
+    assert commands.torque(0.0) is None            # nothing received: the scene's controller
+    commands.accept(["arm_joint_2"], [1.0], stamp=0.0, now=1.0)
+    assert commands.torque(1.5).tolist() == [0.0, 1.0, 0.0, 0.0, 0.0]
+    result = commands.torque(1.51)
+    assert (result is None and after is None) or result.tolist() == after
+
+
+def test_joint_sample_reorders_ignores_locked_joints_and_rejects_missing(simulator: Simulator) -> None:
+    robot = simulator.robot
+    known = [j.name for j in robot.tree]
+    names = ["wheel_joint_fl", *robot.joint_names[::-1]]
+    sample = joint_sample(robot, known, names, [9.0, 5, 4, 3, 2, 1], [9.0, 50, 40, 30, 20, 10], t=0.1)
+    assert sample.q.tolist() == [1, 2, 3, 4, 5] and sample.v.tolist() == [10, 20, 30, 40, 50]
+    with pytest.raises(InputRejected, match="missing_joint"):
+        joint_sample(robot, known, robot.joint_names[:4], [0.0] * 4, [0.0] * 4, t=0.1)
+    with pytest.raises(InputRejected, match="length_mismatch"):
+        joint_sample(robot, known, robot.joint_names, [0.0] * 5, [0.0] * 4, t=0.1)
+
+
+def test_trajectory_is_followed_through_its_points(simulator: Simulator) -> None:
+    robot, q0 = simulator.robot, simulator.scene.q0
+    target = q0 + np.array([0.3, -0.2, 0.1, 0.0, 0.0])
+    points = [(0.5, target[:3], ()), (1.0, target[:3] + 0.1, ())]
+    trajectory = joint_trajectory(robot, robot.joint_names[:3], points, start=2.0, q_now=q0)
+    q, v, a = trajectory.evaluate(2.5)
+    assert np.allclose(q, target) and np.all(np.isfinite(a))
+    assert np.allclose(trajectory.evaluate(2.0)[0], q0)          # starts where the robot is
+    assert np.allclose(trajectory.evaluate(9.0)[0][:3], target[:3] + 0.1) and not trajectory.evaluate(9.0)[1].any()
+    with pytest.raises(InputRejected, match="bad_timing"):
+        joint_trajectory(robot, robot.joint_names[:1], [(0.5, [3.0], ()), (0.5, [3.1], ())], 0.0, q0)
+    with pytest.raises(InputRejected, match="out_of_limits"):
+        joint_trajectory(robot, robot.joint_names[:1], [(0.5, [100.0], ())], 0.0, q0)
+    scene_free = Simulator(load_scene("arm_swing"))
+    with pytest.raises(InputRejected, match="no_controller"):
+        follow(scene_free.controller, trajectory)
+
+
+def test_central_difference_is_the_window_mean_of_the_acceleration() -> None:
+    """v(t) = sin(t): a_hat(t) = cos(t) sin(h)/h exactly (the mean of cos over [t-h, t+h]),
+    and its error stays below the variation of a over the window (the bound the node uses)."""
+    estimator, h = AccelerationEstimator(), 0.01
+    for k, t in enumerate(np.arange(0.0, 1.0, h)):
+        result = estimator.push(JointSample(t, np.zeros(1), np.array([math.sin(t)])))
+        if result is None:
+            assert k < 2
+            continue
+        middle, a_hat = result
+        assert middle.t == pytest.approx(t - h)
+        assert a_hat[0] == pytest.approx(math.cos(middle.t) * math.sin(h) / h, rel=1e-9)
+        window = np.linspace(middle.t - h, middle.t + h, 41)
+        assert abs(a_hat[0] - math.cos(middle.t)) <= np.max(np.abs(np.cos(window) - math.cos(middle.t)))
+    with pytest.raises(InputRejected, match="bad_timing"):
+        estimator.push(JointSample(0.5, np.zeros(1), np.zeros(1)))
+
+
+def test_link_frames_match_pinocchio_forward_kinematics(simulator: Simulator) -> None:
+    robot = simulator.robot
+    frames = LinkFrames(robot)
+    data = robot.model.createData()
+    q = np.random.default_rng(1).uniform(robot.lower, robot.upper)
+    pin.framesForwardKinematics(robot.model, data, q)
+    transforms = [*frames.moving(q), *frames.static]
+    assert {t.child for t in transforms} == set(robot.link_names) - {robot.root_link}
+    for t in transforms:
+        expected = data.oMf[robot.frame_id(t.parent)].inverse() * data.oMf[robot.frame_id(t.child)]
+        assert np.allclose(t.translation, expected.translation, atol=1e-12)
+        assert np.allclose(matrix_from_quaternion(t.quaternion_xyzw), expected.rotation, atol=1e-12)
+    position, quaternion = frames.ee_pose(q)
+    ee = data.oMf[robot.frame_id(frames.ee_link)]
+    assert np.allclose(position, ee.translation, atol=1e-12)
+    assert np.allclose(matrix_from_quaternion(quaternion), ee.rotation, atol=1e-12)
+
+
+def test_counters_flatten_for_diagnostics() -> None:
+    counters = InputCounters()
+    counters.reject(InputRejected("stale", "old"))
+    values = counters.as_values()
+    assert values["rejected.stale"] == 1 and values["rejected.total"] == 1 and values["accepted"] == 0
