@@ -51,14 +51,14 @@ def test_simulate_mode_publishes_the_simulated_motion() -> None:
         wait_matched(node)
         with spinning(context, node, collector):
             wait_until(lambda: node.finished, what="the node to finish")
-            wait_until(lambda: collector.count("/joint_states") == 50 and collector.count("/diagnostics") > 0,
-                       what="50 samples")
+            wait_until(lambda: collector.count("/joint_states") == 51 and collector.count("/diagnostics") > 0,
+                       what="51 samples")
         states, poses = collector.messages("/joint_states"), collector.messages("/ee_pose")
         clocks = [m.clock.sec * 10**9 + m.clock.nanosec for m in collector.messages("/clock")]
         diagnostics = diagnostic_values(collector.messages("/diagnostics")[-1])
     reference = SimulationSession(load_scene("arm_ptp"), 100.0, samples_per_solve=2)
-    expected = [dict(reference.step())["/joint_states"] for _ in range(50)]
-    assert [stamp_ns(m) for m in states] == clocks == [10_000_000 * (k + 1) for k in range(50)]
+    expected = [dict(reference.step())["/joint_states"] for _ in range(51)]
+    assert [stamp_ns(m) for m in states] == clocks == [10_000_000 * k for k in range(51)]
     for got, want in zip(states, expected):
         assert list(got.name) == list(want.name)
         for field in ("position", "velocity", "effort"):

@@ -162,7 +162,7 @@ class DynamicsNode(Node):
             self._rejected("/joint_states", error)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
-        self._publish(self.session.reset())
+        self.session.reset()
         self._restart_pacing()
         response.success, response.message = True, f"reset {self.session.scene.name} to t = 0"
         return response

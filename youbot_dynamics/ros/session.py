@@ -150,16 +150,17 @@ class SimulationSession:
     def stamp_ns(self) -> int:
         return self.k * self.step_ns
 
-    def reset(self) -> Outputs:
-        """Back to the scene's initial state at t = 0; forgets commands and trajectories."""
+    def reset(self) -> None:
+        """Back to the scene's initial state at t = 0 (the next ``step`` gives that sample);
+        forgets commands and trajectories."""
         self.simulator.reset()
         self.commands.clear()
         if self._scene_reference is not None:
             self.simulator.controller.reference = self._scene_reference
         self.k, self.failure, self.wall_time, self._pending = 0, None, 0.0, []
-        self.energy0 = self.simulator.energy
-        self.energy_error = 0.0
-        return self._outputs(self.simulator.snapshot())
+        self.snapshot = self.simulator.snapshot()
+        self.energy0, self.energy_error = self.snapshot.energy, 0.0
+        self._started = False
 
     def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int) -> None:
         """Accept an effort command (raises and counts :class:`InputRejected`)."""
@@ -178,13 +179,17 @@ class SimulationSession:
         self.commands.clear()
 
     def step(self) -> Outputs:
-        """Advance one increment; returns the messages to publish (none when paused or failed).
+        """The sample at t = 0 first, then advance one increment per call; returns the
+        messages to publish (none when paused or failed).
 
         The simulator runs ``samples_per_solve`` increments per integrator call and the
         samples are handed out one per step, so a command or trajectory takes effect at the
         next such block (a latency of at most ``samples_per_solve`` increments)."""
         if self.paused or self.failure is not None:
             return []
+        if not self._started:
+            self._started = True
+            return self._outputs(self.snapshot)
         if not self._pending:
             times = (self.k + 1 + np.arange(self.samples_per_solve)) * self.step_ns / NS_PER_S
             start = time.perf_counter()
