@@ -21,6 +21,14 @@ def positive(text: str) -> float:
     return value
 
 
+def non_negative(text: str) -> float:
+    """An argparse type: a float >= 0."""
+    value = float(text)
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
+
 def stats_table(rows: dict[str, dict]) -> str:
     """A text table: one row per run (name -> statistics dict), the seed's columns."""
     header = f"{'run':<24}" + "".join(f"{title:>14}" for _, title in STAT_COLUMNS)
@@ -82,6 +90,44 @@ def run_woodpecker(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_lagrange(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from youbot_dynamics.sim.integrators import integrate
+    from youbot_dynamics.systems.lagrange import SEED_INITIAL, model
+    lagrange = model(args.problem)
+    p = lagrange.parameter_values({"c": args.friction})
+    q0, u0 = SEED_INITIAL[args.problem]
+    solution = integrate(lagrange.rhs(p), np.r_[q0, u0], np.linspace(0.0, args.t_end, 201),
+                         args.integrator, rtol=args.rtol, atol=args.rtol,
+                         state_names=[*map(str, lagrange.q), *map(str, lagrange.u)])
+    energy = lagrange.energy_of(solution.x, p)
+    summary = {
+        "problem": args.problem, "friction": args.friction,
+        "parameters": dict(zip(map(str, lagrange.parameters), p)),
+        "equations": lagrange.equations(),
+        "final_state": dict(zip(solution.state_names, solution.x[-1].tolist())),
+        "energy_initial": float(energy[0]), "energy_final": float(energy[-1]),
+        "energy_relative_drift": float(np.abs(energy - energy[0]).max() / abs(energy[0])),
+        "energy_nonincreasing": bool(np.all(np.diff(energy) <= 1e-12)),
+        "stats": solution.stats.as_dict(),
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    print(f"Lagrange {args.problem}, friction c = {args.friction:g}, parameters "
+          + ", ".join(f"{k}={v:g}" for k, v in summary["parameters"].items()))
+    for line in summary["equations"]:
+        print(f"  {line if len(line) <= 160 else line[:157] + '...'}")
+    print(f"final state at t = {args.t_end:g} s: "
+          + ", ".join(f"{k}={v:.6g}" for k, v in summary["final_state"].items()))
+    print(f"energy {summary['energy_initial']:.10g} J -> {summary['energy_final']:.10g} J, "
+          f"max relative drift {summary['energy_relative_drift']:.3g}, "
+          f"non-increasing: {summary['energy_nonincreasing']}")
+    print(stats_table({args.integrator: summary["stats"]}))
+    return 0
+
+
 def register(subparsers) -> None:
     """Add the ``woodpecker`` and ``lagrange`` sub-commands."""
     parser = subparsers.add_parser("woodpecker", help="the woodpecker toy: state events, "
@@ -94,3 +140,17 @@ def register(subparsers) -> None:
     parser.add_argument("--plot", metavar="PNG", help="write a plot of the run")
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.set_defaults(run=run_woodpecker)
+
+    parser = subparsers.add_parser("lagrange", help="equations of motion by sympy "
+                                   "(Lagrange), simulated from the seed's initial state")
+    parser.add_argument("problem", choices=("2d", "3d"))
+    parser.add_argument("--friction", type=non_negative, default=0.0,
+                        help="joint friction c: generalised force -c q_i'")
+    parser.add_argument("--t-end", type=positive, default=10.0, help="end time (s)")
+    parser.add_argument("--integrator", choices=[n for n in INTEGRATORS
+                                                 if n not in FIXED_STEP and n != "ida"],
+                        default="dop853")
+    parser.add_argument("--rtol", type=positive, default=1e-12,
+                        help="relative (and absolute) tolerance")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.set_defaults(run=run_lagrange)
