@@ -98,3 +98,13 @@ def test_planar_arm_matches_pinocchio_rnea():
         expected = pin.rnea(reference, data, q, v, a)
         np.testing.assert_allclose(arm.inverse_dynamics(q, v, a, p), expected, atol=1e-10,
                                    rtol=1e-10)
+
+
+def test_command_line_prints_equations_and_energy_drift(capsys):
+    import json
+
+    from youbot_dynamics.cli import main
+    assert main(["lagrange", "2d", "--t-end", "2", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert len(report["equations"]) == 3 and "k*q3" in report["equations"][2]
+    assert report["energy_relative_drift"] < 1e-8

@@ -116,3 +116,16 @@ def test_hit_count_is_the_seeds_and_stable_under_tolerance(integrator):
     counts = {rtol: WOODPECKER.simulate(2.0, integrator, rtol=rtol, atol=rtol * 1e-2).count(BEAK)
               for rtol in (1e-6, 1e-8)}
     assert counts == {1e-6: SEED_BEAK_HITS, 1e-8: SEED_BEAK_HITS}
+
+
+def test_command_line_reports_the_hits_and_rejects_a_fixed_step_run_without_dt(capsys):
+    import json
+
+    from youbot_dynamics.cli import main
+    assert main(["woodpecker", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["beak_hits"] == SEED_BEAK_HITS
+    assert sum(s["kind"] == BEAK for s in report["switches"]) == SEED_BEAK_HITS
+    assert report["stats"]["events"] >= len(report["switches"])
+    assert main(["woodpecker", "--integrator", "rk4"]) == 2
+    assert "--dt" in capsys.readouterr().err
