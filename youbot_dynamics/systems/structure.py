@@ -1,0 +1,258 @@
+"""Structural analysis of equation systems: the bipartite incidence graph, a maximum
+matching, block lower triangular (BLT) sorting and Pantelides' index reduction.
+
+An equation system is a list of residuals (sympy expressions = 0) in unknown functions of
+time x(t) and their derivatives; symbols that are not functions of t are parameters. A
+*variable* is one function at one derivative order (x, x', x'', ...). Numbering: equations
+and variables are 0-based in the code; everything printed (and the seed's lists in
+benchmarks.md section 6) counts from 1, equations named f1, f2, ... in their given order.
+
+- :func:`incidence` / :func:`incidence_graph`: which variables each equation contains, and
+  that as a networkx bipartite graph.
+- :func:`maximum_matching`: Hopcroft-Karp (networkx) between equations and the variables
+  to be solved for.
+- :func:`block_lower_triangular`: the strongly connected components (networkx) of the
+  graph "equation a must be solved before equation b" (b contains the variable matched to
+  a), in a topological order: blocks of equations that must be solved together.
+- :func:`pantelides`: Pantelides' algorithm (1988) with the variable association list A
+  (A[j] = k: variable k is the derivative of variable j) and equation association list B
+  (B[i] = l: equation l was made by differentiating equation i); the structural index and
+  how often each equation was differentiated.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable, Sequence
+
+import networkx as nx
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from youbot_dynamics.errors import UserInputError
+
+#: A variable: (name of the function of t, derivative order).
+Variable = tuple[str, int]
+
+
+def variable_name(variable: Variable) -> str:
+    """x, x', x'', x^(3), ... for (x, 0), (x, 1), ..."""
+    name, order = variable
+    return name + ("'" * order if order <= 3 else f"^({order})")
+
+
+def equation_variables(expression: sp.Expr, t: sp.Symbol) -> set[Variable]:
+    """The variables (function of t, derivative order) that occur in a residual."""
+    found: set[Variable] = set()
+    walk = sp.preorder_traversal(expression)
+    for node in walk:
+        if isinstance(node, sp.Derivative) and isinstance(node.expr, AppliedUndef):
+            if any(symbol != t for symbol, _ in node.variable_count):
+                raise UserInputError(f"derivative {node} is not with respect to {t}")
+            found.add((node.expr.func.__name__, sum(c for _, c in node.variable_count)))
+            walk.skip()
+        elif isinstance(node, AppliedUndef):
+            if node.args != (t,):
+                raise UserInputError(f"unknown {node} must be a function of {t} alone")
+            found.add((node.func.__name__, 0))
+            walk.skip()
+    return found
+
+
+def incidence(equations: Sequence[sp.Expr], t: sp.Symbol
+              ) -> tuple[list[Variable], list[set[int]]]:
+    """All variables (sorted by function name, then order; every order from 0 up to the
+    highest that occurs) and, per equation, the indices of the variables it contains."""
+    per_equation = [equation_variables(sp.sympify(e), t) for e in equations]
+    highest: dict[str, int] = {}
+    for found in per_equation:
+        for name, order in found:
+            highest[name] = max(order, highest.get(name, 0))
+    variables = [(name, order) for name in sorted(highest) for order in range(highest[name] + 1)]
+    index = {variable: j for j, variable in enumerate(variables)}
+    return variables, [{index[v] for v in found} for found in per_equation]
+
+
+def incidence_graph(equation_vars: Sequence[Iterable[int]]) -> nx.Graph:
+    """Bipartite graph: nodes ("e", i) for equations (bipartite=0) and ("v", j) for
+    variables (bipartite=1); an edge where equation i contains variable j."""
+    graph = nx.Graph()
+    for i, variables in enumerate(equation_vars):
+        graph.add_node(("e", i), bipartite=0)
+        for j in variables:
+            graph.add_node(("v", j), bipartite=1)
+            graph.add_edge(("e", i), ("v", j))
+    return graph
+
+
+def maximum_matching(equation_vars: Sequence[Iterable[int]],
+                     unknowns: Iterable[int] | None = None) -> dict[int, int]:
+    """A maximum matching variable -> equation (Hopcroft-Karp), using only the variables
+    in ``unknowns`` (all if None). Perfect when every equation is matched."""
+    allowed = None if unknowns is None else set(unknowns)
+    restricted = [{j for j in vs if allowed is None or j in allowed} for vs in equation_vars]
+    graph = incidence_graph(restricted)
+    equations = [("e", i) for i in range(len(restricted))]
+    matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=equations)
+    return {node[1]: partner[1] for node, partner in matching.items() if node[0] == "v"}
+
+
+def block_lower_triangular(equation_vars: Sequence[Iterable[int]],
+                           assignment: dict[int, int]) -> list[list[int]]:
+    """Blocks of equations in solution order: the strongly connected components of the
+    dependency graph (an edge a -> b when equation b contains the variable matched to
+    equation a), topologically sorted, lowest equation first among independent blocks.
+    Equations whose variables are all known form blocks of their own."""
+    graph = nx.DiGraph()
+    graph.add_nodes_from(range(len(equation_vars)))
+    for b, variables in enumerate(equation_vars):
+        for j in variables:
+            a = assignment.get(j)
+            if a is not None and a != b:
+                graph.add_edge(a, b)
+    condensed = nx.condensation(graph)
+    members = condensed.graph["mapping"]
+    blocks: dict[int, list[int]] = {}
+    for equation, component in members.items():
+        blocks.setdefault(component, []).append(equation)
+    order = nx.lexicographical_topological_sort(condensed, key=lambda c: min(blocks[c]))
+    return [sorted(blocks[c]) for c in order]
+
+
+@dataclass
+class PantelidesResult:
+    """The reduced system: all equations (given ones first, then each differentiated one
+    as it was made) and variables, the association lists (None where there is none), the
+    final assignment variable -> equation, and a log of the reduction steps."""
+
+    equations: list[sp.Expr]
+    equation_names: list[str]
+    variables: list[Variable]
+    variable_association: list[int | None]
+    equation_association: list[int | None]
+    assignment: dict[int, int]
+    steps: list[str] = field(default_factory=list)
+
+    @property
+    def differentiations(self) -> dict[str, int]:
+        """How often each given equation was differentiated (only those that were)."""
+        counts = {}
+        for i, name in enumerate(self.equation_names):
+            count, k = 0, self.equation_association[i]
+            while k is not None:
+                count, k = count + 1, self.equation_association[k]
+            if count and name in self.given_names:
+                counts[name] = count
+        return counts
+
+    @property
+    def given_names(self) -> list[str]:
+        made = {k for k in self.equation_association if k is not None}
+        return [name for i, name in enumerate(self.equation_names) if i not in made]
+
+    @property
+    def structural_index(self) -> int:
+        """max number of differentiations of an equation, plus one if some variable
+        appears only undifferentiated (an algebraic variable, like lambda); Pryce's
+        structural index, equal to the differentiation index for these systems."""
+        differentiated = max(self.differentiations.values(), default=0)
+        algebraic = any(order == 0 and self.variable_association[j] is None
+                        for j, (_, order) in enumerate(self.variables))
+        return differentiated + (1 if algebraic else 0)
+
+    @property
+    def active_equations(self) -> list[int]:
+        """Equations of the reduced system (those not differentiated further)."""
+        return [i for i, b in enumerate(self.equation_association) if b is None]
+
+    def vmap(self) -> dict[str, str]:
+        return {variable_name(self.variables[j]): variable_name(self.variables[k])
+                for j, k in enumerate(self.variable_association) if k is not None}
+
+    def eqmap(self) -> dict[str, str]:
+        return {self.equation_names[i]: self.equation_names[k]
+                for i, k in enumerate(self.equation_association) if k is not None}
+
+    def assignment_names(self) -> dict[str, str]:
+        return {variable_name(self.variables[j]): self.equation_names[i]
+                for j, i in sorted(self.assignment.items())}
+
+
+def pantelides(equations: Sequence[sp.Expr], t: sp.Symbol,
+               names: Sequence[str] | None = None, max_steps: int = 100) -> PantelidesResult:
+    """Pantelides' algorithm on residuals in functions of t (see the module docstring).
+
+    For each given equation in turn: look for an augmenting path over the highest
+    derivatives (variables with A[j] None); if none, differentiate every equation and
+    every variable coloured in the failed search (sympy ``diff``), set
+    assign[A[j]] = B[assign[j]] for the coloured variables and retry with the derivative
+    of the equation.
+    """
+    equations = [sp.sympify(e) for e in equations]
+    eq_names = list(names) if names is not None else [f"f{i + 1}" for i in range(len(equations))]
+    variables, eq_vars = incidence(equations, t)
+    index = {v: j for j, v in enumerate(variables)}
+    A: list[int | None] = [index.get((name, order + 1)) for name, order in variables]
+    B: list[int | None] = [None] * len(equations)
+    assign: dict[int, int] = {}
+    steps: list[str] = []
+
+    def augment(i: int, colored_eqs: list[int], colored_vars: list[int]) -> bool:
+        colored_eqs.append(i)
+        candidates = sorted(j for j in eq_vars[i] if A[j] is None)
+        for j in candidates:
+            if j not in assign:
+                assign[j] = i
+                return True
+        for j in candidates:
+            if j not in colored_vars:
+                colored_vars.append(j)
+                if augment(assign[j], colored_eqs, colored_vars):
+                    assign[j] = i
+                    return True
+        return False
+
+    def add_variable(variable: Variable) -> int:
+        index[variable] = len(variables)
+        variables.append(variable)
+        A.append(None)
+        return index[variable]
+
+    for k in range(len(equations)):
+        i = k
+        for _ in range(max_steps):
+            colored_eqs: list[int] = []
+            colored_vars: list[int] = []
+            if augment(i, colored_eqs, colored_vars):
+                break
+            for j in colored_vars:
+                name, order = variables[j]
+                A[j] = index.get((name, order + 1)) or add_variable((name, order + 1))
+            made = []
+            for l in colored_eqs:
+                derivative = sp.expand(equations[l].diff(t))
+                found = equation_variables(derivative, t)
+                for variable in sorted(found - set(index)):
+                    previous = index.get((variable[0], variable[1] - 1))
+                    new = add_variable(variable)
+                    if previous is not None:
+                        A[previous] = new
+                B[l] = len(equations)
+                equations.append(derivative)
+                eq_names.append(f"f{len(equations)}")
+                eq_vars.append({index[v] for v in found})
+                B.append(None)
+                made.append(f"{eq_names[l]} -> {eq_names[-1]}")
+            for j in colored_vars:
+                assign[A[j]] = B[assign[j]]
+            steps.append(
+                f"{eq_names[i]}: no augmenting path; differentiate equations "
+                f"{', '.join(made)}; variables "
+                + (", ".join(f"{variable_name(variables[j])} -> "
+                             f"{variable_name(variables[A[j]])}" for j in colored_vars)
+                   or "none"))
+            i = B[i]
+        else:
+            raise UserInputError(f"Pantelides: equation {eq_names[k]} still unmatched after "
+                                 f"{max_steps} differentiations; the system is structurally "
+                                 "singular")
+    return PantelidesResult(equations, eq_names, variables, A, B, assign, steps)
