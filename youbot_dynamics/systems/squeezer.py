@@ -32,6 +32,9 @@ from youbot_dynamics.sim.integrators import (INTEGRATORS, IntegratorStats, integ
                                              integrate_dae)
 
 POSITION_NAMES = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
+#: The unknown functions of t in :func:`squeezer_equations`, in the order q, v, lambda.
+SQUEEZER_FUNCTIONS = (POSITION_NAMES + tuple(f"v_{name}" for name in POSITION_NAMES)
+                      + tuple(f"lambda{j + 1}" for j in range(6)))
 
 MASSES = (.04325, .00365, .02373, .00706, .07050, .00706, .05498)
 INERTIAS = (2.194e-6, 4.410e-7, 5.255e-6, 5.667e-7, 1.169e-5, 5.667e-7, 1.912e-5)
@@ -165,9 +168,8 @@ def squeezer_equations(t: sp.Symbol) -> tuple[list[sp.Expr], list[str]]:
     """The index-3 equations as residuals in functions of t, for structural analysis:
     q_i' - v_i (7), (M v' - f + G^T lambda)_i (7), g_j (6); and their names f1..f20."""
     s = squeezer_symbolic()
-    q_t = [sp.Function(name)(t) for name in POSITION_NAMES]
-    v_t = [sp.Function(f"v_{name}")(t) for name in POSITION_NAMES]
-    lam = sp.Matrix([sp.Function(f"lambda{j + 1}")(t) for j in range(6)])
+    functions = [sp.Function(name)(t) for name in SQUEEZER_FUNCTIONS]
+    q_t, v_t, lam = functions[:7], functions[7:14], sp.Matrix(functions[14:])
     substitution = dict(zip(s.q + s.v, q_t + v_t))
     acceleration = sp.Matrix([vi.diff(t) for vi in v_t])
     dynamic = (s.mass * acceleration - s.forces + s.jacobian.T * lam).xreplace(substitution)
@@ -296,3 +298,27 @@ def reference_error(q: np.ndarray) -> np.ndarray:
     """Per-component relative error |q_i - q_ref_i| / |q_ref_i| of q at t = 0.03 s
     against the test set's reference."""
     return np.abs(np.asarray(q) - Q_REFERENCE) / np.abs(Q_REFERENCE)
+
+
+def plot_drift(runs: list[ConstrainedRun], path: str) -> None:
+    """PNG of max_i |g_i(q)| and max_i |(G v)_i| over time for each run (log scale);
+    matplotlib with the Agg backend."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    tiny = np.finfo(float).tiny
+    for run in runs:
+        top.semilogy(run.t, np.abs(run.position_residual).max(axis=1) + tiny,
+                     label=run.formulation)
+        bottom.semilogy(run.t, np.abs(run.velocity_residual).max(axis=1) + tiny,
+                        label=run.formulation)
+    top.set_ylabel("max |g(q)| (m)")
+    bottom.set_ylabel("max |G v| (m/s)")
+    bottom.set_xlabel("t (s)")
+    top.set_title(f"Andrew's squeezer: constraint drift ({runs[0].stats.integrator})")
+    top.legend()
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    plt.close(figure)

@@ -58,16 +58,19 @@ def equation_variables(expression: sp.Expr, t: sp.Symbol) -> set[Variable]:
     return found
 
 
-def incidence(equations: Sequence[sp.Expr], t: sp.Symbol
-              ) -> tuple[list[Variable], list[set[int]]]:
-    """All variables (sorted by function name, then order; every order from 0 up to the
-    highest that occurs) and, per equation, the indices of the variables it contains."""
+def incidence(equations: Sequence[sp.Expr], t: sp.Symbol,
+              function_order: Sequence[str] = ()) -> tuple[list[Variable], list[set[int]]]:
+    """All variables (functions in ``function_order``, the rest by name; each at every
+    order from 0 up to the highest that occurs) and, per equation, the indices of the
+    variables it contains."""
     per_equation = [equation_variables(sp.sympify(e), t) for e in equations]
     highest: dict[str, int] = {}
     for found in per_equation:
         for name, order in found:
             highest[name] = max(order, highest.get(name, 0))
-    variables = [(name, order) for name in sorted(highest) for order in range(highest[name] + 1)]
+    rank = {name: k for k, name in enumerate(function_order)}
+    ordered = sorted(highest, key=lambda name: (rank.get(name, len(rank)), name))
+    variables = [(name, order) for name in ordered for order in range(highest[name] + 1)]
     index = {variable: j for j, variable in enumerate(variables)}
     return variables, [{index[v] for v in found} for found in per_equation]
 
@@ -122,11 +125,13 @@ def block_lower_triangular(equation_vars: Sequence[Iterable[int]],
 class PantelidesResult:
     """The reduced system: all equations (given ones first, then each differentiated one
     as it was made) and variables, the association lists (None where there is none), the
-    final assignment variable -> equation, and a log of the reduction steps."""
+    variables each equation contains, the final assignment variable -> equation, and a
+    log of the reduction steps."""
 
     equations: list[sp.Expr]
     equation_names: list[str]
     variables: list[Variable]
+    equation_vars: list[set[int]]
     variable_association: list[int | None]
     equation_association: list[int | None]
     assignment: dict[int, int]
@@ -178,18 +183,20 @@ class PantelidesResult:
 
 
 def pantelides(equations: Sequence[sp.Expr], t: sp.Symbol,
-               names: Sequence[str] | None = None, max_steps: int = 100) -> PantelidesResult:
+               names: Sequence[str] | None = None, function_order: Sequence[str] = (),
+               max_steps: int = 100) -> PantelidesResult:
     """Pantelides' algorithm on residuals in functions of t (see the module docstring).
 
     For each given equation in turn: look for an augmenting path over the highest
     derivatives (variables with A[j] None); if none, differentiate every equation and
     every variable coloured in the failed search (sympy ``diff``), set
     assign[A[j]] = B[assign[j]] for the coloured variables and retry with the derivative
-    of the equation.
+    of the equation. ``function_order`` orders the variables (see :func:`incidence`),
+    which decides among equally good matchings.
     """
     equations = [sp.sympify(e) for e in equations]
     eq_names = list(names) if names is not None else [f"f{i + 1}" for i in range(len(equations))]
-    variables, eq_vars = incidence(equations, t)
+    variables, eq_vars = incidence(equations, t, function_order)
     index = {v: j for j, v in enumerate(variables)}
     A: list[int | None] = [index.get((name, order + 1)) for name, order in variables]
     B: list[int | None] = [None] * len(equations)
@@ -255,4 +262,98 @@ def pantelides(equations: Sequence[sp.Expr], t: sp.Symbol,
             raise UserInputError(f"Pantelides: equation {eq_names[k]} still unmatched after "
                                  f"{max_steps} differentiations; the system is structurally "
                                  "singular")
-    return PantelidesResult(equations, eq_names, variables, A, B, assign, steps)
+    return PantelidesResult(equations, eq_names, variables, eq_vars, A, B, assign, steps)
+
+
+#: The seed's low-pass filter as a bipartite graph: equation i lists its variables (1-based,
+#: as in benchmarks.md section 6); variable 5 (the capacitor voltage, a state) is known.
+LOWPASS_INCIDENCE = ((1, 2, 4), (1, 7), (3, 4), (3, 7), (6, 7), (2,))
+LOWPASS_KNOWN = (5,)
+
+
+PENDULUM_FUNCTIONS = ("x", "y", "u", "v", "lambda")
+
+
+def cartesian_pendulum_equations(t: sp.Symbol) -> tuple[list[sp.Expr], list[str]]:
+    """The seed's pendulum in Cartesian coordinates (m = 1, L = l^2): residuals
+    x' - u, y' - v, u' - lambda x, v' - lambda y + g, x^2 + y^2 - L (f1..f5), in the
+    unknown functions PENDULUM_FUNCTIONS of t."""
+    x, y, u, v, lam = (sp.Function(name)(t) for name in PENDULUM_FUNCTIONS)
+    length_squared, gravity = sp.symbols("L g", positive=True)
+    equations = [x.diff(t) - u, y.diff(t) - v, u.diff(t) - lam * x,
+                 v.diff(t) - lam * y + gravity, x**2 + y**2 - length_squared]
+    return equations, [f"f{i + 1}" for i in range(5)]
+
+
+STRUCTURE_EXAMPLES: tuple[str, ...] = ("lowpass", "pendulum", "squeezer")
+
+
+def incidence_rows(equation_vars: Sequence[Iterable[int]], n_variables: int) -> list[str]:
+    """The incidence matrix as text rows: 'x' where equation i contains variable j."""
+    return ["".join("x" if j in set(vs) else "." for j in range(n_variables))
+            for vs in equation_vars]
+
+
+def structure_report(example: str) -> dict:
+    """The structural analysis of one of STRUCTURE_EXAMPLES as plain data (1-based numbers
+    and names as printed): incidence matrix, matching, BLT blocks and, for the equation
+    systems, Pantelides' reduction steps, vmap, eqmap, final assignment and structural
+    index."""
+    if example == "lowpass":
+        equation_vars = [{j - 1 for j in vs} for vs in LOWPASS_INCIDENCE]
+        n_variables = max(max(vs) for vs in LOWPASS_INCIDENCE)
+        unknowns = [j for j in range(n_variables) if j + 1 not in LOWPASS_KNOWN]
+        matching = maximum_matching(equation_vars, unknowns)
+        return {
+            "example": example,
+            "variables": [str(j + 1) for j in range(n_variables)],
+            "known": list(LOWPASS_KNOWN),
+            "equations": [f"f{i + 1}" for i in range(len(equation_vars))],
+            "incidence": incidence_rows(equation_vars, n_variables),
+            "assign": [matching[j] + 1 if j in matching else 0 for j in range(n_variables)],
+            "perfect_matching": len(matching) == len(equation_vars),
+            "blocks": [[i + 1 for i in block]
+                       for block in block_lower_triangular(equation_vars, matching)],
+            "steps": ["perfect matching: no equation needs differentiating (index 0 or 1)"]
+            if len(matching) == len(equation_vars) else ["no perfect matching"],
+        }
+    if example not in STRUCTURE_EXAMPLES:
+        raise UserInputError(f"unknown structure example {example!r}; valid: "
+                             + ", ".join(STRUCTURE_EXAMPLES))
+    t = sp.Symbol("t")
+    if example == "pendulum":
+        equations, names = cartesian_pendulum_equations(t)
+        functions = PENDULUM_FUNCTIONS
+    else:
+        from youbot_dynamics.systems.squeezer import SQUEEZER_FUNCTIONS, squeezer_equations
+        equations, names = squeezer_equations(t)
+        functions = SQUEEZER_FUNCTIONS
+    variables, equation_vars = incidence(equations, t, functions)
+    highest = [j for j, (name, order) in enumerate(variables)
+               if (name, order + 1) not in variables]
+    initial = maximum_matching(equation_vars, highest)
+    result = pantelides(equations, t, names, functions)
+    active = result.active_equations
+    solved = {j: active.index(i) for j, i in result.assignment.items()
+              if result.variable_association[j] is None}
+    blocks = block_lower_triangular(
+        [{j for j in result.equation_vars[i] if j in solved} for i in active], solved)
+    return {
+        "example": example,
+        "variables": [variable_name(v) for v in variables],
+        "equations": names,
+        "incidence": incidence_rows(equation_vars, len(variables)),
+        "initial_matching": {variable_name(variables[j]): names[i]
+                             for j, i in sorted(initial.items())},
+        "unmatched_equations": [names[i] for i in range(len(names))
+                                if i not in initial.values()],
+        "steps": result.steps,
+        "vmap": result.vmap(),
+        "eqmap": result.eqmap(),
+        "assignment": result.assignment_names(),
+        "differentiations": result.differentiations,
+        "n_equations": len(result.equations),
+        "n_variables": len(result.variables),
+        "blocks": [[result.equation_names[active[i]] for i in block] for block in blocks],
+        "structural_index": result.structural_index,
+    }

@@ -1,0 +1,124 @@
+"""Sub-commands ``squeezer`` (Andrew's squeezer in one formulation, end state, residuals,
+statistics, error against the reference) and ``structure`` (matching, BLT blocks and
+Pantelides' reduction of an example equation system)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from youbot_dynamics.dynamics.constraints import FORMULATIONS
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.sim.integrators import INTEGRATORS, IntegrationError
+from youbot_dynamics.systems.structure import STRUCTURE_EXAMPLES, structure_report
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    squeezer = subparsers.add_parser(
+        "squeezer", help="Andrew's squeezer: a constrained mechanism in one formulation")
+    squeezer.add_argument("--formulation", choices=FORMULATIONS, default="index1-projection")
+    squeezer.add_argument("--integrator", choices=INTEGRATORS, default=None,
+                          help="default: ida for index2/ggl/index3, rk45 otherwise")
+    squeezer.add_argument("--rtol", type=float, default=1e-6)
+    squeezer.add_argument("--t-end", type=float, default=0.03, help="end time (s)")
+    squeezer.add_argument("--outputs", type=int, default=101,
+                          help="output times (projections happen at these)")
+    squeezer.add_argument("--dt", type=float, default=None, help="fixed step (s)")
+    squeezer.add_argument("--plot", metavar="PNG",
+                          help="plot the drift of index1 vs index1-baumgarte vs "
+                               "index1-projection with the chosen ODE integrator")
+    squeezer.add_argument("--json", action="store_true")
+    squeezer.set_defaults(run=run_squeezer)
+
+    structure = subparsers.add_parser(
+        "structure", help="structural analysis (matching, BLT, Pantelides) of an example")
+    structure.add_argument("example", choices=STRUCTURE_EXAMPLES)
+    structure.add_argument("--json", action="store_true")
+    structure.set_defaults(run=run_structure)
+
+
+def format_vector(values) -> str:
+    return " ".join(f"{value: .10g}" for value in values)
+
+
+def run_squeezer(args: argparse.Namespace) -> int:
+    from youbot_dynamics.systems.squeezer import (POSITION_NAMES, T_REFERENCE, plot_drift,
+                                                  reference_error, simulate_squeezer)
+    if not args.rtol > 0:
+        raise UserInputError(f"--rtol must be positive, got {args.rtol!r}")
+    options = dict(rtol=args.rtol, t_end=args.t_end, n_outputs=args.outputs, dt=args.dt)
+    try:
+        run = simulate_squeezer(args.formulation, args.integrator, **options)
+        if args.plot:
+            ode = run.stats.integrator if run.stats.integrator != "ida" else "rk45"
+            plot_drift([simulate_squeezer(name, ode, **options)
+                        for name in ("index1", "index1-baumgarte", "index1-projection")],
+                       args.plot)
+    except (IntegrationError, NotImplementedError) as error:
+        print(f"youbot-dynamics squeezer: {args.formulation} failed: {error}",
+              file=sys.stderr)
+        return 1
+    report = run.as_dict()
+    if abs(args.t_end - T_REFERENCE) < 1e-15:
+        report["relative_error_vs_reference"] = reference_error(run.q[-1]).tolist()
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    print(f"Andrew's squeezer, {run.formulation} with {run.stats.integrator}, "
+          f"rtol {args.rtol:g}, t = {report['t_end']:g} s")
+    print(f"{'':10s} {'q (rad)':>18s} {'v (rad/s)':>18s}"
+          + (f" {'rel. error q':>14s}" if "relative_error_vs_reference" in report else ""))
+    for i, name in enumerate(POSITION_NAMES):
+        line = f"{name:10s} {run.q[-1, i]:18.12g} {run.v[-1, i]:18.10g}"
+        if "relative_error_vs_reference" in report:
+            line += f" {report['relative_error_vs_reference'][i]:14.3e}"
+        print(line)
+    print(f"lambda     {format_vector(run.multipliers[-1])}")
+    print(f"g(q)       {format_vector(run.position_residual[-1])}")
+    print(f"G v        {format_vector(run.velocity_residual[-1])}")
+    stats = run.stats
+    print(f"steps {stats.steps}, f-evals {stats.rhs_evals}, J-evals {stats.jac_evals}, "
+          f"error-test failures {stats.rejected_steps}, nonlinear iterations "
+          f"{stats.nonlinear_iterations}, convergence failures "
+          f"{stats.nonlinear_convergence_failures}, wall {stats.wall_time:.3f} s")
+    if run.projection:
+        print(f"projections {run.projection['projections']}, Gauss-Newton iterations "
+              f"{run.projection['gauss_newton_iterations']}")
+    if args.plot:
+        print(f"drift plot written to {args.plot}")
+    return 0
+
+
+def run_structure(args: argparse.Namespace) -> int:
+    report = structure_report(args.example)
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    print(f"Structural analysis: {args.example} (equations and variables numbered from 1)")
+    print("variables: " + ", ".join(f"{j + 1}:{name}" for j, name in
+                                    enumerate(report["variables"])))
+    if "known" in report:
+        print(f"known: {report['known']}")
+    print("incidence matrix (rows equations, columns variables):")
+    for name, row in zip(report["equations"], report["incidence"]):
+        print(f"  {name:>4s} {row}")
+    if "assign" in report:
+        print(f"matching (variable -> equation, 0 = known): assign = {report['assign']}")
+    else:
+        print("matching of the highest derivatives: " + ", ".join(
+            f"{v} -> {e}" for v, e in report["initial_matching"].items()))
+        print(f"unmatched equations: {', '.join(report['unmatched_equations']) or 'none'}")
+    print("reduction steps:")
+    for step in report["steps"]:
+        print(f"  {step}")
+    if "vmap" in report:
+        for key in ("vmap", "eqmap", "assignment"):
+            print(f"{key}: " + ", ".join(f"{a} -> {b}" for a, b in report[key].items()))
+        print("differentiated: " + ", ".join(f"{name} x{count}" for name, count in
+                                             report["differentiations"].items()))
+        print(f"{report['n_equations']} equations in {report['n_variables']} variables; "
+              f"structural index {report['structural_index']}")
+    print("blocks (BLT order): " + "  ".join(
+        "[" + ", ".join(str(e) for e in block) + "]" for block in report["blocks"]))
+    return 0
+
