@@ -196,9 +196,10 @@ def dae_tolerances(form: DaeForm, atol: float) -> np.ndarray:
 
 def project_positions(system: HolonomicSystem, q: Vector, tolerance: float = 1e-12,
                       max_iterations: int = 20) -> tuple[Vector, int]:
-    """The point of g = 0 nearest to q in the metric of M(q): Gauss-Newton steps
-    dq = -M^-1 G^T (G M^-1 G^T)^-1 g (solved as one saddle-point system, M and G taken at
-    the current iterate) until max|g| <= tolerance; returns (q, iterations)."""
+    """A point of g = 0 near q: Gauss-Newton steps dq = -M^-1 G^T (G M^-1 G^T)^-1 g, each
+    the least M-norm correction for the linearised constraint (solved as one saddle-point
+    system, M and G taken at the current iterate), until max|g| <= tolerance. The result
+    is the M-nearest point to first order in the distance. Returns (q, iterations)."""
     q = np.array(q, dtype=float)
     for iteration in range(max_iterations + 1):
         residual = system.constraint(q)

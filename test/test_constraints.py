@@ -1,0 +1,92 @@
+"""Holonomic formulations on the planar pendulum in Cartesian coordinates, checked against
+the angle ODE theta'' = -(g/L) sin theta (scipy at tight tolerance) and the closed-form
+multiplier lambda = (|v|^2 - g y) / (2 L^2) for g(q) = x^2 + y^2 - L^2, M = I."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from youbot_dynamics.dynamics.constraints import (HolonomicSystem,
+                                                  accelerations_and_multipliers,
+                                                  consistent_initial_values, dae_form,
+                                                  project_positions, project_velocities)
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.systems.squeezer import simulate_holonomic
+
+GRAVITY, LENGTH = 9.81, 0.7
+PENDULUM = HolonomicSystem(
+    name="pendulum", position_names=("x", "y"), n_constraints=1,
+    mass=lambda q: np.eye(2),
+    forces=lambda q, v: np.array([0.0, -GRAVITY]),
+    constraint=lambda q: np.array([q @ q - LENGTH**2]),
+    jacobian=lambda q: 2.0 * q[None, :],
+    curvature=lambda q, v: np.array([2.0 * v @ v]))
+THETA0 = 1.2      # from the downward vertical, rad
+Q0 = LENGTH * np.array([np.sin(THETA0), -np.cos(THETA0)])
+V0 = np.zeros(2)
+T_END = 2.0
+
+
+def exact_positions(times):
+    solution = solve_ivp(lambda t, s: [s[1], -GRAVITY / LENGTH * np.sin(s[0])], (0, T_END),
+                         [THETA0, 0.0], t_eval=times, rtol=1e-12, atol=1e-12,
+                         method="DOP853")
+    theta = solution.y[0]
+    return LENGTH * np.column_stack((np.sin(theta), -np.cos(theta)))
+
+
+def test_multiplier_is_the_closed_form():
+    q = LENGTH * np.array([0.6, -0.8])
+    v = np.array([0.8, 0.6]) * 1.7
+    w, lam = accelerations_and_multipliers(PENDULUM, q, v)
+    assert lam[0] == pytest.approx((v @ v - GRAVITY * q[1]) / (2 * LENGTH**2), rel=1e-13)
+    assert PENDULUM.jacobian(q) @ w + PENDULUM.curvature(q, v) == pytest.approx(0, abs=1e-12)
+
+
+@pytest.mark.parametrize("formulation,integrator,tolerance", [
+    ("index1", "dop853", 1e-7), ("index1-baumgarte", "dop853", 1e-7),
+    ("index1-projection", "dop853", 1e-7), ("index2", "ida", 1e-4), ("ggl", "ida", 1e-4)])
+def test_formulations_follow_the_angle_ode(formulation, integrator, tolerance):
+    times = np.linspace(0.0, T_END, 21)
+    run = simulate_holonomic(PENDULUM, formulation, integrator, Q0, V0, times,
+                             rtol=1e-10 if integrator != "ida" else 1e-8, atol=1e-12,
+                             baumgarte_rate=20.0)
+    assert np.max(np.abs(run.q - exact_positions(times))) < tolerance * LENGTH
+    expected = [(v @ v - GRAVITY * q[1]) / (2 * LENGTH**2) for q, v in zip(run.q, run.v)]
+    assert run.multipliers[:, 0] == pytest.approx(expected, rel=1e-3)
+
+
+def test_projections_land_on_the_manifolds_nearest_in_the_mass_metric():
+    mass = np.diag([1.0, 3.0])
+    system = HolonomicSystem(**{**PENDULUM.__dict__, "mass": lambda q: mass})
+    for offset in (0.1, 1e-4):
+        guess = Q0 + offset * np.array([1.0, -2.0])
+        q, iterations = project_positions(system, guess)
+        assert abs(system.constraint(q)[0]) < 1e-12 and iterations > 0
+        tangent = np.array([-q[1], q[0]]) / LENGTH
+        step = q - guess
+        # optimality of min (q - guess)^T M (q - guess) on the circle holds to first order:
+        # the step's M-component along the tangent is O(|step|^2)
+        cosine = abs(tangent @ mass @ step) / np.linalg.norm(mass @ step)
+        assert cosine < 2.0 * np.linalg.norm(step) / LENGTH
+    v = project_velocities(system, q, np.array([1.0, 2.0]))
+    assert system.jacobian(q) @ v == pytest.approx(0, abs=1e-12)
+
+
+def test_consistent_initialisation_from_a_perturbed_guess():
+    q, v, w, lam, iterations = consistent_initial_values(
+        PENDULUM, np.array([0.3, -0.9]), np.array([1.0, 5.0]), fixed=(0,))
+    assert q[0] == 0.3 and q[1] == pytest.approx(-np.sqrt(LENGTH**2 - 0.09), rel=1e-12)
+    assert iterations > 1
+    assert PENDULUM.jacobian(q) @ v == pytest.approx(0, abs=1e-12) and v[0] == 1.0
+    assert lam[0] == pytest.approx((v @ v - GRAVITY * q[1]) / (2 * LENGTH**2), rel=1e-12)
+
+
+def test_bad_requests_are_user_errors():
+    with pytest.raises(UserInputError, match="free coordinates"):
+        consistent_initial_values(PENDULUM, Q0, V0, fixed=(0, 1))
+    with pytest.raises(UserInputError, match="needs ida"):
+        simulate_holonomic(PENDULUM, "index2", "rk45", Q0, V0, [0, 1])
+    with pytest.raises(UserInputError, match="not a DAE formulation"):
+        dae_form(PENDULUM, "index1", Q0, V0, V0, np.zeros(1))
