@@ -1,0 +1,94 @@
+"""Andrew's squeezer against the IVP test set (benchmarks.md section 1)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from youbot_dynamics.cli import main
+from youbot_dynamics.dynamics.constraints import consistent_initial_values, dae_form
+from youbot_dynamics.systems.squeezer import (LAMBDA0, Q0, V0, W0, reference_error,
+                                              simulate_squeezer, squeezer_system)
+
+RNG = np.random.default_rng(7)
+
+
+def test_generated_jacobian_and_curvature_match_finite_differences():
+    system = squeezer_system()
+    q, v = Q0 + 0.1 * RNG.standard_normal(7), 50.0 * RNG.standard_normal(7)
+    h = 1e-6
+    columns = [(system.constraint(q + h * e) - system.constraint(q - h * e)) / (2 * h)
+               for e in np.eye(7)]
+    assert system.jacobian(q) == pytest.approx(np.array(columns).T, abs=1e-9)
+    # g_qq(v, v) = d/dt (G(q) v) along q' = v with v held
+    dgv = (system.jacobian(q + h * v) @ v - system.jacobian(q - h * v) @ v) / (2 * h)
+    assert system.curvature(q, v) == pytest.approx(dgv, rel=1e-6)
+
+
+def test_published_consistent_values_are_reproduced():
+    q, v, w, lam, _ = consistent_initial_values(squeezer_system(), Q0, V0, fixed=(1,))
+    assert np.max(np.abs(squeezer_system().constraint(Q0))) < 1e-16
+    assert w == pytest.approx(W0, rel=1e-12, abs=1e-9)
+    assert lam == pytest.approx(LAMBDA0, rel=1e-12, abs=1e-11)
+
+
+def test_newton_initialisation_from_a_perturbed_guess():
+    guess = Q0 + 0.05 * RNG.standard_normal(7)
+    guess[1] = 0.0                                   # Theta held, as in the test set
+    v_guess = np.ones(7)
+    v_guess[1] = 0.0                                 # Theta' = 0 held: v must come out 0
+    q, v, w, lam, iterations = consistent_initial_values(
+        squeezer_system(), guess, v_guess, fixed=(1,))
+    assert iterations >= 3
+    assert np.max(np.abs(squeezer_system().constraint(q))) < 1e-13
+    assert q == pytest.approx(Q0, abs=1e-12)         # the branch of the published q0
+    assert v == pytest.approx(V0, abs=1e-12)
+    assert w == pytest.approx(W0, rel=1e-9, abs=1e-6)
+    assert lam == pytest.approx(LAMBDA0, rel=1e-9, abs=1e-8)
+
+
+@pytest.mark.parametrize("formulation,integrator,rtol,bound", [
+    ("index1", "dop853", 1e-10, 2e-9),             # reference's own accuracy is ~1e-9
+    ("index1-projection", "dop853", 1e-10, 2e-9),
+    ("index2", "ida", 1e-10, 1e-8),
+    ("ggl", "ida", 1e-10, 1e-8)])
+def test_state_at_reference_time(formulation, integrator, rtol, bound):
+    run = simulate_squeezer(formulation, integrator, rtol=rtol, n_outputs=4)
+    assert np.max(reference_error(run.q[-1])) < bound
+
+
+def test_index3_residual_vanishes_on_an_accurate_solution():
+    accurate = simulate_squeezer("index1", "dop853", rtol=1e-10, n_outputs=3)
+    system = squeezer_system()
+    q, v, lam = accurate.q[1], accurate.v[1], accurate.multipliers[1]
+    w = np.linalg.solve(system.mass(q), system.forces(q, v) - system.jacobian(q).T @ lam)
+    form = dae_form(system, "index3", Q0, V0, W0, LAMBDA0)
+    y = np.concatenate((q, v, w, lam))
+    residual = form.residual(0.0, y, np.concatenate((v, w, np.zeros(13))))
+    assert np.max(np.abs(residual[:21])) < 1e-9 * np.max(np.abs(w))
+    assert np.max(np.abs(residual[21:])) < 1e-10
+
+
+def test_drift_is_largest_without_stabilisation():
+    drift = {}
+    for formulation in ("index1", "index1-baumgarte", "index1-projection"):
+        run = simulate_squeezer(formulation, "rk45", rtol=1e-6, n_outputs=31)
+        drift[formulation] = (np.abs(run.position_residual).max(),
+                              np.abs(run.velocity_residual[-1]).max())
+    for stabilised in ("index1-baumgarte", "index1-projection"):
+        assert drift[stabilised][0] < 0.1 * drift["index1"][0]
+        assert drift[stabilised][1] < drift["index1"][1]
+    assert drift["index1-projection"][0] < 1e-12
+
+
+def test_cli_json_and_errors(capsys, tmp_path):
+    assert main(["squeezer", "--formulation", "index1", "--integrator", "dop853",
+                 "--rtol", "1e-8", "--json", "--plot", str(tmp_path / "drift.png")]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert max(report["relative_error_vs_reference"]) < 1e-6
+    assert (tmp_path / "drift.png").stat().st_size > 10_000
+    assert main(["squeezer", "--formulation", "index3", "--integrator", "rk45"]) == 2
+    assert main(["squeezer", "--formulation", "index1", "--rtol", "-1"]) == 2
+    assert main(["structure", "pendulum", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["structural_index"] == 3
