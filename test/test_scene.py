@@ -103,7 +103,7 @@ def test_waypoint_outside_joint_limits(tmp_path):
     (lambda d: d["friction"]["joints"]["arm_joint_2"].update(law="sticky"), "friction.joints"),
     (lambda d: d["friction"]["joints"]["arm_joint_2"].pop("sigma0"), "friction.joints"),
     (lambda d: d["initial"]["q"].update(arm_joint_3=0.5), "initial.q.arm_joint_3"),
-    (lambda d: d.update(free_bodies=[{"sphere": 1}]), "free_bodies"),
+    (lambda d: d.update(free_bodies=[{"sphere": 1}]), "free_bodies[0].sphere"),
     (lambda d: d["outputs"].update(record=["q", "jerk"]), "outputs.record[1]"),
 ])
 def test_other_mistakes(tmp_path, mutate, key):

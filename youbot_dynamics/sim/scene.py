@@ -33,8 +33,12 @@ Keys (units SI, angles rad; joint values are mappings by joint name)::
       energy_tolerance: J           # conservative scenes: allowed energy growth
     duration: s
     outputs: {rate: Hz, record: [q, v, z, tau, energy, ee_position]}
-    contacts: []                    # reserved for the contact issue: must be empty
-    free_bodies: []                 # reserved for the contact issue: must be empty
+    robot: none | {compose: [...]}  # no robot, or several composed into one (scene_contacts)
+    free_bodies: [...]              # rigid objects (see sim/scene_contacts.py for these four)
+    world: [...]                    # static geometry
+    geometry: [...]                 # geometry on robot links
+    contacts: [...]                 # pairs of geometry names, each with its contact law
+    integrator: {method: pgs | admm, dt: s}   # constraint stepper (pairs with law constraint)
 
 Every mistake is a :class:`SceneError` naming the file, the key (dotted path) and the value.
 PyYAML reads ``1e-6`` (no dot) as a string: numbers given that way are accepted.
@@ -57,13 +61,17 @@ from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
 from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS
+from youbot_dynamics.sim.scene_contacts import (EMPTY_ROBOT, ContactPairSpec, FreeBodySpec, composed_urdf,
+                                                read_contacts, read_free_bodies, read_geometries)
 
 CONTROLLERS = ("none", "pd", "computed_torque")
 RECORDABLE = ("q", "v", "z", "tau", "energy", "ee_position")
 FRICTION_DEFAULTS = ("urdf", "none")
-RESERVED_SECTIONS = ("contacts", "free_bodies")
+CONTACT_SECTIONS = ("free_bodies", "world", "geometry", "contacts")
 TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "gravity", "friction",
-            "controller", "integrator", "duration", "outputs", *RESERVED_SECTIONS)
+            "controller", "integrator", "duration", "outputs", *CONTACT_SECTIONS)
+#: Integrators of the constraint stepper (dynamics/contact_stepper.py), fixed step dt.
+STEPPERS = ("pgs", "admm")
 
 
 class SceneError(UserInputError):
@@ -116,7 +124,7 @@ class IntegratorSpec:
         """``rk4 dt=0.001`` or ``rk45 rtol=1e-06 atol=1e-08`` or ``auto target_error=...``."""
         if self.method == "auto":
             return f"auto target_error={self.target_error:g}"
-        if self.method in FIXED_STEP:
+        if self.method in FIXED_STEP + STEPPERS:
             return f"{self.method} dt={self.dt:g}"
         return f"{self.method} rtol={self.rtol:g} atol={self.atol:g}"
 
@@ -135,7 +143,10 @@ class Scene:
 
     ``friction`` maps a moving joint to its spec (law and parameters) for the joints the
     scene lists; the others follow ``friction_default``. ``content_hash`` is the SHA-256 of
-    the file's bytes (the key of per-scene caches).
+    the file's bytes (the key of per-scene caches). ``robot_path`` is a URDF path, or the
+    URDF text itself for ``robot: none`` and composed robots. ``free_bodies``,
+    ``geometries`` (free bodies' shapes first, then world and link geometry) and
+    ``contacts`` are empty in a scene without contact.
     """
 
     name: str
@@ -154,6 +165,14 @@ class Scene:
     integrator: IntegratorSpec
     duration: float
     outputs: OutputSpec
+    free_bodies: tuple[FreeBodySpec, ...] = ()
+    geometries: tuple = ()
+    contacts: tuple[ContactPairSpec, ...] = ()
+
+    @property
+    def has_contact(self) -> bool:
+        """Whether the scene has free bodies or contact pairs (the contact simulator)."""
+        return bool(self.free_bodies or self.contacts)
 
     @property
     def output_times(self) -> np.ndarray:
@@ -182,7 +201,7 @@ class Scene:
         """The same scene with other integrator settings (validated like the file's)."""
         current = dataclasses.asdict(self.integrator)
         changes = {"method": method, "dt": dt, "rtol": rtol, "atol": atol, "target_error": target_error}
-        if method is not None and method not in FIXED_STEP:
+        if method is not None and method not in FIXED_STEP + STEPPERS:
             current["dt"] = None
         current.update({k: v for k, v in changes.items() if v is not None})
         return dataclasses.replace(self, integrator=_integrator(_Reader(self.source), current, "integrator"))
@@ -224,17 +243,13 @@ def load_scene(name_or_path: str | Path) -> Scene:
     except (yaml.YAMLError, UnicodeDecodeError) as error:
         raise SceneError(source, "(file)", f"not valid YAML: {error}") from None
     data = reader.mapping(data if data is not None else {}, "(top level)", TOP_KEYS)
-    for section in RESERVED_SECTIONS:
-        if data.get(section):
-            raise SceneError(source, section, "not supported yet (reserved for contacts and free "
-                             "bodies): leave it out or empty", data[section])
     robot_path = _robot_path(reader, path, data.get("robot"))
     try:
         full = load_robot(robot_path)
     except UserInputError as error:
         raise SceneError(source, "robot", str(error), data.get("robot")) from None
 
-    moving = reader.joint_list(data.get("moving", list(full.joint_names)), "moving", full)
+    moving = reader.joint_list(data.get("moving", list(full.joint_names)), "moving", full) if full.nv else ()
     locked_raw = reader.joint_values(data.get("locked", {}), "locked", full)
     for name in locked_raw:
         if name in moving:
@@ -290,12 +305,26 @@ def load_scene(name_or_path: str | Path) -> Scene:
         scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
     except UserInputError as error:
         raise SceneError(source, "friction.joints", str(error)) from None
-    return scene
+    bodies = read_free_bodies(reader, data.get("free_bodies", []))
+    geometries = read_geometries(reader, data.get("world", []), data.get("geometry", []), robot, bodies)
+    contacts = read_contacts(reader, data.get("contacts", []), geometries)
+    stepper = [pair.name for pair in contacts if pair.law.law == "constraint"]
+    if integrator.method in STEPPERS and len(stepper) != len(contacts):
+        raise SceneError(source, "contacts", f"integrator {integrator.method!r} (the constraint stepper) takes "
+                         "pairs with law 'constraint' only", [p.name for p in contacts if p.name not in stepper])
+    if stepper and integrator.method not in STEPPERS:
+        raise SceneError(source, "integrator.method", f"pairs with law 'constraint' ({', '.join(stepper)}) need "
+                         f"the constraint stepper: one of {', '.join(STEPPERS)}", integrator.method)
+    return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts)
 
 
-def _robot_path(reader: _Reader, scene_path: Path, value: Any) -> Path:
+def _robot_path(reader: _Reader, scene_path: Path, value: Any) -> Path | str:
     if value is None:
         return default_urdf()
+    if value == "none":
+        return EMPTY_ROBOT
+    if isinstance(value, Mapping):
+        return composed_urdf(reader, reader.mapping(value, "robot", ("compose",)), scene_path)
     for base in (scene_path.parent, package_share()):
         candidate = (base / str(value)).resolve()
         if candidate.is_file():
@@ -377,8 +406,9 @@ def _trajectory(reader: _Reader, robot: Robot, value: Any, q0: np.ndarray) -> Tr
 def _integrator(reader: _Reader, value: Any, key: str) -> IntegratorSpec:
     data = dict(reader.mapping(value, key, ("method", "dt", "rtol", "atol", "target_error", "energy_tolerance")))
     method = data.get("method", "rk45")
-    if method not in (*INTEGRATORS, "auto"):
-        raise SceneError(reader.source, f"{key}.method", f"expected auto or one of {', '.join(INTEGRATORS)}", method)
+    if method not in (*INTEGRATORS, *STEPPERS, "auto"):
+        raise SceneError(reader.source, f"{key}.method", f"expected auto or one of "
+                         f"{', '.join(INTEGRATORS + STEPPERS)}", method)
     numbers = {name: reader.number(data[name], f"{key}.{name}") for name in
                ("dt", "rtol", "atol", "target_error", "energy_tolerance") if data.get(name) is not None}
     for name, number in numbers.items():
@@ -386,9 +416,9 @@ def _integrator(reader: _Reader, value: Any, key: str) -> IntegratorSpec:
             raise SceneError(reader.source, f"{key}.{name}", "must not be negative", number)
         if number == 0 and name != "energy_tolerance":
             raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
-    if method in FIXED_STEP and "dt" not in numbers:
+    if method in FIXED_STEP + STEPPERS and "dt" not in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"missing: fixed-step method {method!r} needs dt (s)")
-    if method not in FIXED_STEP and "dt" in numbers:
+    if method not in FIXED_STEP + STEPPERS and "dt" in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"only for fixed-step methods "
                          f"({', '.join(FIXED_STEP)}); {method!r} uses rtol/atol", numbers["dt"])
     if method == "auto" and "target_error" not in numbers:

@@ -38,10 +38,15 @@ import pinocchio as pin
 
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy, potential_energy
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.sim.integration import DivergenceError
 from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper, StepperSettings
+from youbot_dynamics.dynamics.rigid_body import mass_matrix
+from youbot_dynamics.sim.contact_system import ContactEvent, ContactSystem
 from youbot_dynamics.sim.controllers import Reference, make_controller
+from youbot_dynamics.sim.events import Mode, simulate_hybrid
 from youbot_dynamics.sim.integrators import IntegratorStats, Solution, integrate, integrate_dae
-from youbot_dynamics.sim.scene import IntegratorSpec, Scene
+from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
@@ -80,7 +85,9 @@ class SimulationResult:
     """A run: states x (k, n) at times t (k,), named by ``layout``; ``series`` holds the
     recorded extras (``tau`` (k, nv), ``energy`` (k,), ``ee_position`` (k, 3)); ``stats``
     the integrator's statistics. ``energy_error`` (J) is max |E(t) - E(0)| in a conservative
-    scene, None otherwise (friction or a controller change the energy)."""
+    scene, None otherwise (friction or a controller change the energy). A contact scene adds
+    its ``contact_events`` and ``max_penetration`` (m: the deepest overlap the compliant
+    law saw over the right-hand-side evaluations, or the stepper over its steps)."""
 
     scene: str
     integrator: IntegratorSpec
@@ -91,6 +98,8 @@ class SimulationResult:
     stats: IntegratorStats
     conservative: bool
     energy_error: float | None
+    contact_events: list[ContactEvent] = dataclasses.field(default_factory=list)
+    max_penetration: float | None = None
 
     @property
     def final_state(self) -> dict[str, float]:
@@ -139,7 +148,11 @@ class Simulator:
         self.friction = scene.joint_friction(self.robot)
         lugre = [] if self.friction is None else \
             [name for name, law in zip(self.friction.joint_names, self.friction.laws) if law == "lugre"]
-        self.layout = StateLayout.for_joints(self.robot.joint_names, {"z": lugre})
+        self.contact = ContactSystem(scene, self.robot, self.data) if scene.has_contact else None
+        extra = {"z": lugre, **(self.contact.extra_blocks() if self.contact else {})}
+        self.layout = StateLayout.for_joints(self.robot.joint_names, extra)
+        if self.contact:
+            self.contact.bind({symbol: self.layout.slice(symbol) for symbol in extra if symbol != "z"})
         spec = scene.controller
         trajectory = None if spec.trajectory is None else PointToPointTrajectory.through(
             np.vstack([scene.q0, spec.trajectory.waypoints]), spec.trajectory.v_max,
@@ -147,7 +160,7 @@ class Simulator:
         self.trajectory = trajectory
         self.controller = make_controller(spec.type, self.robot, Reference(scene.q0, trajectory), spec.kp, spec.kd,
                                           self.friction)
-        self.conservative = self.friction is None and spec.type == "none"
+        self.conservative = self.friction is None and spec.type == "none" and not scene.contacts
         self.effort_limit = np.asarray(self.robot.effort_limit)
         self.ee_frame = self.robot.frame_id(self.robot.end_effector)
         self.bounds = self.layout.velocity_bounds(self.robot.velocity_limit, VELOCITY_LIMIT_FACTOR)
@@ -166,14 +179,22 @@ class Simulator:
     def initial_state(self) -> np.ndarray:
         """x0 from the scene: q0, v0 and LuGre bristles at their steady state for v0."""
         z0 = self.friction.steady_state_bristles(self.scene.v0) if self.friction is not None else np.zeros(0)
-        return self.layout.pack(q=self.scene.q0, v=self.scene.v0, **({"z": z0} if z0.size else {}))
+        bodies = self.contact.initial_blocks() if self.contact else {}
+        return self.layout.pack(q=self.scene.q0, v=self.scene.v0, **({"z": z0} if z0.size else {}), **bodies)
 
     def derivative(self, t: float, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """dx/dt under applied joint torques tau (N m, N)."""
         q, v, z = x[self._q], x[self._v], x[self._z]
         dx = np.empty_like(x)
         dx[self._q] = v
-        dx[self._v] = forward_dynamics(self.robot, self.data, q, v, tau, self.friction, z if z.size else None)
+        if self.contact:
+            tau_contact, wrenches = self.contact.forces(x, q, v)
+            tau = tau + tau_contact
+            for symbol, rate in self.contact.body_derivative(x, wrenches).items():
+                dx[self.layout.slice(symbol)] = rate
+            dx[self.layout.slice("s")] = 0.0
+        if self.robot.nv:
+            dx[self._v] = forward_dynamics(self.robot, self.data, q, v, tau, self.friction, z if z.size else None)
         if z.size:
             dx[self._z] = self.friction.state_derivative(v, z)
         return dx
@@ -195,7 +216,8 @@ class Simulator:
     def energy_of(self, x: np.ndarray) -> float:
         """Kinetic plus potential energy (J) of state x."""
         q, v = x[self._q], x[self._v]
-        return kinetic_energy(self.robot, self.data, q, v) + potential_energy(self.robot, self.data, q)
+        bodies = self.contact.energy(x) if self.contact else 0.0
+        return kinetic_energy(self.robot, self.data, q, v) + potential_energy(self.robot, self.data, q) + bodies
 
     def ee_pose_of(self, q: np.ndarray) -> np.ndarray:
         """4x4 pose of the end-effector link in the root frame at joint positions q."""
@@ -214,6 +236,10 @@ class Simulator:
         rhs = self.rhs if tau_command is None else (lambda t, x: self.derivative(t, x, tau_command))
         spec, names = self.integrator, self.layout.names
         monitor = self._energy_monitor(self.energy_of(x0)) if self.conservative and tau_command is None else None
+        if spec.method in STEPPERS:
+            return self._step_constraints(x0, t_eval, tau_command)
+        if self.contact:
+            return self._solve_hybrid(rhs, x0, t_eval, monitor)
         if spec.method == "ida":
             def residual(t: float, y: np.ndarray, yp: np.ndarray) -> np.ndarray:
                 return yp - rhs(t, y)
@@ -223,6 +249,99 @@ class Simulator:
                                  monitor=monitor)
         return integrate(rhs, x0, t_eval, spec.method, dt=spec.dt, rtol=spec.rtol, atol=spec.atol,
                          state_names=names, n_positions=self.robot.nv, bounds=self.bounds, monitor=monitor)
+
+    def _solve_hybrid(self, rhs, x0: np.ndarray, t_eval: np.ndarray, monitor) -> Solution:
+        """The contact scene as a hybrid run (impacts, touches, re-centring are guards);
+        returns the samples at ``t_eval`` (after any reset at the same time)."""
+        spec = self.integrator
+        mode = Mode("contact", rhs, self.contact.transitions(
+            self._q, self._v, lambda q: mass_matrix(self.robot, self.data, q)))
+        options = {"rtol": spec.rtol, "atol": spec.atol, "state_names": self.layout.names,
+                   "bounds": self.bounds, "monitor": monitor}
+        if spec.dt is not None:
+            options.update(dt=spec.dt, n_positions=self.robot.nv or None)
+        hybrid = simulate_hybrid([mode], "contact", x0, t_eval, spec.method, **options)
+        keep = [int(np.flatnonzero(hybrid.t == t)[-1]) for t in t_eval]
+        return Solution(hybrid.t[keep], hybrid.x[keep], hybrid.stats, hybrid.state_names)
+
+    def constraint_stepper(self) -> ConstraintStepper:
+        """The scene's constraint stepper (built on first use)."""
+        if getattr(self, "_stepper", None) is None:
+            index = {g.name: i for i, g in enumerate(self.scene.geometries)}
+            pairs = [(p.name, index[p.geometry1], index[p.geometry2], p.law) for p in self.scene.contacts]
+            self._stepper = ConstraintStepper(self.robot.model, [b.body for b in self.scene.free_bodies],
+                                              self.scene.geometries, pairs,
+                                              StepperSettings(solver=self.integrator.method))
+        return self._stepper
+
+    def _step_constraints(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None) -> Solution:
+        """Fixed steps of the constraint stepper from x0 with outputs at t_eval (each output
+        time is reached by a shortened last step); contact events are the steps at which a
+        pair starts carrying an impulse."""
+        import time as clock
+
+        start = clock.perf_counter()
+        if self.layout.slice("z").stop > self.layout.slice("z").start:
+            raise UserInputError(f"{self.scene.source}: the constraint stepper does not integrate LuGre bristles")
+        stepper, h = self.constraint_stepper(), self.integrator.dt
+        nv, nb = self.robot.nv, len(self.scene.free_bodies)
+        q, v = self._pin_state(stepper, x0)
+        t, outputs, in_contact = float(t_eval[0]), [x0.copy()], set()
+        stats = IntegratorStats(self.integrator.method)
+        penetration = 0.0
+        for t_next in t_eval[1:]:
+            while t < t_next - 1e-12:
+                dt = min(h, t_next - t)
+                tau = np.zeros(stepper.model.nv)
+                if nv:
+                    qr, vr = q[:nv], v[:nv]
+                    command = tau_command if tau_command is not None else self.controller.torque(t, qr, vr)
+                    tau[:nv] = command - (self.friction.torque(vr) if self.friction is not None else 0.0)
+                q, v, report = stepper.step(q, v, tau, dt)
+                t += dt
+                stats.steps += 1
+                stats.nonlinear_iterations += report.iterations
+                penetration = max(penetration, report.penetration)
+                touching = {name for name, impulse in report.normal_impulse.items() if impulse > 0}
+                for name in sorted(touching - in_contact):
+                    self.contact.events.append(ContactEvent(t, name, "contact", report.normal_impulse[name]))
+                in_contact = touching
+                if not np.all(np.isfinite(v)):
+                    raise DivergenceError(t, self.integrator.method, dt, "non-finite velocity")
+            outputs.append(self._ode_state(stepper, q, v, nb))
+        stats.events = len(self.contact.events)
+        stats.simulated_time = float(t_eval[-1] - t_eval[0])
+        stats.wall_time = clock.perf_counter() - start
+        self.stepper_penetration = penetration
+        return Solution(np.asarray(t_eval, dtype=float), np.array(outputs), stats, self.layout.names)
+
+    def _pin_state(self, stepper: ConstraintStepper, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pinocchio (q, v) of the combined model from our state x."""
+        poses = self.contact.poses_of(x)
+        parts = self.layout.split(x)
+        q, v = [x[self._q]], [x[self._v]]
+        for k, body in enumerate(self.scene.free_bodies):
+            pose = poses[body.body.name]
+            q.append(pin.SE3ToXYZQUAT(pin.SE3(pose[:3, :3], pose[:3, 3])))
+            rotation = pose[:3, :3]
+            v += [rotation.T @ parts["u"][3 * k:3 * k + 3], rotation.T @ parts["w"][3 * k:3 * k + 3]]
+        return np.concatenate(q), np.concatenate(v)
+
+    def _ode_state(self, stepper: ConstraintStepper, q: np.ndarray, v: np.ndarray, nb: int) -> np.ndarray:
+        """Our state x from Pinocchio's (q, v): orientation in r, phi = 0, velocities in the world frame."""
+        nv = self.robot.nv
+        blocks = {"q": q[:nv], "v": v[:nv]}
+        p, r, u, w = [], [], [], []
+        for k in range(nb):
+            xyzquat = q[nv + 7 * k:nv + 7 * k + 7]
+            rotation = pin.Quaternion(xyzquat[6], *xyzquat[3:6]).toRotationMatrix()
+            p.append(xyzquat[:3])
+            r.append(xyzquat[3:] / np.linalg.norm(xyzquat[3:]))
+            u.append(rotation @ v[nv + 6 * k:nv + 6 * k + 3])
+            w.append(rotation @ v[nv + 6 * k + 3:nv + 6 * k + 6])
+        if nb:
+            blocks.update(p=np.concatenate(p), r=np.concatenate(r), u=np.concatenate(u), w=np.concatenate(w))
+        return self.layout.pack(**blocks)
 
     def _energy_monitor(self, energy0: float):
         tolerance = self.integrator.energy_tolerance
@@ -241,14 +360,21 @@ class Simulator:
         times); leaves the step-wise state at the end of the run."""
         times = self.scene.output_times if t_eval is None else np.asarray(t_eval, dtype=float)
         x0 = self.initial_state()
+        if self.contact:
+            self.contact.events.clear()
+            self.contact.deepest = 0.0
         solution = self.solve(x0, times)
         series = self._series(solution, set(self.scene.outputs.record) | ({"energy"} if self.conservative else set()))
         energy_error = float(np.max(np.abs(series["energy"] - series["energy"][0]))) if self.conservative else None
         self.t, self.x = float(solution.t[-1]), solution.x[-1].copy()
         self.stats = solution.stats
         self._tau = self.controller.torque(self.t, self.x[self._q], self.x[self._v]).copy()
+        penetration = None
+        if self.contact:
+            penetration = self.stepper_penetration if self.integrator.method in STEPPERS else self.contact.deepest
         return SimulationResult(self.scene.name, self.integrator, self.layout, solution.t, solution.x,
-                                series, solution.stats, self.conservative, energy_error)
+                                series, solution.stats, self.conservative, energy_error,
+                                list(self.contact.events) if self.contact else [], penetration)
 
     def _series(self, solution: Solution, wanted: set[str]) -> dict[str, np.ndarray]:
         series = {}

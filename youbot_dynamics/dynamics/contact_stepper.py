@@ -1,0 +1,164 @@
+"""Constraint-based time stepping with Pinocchio's contact solvers (no home-made LCP).
+
+One Pinocchio model holds the robot's joints followed by one free-flyer joint per free body
+(configuration (p, quaternion x y z w), velocity the body-frame twist), so the step stays on
+the manifold through ``pin.integrate``. A step of size h (semi-implicit Euler, velocity
+level, Moreau-Jean style):
+
+1. free velocity v_f = v + h ABA(q, v, tau);
+2. for every contact point within ``margin`` (coal, dynamics/collision.py) a
+   ``PointContactConstraintModel`` between the two owners' joints, its frame's z axis along
+   the normal from geometry 1 to geometry 2, with the pair's Coulomb coefficient;
+3. the Delassus matrix G = J M^-1 J^T and the drift g = J v_f + b, where the normal part of
+   b lets a gap phi > 0 close within the step (phi / h: no tunnelling), pushes an overlap
+   out at the rate ``baumgarte`` (-phi) / h and, for a point approaching faster than
+   ``restitution_threshold``, asks for the rebound e (-v_n) (Newton's law);
+4. impulses lambda from ``pin.PGSConstraintSolver`` or ``pin.ADMMConstraintSolver`` (the
+   friction cone as given), v+ = v_f + M^-1 J^T lambda, q+ = integrate(q, h v+).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from youbot_dynamics.dynamics.collision import BroadPhase, Geometry, PlacedPair
+from youbot_dynamics.dynamics.contact import ConstraintContact
+from youbot_dynamics.dynamics.free_body import FreeBody, add_free_flyer
+
+SOLVERS = ("pgs", "admm")
+
+
+@dataclass(frozen=True)
+class StepperSettings:
+    """Solver (pgs or admm), its iteration cap and tolerance, the look-ahead margin (m),
+    the overlap correction rate (per step) and the restitution threshold (m/s)."""
+
+    solver: str = "pgs"
+    max_iterations: int = 200
+    tolerance: float = 1e-10
+    margin: float = 0.01
+    baumgarte: float = 0.2
+    restitution_threshold: float = 0.05
+
+
+@dataclass
+class StepReport:
+    """What one step found: per pair the summed normal impulse (N s), the deepest overlap
+    (m) and the solver's iterations."""
+
+    normal_impulse: dict[str, float] = field(default_factory=dict)
+    penetration: float = 0.0
+    iterations: int = 0
+
+
+def _contact_rotation(normal: np.ndarray) -> np.ndarray:
+    """A rotation whose z axis is ``normal``."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, normal)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(normal, x), normal])
+
+
+class ConstraintStepper:
+    """The combined model, the pairs and one :meth:`step`."""
+
+    def __init__(self, robot_model: pin.Model, bodies: list[FreeBody], geometries: tuple[Geometry, ...],
+                 pairs: list[tuple[str, int, int, ConstraintContact]], settings: StepperSettings) -> None:
+        self.model = pin.Model(robot_model)
+        self.body_joints = [add_free_flyer(self.model, body) for body in bodies]
+        self.data = self.model.createData()
+        self.robot_nq = robot_model.nq
+        self.geometries = geometries
+        self.pairs = pairs
+        self.narrow = [PlacedPair(geometries[a].shape, geometries[b].shape) for _, a, b, _ in pairs]
+        self.broad = BroadPhase([g.shape for g in geometries], [(a, b) for _, a, b, _ in pairs], settings.margin)
+        self.settings = settings
+        self.body_index = {body.name: k for k, body in enumerate(bodies)}
+        self.frames = {g.owner_name: self.model.getFrameId(g.owner_name) for g in geometries if g.owner == "link"}
+        if settings.solver not in SOLVERS:
+            raise ValueError(f"unknown constraint solver {settings.solver!r}; known: {', '.join(SOLVERS)}")
+
+    def _owner(self, geometry: Geometry) -> tuple[int, pin.SE3]:
+        """Joint id and the joint's world placement of a geometry's owner."""
+        if geometry.owner == "world":
+            return 0, pin.SE3.Identity()
+        if geometry.owner == "body":
+            joint = self.body_joints[self.body_index[geometry.owner_name]]
+        else:
+            joint = self.model.frames[self.frames[geometry.owner_name]].parentJoint
+        return joint, self.data.oMi[joint]
+
+    def poses(self, q: np.ndarray) -> list[np.ndarray]:
+        """World poses (4x4) of the geometries at configuration q."""
+        pin.framesForwardKinematics(self.model, self.data, q)
+        poses = []
+        for g in self.geometries:
+            if g.owner == "world":
+                poses.append(g.placement)
+            elif g.owner == "body":
+                poses.append(self.data.oMi[self.body_joints[self.body_index[g.owner_name]]].homogeneous @ g.placement)
+            else:
+                poses.append(self.data.oMf[self.frames[g.owner_name]].homogeneous @ g.placement)
+        return poses
+
+    def step(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, StepReport]:
+        """(q+, v+, report) after one step of h seconds under joint torques tau (nv,)."""
+        model, data, settings = self.model, self.data, self.settings
+        report = StepReport()
+        v_free = v + h * pin.aba(model, data, q, v, tau)
+        poses = self.poses(q)
+        constraints = pin.StdVec_ConstraintModel()
+        rows: list[tuple[int, float, str]] = []
+        for k in self.broad.close_pairs(poses):
+            name, a, b, law = self.pairs[k]
+            for c in self.narrow[k].contact_points(poses[a], poses[b], settings.margin):
+                rotation = _contact_rotation(c.normal)
+                joint1, world1 = self._owner(self.geometries[a])
+                joint2, world2 = self._owner(self.geometries[b])
+                point = pin.PointContactConstraintModel(
+                    model, joint1, world1.actInv(pin.SE3(rotation, c.point1)),
+                    joint2, world2.actInv(pin.SE3(rotation, c.point2)))
+                point.setFriction(law.friction)
+                constraints.append(pin.ConstraintModel(point))
+                rows.append((len(rows), -c.depth, name, law.restitution))
+                report.penetration = max(report.penetration, c.depth)
+        if not rows:
+            return pin.integrate(model, q, h * v_free), v_free, report
+        datas = pin.StdVec_ConstraintData()
+        for constraint in constraints:
+            datas.append(constraint.createData())
+        pin.computeJointJacobians(model, data, q)
+        for constraint, cdata in zip(constraints, datas):
+            constraint.calc(model, data, cdata)
+        jacobian = pin.getConstraintsJacobian(model, data, constraints, datas)
+        inverse_mass = pin.computeMinverse(model, data, q)
+        inverse_mass = np.triu(inverse_mass) + np.triu(inverse_mass, 1).T
+        delassus = jacobian @ inverse_mass @ jacobian.T
+        drift = jacobian @ v_free
+        before = jacobian @ v
+        for i, gap, _, restitution in rows:
+            n = 3 * i + 2
+            drift[n] += gap / h if gap > 0 else settings.baumgarte * gap / h
+            if before[n] < -settings.restitution_threshold and gap + h * before[n] < 0:
+                drift[n] += restitution * before[n]
+        impulses = self._solve(delassus, drift, constraints, datas, report)
+        v_next = v_free + inverse_mass @ jacobian.T @ impulses
+        for i, _, name, _ in rows:
+            report.normal_impulse[name] = report.normal_impulse.get(name, 0.0) + float(impulses[3 * i + 2])
+        return pin.integrate(model, q, h * v_next), v_next, report
+
+    def _solve(self, delassus: np.ndarray, drift: np.ndarray, constraints, datas, report: StepReport) -> np.ndarray:
+        size = drift.size
+        if self.settings.solver == "pgs":
+            solver, options, result = pin.PGSConstraintSolver(size), pin.PGSSolverSettings(), pin.PGSSolverResult()
+        else:
+            solver, options, result = pin.ADMMConstraintSolver(size), pin.ADMMSolverSettings(), pin.ADMMSolverResult()
+            options.lanczos_size = size
+        options.max_iterations = self.settings.max_iterations
+        options.absolute_feasibility_tol = self.settings.tolerance
+        options.absolute_complementarity_tol = self.settings.tolerance
+        solver.solve(pin.DelassusOperatorDense(delassus), drift, constraints, datas, options, result)
+        report.iterations = int(result.iterations)
+        return np.array(result.retrieveConstraintImpulses())

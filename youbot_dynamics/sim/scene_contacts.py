@@ -1,0 +1,244 @@
+"""The contact sections of a scene file: robot composition, free bodies, static world
+geometry, geometry on robot links and contact pairs (read by :mod:`youbot_dynamics.sim.scene`).
+
+Keys (SI units; a pose is ``{xyz: [m, m, m], rpy: [rad, rad, rad]}``, default identity;
+a shape is ``{type: sphere|box|cylinder|capsule|halfspace, <dimensions>}``, see
+:mod:`youbot_dynamics.dynamics.collision`)::
+
+    robot: none                       # no robot: free bodies and world geometry only
+    robot:                            # several robots as one Robot (names prefixed)
+      compose:
+        - {urdf: urdf/youbot.urdf, prefix: yb1_, pose: {xyz: [...], rpy: [...]}}
+    free_bodies:
+      - name: ball
+        shape: {type: sphere, radius: 0.05}
+        density: 700                  # kg/m^3, or mass: kg and inertia: [Ixx, Iyy, Izz]
+        position: [0, 0, 1]           # m, world frame (centre of mass)
+        orientation: [0, 0, 0, 1]     # quaternion x, y, z, w
+        velocity: [0, 0, 0]           # m/s, world frame
+        angular_velocity: [0, 0, 0]   # rad/s, world frame
+    world:
+      - {name: floor, shape: {type: halfspace, normal: [0, 0, 1], offset: 0}, pose: ...}
+    geometry:
+      - {name: finger, link: gripper_finger_link_l, shape: {...}, pose: ...}
+    contacts:
+      - {pair: [ball, floor], law: hunt_crossley, stiffness: 1e5, restitution: 0.8, friction: 0.3}
+
+A free body's name is also the name of its shape in ``contacts``. Every mistake is a
+SceneError naming the file, the key and the value.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import pinocchio as pin
+from lxml import etree
+
+from youbot_dynamics import package_share
+from youbot_dynamics.dynamics.collision import SHAPES, Geometry, Shape
+from youbot_dynamics.dynamics.contact import ContactLaw, ContactLawError, contact_law_from_spec
+from youbot_dynamics.dynamics.free_body import FreeBody
+from youbot_dynamics.model.robot import Robot
+
+#: The URDF of ``robot: none``: one link, no joint.
+EMPTY_ROBOT = '<robot name="none"><link name="world"/></robot>'
+SHAPE_KEYS = ("type", "radius", "length", "size", "normal", "offset")
+
+
+@dataclass(frozen=True)
+class FreeBodySpec:
+    """A free body and its initial state (world frame; quaternion x, y, z, w)."""
+
+    body: FreeBody
+    shape: Shape
+    position: np.ndarray
+    orientation: np.ndarray
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+
+
+@dataclass(frozen=True)
+class ContactPairSpec:
+    """A declared pair: its name (``a/b``), the two geometry names and the law."""
+
+    name: str
+    geometry1: str
+    geometry2: str
+    law: ContactLaw
+
+
+def pose_matrix(reader, value: Any, key: str) -> np.ndarray:
+    """4x4 pose from ``{xyz, rpy}`` (roll-pitch-yaw, URDF convention)."""
+    data = reader.mapping(value if value is not None else {}, key, ("xyz", "rpy"))
+    pose = np.eye(4)
+    pose[:3, 3] = reader.vector3(data.get("xyz", [0, 0, 0]), f"{key}.xyz")
+    pose[:3, :3] = pin.rpy.rpyToMatrix(*reader.vector3(data.get("rpy", [0, 0, 0]), f"{key}.rpy"))
+    return pose
+
+
+def read_shape(reader, value: Any, key: str) -> Shape:
+    """A :class:`Shape` from ``{type, dimensions}``."""
+    from youbot_dynamics.sim.scene import SceneError
+
+    data = reader.mapping(value, key, SHAPE_KEYS)
+    kind = data.get("type")
+    if kind not in SHAPES:
+        raise SceneError(reader.source, f"{key}.type", f"expected one of {', '.join(SHAPES)}", kind)
+    allowed = SHAPES[kind]
+    for name in data:
+        if name != "type" and name not in allowed:
+            raise SceneError(reader.source, f"{key}.{name}", f"not a dimension of a {kind} "
+                             f"(dimensions: {', '.join(allowed)})", data[name])
+    values: dict[str, Any] = {}
+    for name in allowed:
+        if name not in data and not (kind == "halfspace" and name == "offset"):
+            raise SceneError(reader.source, f"{key}.{name}", f"missing: a {kind} needs {', '.join(allowed)}")
+        if name in ("size", "normal"):
+            values[name] = tuple(reader.vector3(data[name], f"{key}.{name}"))
+        elif name in data:
+            values[name] = reader.number(data[name], f"{key}.{name}")
+    for name, number in values.items():
+        if name in ("radius", "length") and number <= 0 or name == "size" and min(number) <= 0:
+            raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
+    if kind == "halfspace" and np.linalg.norm(values["normal"]) == 0:
+        raise SceneError(reader.source, f"{key}.normal", "must not be zero", values["normal"])
+    return Shape(kind, **values)
+
+
+def composed_urdf(reader, value: Mapping[str, Any], scene_path: Path) -> str:
+    """One URDF from several: every link and joint name prefixed, each robot's root link
+    fixed to a common ``world`` link at its pose."""
+    from youbot_dynamics.sim.scene import SceneError
+
+    entries = value.get("compose")
+    if not isinstance(entries, list) or not entries:
+        raise SceneError(reader.source, "robot.compose", "expected a non-empty list of {urdf, prefix, pose}", entries)
+    world = etree.Element("robot", name="composed")
+    etree.SubElement(world, "link", name="world")
+    for i, entry in enumerate(entries):
+        key = f"robot.compose[{i}]"
+        entry = reader.mapping(entry, key, ("urdf", "prefix", "pose"))
+        path = next((base / str(entry.get("urdf"))).resolve() for base in (scene_path.parent, package_share())
+                    if (base / str(entry.get("urdf"))).is_file()) if entry.get("urdf") else None
+        if path is None:
+            raise SceneError(reader.source, f"{key}.urdf", "file not found next to the scene or in the package share",
+                             entry.get("urdf"))
+        prefix = str(entry.get("prefix", ""))
+        pose = pose_matrix(reader, entry.get("pose"), f"{key}.pose")
+        root = etree.parse(str(path)).getroot()
+        children = {j.find("child").get("link") for j in root.findall("joint")}
+        for element in root:
+            if element.tag in ("link", "joint"):
+                element.set("name", prefix + element.get("name"))
+                for role in ("parent", "child"):
+                    link = element.find(role)
+                    if link is not None:
+                        link.set("link", prefix + link.get("link"))
+                world.append(element)
+        base = next(link.get("name") for link in root.findall("link") if link.get("name") not in children)
+        joint = etree.SubElement(world, "joint", name=f"{prefix}world_joint", type="fixed")
+        etree.SubElement(joint, "parent", link="world")
+        etree.SubElement(joint, "child", link=prefix + base)
+        rpy = pin.rpy.matrixToRpy(pose[:3, :3])
+        etree.SubElement(joint, "origin", xyz=" ".join(map(repr, pose[:3, 3])), rpy=" ".join(map(repr, rpy)))
+    return etree.tostring(world, encoding="unicode")
+
+
+def read_free_bodies(reader, value: Any) -> tuple[FreeBodySpec, ...]:
+    """The ``free_bodies`` list."""
+    from youbot_dynamics.sim.scene import SceneError
+
+    if not isinstance(value, list):
+        raise SceneError(reader.source, "free_bodies", "expected a list of bodies", value)
+    specs = []
+    for i, entry in enumerate(value):
+        key = f"free_bodies[{i}]"
+        data = reader.mapping(entry, key, ("name", "shape", "density", "mass", "inertia", "position",
+                                           "orientation", "velocity", "angular_velocity"))
+        name = data.get("name")
+        if not isinstance(name, str) or not name:
+            raise SceneError(reader.source, f"{key}.name", "missing: give the body a name", name)
+        shape = read_shape(reader, data.get("shape"), f"{key}.shape")
+        if shape.kind == "halfspace":
+            raise SceneError(reader.source, f"{key}.shape.type", "a free body needs a finite shape", "halfspace")
+        if "density" in data:
+            if "mass" in data or "inertia" in data:
+                raise SceneError(reader.source, f"{key}.density", "give density, or mass and inertia, not both")
+            body = FreeBody.from_shape(name, shape, reader.positive(data["density"], f"{key}.density"))
+        elif "mass" in data and "inertia" in data:
+            inertia = reader.vector3(data["inertia"], f"{key}.inertia")
+            if np.any(inertia <= 0):
+                raise SceneError(reader.source, f"{key}.inertia", "principal moments must be positive", inertia.tolist())
+            body = FreeBody(name, reader.positive(data["mass"], f"{key}.mass"), np.diag(inertia))
+        else:
+            raise SceneError(reader.source, f"{key}.density", "missing: give density (kg/m^3) or mass and inertia")
+        quaternion = data.get("orientation", [0.0, 0.0, 0.0, 1.0])
+        if not isinstance(quaternion, list) or len(quaternion) != 4:
+            raise SceneError(reader.source, f"{key}.orientation", "expected a quaternion [x, y, z, w]", quaternion)
+        quaternion = np.array([reader.number(x, f"{key}.orientation[{j}]") for j, x in enumerate(quaternion)])
+        if np.linalg.norm(quaternion) == 0:
+            raise SceneError(reader.source, f"{key}.orientation", "must not be zero", quaternion.tolist())
+        specs.append(FreeBodySpec(
+            body, shape, reader.vector3(data.get("position", [0, 0, 0]), f"{key}.position"),
+            quaternion / np.linalg.norm(quaternion),
+            reader.vector3(data.get("velocity", [0, 0, 0]), f"{key}.velocity"),
+            reader.vector3(data.get("angular_velocity", [0, 0, 0]), f"{key}.angular_velocity")))
+    return tuple(specs)
+
+
+def read_geometries(reader, world: Any, attached: Any, robot: Robot,
+                    bodies: Sequence[FreeBodySpec]) -> tuple[Geometry, ...]:
+    """World geometry, link geometry and one geometry per free body (its shape)."""
+    from youbot_dynamics.sim.scene import SceneError
+
+    geometries = [Geometry(spec.body.name, spec.shape, "body", spec.body.name) for spec in bodies]
+    for section, value, owner in (("world", world, "world"), ("geometry", attached, "link")):
+        if not isinstance(value, list):
+            raise SceneError(reader.source, section, "expected a list of {name, shape, pose}", value)
+        for i, entry in enumerate(value):
+            key = f"{section}[{i}]"
+            data = reader.mapping(entry, key, ("name", "shape", "pose") + (("link",) if owner == "link" else ()))
+            name = data.get("name")
+            if not isinstance(name, str) or not name:
+                raise SceneError(reader.source, f"{key}.name", "missing: give the geometry a name", name)
+            owner_name = "world"
+            if owner == "link":
+                owner_name = data.get("link")
+                if owner_name not in robot.link_names:
+                    raise SceneError(reader.source, f"{key}.link", "not a link of the robot", owner_name)
+            geometries.append(Geometry(name, read_shape(reader, data.get("shape"), f"{key}.shape"), owner, owner_name,
+                                       pose_matrix(reader, data.get("pose"), f"{key}.pose")))
+    names = [g.name for g in geometries]
+    for name in names:
+        if names.count(name) > 1:
+            raise SceneError(reader.source, "world", "two geometries (or a geometry and a free body) share a name", name)
+    return tuple(geometries)
+
+
+def read_contacts(reader, value: Any, geometries: Sequence[Geometry]) -> tuple[ContactPairSpec, ...]:
+    """The ``contacts`` list: pairs of geometry names and their laws."""
+    from youbot_dynamics.sim.scene import SceneError
+
+    if not isinstance(value, list):
+        raise SceneError(reader.source, "contacts", "expected a list of {pair: [a, b], law: ..., parameters}", value)
+    by_name = {g.name: g for g in geometries}
+    pairs = []
+    for i, entry in enumerate(value):
+        key = f"contacts[{i}]"
+        data = dict(reader.mapping(entry, key))
+        pair = data.pop("pair", None)
+        if not isinstance(pair, list) or len(pair) != 2 or any(name not in by_name for name in pair):
+            raise SceneError(reader.source, f"{key}.pair", "expected two geometry or free-body names "
+                             f"(known: {', '.join(by_name)})", pair)
+        name = f"{pair[0]}/{pair[1]}"
+        if by_name[pair[0]].owner != "body" and by_name[pair[1]].owner != "body":
+            raise SceneError(reader.source, f"{key}.pair", "one side must be a free body", name)
+        try:
+            law = contact_law_from_spec(data, f"pair {name}")
+        except ContactLawError as error:
+            raise SceneError(reader.source, key, str(error), name) from None
+        pairs.append(ContactPairSpec(name, pair[0], pair[1], law))
+    return tuple(pairs)
