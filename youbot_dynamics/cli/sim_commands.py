@@ -75,7 +75,9 @@ def run_simulate(args: argparse.Namespace) -> int:
         print(json.dumps({"scene": scene.name, "integrator": result.integrator.describe(),
                           "t_end": float(result.t[-1]), "final_state": result.final_state,
                           "energy_error": result.energy_error, "conservative": result.conservative,
-                          "rhs_cost": cost, "stats": result.stats.as_dict()}))
+                          "rhs_cost": cost, "stats": result.stats.as_dict(),
+                          "contact_events": [e.as_dict() for e in result.contact_events],
+                          "max_penetration": result.max_penetration}))
         return 0
     print(f"scene {scene.name}: {result.integrator.describe()}, t = {result.t[-1]:g} s, "
           f"state dimension {cost['state_dim']} (nv {cost['nv']}, friction {cost['friction_laws']}, "
@@ -85,6 +87,10 @@ def run_simulate(args: argparse.Namespace) -> int:
         print(f"  {name:28s} {value: .9g}")
     print("energy error max|E-E0|: " + (f"{result.energy_error:.3e} J" if result.conservative
                                         else "n/a (friction or a controller changes the energy)"))
+    if result.contact_events or result.max_penetration is not None:
+        print(f"contact events: {len(result.contact_events)}, max penetration {result.max_penetration or 0.0:.3e} m")
+        for event in result.contact_events[:20]:
+            print(f"  t={event.time:.6f} s  {event.pair:24s} {event.kind:10s} {event.value:.6g}")
     print("statistics:")
     for name, value in result.stats.as_dict().items():
         shown = "-" if value is None else value if isinstance(value, (str, int)) else f"{value:.4g}"

@@ -209,9 +209,10 @@ class Simulator:
         and the controller's extra rigid-body pass (RNEA or gravity: O(nv))."""
         laws = () if self.friction is None else sorted(set(self.friction.laws))
         return {"state_dim": self.layout.size, "nv": self.robot.model.nv,
-                "bodies": self.robot.model.nbodies, "lugre_states": self.layout.size - 2 * self.robot.nv,
+                "bodies": self.robot.model.nbodies, "lugre_states": self._z.stop - self._z.start,
                 "friction_laws": ",".join(laws) or "none", "controller": self.controller.kind,
-                "rigid_body_passes": 1 + (self.controller.kind != "none")}
+                "rigid_body_passes": 1 + (self.controller.kind != "none"),
+                "free_bodies": len(self.scene.free_bodies), "contact_pairs": len(self.scene.contacts)}
 
     def energy_of(self, x: np.ndarray) -> float:
         """Kinetic plus potential energy (J) of state x."""
