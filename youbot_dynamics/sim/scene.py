@@ -188,6 +188,8 @@ class Scene:
     def joint_friction(self, robot: Robot) -> JointFriction | None:
         """The friction of the reduced Robot's joints, or None for a scene without any
         (``default: none`` and no joint listed): then the simulator computes none."""
+        if not robot.nv:
+            return None
         spec = dict(self.friction)
         if self.friction_default == "none":
             if not spec:
