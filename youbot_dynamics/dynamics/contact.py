@@ -128,11 +128,12 @@ class HuntCrossley:
 @dataclass(frozen=True)
 class NewtonImpact:
     """Impulsive law: restitution e and Coulomb friction mu of the impact impulse; contacts
-    slower than ``rest_speed`` (m/s) at impact are a resting contact the law cannot carry."""
+    slower than ``rest_speed`` (m/s) at impact are a resting contact the law cannot carry
+    (an error: the run would chatter towards a Zeno point)."""
 
     restitution: float
     friction: float
-    rest_speed: float = 1e-3
+    rest_speed: float = 0.05
 
     law = "newton"
 

@@ -39,10 +39,11 @@ BROAD_PHASE_MARGIN = 1e-3
 
 @dataclass
 class ContactEvent:
-    """A contact event: time (s), pair, kind (``impact``: value = normal impulse, N s;
-    ``touch``: value = approach speed, m/s; ``separation``: value = peak normal force of the
-    episode over the right-hand-side evaluations, N; ``contact``: the constraint stepper's
-    first step of a contact, value = normal impulse, N s)."""
+    """A contact event: time (s), pair, kind and value: ``impact`` (impulsive law): the
+    normal impulse, N s; ``touch`` (compliant law): the approach speed, m/s;
+    ``compression`` (compliant, maximum compression): the normal force there, N;
+    ``separation`` (compliant): the separation speed, m/s; ``contact`` (constraint
+    stepper, first step of a contact): the normal impulse, N s."""
 
     time: float
     pair: str
@@ -76,7 +77,7 @@ class ContactSystem:
         self.compliant = [k for k, p in enumerate(self.pairs) if isinstance(p.law, HuntCrossley)]
         self.impulsive = [k for k, p in enumerate(self.pairs) if isinstance(p.law, NewtonImpact)]
         self.frames = {g.owner_name: robot.frame_id(g.owner_name) for g in self.geometries if g.owner == "link"}
-        self.peak = np.zeros(len(self.pairs))
+        self.awaiting = np.zeros(len(self.pairs), dtype=bool)
         self.deepest = 0.0
         self.events: list[ContactEvent] = []
         self.nb = len(self.bodies)
@@ -160,9 +161,7 @@ class ContactSystem:
                 continue
             law: HuntCrossley = self.pairs[k].law
             points = [c for c in self._contacts(k, poses, 0.0) if c.depth > 0.0]
-            self.deepest = max([self.deepest] + [c.depth for c in points])
             chi = hysteresis_factor(law.restitution, speeds[j], law.damping_model)
-            total = 0.0
             for c in points:
                 a, b = self.sides[k]
                 middle = 0.5 * (c.point1 + c.point2)
@@ -173,8 +172,6 @@ class ContactSystem:
                 fn = hunt_crossley_force(c.depth, -un, law.stiffness, law.exponent, chi) / len(points)
                 force = fn * c.normal + regularised_coulomb(u - un * c.normal, fn, law.friction, law.velocity_scale)
                 generalised += relative.T @ force
-                total += fn
-            self.peak[k] = max(self.peak[k], total)
         wrenches = generalised[self.robot.nv:].reshape(self.nb, 6)
         return generalised[:self.robot.nv], wrenches
 
@@ -207,8 +204,10 @@ class ContactSystem:
 
     # ---- guards and resets -----------------------------------------------------------------
     def transitions(self, q_slice: slice, v_slice: slice, mass_matrix) -> tuple[Transition, ...]:
-        """Touch/separation guards of compliant pairs, impact guards of impulsive pairs and
-        the re-centring guards of the bodies."""
+        """Touch, maximum-compression and separation guards of compliant pairs, impact
+        guards of impulsive pairs and the re-centring guards of the bodies. The compression
+        guard (normal relative velocity rising through 0) is armed by a touch and disarmed
+        when it fires (it reads -1 then), so a resting contact raises no events."""
         out = []
 
         def gap(k: int):
@@ -222,7 +221,9 @@ class ContactSystem:
 
         for j, k in enumerate(self.compliant):
             out.append(Transition(f"touch:{self.pairs[k].name}", gap(k), self._touch(j, k, q_slice, v_slice), -1))
-            out.append(Transition(f"separation:{self.pairs[k].name}", gap(k), self._separation(k), +1))
+            out.append(Transition(f"compression:{self.pairs[k].name}", self._armed_normal_speed(k, q_slice, v_slice),
+                                  self._compression(j, k, q_slice), +1))
+            out.append(Transition(f"separation:{self.pairs[k].name}", gap(k), self._separation(k, q_slice, v_slice), +1))
         for k in self.impulsive:
             out.append(Transition(f"impact:{self.pairs[k].name}", gap(k), self._impact(k, q_slice, v_slice, mass_matrix), -1))
         for k in range(self.nb):
@@ -246,13 +247,36 @@ class ContactSystem:
             x = x.copy()
             x[self.slices["s"].start + j] = speed
             self.events.append(ContactEvent(t, self.pairs[k].name, "touch", speed))
-            self.peak[k] = 0.0
+            self.awaiting[k] = True
             return "contact", x
         return reset
 
-    def _separation(self, k: int):
+    def _armed_normal_speed(self, k: int, q_slice: slice, v_slice: slice):
+        def function(t: float, x: np.ndarray) -> float:
+            if not self.awaiting[k]:
+                return -1.0
+            c, _, u = self._approach(k, x, x[q_slice], x[v_slice])
+            return float(u @ c.normal)
+        return function
+
+    def _compression(self, j: int, k: int, q_slice: slice):
+        law: HuntCrossley = self.pairs[k].law
+
         def reset(t: float, x: np.ndarray):
-            self.events.append(ContactEvent(t, self.pairs[k].name, "separation", float(self.peak[k])))
+            positions, rotations, _, _, _ = self._bodies(x)
+            depth = max(c.depth for c in self._contacts(k, self._poses(x[q_slice], positions, rotations), np.inf))
+            self.deepest = max(self.deepest, depth)
+            force = hunt_crossley_force(depth, 0.0, law.stiffness, law.exponent, 0.0)
+            self.events.append(ContactEvent(t, self.pairs[k].name, "compression", force))
+            self.awaiting[k] = False
+            return "contact", x
+        return reset
+
+    def _separation(self, k: int, q_slice: slice, v_slice: slice):
+        def reset(t: float, x: np.ndarray):
+            c, _, u = self._approach(k, x, x[q_slice], x[v_slice])
+            self.events.append(ContactEvent(t, self.pairs[k].name, "separation", float(u @ c.normal)))
+            self.awaiting[k] = False
             return "contact", x
         return reset
 
@@ -280,6 +304,14 @@ class ContactSystem:
             self.events.append(ContactEvent(t, self.pairs[k].name, "impact", float(impulse @ c.normal)))
             return "contact", x
         return reset
+
+    def shortest_flight(self, gravity: float) -> float:
+        """Duration (s) of the shortest ballistic hop an impulsive pair accepts,
+        2 e v_rest / g (e at least 0.05): the step-size cap of adaptive integrators, so that a
+        step never spans a whole hop (its impact would go unseen)."""
+        hops = [2.0 * max(self.pairs[k].law.restitution, 0.05) * self.pairs[k].law.rest_speed / max(gravity, 1e-9)
+                for k in self.impulsive]
+        return min(hops)
 
     def _inverse_mass(self, x: np.ndarray, q: np.ndarray, mass_matrix) -> np.ndarray:
         nv = self.robot.nv

@@ -86,8 +86,8 @@ class SimulationResult:
     recorded extras (``tau`` (k, nv), ``energy`` (k,), ``ee_position`` (k, 3)); ``stats``
     the integrator's statistics. ``energy_error`` (J) is max |E(t) - E(0)| in a conservative
     scene, None otherwise (friction or a controller change the energy). A contact scene adds
-    its ``contact_events`` and ``max_penetration`` (m: the deepest overlap the compliant
-    law saw over the right-hand-side evaluations, or the stepper over its steps)."""
+    its ``contact_events`` and ``max_penetration`` (m: the deepest overlap at the located
+    maximum compressions of the compliant law, or over the constraint stepper's steps)."""
 
     scene: str
     integrator: IntegratorSpec
@@ -261,6 +261,8 @@ class Simulator:
                    "bounds": self.bounds, "monitor": monitor}
         if spec.dt is not None:
             options.update(dt=spec.dt, n_positions=self.robot.nv or None)
+        elif spec.method != "ida" and self.contact.impulsive:
+            options["max_step"] = self.contact.shortest_flight(float(np.linalg.norm(self.scene.gravity)))
         hybrid = simulate_hybrid([mode], "contact", x0, t_eval, spec.method, **options)
         keep = [int(np.flatnonzero(hybrid.t == t)[-1]) for t in t_eval]
         return Solution(hybrid.t[keep], hybrid.x[keep], hybrid.stats, hybrid.state_names)
@@ -364,6 +366,7 @@ class Simulator:
         if self.contact:
             self.contact.events.clear()
             self.contact.deepest = 0.0
+            self.contact.awaiting[:] = False
         solution = self.solve(x0, times)
         series = self._series(solution, set(self.scene.outputs.record) | ({"energy"} if self.conservative else set()))
         energy_error = float(np.max(np.abs(series["energy"] - series["energy"][0]))) if self.conservative else None
