@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from youbot_dynamics.dynamics.constraints import (HolonomicSystem,
+from youbot_dynamics.dynamics.constraints import (DAE_FORMULATIONS, HolonomicSystem,
                                                   accelerations_and_multipliers,
                                                   consistent_initial_values, dae_form,
                                                   project_positions, project_velocities)
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.systems.squeezer import simulate_holonomic
+from youbot_dynamics.sim.constrained import simulate_holonomic
 
 GRAVITY, LENGTH = 9.81, 0.7
 PENDULUM = HolonomicSystem(
@@ -22,6 +22,12 @@ PENDULUM = HolonomicSystem(
     constraint=lambda q: np.array([q @ q - LENGTH**2]),
     jacobian=lambda q: 2.0 * q[None, :],
     curvature=lambda q, v: np.array([2.0 * v @ v]))
+#: The same pendulum with the second derivatives, so that its DAE forms carry the exact
+#: Jacobian (M and f constant; d^2 g/dq^2 = 2 I).
+PENDULUM_EXACT = HolonomicSystem(
+    **{**PENDULUM.__dict__, "mass_derivative": lambda q, w: np.zeros((2, 2)),
+       "force_derivatives": lambda q, v: (np.zeros((2, 2)), np.zeros((2, 2))),
+       "constraint_hessian": lambda q: 2.0 * np.eye(2)[None]})
 THETA0 = 1.2      # from the downward vertical, rad
 Q0 = LENGTH * np.array([np.sin(THETA0), -np.cos(THETA0)])
 V0 = np.zeros(2)
@@ -44,12 +50,33 @@ def test_multiplier_is_the_closed_form():
     assert PENDULUM.jacobian(q) @ w + PENDULUM.curvature(q, v) == pytest.approx(0, abs=1e-12)
 
 
-@pytest.mark.parametrize("formulation,integrator,tolerance", [
-    ("index1", "dop853", 1e-7), ("index1-baumgarte", "dop853", 1e-7),
-    ("index1-projection", "dop853", 1e-7), ("index2", "ida", 1e-4), ("ggl", "ida", 1e-4)])
-def test_formulations_follow_the_angle_ode(formulation, integrator, tolerance):
+def central_difference_jacobian(form, y, yp, cj, h=1e-6):
+    """dF/dy + cj dF/dy' by central differences along (e_k, cj e_k)."""
+    columns = [(form.residual(0.0, y + h * e, yp + cj * h * e)
+                - form.residual(0.0, y - h * e, yp - cj * h * e)) / (2 * h)
+               for e in np.eye(y.size)]
+    return np.array(columns).T
+
+
+@pytest.mark.parametrize("formulation", DAE_FORMULATIONS)
+def test_exact_dae_jacobian_matches_finite_differences(formulation):
+    assert dae_form(PENDULUM, formulation, Q0, V0, V0, np.zeros(1)).residual_jacobian is None
+    form = dae_form(PENDULUM_EXACT, formulation, Q0, V0, V0, np.zeros(1))
+    rng = np.random.default_rng(3)
+    y, yp = rng.standard_normal((2, form.y0.size))
+    cj = 37.0
+    assert form.residual_jacobian(0.0, y, yp, cj) == pytest.approx(
+        central_difference_jacobian(form, y, yp, cj), abs=1e-8)
+
+
+@pytest.mark.parametrize("formulation,integrator,tolerance,system", [
+    ("index1", "dop853", 1e-7, PENDULUM), ("index1-baumgarte", "dop853", 1e-7, PENDULUM),
+    ("index1-projection", "dop853", 1e-7, PENDULUM), ("index2", "ida", 1e-4, PENDULUM),
+    ("ggl", "ida", 1e-4, PENDULUM), ("index2", "ida", 1e-4, PENDULUM_EXACT),
+    ("ggl", "ida", 1e-4, PENDULUM_EXACT)])
+def test_formulations_follow_the_angle_ode(formulation, integrator, tolerance, system):
     times = np.linspace(0.0, T_END, 21)
-    run = simulate_holonomic(PENDULUM, formulation, integrator, Q0, V0, times,
+    run = simulate_holonomic(system, formulation, integrator, Q0, V0, times,
                              rtol=1e-10 if integrator != "ida" else 1e-8, atol=1e-12,
                              baumgarte_rate=20.0)
     assert np.max(np.abs(run.q - exact_positions(times))) < tolerance * LENGTH
@@ -90,3 +117,5 @@ def test_bad_requests_are_user_errors():
         simulate_holonomic(PENDULUM, "index2", "rk45", Q0, V0, [0, 1])
     with pytest.raises(UserInputError, match="not a DAE formulation"):
         dae_form(PENDULUM, "index1", Q0, V0, V0, np.zeros(1))
+    with pytest.raises(UserInputError, match="exact DAE Jacobian needs"):
+        simulate_holonomic(PENDULUM, "index2", "ida", Q0, V0, [0, 1], exact_jacobian=True)

@@ -31,7 +31,7 @@ Newton convergence test as well, so their values are only as good as the converg
 make them (the tests measure q against the reference and lambda against index 1).
 
 This module holds the formulas only (nothing here integrates); the driver that runs them
-with youbot_dynamics.sim.integrators is systems.squeezer.simulate_holonomic.
+with youbot_dynamics.sim.integrators is sim.constrained.simulate_holonomic.
 """
 from __future__ import annotations
 
@@ -57,6 +57,11 @@ class HolonomicSystem:
     mass(q) -> M (n, n); forces(q, v) -> f (n,) (applied plus Coriolis/centrifugal forces,
     time-invariant); constraint(q) -> g (m,); jacobian(q) -> G = dg/dq (m, n);
     curvature(q, v) -> g_qq(v, v) = (dG/dt) v (m,), so that d^2 g/dt^2 = G v' + g_qq(v, v).
+
+    Optional second derivatives, for the exact Jacobian of the DAE forms (IDA builds one
+    by finite differences without them): mass_derivative(q, w) -> d(M(q) w)/dq (n, n);
+    force_derivatives(q, v) -> (df/dq, df/dv), each (n, n); constraint_hessian(q) ->
+    d^2 g_i / dq_j dq_k (m, n, n).
     """
 
     name: str
@@ -67,10 +72,19 @@ class HolonomicSystem:
     constraint: Callable[[Vector], Vector]
     jacobian: Callable[[Vector], np.ndarray]
     curvature: Callable[[Vector, Vector], Vector]
+    mass_derivative: Callable[[Vector, Vector], np.ndarray] | None = None
+    force_derivatives: Callable[[Vector, Vector], tuple[np.ndarray, np.ndarray]] | None = None
+    constraint_hessian: Callable[[Vector], np.ndarray] | None = None
 
     @property
     def n_positions(self) -> int:
         return len(self.position_names)
+
+    @property
+    def has_second_derivatives(self) -> bool:
+        """Whether the exact DAE Jacobian can be formed (all three derivatives given)."""
+        return None not in (self.mass_derivative, self.force_derivatives,
+                            self.constraint_hessian)
 
 
 def saddle_point_solve(mass: np.ndarray, jacobian: np.ndarray, top: Vector,
@@ -116,12 +130,14 @@ def index1_rhs(system: HolonomicSystem, alpha: float = 0.0, beta: float = 0.0
 
 @dataclass(frozen=True)
 class DaeForm:
-    """A DAE formulation for IDA: residual(t, y, y'), consistent (y0, y0'), which
-    components are algebraic and which are left out of the error test, their names, and
-    the slices of q, v, lambda in y."""
+    """A DAE formulation for IDA: residual(t, y, y'), its exact iteration matrix
+    residual_jacobian(t, y, y', cj) = dF/dy + cj dF/dy' (None when the system lacks the
+    second derivatives), consistent (y0, y0'), which components are algebraic and which
+    are left out of the error test, their names, and the slices of q, v, lambda in y."""
 
     name: str
     residual: Callable[[float, Vector, Vector], Vector]
+    residual_jacobian: Callable[[float, Vector, Vector, float], np.ndarray] | None
     y0: Vector
     yp0: Vector
     algebraic: np.ndarray
@@ -147,6 +163,7 @@ def dae_form(system: HolonomicSystem, formulation: str, q0: Vector, v0: Vector,
     y = (q, v, w, lambda[, mu]); residual blocks q' - v [+ G^T mu], v' - w,
     M w - f + G^T lambda, then g (index 3), G v (index 2) or both (GGL). w, lambda and mu
     are algebraic and, with v for index 3, marked for exclusion from the error test.
+    The exact Jacobian is :func:`dae_jacobian` when the system has second derivatives.
     """
     n, m = system.n_positions, system.n_constraints
     ggl = formulation == "ggl"
@@ -181,7 +198,55 @@ def dae_form(system: HolonomicSystem, formulation: str, q0: Vector, v0: Vector,
              + tuple(f"lambda{i + 1}" for i in range(m))
              + (tuple(f"mu{i + 1}" for i in range(m)) if ggl else ()))
     excluded = algebraic | ((np.arange(size) >= n) if formulation == "index3" else False)
-    return DaeForm(formulation, residual, y0, yp0, algebraic, excluded, names, n, m)
+    jacobian = (dae_jacobian(system, formulation) if system.has_second_derivatives
+                else None)
+    return DaeForm(formulation, residual, jacobian, y0, yp0, algebraic, excluded, names,
+                   n, m)
+
+
+def dae_jacobian(system: HolonomicSystem, formulation: str
+                 ) -> Callable[[float, Vector, Vector, float], np.ndarray]:
+    """dF/dy + cj dF/dy' of :func:`dae_form`'s residual, from the system's second
+    derivatives. With H = d^2 g/dq^2: d(G^T lambda)/dq = lambda . H, d(G v)/dq = H . v;
+    the kinematic and v' - w rows give cj I on their own derivatives, -I on v and w."""
+    n, m = system.n_positions, system.n_constraints
+    ggl = formulation == "ggl"
+    position_rows = formulation in ("index3", "ggl")
+    velocity_rows = formulation in ("index2", "ggl")
+    size = 3 * n + m * (2 if ggl else 1)
+    identity = np.eye(n)
+    qs, vs, ws = (slice(k * n, (k + 1) * n) for k in range(3))
+    ls = slice(3 * n, 3 * n + m)
+
+    def jacobian(t: float, y: Vector, yp: Vector, cj: float) -> np.ndarray:
+        q, v, w, lam = y[qs], y[vs], y[ws], y[ls]
+        constraint_jacobian = system.jacobian(q)
+        hessian = system.constraint_hessian(q)
+        force_q, force_v = system.force_derivatives(q, v)
+        matrix = np.zeros((size, size))
+        matrix[qs, qs] = cj * identity
+        matrix[qs, vs] = -identity
+        if ggl:
+            mu = y[3 * n + m:]
+            matrix[qs, qs] += np.einsum("i,ijk->jk", mu, hessian)
+            matrix[qs, 3 * n + m:] = constraint_jacobian.T
+        matrix[vs, vs] = cj * identity
+        matrix[vs, ws] = -identity
+        matrix[ws, qs] = (system.mass_derivative(q, w) - force_q
+                          + np.einsum("i,ijk->jk", lam, hessian))
+        matrix[ws, vs] = -force_v
+        matrix[ws, ws] = system.mass(q)
+        matrix[ws, ls] = constraint_jacobian.T
+        row = 3 * n
+        if position_rows:
+            matrix[row:row + m, qs] = constraint_jacobian
+            row += m
+        if velocity_rows:
+            matrix[row:row + m, qs] = np.einsum("ijk,j->ik", hessian, v)
+            matrix[row:row + m, vs] = constraint_jacobian
+        return matrix
+
+    return jacobian
 
 
 #: Absolute tolerance standing in for "excluded from the error test" (see module notes).

@@ -13,7 +13,7 @@ silent: see :class:`DivergenceError`.
 from __future__ import annotations
 
 import time
-from typing import Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -115,15 +115,18 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
                   exclude_from_error_test: Sequence[bool] | None = None,
                   events: Sequence[Event] = (), state_names: Sequence[str] | None = None,
                   jac: Callable | None = None, bounds: np.ndarray | None = None,
-                  monitor: Callable[[float, np.ndarray], str | None] | None = None
-                  ) -> Solution:
+                  monitor: Callable[[float, np.ndarray], str | None] | None = None,
+                  ida_options: Mapping[str, Any] | None = None) -> Solution:
     """Solve the DAE residual(t, y, y') = 0 with SUNDIALS IDA (integrator ``ida``).
 
     ``algebraic[i]`` marks y_i as algebraic (no y_i' in the equations). y0, yp0 must be
     consistent. ``exclude_from_error_test`` (IDASetSuppressAlg, for index-3 forms) is not
     available through scikit-sundae 1.2: any True entry raises NotImplementedError (see
     sim/sundials.py); all-False or None is accepted. ``jac(t, y, yp, cj)``
-    returns dF/dy + cj dF/dy'. Events see (t, y). Solution.xp holds y' at the outputs.
+    returns dF/dy + cj dF/dy' (IDA builds it by finite differences without it).
+    ``ida_options``: further sksundae.ida.IDA options passed as they are (first_step,
+    max_step, max_order, max_nonlin_iters, max_conv_fails, ...; times in s). Events see
+    (t, y). Solution.xp holds y' at the outputs.
     """
     start = time.perf_counter()
     times = checked_times(t_eval)
@@ -143,7 +146,8 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
     checked_positive("rtol", rtol)
     checked_positive("atol", atol)
     check = StateCheck("ida", names, bounds, monitor)
-    stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0], rtol, atol, jac)
+    stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0], rtol, atol, jac,
+                         dict(ida_options or {}))
     solution = drive(stepper, "ida", times, events, check, names,
                      derivative_at=stepper.derivative_at)
     solution.stats.wall_time = time.perf_counter() - start

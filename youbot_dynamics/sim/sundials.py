@@ -91,10 +91,13 @@ class CvodeStepper(SundialsStepper):
 
 
 class IdaStepper(SundialsStepper):
-    """IDA on residual(t, y, y') = 0; ``jac(t, y, yp, cj)`` = dF/dy + cj dF/dy' if given."""
+    """IDA on residual(t, y, y') = 0; ``jac(t, y, yp, cj)`` = dF/dy + cj dF/dy' if given;
+    ``extra`` holds further sksundae.ida.IDA options (e.g. first_step, max_step in s,
+    max_order, max_nonlin_iters), which take precedence over the defaults here."""
 
     def __init__(self, residual: Callable, t0: float, y0: np.ndarray, yp0: np.ndarray,
-                 t_end: float, algebraic: np.ndarray, rtol: float, atol, jac) -> None:
+                 t_end: float, algebraic: np.ndarray, rtol: float, atol, jac,
+                 extra: dict | None = None) -> None:
         def resfn(t, y, yp, res):
             res[:] = residual(t, y, yp)
 
@@ -104,6 +107,7 @@ class IdaStepper(SundialsStepper):
             def jacfn(t, y, yp, res, cj, jj):
                 jj[:, :] = jac(t, y, yp, cj)
             options["jacfn"] = jacfn
+        options.update(extra or {})
         solver = IDA(resfn, **options)
         super().__init__("ida", solver, t0, t_end, solver.init_step(t0, y0, yp0))
 
