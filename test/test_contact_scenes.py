@@ -188,3 +188,26 @@ def test_simulate_json_reports_contact_events(capsys):
     assert first["time"] == pytest.approx(np.sqrt(2 / G), rel=1e-6)
     assert first["value"] == pytest.approx(np.sqrt(2 * G), rel=1e-6)
     assert report["final_state"]["p[ball.z]"] > 0.025 and report["max_penetration"] > 0
+
+
+def test_grasp_at_the_friction_cone_limit_creeps_or_slips_as_coulomb_predicts(capsys):
+    assert main(["contact-extremes", "--table", "grasp", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["grasp"]
+    v_s = 1e-3
+    for row, s in zip(rows, (0.9, 0.99, 1.01, 1.1)):
+        assert row["status"] == "ok"
+        if s < 1:   # held: creeps at the regularised law's v_s s / sqrt(1 - s^2)
+            assert row["held"] and row["sink_speed_m_s"] == pytest.approx(v_s * s / np.sqrt(1 - s * s), rel=0.01)
+        else:       # slips: m a = m g - 2 mu N
+            assert not row["held"]
+    assert rows[-1]["measured_accel_m_s2"] == pytest.approx(G * (1 - 1 / 1.1), rel=0.01)
+
+
+def test_light_body_on_heavy_one_stays_put_with_the_constraint_stepper():
+    from youbot_dynamics.analysis.contact_extremes import light_on_heavy
+    for row in light_on_heavy():
+        assert row["status"] == "ok"
+        if row["integrator"].startswith("constraint"):
+            assert row["light_drift_m"] < 1e-6 and row["max_penetration_m"] < 1e-6
+        else:   # compliant: settles by the static deflection (98 N on k = 1e6: (98 / 1e6)^(2/3) = 2.1 mm)
+            assert row["heavy_drift_m"] == pytest.approx((10 * G / 1e6) ** (2 / 3), rel=0.05)

@@ -19,6 +19,7 @@ COMMAND_MODULES = (
     "youbot_dynamics.cli.mechanism_commands",
     "youbot_dynamics.cli.pendulum_commands",
     "youbot_dynamics.cli.sim_commands",
+    "youbot_dynamics.cli.contact_commands",
     "youbot_dynamics.cli.ros_commands",
 )
 

@@ -11,8 +11,9 @@ level, Moreau-Jean style):
    the normal from geometry 1 to geometry 2, with the pair's Coulomb coefficient;
 3. the Delassus matrix G = J M^-1 J^T and the drift g = J v_f + b, where the normal part of
    b lets a gap phi > 0 close within the step (phi / h: no tunnelling), pushes an overlap
-   out at the rate ``baumgarte`` (-phi) / h and, for a point approaching faster than
-   ``restitution_threshold``, asks for the rebound e (-v_n) (Newton's law);
+   out at the rate ``baumgarte`` (-phi) / h; a point approaching faster than
+   ``restitution_threshold`` that would close its gap within the step asks instead for
+   the rebound v_n+ >= e (-v_n) (Newton's law; the bounce happens up to one step early);
 4. impulses lambda from ``pin.PGSConstraintSolver`` or ``pin.ADMMConstraintSolver`` (the
    friction cone as given), v+ = v_f + M^-1 J^T lambda, q+ = integrate(q, h v+).
 """
@@ -110,7 +111,7 @@ class ConstraintStepper:
         v_free = v + h * pin.aba(model, data, q, v, tau)
         poses = self.poses(q)
         constraints = pin.StdVec_ConstraintModel()
-        rows: list[tuple[int, float, str]] = []
+        rows: list[tuple[int, float, str, float]] = []
         for k in self.broad.close_pairs(poses):
             name, a, b, law = self.pairs[k]
             for c in self.narrow[k].contact_points(poses[a], poses[b], settings.margin):
@@ -140,9 +141,10 @@ class ConstraintStepper:
         before = jacobian @ v
         for i, gap, _, restitution in rows:
             n = 3 * i + 2
-            drift[n] += gap / h if gap > 0 else settings.baumgarte * gap / h
             if before[n] < -settings.restitution_threshold and gap + h * before[n] < 0:
                 drift[n] += restitution * before[n]
+            else:
+                drift[n] += gap / h if gap > 0 else settings.baumgarte * gap / h
         impulses = self._solve(delassus, drift, constraints, datas, report)
         v_next = v_free + inverse_mass @ jacobian.T @ impulses
         for i, _, name, _ in rows:

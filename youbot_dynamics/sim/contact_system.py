@@ -37,6 +37,17 @@ MIN_APPROACH_SPEED = 1e-2
 BROAD_PHASE_MARGIN = 1e-3
 
 
+#: Guard values below this magnitude (m, m/s) read 0: a pair resting exactly at contact
+#: would otherwise flicker across 0 at round-off level between a step's end and the
+#: interpolated state there, and the root finder would see no sign change.
+GUARD_RESOLUTION = 1e-12
+
+
+def snapped(value: float) -> float:
+    """``value``, or 0 when its magnitude is below GUARD_RESOLUTION."""
+    return 0.0 if abs(value) < GUARD_RESOLUTION else value
+
+
 @dataclass
 class ContactEvent:
     """A contact event: time (s), pair, kind and value: ``impact`` (impulsive law): the
@@ -216,7 +227,7 @@ class ContactSystem:
             def function(t: float, x: np.ndarray) -> float:
                 positions, rotations, _, _, _ = self._bodies(x)
                 poses = self._poses(x[q_slice], positions, rotations)
-                return self.narrow[k].signed_distance(poses[a], poses[b])
+                return snapped(self.narrow[k].signed_distance(poses[a], poses[b]))
             return function
 
         for j, k in enumerate(self.compliant):
@@ -256,7 +267,7 @@ class ContactSystem:
             if not self.awaiting[k]:
                 return -1.0
             c, _, u = self._approach(k, x, x[q_slice], x[v_slice])
-            return float(u @ c.normal)
+            return snapped(float(u @ c.normal))
         return function
 
     def _compression(self, j: int, k: int, q_slice: slice):
