@@ -44,11 +44,12 @@ def wait_matched(node: DynamicsNode, topic: str = "/joint_states") -> None:
 
 def test_simulate_mode_publishes_the_simulated_motion() -> None:
     """Every /joint_states sample equals the simulator's, /ee_pose the screw FK of its q,
-    /clock the sample times; the node stops after `duration` with a last /diagnostics."""
+    /clock the sample times; the node stops after `duration` with a last /diagnostics, where
+    a counter the integrator does not report (CVODE's rejected steps) reads n/a."""
     with ros_context(0) as (context, _):
-        node = make_node(context, scene="arm_ptp", publish_rate=100.0, duration=0.5, time_scale=0.0)
+        node = make_node(context, scene="arm_ptp", publish_rate=100.0, duration=0.5, time_scale=0.0,
+                         wait_for_subscribers=1)
         collector = Collector(context, OUTPUTS)
-        wait_matched(node)
         with spinning(context, node, collector):
             wait_until(lambda: node.finished, what="the node to finish")
             wait_until(lambda: collector.count("/joint_states") == 51 and collector.count("/diagnostics") > 0,
@@ -74,6 +75,28 @@ def test_simulate_mode_publishes_the_simulated_motion() -> None:
     assert float(diagnostics["sim_time"]) == pytest.approx(0.5)
     assert int(diagnostics["integrator.steps"]) > 0 and diagnostics["integrator.integrator"] == "cvode_bdf"
     assert math.isfinite(float(diagnostics["real_time_factor"])) and float(diagnostics["energy"]) > 0
+    assert diagnostics["integrator.rejected_steps"] == "n/a" and "None" not in diagnostics.values()
+
+
+def test_simulated_time_waits_for_the_subscribers() -> None:
+    """With wait_for_subscribers 2 the node holds simulated time at 0 while one subscriber
+    listens, and starts once a second one comes: both get every sample from t = 0."""
+    with ros_context(8) as (context, _):
+        node = make_node(context, scene="arm_swing", publish_rate=100.0, duration=0.2, time_scale=0.0,
+                         wait_for_subscribers=2, wait_timeout=WAIT, diagnostics_period=0.05)
+        first = Collector(context, {"/joint_states": OUTPUTS["/joint_states"], "/diagnostics": OUTPUTS["/diagnostics"]})
+        with spinning(context, node, first) as executor:
+            wait_until(lambda: first.count("/diagnostics") >= 3, what="/diagnostics while waiting")
+            assert first.count("/joint_states") == 0 and node.session.t == 0.0
+            assert all(diagnostic_values(m)["sim_time"] == "0.0" for m in first.messages("/diagnostics"))
+            second = Collector(context, {"/joint_states": OUTPUTS["/joint_states"]}, name="second")
+            executor.add_node(second)
+            wait_until(lambda: node.finished, what="the node to finish")
+            wait_until(lambda: first.count("/joint_states") == second.count("/joint_states") == 21,
+                       what="21 samples on both subscribers")
+        stamps = [[stamp_ns(m) for m in c.messages("/joint_states")] for c in (first, second)]
+        second.destroy_node()
+    assert stamps[0] == stamps[1] == [10_000_000 * k for k in range(21)]
 
 
 def _command(names, efforts, stamp_ns_: int = 0) -> JointState:
@@ -180,8 +203,8 @@ def test_parameter_ranges_and_choices_are_enforced() -> None:
             assert [r.successful for r in results] == [False, False, False, True]
             assert node.session.commands.on_timeout == "zero_torque"
             assert node.get_parameter("command_timeout").value == 0.5
-            descriptor = node.describe_parameter("publish_rate")
-            assert descriptor.floating_point_range[0].to_value == 2000.0
+            assert node.describe_parameter("publish_rate").floating_point_range[0].to_value == 2000.0
+            assert node.describe_parameter("wait_for_subscribers").integer_range[0].to_value == 100
         finally:
             node.close()
             node.destroy_node()
@@ -194,14 +217,15 @@ def test_parameter_ranges_and_choices_are_enforced() -> None:
 @pytest.mark.parametrize(("signum", "offset"), [(signal.SIGINT, 5), (signal.SIGTERM, 6)])
 def test_signal_finalises_the_logs(tmp_path: Path, signum: int, offset: int) -> None:
     """A node process killed by SIGINT / SIGTERM leaves an MCAP that rosbags and mcap_ros2
-    read to the end, and a Rerun file with its samples; a subscriber here (another process)
-    received its /joint_states."""
+    read to the end, and a Rerun file with its samples; a subscriber here (another process),
+    waited for by the node, received its /joint_states from t = 0 on."""
     mcap, rrd = tmp_path / "run.mcap", tmp_path / "run.rrd"
     with ros_context(offset) as (context, domain):
         collector = Collector(context, {"/joint_states": OUTPUTS["/joint_states"]})
         process = subprocess.Popen(
             [sys.executable, "-m", "youbot_dynamics.ros.dynamics_node", "--ros-args", "-p", "scene:=arm_swing",
-             "-p", "publish_rate:=100.0", "-p", f"mcap_path:={mcap}", "-p", f"rrd_path:={rrd}"],
+             "-p", "publish_rate:=100.0", "-p", f"mcap_path:={mcap}", "-p", f"rrd_path:={rrd}",
+             "-p", "wait_for_subscribers:=1"],
             cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain)}, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
             text=True)
         try:
@@ -215,6 +239,7 @@ def test_signal_finalises_the_logs(tmp_path: Path, signum: int, offset: int) -> 
                 process.kill()
         received = collector.messages("/joint_states")
     assert process.returncode == 0, process.stderr.read()
+    assert [stamp_ns(m) for m in received] == [10_000_000 * k for k in range(len(received))]
     topics = {t.topic: t for t in bag_topics(mcap)}
     assert set(topics) == {"/clock", "/joint_states", "/ee_pose", "/diagnostics", "/tf", "/tf_static"}
     assert topics["/tf_static"].latched and topics["/tf_static"].message_count == 1

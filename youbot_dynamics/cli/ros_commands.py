@@ -6,7 +6,8 @@
 - ``main-job [--scene NAME] [--duration S] [--out DIR] [--rate HZ]``: the dynamics node in
   simulate mode on the scene for S simulated seconds, publishing on ROS 2 topics and writing
   DIR/<scene>.mcap and DIR/<scene>.rrd; prints the real-time factor, the integrator
-  statistics, the energy error and the file paths.
+  statistics (n/a for a counter the integrator does not report), the energy error and the
+  file paths.
 
 rclpy is imported when a command runs, so the rest of the command line works without ROS.
 """
@@ -65,6 +66,14 @@ def run_replay(args: argparse.Namespace) -> int:
     return 0
 
 
+def _figure(value: float | int | None, spec: str = "") -> str:
+    """``value`` formatted with ``spec``, or n/a when it is not known (None, not finite)."""
+    from youbot_dynamics.ros.session import NOT_REPORTED, reported
+
+    value = reported(value)
+    return NOT_REPORTED if value == NOT_REPORTED else format(value, spec)
+
+
 def run_main_job(args: argparse.Namespace) -> int:
     from youbot_dynamics.ros.dynamics_node import run
     from youbot_dynamics.sim.scene import load_scene
@@ -86,11 +95,11 @@ def run_main_job(args: argparse.Namespace) -> int:
                     "n/a: the scene's controller and friction change the energy "
                     f"(E(0) = {session.energy0:.6g} J, E(end) = {session.snapshot.energy:.6g} J)")
     rows = [("scene", f"{name} ({session.scene.source})"),
-            ("simulated time", f"{session.t:.3f} s at {args.rate:g} Hz ({session.k} samples per topic)"),
+            ("simulated time", f"{session.t:.3f} s at {args.rate:g} Hz ({session.k + 1} samples per topic)"),
             ("real-time factor", f"{session.t / wall:.3f} (simulated s per wall s, node start to finish)"),
-            ("integrator", f"{stats.integrator}: {stats.steps} steps, {stats.rhs_evals} rhs, "
-                           f"{stats.jac_evals} Jacobians, rejected {stats.rejected_steps}, "
-                           f"integrator-only real-time factor {stats.real_time_factor:.2f}"),
+            ("integrator", f"{stats.integrator}: {_figure(stats.steps)} steps, {_figure(stats.rhs_evals)} rhs, "
+                           f"{_figure(stats.jac_evals)} Jacobians, {_figure(stats.rejected_steps)} rejected, "
+                           f"integrator-only real-time factor {_figure(stats.real_time_factor, '.2f')}"),
             ("energy error", energy_error),
             ("status", session.failure or "ok"),
             *((f"log ({path.suffix[1:]})", str(path)) for path in session.recorder.paths)]

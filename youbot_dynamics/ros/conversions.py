@@ -43,7 +43,7 @@ def _element_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any]
     """Converter of one base or nested element; None when the value passes unchanged."""
     node_type, detail = description
     if node_type.name == "NAME":
-        return _to_rclpy_plan(detail) if to_ros else _from_rclpy_plan(detail)
+        return _plan(detail, to_ros)
     return None
 
 
@@ -67,24 +67,11 @@ def _field_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any] |
 
 
 @lru_cache(maxsize=None)
-def _to_rclpy_plan(msgtype: str) -> Callable[[Any], Any]:
-    cls = rclpy_class(msgtype)
-    plan = [(name, _field_converter(description, True)) for name, description in _fields(msgtype)]
-
-    def convert(message: Any) -> Any:
-        out = cls()
-        for name, converter in plan:
-            value = getattr(message, name)
-            setattr(out, name, value if converter is None else converter(value))
-        return out
-
-    return convert
-
-
-@lru_cache(maxsize=None)
-def _from_rclpy_plan(msgtype: str) -> Callable[[Any], Any]:
-    cls = rosbags_class(msgtype)
-    plan = [(name, _field_converter(description, False)) for name, description in _fields(msgtype)]
+def _plan(msgtype: str, to_ros: bool) -> Callable[[Any], Any]:
+    """Converter of whole ``msgtype`` messages: rosbags -> rclpy (``to_ros``) or back. Both
+    message kinds take every field as a keyword argument."""
+    cls = rclpy_class(msgtype) if to_ros else rosbags_class(msgtype)
+    plan = [(name, _field_converter(description, to_ros)) for name, description in _fields(msgtype)]
 
     def convert(message: Any) -> Any:
         return cls(**{name: getattr(message, name) if converter is None else converter(getattr(message, name))
@@ -103,9 +90,9 @@ def msgtype_of(message: Any) -> str:
 
 def to_rclpy(message: Any) -> Any:
     """The rclpy message equal to the rosbags message ``message``."""
-    return _to_rclpy_plan(message.__msgtype__)(message)
+    return _plan(message.__msgtype__, True)(message)
 
 
 def from_rclpy(message: Any) -> Any:
     """The rosbags message equal to the rclpy message ``message``."""
-    return _from_rclpy_plan(msgtype_of(message))(message)
+    return _plan(msgtype_of(message), False)(message)

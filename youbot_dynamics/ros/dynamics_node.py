@@ -7,9 +7,14 @@ simulate mode publishes /clock, /joint_states, /ee_pose and /diagnostics, subscr
 /ee_pose and /diagnostics. Parameters: :mod:`youbot_dynamics.ros.parameters`.
 
 Timing (simulate): a steady-clock timer paces the samples at ``publish_rate x time_scale``
-per wall second; a late tick publishes the samples that are due (up to ``MAX_CATCH_UP``),
-so the average rate holds while the simulation keeps up. Simulated time itself advances by
-fixed increments, independent of the wall clock.
+per wall second; a late tick publishes the samples that are due (up to ``MAX_BURST``, the
+rest at the next ticks), so the average rate holds while the simulation keeps up; only
+after falling ``MAX_LAG`` wall seconds behind does the pacing restart from now. Simulated
+time itself advances by fixed increments, independent of the wall clock. With
+``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched /joint_states
+(or after ``wait_timeout`` wall seconds), so a subscriber started with the node misses none
+of the first samples. On leaving, the node waits (up to ``ACK_TIMEOUT``) until its
+subscribers have acknowledged every message.
 
 Run: ``ros2 run youbot_dynamics dynamics_node --ros-args --params-file config/dynamics_node.yaml``
 or ``python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing``.
@@ -24,6 +29,7 @@ import time
 import rclpy
 import rclpy.executors
 from rclpy.clock import Clock, ClockType
+from rclpy.duration import Duration
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -41,11 +47,15 @@ from youbot_dynamics.ros.session import PUBLISHED, TOPIC_TYPES, InverseSession, 
 from youbot_dynamics.sim.commands import InputRejected
 from youbot_dynamics.sim.scene import load_scene
 
-MAX_CATCH_UP = 20
-"""Most samples one late timer tick publishes; further behind, the pacing restarts (the
+MAX_BURST = 20
+"""Most samples one timer tick publishes (and, at time_scale 0, the samples per tick)."""
+MAX_LAG = 0.25
+"""Wall seconds the samples may fall behind their pacing before it restarts from now (the
 real-time factor then drops below the requested time scale)."""
 WARN_THROTTLE = 2.0
 """Seconds between repeated warnings about bad input."""
+ACK_TIMEOUT = 3.0
+"""Longest wait (wall s), on leaving, for subscribers to acknowledge what was published."""
 
 
 def _stamp_ns(stamp) -> int:
@@ -77,6 +87,8 @@ class DynamicsNode(Node):
             self.create_subscription(JointTrajectory, "/joint_trajectory", self._on_trajectory, RELIABLE_DEEP)
             self.create_service(Trigger, "~/reset", self._on_reset)
             self.create_service(SetBool, "~/pause", self._on_pause)
+            self._wait_deadline = time.monotonic() + p["wait_timeout"]
+            self._waiting = p["wait_for_subscribers"] > 0
             self._restart_pacing()
             self.create_timer(1.0 / p["publish_rate"], self._on_tick, clock=steady)
         else:
@@ -95,17 +107,31 @@ class DynamicsNode(Node):
     def _restart_pacing(self) -> None:
         self._pace_start, self._pace_k0 = time.monotonic(), self.session.k
 
+    def _subscribers_ready(self) -> bool:
+        """False while simulated time waits for ``wait_for_subscribers`` subscribers on
+        /joint_states; at the end of the wait the pacing and the diagnostics mark restart."""
+        wanted = self.params["wait_for_subscribers"]
+        count = self.publishers_["/joint_states"].get_subscription_count()
+        if count < wanted:
+            if time.monotonic() < self._wait_deadline:
+                return False
+            self.get_logger().warning(f"{count} of {wanted} /joint_states subscribers after "
+                                      f"{self.params['wait_timeout']:g} s; starting anyway")
+        self._waiting = False
+        self._restart_pacing()
+        self._diagnostics_mark = (time.monotonic(), self.session.t)
+        return True
+
     def _on_tick(self) -> None:
         session, p = self.session, self.params
-        if self.finished or session.paused or session.failure:
+        if self.finished or session.paused or session.failure or (self._waiting and not self._subscribers_ready()):
             return
-        scale = self.get_parameter("time_scale").value
-        due = MAX_CATCH_UP if scale == 0.0 else \
-            int((time.monotonic() - self._pace_start) * p["publish_rate"] * scale) - (session.k - self._pace_k0)
-        if due > MAX_CATCH_UP:
+        rate = p["publish_rate"] * self.get_parameter("time_scale").value    # samples per wall s
+        due = MAX_BURST if rate == 0.0 else \
+            int((time.monotonic() - self._pace_start) * rate) - (session.k - self._pace_k0)
+        if due > MAX_LAG * rate:
             self._restart_pacing()
-            due = MAX_CATCH_UP
-        for _ in range(max(0, due)):
+        for _ in range(min(max(0, due), MAX_BURST)):
             self._publish(session.step())
             if session.failure:
                 self.get_logger().error(session.failure)
@@ -192,6 +218,16 @@ class DynamicsNode(Node):
         """Finalise the logs (idempotent)."""
         self.session.close()
 
+    def wait_for_acknowledgements(self) -> bool:
+        """Wait (at most ``ACK_TIMEOUT`` in all) until every subscriber has acknowledged every
+        message published; False if one has not."""
+        deadline = time.monotonic() + ACK_TIMEOUT
+        acknowledged = True
+        for publisher in self.publishers_.values():
+            left = Duration(nanoseconds=max(0, round((deadline - time.monotonic()) * 1e9)))
+            acknowledged = publisher.wait_for_all_acked(left) and acknowledged
+        return acknowledged
+
 
 def run(args: list[str] | None = None, overrides: dict[str, object] | None = None) -> tuple[int, DynamicsNode | None]:
     """Run the node until ``duration`` is reached, SIGINT or SIGTERM, and finalise the logs.
@@ -216,6 +252,8 @@ def run(args: list[str] | None = None, overrides: dict[str, object] | None = Non
             executor.spin_once(timeout_sec=0.05)
     finally:
         node.close()
+        if not node.wait_for_acknowledgements():
+            node.get_logger().warning("some subscribers did not acknowledge the last messages")
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.node import Node
 
 from youbot_dynamics.errors import UserInputError
@@ -21,7 +21,8 @@ CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS}
 
 @dataclass(frozen=True)
 class Spec:
-    """One parameter: default, description, optional (min, max) range, read-only or not."""
+    """One parameter: default (its type is the parameter's), description, optional (min,
+    max) range, read-only or not."""
 
     default: object
     description: str
@@ -50,6 +51,10 @@ PARAMETERS: dict[str, Spec] = {
     "on_timeout": Spec("hold", "after the timeout: hold (scene controller) | zero_torque", read_only=False),
     "acceleration_filter": Spec(0.0, "inverse mode: low-pass time constant (s) on the central-difference "
                                 "acceleration; 0: none", (0.0, 10.0)),
+    "wait_for_subscribers": Spec(0, "simulate mode: simulated time starts once /joint_states has this many "
+                                 "subscribers (or after wait_timeout); 0: at once", (0, 100)),
+    "wait_timeout": Spec(10.0, "wall-clock seconds to wait for those subscribers; then start anyway, "
+                         "with a warning", (0.0, 3600.0)),
     "diagnostics_period": Spec(1.0, "wall-clock seconds between /diagnostics messages", (0.01, 60.0)),
 }
 
@@ -57,7 +62,9 @@ PARAMETERS: dict[str, Spec] = {
 def descriptor(name: str, spec: Spec) -> ParameterDescriptor:
     """The ParameterDescriptor of one parameter (with its range, if numeric)."""
     extra = {}
-    if spec.limits is not None:
+    if spec.limits is not None and isinstance(spec.default, int):
+        extra["integer_range"] = [IntegerRange(from_value=int(spec.limits[0]), to_value=int(spec.limits[1]), step=1)]
+    elif spec.limits is not None:
         extra["floating_point_range"] = [FloatingPointRange(from_value=spec.limits[0], to_value=spec.limits[1])]
     choices = CHOICES.get(name)
     return ParameterDescriptor(name=name, description=spec.description, read_only=spec.read_only,

@@ -111,7 +111,48 @@ class _Frames:
         return messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion), position
 
 
-class SimulationSession:
+NOT_REPORTED = "n/a"
+"""The value (diagnostics) or text (printed summaries) of a figure that is not known."""
+
+
+def reported(value: float | int | str | None) -> float | int | str:
+    """``value``, or ``NOT_REPORTED`` when it is None (a counter the integrator does not
+    report) or a non-finite float (a rate over no wall time yet)."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return NOT_REPORTED
+    return value
+
+
+class _Session:
+    """What both modes share: the robot's frames, the input counters, the logs (with
+    /tf_static written once at t = 0) and the /diagnostics status. Subclasses say their
+    ``mode`` and keep ``stamp_ns``, the stamp (ns) of their latest output."""
+
+    mode: str
+    stamp_ns: int
+
+    def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
+                 mcap_path: str | Path | None, rrd_path: str | Path | None) -> None:
+        self.scene, self.robot = scene, robot
+        self.counters = InputCounters()
+        self.frames = _Frames(robot, frame_id, ee_link)
+        self.recorder = Recorder(self.mode, scene, mcap_path, rrd_path, self.frames.root_frame)
+        self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
+
+    def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
+        """/diagnostics with one status of this session (also logged)."""
+        status = messages.diagnostic_status(f"dynamics_node: {self.scene.name} ({self.mode})", level, text,
+                                            hardware_id=self.robot.name, values=values)
+        outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
+        self.recorder.write(outputs, self.stamp_ns)
+        return outputs
+
+    def close(self) -> None:
+        """Finalise the logs (idempotent)."""
+        self.recorder.close()
+
+
+class SimulationSession(_Session):
     """A scene simulated step by step at ``publish_rate`` (Hz) samples per simulated second
     (the same scene, rate and ``samples_per_solve`` give the same samples, bit for bit).
 
@@ -126,19 +167,14 @@ class SimulationSession:
     def __init__(self, scene: Scene, publish_rate: float, *, command_timeout: float = 0.5,
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
                  mcap_path: str | Path | None = None, rrd_path: str | Path | None = None) -> None:
-        self.scene = scene
         self.simulator = Simulator(scene)
-        self.robot = self.simulator.robot
+        super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path)
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         self.samples_per_solve = max(1, int(samples_per_solve))
-        self.counters = InputCounters()
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters)
-        self.frames = _Frames(self.robot, frame_id, ee_link)
-        self.recorder = Recorder(self.mode, scene, mcap_path, rrd_path, self.frames.root_frame)
         self._scene_reference = getattr(self.simulator.controller, "reference", None)
         self.paused = False
         self.failure: str | None = None
-        self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
         self.reset()
 
     @property
@@ -222,10 +258,10 @@ class SimulationSession:
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
-        energy (J), input counters; level ERROR after a divergence, WARN when paused."""
-        stats = {f"integrator.{key}": value for key, value in self.simulator.stats.as_dict().items()
-                 if value is not None and (not isinstance(value, float) or math.isfinite(value))}
-        values = {"sim_time": self.t, "real_time_factor": real_time_factor if math.isfinite(real_time_factor) else -1.0,
+        energy (J), input counters; level ERROR after a divergence, WARN when paused. Figures
+        not known (counters the integrator does not report) are ``NOT_REPORTED``."""
+        stats = {f"integrator.{key}": reported(value) for key, value in self.simulator.stats.as_dict().items()}
+        values = {"sim_time": self.t, "real_time_factor": reported(real_time_factor),
                   "energy": self.snapshot.energy, "energy_error": self.energy_error,
                   "paused": self.paused, "command": self._command_source(), **stats, **self.counters.as_values()}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
@@ -238,18 +274,8 @@ class SimulationSession:
             return "zero_torque (command timed out)"
         return f"scene controller ({self.simulator.controller.kind})"
 
-    def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
-        status = messages.diagnostic_status(f"dynamics_node: {self.scene.name} ({self.mode})", level, text or "",
-                                            hardware_id=self.robot.name, values=values)
-        outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
-        self.recorder.write(outputs, self.stamp_ns)
-        return outputs
 
-    def close(self) -> None:
-        self.recorder.close()
-
-
-class InverseSession:
+class InverseSession(_Session):
     """Torques from measured joint states: accelerations by central differences (see
     :mod:`youbot_dynamics.sim.inverse`), tau = RNEA + friction of the scene's robot."""
 
@@ -258,15 +284,11 @@ class InverseSession:
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
                  ee_link: str = "", mcap_path: str | Path | None = None,
                  rrd_path: str | Path | None = None) -> None:
-        self.scene = scene
-        self.robot = robot_with_gravity(scene.robot(), scene.gravity)
+        super().__init__(scene, robot_with_gravity(scene.robot(), scene.gravity), frame_id, ee_link,
+                         mcap_path, rrd_path)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self.estimator = AccelerationEstimator(filter_time_constant)
-        self.counters = InputCounters()
-        self.frames = _Frames(self.robot, frame_id, ee_link)
-        self.recorder = Recorder(self.mode, scene, mcap_path, rrd_path, self.frames.root_frame)
-        self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
         self.stamp_ns, self.samples = 0, 0
         self.failure: str | None = None
 
@@ -308,11 +330,4 @@ class InverseSession:
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: samples processed and input counters."""
         values = {"torques_published": self.samples, **self.counters.as_values()}
-        status = messages.diagnostic_status(f"dynamics_node: {self.scene.name} ({self.mode})", "OK", "running",
-                                            hardware_id=self.robot.name, values=values)
-        outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
-        self.recorder.write(outputs, self.stamp_ns)
-        return outputs
-
-    def close(self) -> None:
-        self.recorder.close()
+        return self._diagnostic_outputs("OK", "running", values)

@@ -17,7 +17,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.controllers import Reference
@@ -180,6 +179,8 @@ class SampledTrajectory:
     """
 
     def __init__(self, times: np.ndarray, positions: np.ndarray, velocities: np.ndarray | None) -> None:
+        from scipy.interpolate import CubicHermiteSpline, CubicSpline  # only a received trajectory needs it
+
         self.times = np.asarray(times, dtype=float)
         self.positions = np.asarray(positions, dtype=float)
         if velocities is None:
