@@ -1,6 +1,7 @@
 """Andrew's squeezer at matched accuracy: for each formulation and integrator the loosest
 rtol in 1e-3, 10^-3.5, ..., 1e-12 whose q at t = 0.03 s is within 1e-6 (max relative,
 per component) of the test set's reference; its statistics beside the seed's figures.
+The DAE forms (IDA) run with the exact iteration matrix and with IDA's finite differences.
 
 Run: python bench/bench_squeezer.py [--outputs N] [--target E]
 """
@@ -17,18 +18,23 @@ from youbot_dynamics.sim.integrators import IntegrationError  # noqa: E402
 from youbot_dynamics.systems.squeezer import (SEED_FIGURES,  # noqa: E402
                                               reference_error, simulate_squeezer)
 
-CASES = [("index1", "rk45"), ("index1", "dop853"), ("index1", "cvode_adams"),
-         ("index1", "radau"), ("index1-baumgarte", "rk45"), ("index1-baumgarte", "dop853"),
-         ("index1-projection", "rk45"), ("index1-projection", "dop853"),
-         ("index2", "ida"), ("ggl", "ida"), ("index3", "ida")]
+#: (formulation, integrator, Jacobian: "exact" or "fd" for IDA, "" for ODE integrators)
+CASES = [("index1", "rk45", ""), ("index1", "dop853", ""), ("index1", "cvode_adams", ""),
+         ("index1", "radau", ""), ("index1-baumgarte", "rk45", ""),
+         ("index1-baumgarte", "dop853", ""), ("index1-projection", "rk45", ""),
+         ("index1-projection", "dop853", "")] + [
+    (formulation, "ida", jacobian) for formulation in ("index2", "ggl", "index3")
+    for jacobian in ("exact", "fd")]
 RTOLS = 10.0 ** -np.arange(3.0, 12.01, 0.5)
 
 
-def matched_run(formulation: str, integrator: str, target: float, outputs: int):
+def matched_run(formulation: str, integrator: str, jacobian: str, target: float,
+                outputs: int):
     """The loosest rtol meeting the target, its run and error; None if none does."""
     for rtol in RTOLS:
         try:
-            run = simulate_squeezer(formulation, integrator, rtol=rtol, n_outputs=outputs)
+            run = simulate_squeezer(formulation, integrator, rtol=rtol, n_outputs=outputs,
+                                    exact_jacobian=jacobian != "fd")
         except IntegrationError:
             continue
         error = float(np.max(reference_error(run.q[-1])))
@@ -43,22 +49,23 @@ def main() -> None:
                         help="output times on [0, 0.03] s (projection happens at each)")
     parser.add_argument("--target", type=float, default=1e-6)
     args = parser.parse_args()
-    header = (f"{'formulation':18s} {'integrator':12s} {'rtol':>8s} {'steps':>6s} "
+    header = (f"{'formulation':18s} {'integrator':12s} {'J':5s} {'rtol':>8s} {'steps':>6s} "
               f"{'f-evals':>8s} {'J-evals':>8s} {'err-fail':>8s} {'wall s':>8s} "
               f"{'max rel err':>11s}")
     print(f"Andrew's squeezer, t = 0.03 s, target {args.target:g}, {args.outputs} outputs")
     print(header)
     print("-" * len(header))
-    for formulation, integrator in CASES:
-        found = matched_run(formulation, integrator, args.target, args.outputs)
+    for formulation, integrator, jacobian in CASES:
+        found = matched_run(formulation, integrator, jacobian, args.target, args.outputs)
+        label = f"{formulation:18s} {integrator:12s} {jacobian:5s}"
         if found is None:
-            print(f"{formulation:18s} {integrator:12s} no rtol down to 1e-12 met the target")
+            print(f"{label} no rtol down to 1e-12 met the target", flush=True)
             continue
         rtol, run, error = found
         s = run.stats
-        print(f"{formulation:18s} {integrator:12s} {rtol:8.1e} {s.steps:6d} {s.rhs_evals:8d} "
+        print(f"{label} {rtol:8.1e} {s.steps:6d} {s.rhs_evals:8d} "
               f"{s.jac_evals!s:>8s} {s.rejected_steps!s:>8s} {s.wall_time:8.3f} "
-              f"{error:11.2e}")
+              f"{error:11.2e}", flush=True)
     print("\nSeed figures (500 outputs, accuracy not matched):")
     for name, figures in SEED_FIGURES.items():
         print(f"  {name:22s} " + ", ".join(f"{k} {v}" for k, v in figures.items()))

@@ -84,6 +84,14 @@ def test_formulations_follow_the_angle_ode(formulation, integrator, tolerance, s
     assert run.multipliers[:, 0] == pytest.approx(expected, rel=1e-3)
 
 
+def test_ida_options_reach_the_solver():
+    times = [0.0, T_END]
+    free = simulate_holonomic(PENDULUM_EXACT, "ggl", "ida", Q0, V0, times, rtol=1e-6)
+    capped = simulate_holonomic(PENDULUM_EXACT, "ggl", "ida", Q0, V0, times, rtol=1e-6,
+                                ida_options={"max_step": 0.001})
+    assert free.stats.steps < T_END / 0.001 <= capped.stats.steps
+
+
 def test_projections_land_on_the_manifolds_nearest_in_the_mass_metric():
     mass = np.diag([1.0, 3.0])
     system = HolonomicSystem(**{**PENDULUM.__dict__, "mass": lambda q: mass})

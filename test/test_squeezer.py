@@ -112,6 +112,9 @@ def test_cli_json_and_errors(capsys, tmp_path):
     report = json.loads(capsys.readouterr().out)
     assert max(report["relative_error_vs_reference"]) < 1e-6
     assert (tmp_path / "drift.png").stat().st_size > 10_000
+    assert main(["squeezer", "--formulation", "index2", "--jacobian", "fd", "--rtol", "1e-4",
+                 "--outputs", "3", "--json"]) == 0
+    assert max(json.loads(capsys.readouterr().out)["relative_error_vs_reference"]) < 1e-2
     assert main(["squeezer", "--formulation", "index3", "--integrator", "rk45"]) == 2
     assert main(["squeezer", "--formulation", "index1", "--rtol", "-1"]) == 2
     assert main(["structure", "pendulum", "--json"]) == 0

@@ -24,6 +24,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     squeezer.add_argument("--outputs", type=int, default=101,
                           help="output times (projections happen at these)")
     squeezer.add_argument("--dt", type=float, default=None, help="fixed step (s)")
+    squeezer.add_argument("--jacobian", choices=("exact", "fd"), default="exact",
+                          help="IDA's iteration matrix for index2/ggl/index3: exact (from "
+                               "the sympy model) or IDA's finite differences")
     squeezer.add_argument("--plot", metavar="PNG",
                           help="plot the drift of index1 vs index1-baumgarte vs "
                                "index1-projection with the chosen ODE integrator")
@@ -48,7 +51,8 @@ def run_squeezer(args: argparse.Namespace) -> int:
         raise UserInputError(f"--rtol must be positive, got {args.rtol!r}")
     options = dict(rtol=args.rtol, t_end=args.t_end, n_outputs=args.outputs, dt=args.dt)
     try:
-        run = simulate_squeezer(args.formulation, args.integrator, **options)
+        run = simulate_squeezer(args.formulation, args.integrator,
+                                exact_jacobian=args.jacobian == "exact", **options)
         if args.plot:
             ode = run.stats.integrator if run.stats.integrator != "ida" else "rk45"
             plot_drift([simulate_squeezer(name, ode, **options)

@@ -28,7 +28,14 @@ Assimulo run excluded only w and lambda, but then IDA's first step, sized from
 IDASetSuppressAlg, so :attr:`DaeForm.excluded` is realised by an absolute tolerance of
 EXCLUDED_ATOL on those components (:func:`dae_tolerances`): that takes them out of the
 Newton convergence test as well, so their values are only as good as the converged q and v
-make them (the tests measure q against the reference and lambda against index 1).
+make them (the tests measure q against the reference and lambda against index 1). For
+index 3 it also leaves the tangential velocity without error control: on the squeezer
+q's error is 1e2 to 1e4 times rtol and not monotone in it, and below rtol ~ 1e-9 IDA's
+error test or corrector fails at steps of 1e-11 s and less.
+
+Jacobian. :func:`dae_jacobian` is the exact iteration matrix dF/dy + cj dF/dy' of the DAE
+forms, from the system's optional second derivatives (d(M w)/dq, df/dq, df/dv and the
+constraint Hessians); without them IDA differences the residual.
 
 This module holds the formulas only (nothing here integrates); the driver that runs them
 with youbot_dynamics.sim.integrators is sim.constrained.simulate_holonomic.

@@ -9,6 +9,7 @@ index-1 formulations go to integrate with any ODE integrator.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -67,17 +68,18 @@ def checked_choice(system: HolonomicSystem, formulation: str, integrator: str) -
 def simulate_holonomic(system: HolonomicSystem, formulation: str, integrator: str,
                        q0: np.ndarray, v0: np.ndarray, t_eval: np.ndarray, *,
                        rtol: float = 1e-6, atol: float = 1e-10, dt: float | None = None,
-                       baumgarte_rate: float = 0.0, exact_jacobian: bool | None = None
-                       ) -> ConstrainedRun:
+                       baumgarte_rate: float = 0.0, exact_jacobian: bool | None = None,
+                       ida_options: Mapping[str, Any] | None = None) -> ConstrainedRun:
     """Run ``system`` from consistent (q0, v0) with outputs at t_eval (s).
 
     DAE formulations go to integrate_dae (IDA), with ``exact_jacobian`` (default: when
     the system has second derivatives) the analytic iteration matrix
-    dynamics.constraints.dae_jacobian, else IDA's finite differences; index-1 ones to
-    integrate. For ``index1-projection`` each interval between outputs is a separate run
-    and the state at its end is projected onto g = 0 and then G v = 0 (M-weighted
-    Gauss-Newton, see dynamics.constraints) before the next; their statistics are summed.
-    lambda at the outputs comes from the index-1 saddle-point system for ODE formulations.
+    dynamics.constraints.dae_jacobian, else IDA's finite differences, and with
+    ``ida_options`` passed as they are; index-1 ones go to integrate. For
+    ``index1-projection`` each interval between outputs is a separate run and the state at
+    its end is projected onto g = 0 and then G v = 0 (M-weighted Gauss-Newton, see
+    dynamics.constraints) before the next; their statistics are summed. lambda at the
+    outputs comes from the index-1 saddle-point system for ODE formulations.
     """
     checked_choice(system, formulation, integrator)
     n = system.n_positions
@@ -94,7 +96,8 @@ def simulate_holonomic(system: HolonomicSystem, formulation: str, integrator: st
                                  algebraic=form.algebraic, rtol=rtol,
                                  atol=dae_tolerances(form, atol),
                                  state_names=form.state_names,
-                                 jac=form.residual_jacobian if use_exact else None)
+                                 jac=form.residual_jacobian if use_exact else None,
+                                 ida_options=ida_options)
         q, v = form.positions(solution.x), form.velocities(solution.x)
         multipliers, stats = form.multipliers(solution.x), solution.stats
         t = solution.t
