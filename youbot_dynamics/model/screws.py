@@ -11,20 +11,39 @@ or m (prismatic). Functions take the ROBOT's full joint vector q (shape (nv,), o
 for a batch) and pick the chain's joints with ``chain.joints``; Jacobians have one column per
 chain joint, in chain order (root first), and map joint rates to twists (omega, v).
 
-Speed: exp([S_i] theta) = I + theta A1 + sin(theta) A2 + (1 - cos(theta)) A3 with constant
-matrices A_k per joint (Rodrigues for a unit screw axis, Prop. 3.25 of the book). They are
-precomputed (with M folded into the last space / first body exponential), so the
-exponentials of all joints cost one small matrix product and the pose n - 1 more.
+Speed: a call costs a fixed number of numpy calls plus one 4x4 product per joint, which is
+what matters for one configuration (each numpy call costs ~0.3 us, the arithmetic far less).
+exp([S_i] theta) = I + theta A1 + sin(theta) A2 + (1 - cos(theta)) A3 with constant matrices
+A_k per joint (Rodrigues for a unit screw axis, Prop. 3.25 of the book), so the exponentials
+of all joints are one product of (theta, sin theta, cos theta) with a precomputed
+block-diagonal matrix (M folded into the last space / first body exponential); the pose then
+costs n - 1 4x4 products. The Jacobian columns [Ad_{T_i}] S_i = (R_i omega_i,
+p_i x R_i omega_i + R_i v_i) come from the running products T_i = (R_i, p_i) of the same
+pass, for all joints at once.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.lie import adjoint, inverse_transform, skew
 from youbot_dynamics.model.robot import Robot
+
+
+class ExponentialMap(NamedTuple):
+    """exp([X_i] theta_i) for all joints of a chain as one affine map of the coefficients
+    c = (theta_1..theta_n, sin theta_1..sin theta_n, cos theta_1..cos theta_n) (rad or m).
+
+    ``offset + c.dot(matrix)`` is the stack of the n 4x4 exponentials, flattened row-major,
+    shape (..., 16 n). ``matrix`` (3 n, 16 n) is block diagonal: joint i's coefficients only
+    reach its own 16 entries.
+    """
+
+    offset: np.ndarray
+    matrix: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -43,10 +62,12 @@ class ScrewChain:
     S: np.ndarray
     M: np.ndarray
     B: np.ndarray = field(init=False)
-    _space_terms: np.ndarray = field(init=False, repr=False)
-    _body_terms: np.ndarray = field(init=False, repr=False)
-    _space_pose_terms: np.ndarray = field(init=False, repr=False)
-    _body_pose_terms: np.ndarray = field(init=False, repr=False)
+    _space_pose: ExponentialMap = field(init=False, repr=False)
+    _body_pose: ExponentialMap = field(init=False, repr=False)
+    _space_factors: ExponentialMap = field(init=False, repr=False)
+    _body_factors: ExponentialMap = field(init=False, repr=False)
+    _space_axes: np.ndarray = field(init=False, repr=False)
+    _body_axes: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         body = adjoint(inverse_transform(self.M)) @ self.S
@@ -55,12 +76,21 @@ class ScrewChain:
         # (M exp([B_1] q_1)): forward kinematics then needs n - 1 matrix products.
         space_pose_terms, body_pose_terms = space_terms.copy(), body_terms.copy()
         if self.n:
-            space_pose_terms[-1] = (space_terms[-1].reshape(4, 4, 4) @ self.M).reshape(4, 16)
-            body_pose_terms[0] = (self.M @ body_terms[0].reshape(4, 4, 4)).reshape(4, 16)
-        for name, value in (("B", body), ("_space_terms", space_terms),
-                            ("_body_terms", body_terms), ("_space_pose_terms", space_pose_terms),
-                            ("_body_pose_terms", body_pose_terms)):
-            value.setflags(write=False)
+            space_pose_terms[-1] = space_terms[-1] @ self.M
+            body_pose_terms[0] = self.M @ body_terms[0]
+        # J_b is J_s's formula applied to the factors exp([-B_i] q_i) from the tip down (see
+        # jacobian_body), so the body factors and hats are in reverse joint order.
+        reversed_body = body[:, ::-1]
+        derived = {"B": body,
+                   "_space_pose": exponential_map(space_pose_terms),
+                   "_body_pose": exponential_map(body_pose_terms),
+                   "_space_factors": exponential_map(space_terms),
+                   "_body_factors": exponential_map(exponential_terms(-reversed_body)),
+                   "_space_axes": _axis_pairs(self.S),
+                   "_body_axes": _axis_pairs(reversed_body)}
+        for name, value in derived.items():
+            for array in value if isinstance(value, ExponentialMap) else (value,):
+                array.setflags(write=False)
             object.__setattr__(self, name, value)
         for array in (self.joints, self.S, self.M):
             array.setflags(write=False)
@@ -99,8 +129,9 @@ def screw_chain(robot: Robot, link: str | None = None) -> ScrewChain:
 
 
 def exponential_terms(axes: np.ndarray) -> np.ndarray:
-    """Constant matrices (A0, A1, A2, A3) per unit screw axis, shape (n, 4, 16), such that
-    exp([S] theta) = A0 + theta A1 + sin(theta) A2 + (1 - cos(theta)) A3 (flattened 4x4).
+    """Constant 4x4 matrices (A0, A1, A2, A3) per unit screw axis (columns (omega, v) of
+    ``axes``), shape (n, 4, 4, 4), such that
+    exp([S] theta) = A0 + theta A1 + sin(theta) A2 + (1 - cos(theta)) A3 (Prop. 3.25).
 
     With [omega] = K: A0 = I, A1 = [[0, v + K^2 v]], A2 = [[K, -K^2 v]], A3 = [[K^2, K v]];
     for a prismatic axis (omega = 0) A2 and A3 vanish and A1 = [[0, v]].
@@ -115,18 +146,38 @@ def exponential_terms(axes: np.ndarray) -> np.ndarray:
         terms[i, 1, :3, 3] = v + k2 @ v
         terms[i, 2, :3, :3], terms[i, 2, :3, 3] = k, -k2 @ v
         terms[i, 3, :3, :3], terms[i, 3, :3, 3] = k2, k @ v
-    return terms.reshape(n, 4, 16)
+    return terms
 
 
-def _exponentials(terms: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Sum over k of coefficient_k(theta_i) terms[i, k] for every joint i: the matrices
-    exp([X_i] theta_i) (times M where it is folded in), shape (..., n, 4, 4)."""
-    coefficients = np.empty((*theta.shape, 4))
-    coefficients[..., 0] = 1.0
-    coefficients[..., 1] = theta
-    np.sin(theta, out=coefficients[..., 2])
-    coefficients[..., 3] = 1.0 - np.cos(theta)
-    return np.einsum("...nk,nkm->...nm", coefficients, terms).reshape(*theta.shape, 4, 4)
+def exponential_map(terms: np.ndarray) -> ExponentialMap:
+    """The :class:`ExponentialMap` of per-joint terms (A0, A1, A2, A3) (shape (n, 4, 4, 4), from
+    :func:`exponential_terms`, possibly with constant transforms folded in):
+    (1 - cos) A3 = A3 - cos A3, so the offset is A0 + A3 and cos theta multiplies -A3."""
+    n = terms.shape[0]
+    flat = terms.reshape(n, 4, 16)
+    matrix = np.zeros((3, n, n, 16))
+    for i in range(n):
+        matrix[:, i, i] = flat[i, 1], flat[i, 2], -flat[i, 3]
+    return ExponentialMap((flat[:, 0] + flat[:, 3]).ravel(), matrix.reshape(3 * n, n * 16))
+
+
+def _axis_pairs(axes: np.ndarray) -> np.ndarray:
+    """The columns (omega_i, v_i) of ``axes`` as 3x2 matrices [omega_i v_i], shape (n, 3, 2)."""
+    return np.ascontiguousarray(axes.reshape(2, 3, -1).transpose(2, 1, 0))
+
+
+# (a x b)_k = sum over i, j of CROSS[3 i + j, k] a_i b_j (the Levi-Civita symbol).
+_CROSS = np.zeros((9, 3))
+_CROSS[[5, 6, 1], [0, 1, 2]] = 1.0
+_CROSS[[7, 2, 3], [0, 1, 2]] = -1.0
+_CROSS.setflags(write=False)
+
+
+def _exponentials(exponential: ExponentialMap, theta: np.ndarray) -> np.ndarray:
+    """exp([X_i] theta_i) (with the folded constants) at theta (..., n): shape (..., n, 4, 4)."""
+    coefficients = np.concatenate((theta, np.sin(theta), np.cos(theta)), axis=-1)
+    flat = exponential.offset + coefficients.dot(exponential.matrix)
+    return flat.reshape(*theta.shape, 4, 4)
 
 
 def _joint_values(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
@@ -134,16 +185,17 @@ def _joint_values(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     if q.ndim == 0 or q.shape[-1] != chain.nv:
         raise UserInputError(f"chain to '{chain.link}' needs the robot's joint vector of "
                              f"{chain.nv} values; got shape {q.shape}")
-    return q[..., chain.joints]
+    return q.take(chain.joints, axis=-1)
 
 
-def _product(matrices: np.ndarray) -> np.ndarray:
-    """matrices[..., 0, :, :] @ ... @ matrices[..., n-1, :, :] for n >= 1."""
-    multiply = np.dot if matrices.ndim == 3 else np.matmul  # np.dot: less overhead for 4x4
-    out = matrices[..., 0, :, :]
-    for i in range(1, matrices.shape[-3]):
-        out = multiply(out, matrices[..., i, :, :])
-    return out
+def _running_products(factors: np.ndarray) -> list[np.ndarray]:
+    """[F_1, F_1 F_2, ..., F_1 ... F_n] for factors F_i = factors[..., i - 1, :, :] (n >= 1)."""
+    # One configuration: ndarray.dot, the 4x4 product with the least call overhead.
+    multiply = np.ndarray.dot if factors.ndim == 3 else np.matmul
+    products = [factors[..., 0, :, :]]
+    for i in range(1, factors.shape[-3]):
+        products.append(multiply(products[-1], factors[..., i, :, :]))
+    return products
 
 
 def _home(chain: ScrewChain, theta: np.ndarray) -> np.ndarray:
@@ -155,48 +207,46 @@ def fkin_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     """T_sb(q) = exp([S_1] q_1) ... exp([S_n] q_n) M, the pose of the chain's end link in the
     root frame (4x4, m) (FKinSpace). q: robot joint vector(s), shape (nv,) or (..., nv)."""
     theta = _joint_values(chain, q)
-    return _product(_exponentials(chain._space_pose_terms, theta)) if chain.n else _home(chain, theta)
+    if not chain.n:
+        return _home(chain, theta)
+    return _running_products(_exponentials(chain._space_pose, theta))[-1]
 
 
 def fkin_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     """T_sb(q) = M exp([B_1] q_1) ... exp([B_n] q_n) (4x4, m) (FKinBody)."""
     theta = _joint_values(chain, q)
-    return _product(_exponentials(chain._body_pose_terms, theta)) if chain.n else _home(chain, theta)
+    if not chain.n:
+        return _home(chain, theta)
+    return _running_products(_exponentials(chain._body_pose, theta))[-1]
 
 
-def _adjoint_columns(transforms: np.ndarray, axes: np.ndarray) -> np.ndarray:
-    """[Ad_{T_i}] X_i for transforms (..., n, 4, 4) and axes (6, n): shape (..., 6, n)."""
-    rotations, positions = transforms[..., :3, :3], transforms[..., :3, 3]
-    omega = (rotations @ axes[:3].T[..., None])[..., 0]
-    v = np.cross(positions, omega) + (rotations @ axes[3:].T[..., None])[..., 0]
-    return np.swapaxes(np.concatenate([omega, v], axis=-1), -1, -2)
+def _adjoint_columns(factors: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """[Ad_{T_i}] X_i = (R_i omega_i, p_i x R_i omega_i + R_i v_i) for T_i = F_1 ... F_i =
+    (R_i, p_i), shape (..., 6, n), from factors F_i = exp([X_i] theta_i) (..., n, 4, 4) and
+    axes [omega_i v_i] (n, 3, 2). F_i leaves X_i unchanged ([Ad_{exp([X] theta)}] X = X), so
+    this is [Ad_{F_1 ... F_{i-1}}] X_i; n = 0 gives shape (..., 6, 0)."""
+    n = axes.shape[0]
+    if not n:
+        return np.zeros((*factors.shape[:-3], 6, 0))
+    transforms = np.array(_running_products(factors))  # joint axis first: (n, ..., 4, 4)
+    moved = np.matmul(transforms[..., :3, :3], axes.reshape(n, *(1,) * (factors.ndim - 3), 3, 2))
+    omega, position = moved[..., 0], transforms[..., :3, 3]
+    outer = (position[..., :, None] * omega[..., None, :]).reshape(*omega.shape[:-1], 9)
+    columns = np.concatenate((omega, outer.dot(_CROSS) + moved[..., 1]), axis=-1)
+    return columns.transpose(*range(1, columns.ndim), 0)
 
 
 def jacobian_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     """Space Jacobian J_s(q), shape (6, n) (or (..., 6, n)): rows (omega, v) of the end
     link's spatial twist in the root frame (JacobianSpace). Column i is
     [Ad_{exp([S_1] q_1) ... exp([S_{i-1}] q_{i-1})}] S_i."""
-    exponentials = _exponentials(chain._space_terms, _joint_values(chain, q))
-    prefix = np.empty_like(exponentials)
-    if chain.n:
-        prefix[..., 0, :, :] = np.eye(4)
-    for i in range(1, chain.n):
-        prefix[..., i, :, :] = prefix[..., i - 1, :, :] @ exponentials[..., i - 1, :, :]
-    return _adjoint_columns(prefix, chain.S)
+    theta = _joint_values(chain, q)
+    return _adjoint_columns(_exponentials(chain._space_factors, theta), chain._space_axes)
 
 
 def jacobian_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     """Body Jacobian J_b(q), shape (6, n) (or (..., 6, n)): rows (omega, v) of the end link's
-    body twist (JacobianBody). Column i is [Ad_{(exp([B_{i+1}] q_{i+1}) ... exp([B_n] q_n))^-1}] B_i."""
-    exponentials = _exponentials(chain._body_terms, _joint_values(chain, q))
-    suffix = np.empty_like(exponentials)
-    if chain.n:
-        suffix[..., -1, :, :] = np.eye(4)
-    for i in range(chain.n - 2, -1, -1):
-        suffix[..., i, :, :] = exponentials[..., i + 1, :, :] @ suffix[..., i + 1, :, :]
-    inverse = np.zeros_like(suffix)
-    rotations_t = np.swapaxes(suffix[..., :3, :3], -1, -2)
-    inverse[..., :3, :3] = rotations_t
-    inverse[..., :3, 3] = -(rotations_t @ suffix[..., :3, 3, None])[..., 0]
-    inverse[..., 3, 3] = 1.0
-    return _adjoint_columns(inverse, chain.B)
+    body twist (JacobianBody). Column i is [Ad_{exp(-[B_n] q_n) ... exp(-[B_{i+1}] q_{i+1})}] B_i:
+    J_s's formula for the factors exp([-B_j] q_j) from j = n down, columns reversed."""
+    theta = _joint_values(chain, q)[..., ::-1]
+    return _adjoint_columns(_exponentials(chain._body_factors, theta), chain._body_axes)[..., ::-1]
