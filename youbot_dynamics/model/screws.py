@@ -37,9 +37,9 @@ class ExponentialMap(NamedTuple):
     """exp([X_i] theta_i) for all joints of a chain as one affine map of the coefficients
     c = (theta_1..theta_n, sin theta_1..sin theta_n, cos theta_1..cos theta_n) (rad or m).
 
-    ``offset + c.dot(matrix)`` is the stack of the n 4x4 exponentials, flattened row-major,
-    shape (..., 16 n). ``matrix`` (3 n, 16 n) is block diagonal: joint i's coefficients only
-    reach its own 16 entries.
+    ``offset + c.dot(matrix).reshape(..., n, 4, 4)`` is the stack of the n 4x4 exponentials;
+    ``offset`` is (n, 4, 4), ``matrix`` (3 n, 16 n) is block diagonal: joint i's coefficients
+    only reach its own 16 entries (row-major).
     """
 
     offset: np.ndarray
@@ -79,7 +79,7 @@ class ScrewChain:
             space_pose_terms[-1] = space_terms[-1] @ self.M
             body_pose_terms[0] = self.M @ body_terms[0]
         # J_b is J_s's formula applied to the factors exp([-B_i] q_i) from the tip down (see
-        # jacobian_body), so the body factors and hats are in reverse joint order.
+        # jacobian_body), so the body factors and axes are in reverse joint order.
         reversed_body = body[:, ::-1]
         derived = {"B": body,
                    "_space_pose": exponential_map(space_pose_terms),
@@ -158,7 +158,7 @@ def exponential_map(terms: np.ndarray) -> ExponentialMap:
     matrix = np.zeros((3, n, n, 16))
     for i in range(n):
         matrix[:, i, i] = flat[i, 1], flat[i, 2], -flat[i, 3]
-    return ExponentialMap((flat[:, 0] + flat[:, 3]).ravel(), matrix.reshape(3 * n, n * 16))
+    return ExponentialMap(terms[:, 0] + terms[:, 3], matrix.reshape(3 * n, n * 16))
 
 
 def _axis_pairs(axes: np.ndarray) -> np.ndarray:
@@ -176,8 +176,7 @@ _CROSS.setflags(write=False)
 def _exponentials(exponential: ExponentialMap, theta: np.ndarray) -> np.ndarray:
     """exp([X_i] theta_i) (with the folded constants) at theta (..., n): shape (..., n, 4, 4)."""
     coefficients = np.concatenate((theta, np.sin(theta), np.cos(theta)), axis=-1)
-    flat = exponential.offset + coefficients.dot(exponential.matrix)
-    return flat.reshape(*theta.shape, 4, 4)
+    return coefficients.dot(exponential.matrix).reshape(theta.shape + (4, 4)) + exponential.offset
 
 
 def _joint_values(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
