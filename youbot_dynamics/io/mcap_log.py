@@ -14,13 +14,13 @@ which makes a folder, cannot set publish time apart from log time, and omits
 from __future__ import annotations
 
 from pathlib import Path
-from types import TracebackType
 from typing import IO
 
 import yaml
 from mcap.writer import CompressionType, Writer
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.messages import TYPESTORE
 
 DEFAULT_DEPTH = 10
@@ -56,7 +56,7 @@ def ros2msg_schema(msgtype: str) -> bytes:
     return text.encode()
 
 
-class McapLogger:
+class McapLogger(ClosesOnExit):
     """Writes one rosbag2-form .mcap file; a context manager.
 
     Usage::
@@ -174,13 +174,3 @@ class McapLogger:
         if self._stream is None:
             raise RuntimeError(f"{self.path}: MCAP log already closed")
 
-    def __enter__(self) -> McapLogger:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()

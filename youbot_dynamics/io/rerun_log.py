@@ -24,7 +24,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from types import TracebackType
 from typing import NamedTuple
 
 import numpy as np
@@ -32,6 +31,7 @@ import rerun as rr
 from rerun.urdf import UrdfJoint, UrdfTree
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.messages import finite_array, finite_floats
 
 TIMELINE = "sim_time"
@@ -58,7 +58,7 @@ class Samples(NamedTuple):
     ee: np.ndarray
 
 
-class RerunLogger:
+class RerunLogger(ClosesOnExit):
     """Writes one .rrd file for a run of the robot in ``urdf_path``; a context manager.
 
     ``log_sample`` appends one sample (for a running node; buffered and sent every
@@ -237,13 +237,3 @@ class RerunLogger:
         rec.send_columns(EE_POSITION, indexes=index, columns=points)
         self._ee_path.append(samples.ee)
 
-    def __enter__(self) -> RerunLogger:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
