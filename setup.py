@@ -42,7 +42,6 @@ setup(
     description="youBot dynamics service: screw kinematics, RNEA/ABA with friction, integrators, logs",
     license="BSD-3-Clause",
     python_requires=">=3.11",
-    tests_require=["pytest"],
     entry_points={
         "console_scripts": [
             "youbot-dynamics = youbot_dynamics.cli:main",
