@@ -68,7 +68,8 @@ def robot_with_gravity(robot: Robot, gravity: np.ndarray) -> Robot:
 class Snapshot:
     """The simulation at one instant: t (s), q (rad, m), v (rad/s, m/s), z (LuGre bristle
     deflections), tau (applied joint torque, N m or N), energy (kinetic + potential, J) and
-    ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m)."""
+    ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m);
+    bodies: the world pose (4x4, m) of each free body by name, in the scene's order."""
 
     t: float
     joint_names: tuple[str, ...]
@@ -78,6 +79,7 @@ class Snapshot:
     tau: np.ndarray
     energy: float
     ee_pose: np.ndarray
+    bodies: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
 
 
 @dataclass
@@ -455,4 +457,5 @@ class Simulator:
 
     def snapshot(self) -> Snapshot:
         """The current instant."""
-        return Snapshot(self.t, self.joint_names, self.q, self.v, self.z, self.tau, self.energy, self.ee_pose)
+        return Snapshot(self.t, self.joint_names, self.q, self.v, self.z, self.tau, self.energy, self.ee_pose,
+                        self.contact.poses_of(self.x) if self.contact else {})
