@@ -30,6 +30,7 @@ Vector3 = _T["geometry_msgs/msg/Vector3"]
 Quaternion = _T["geometry_msgs/msg/Quaternion"]
 Pose = _T["geometry_msgs/msg/Pose"]
 PoseStamped = _T["geometry_msgs/msg/PoseStamped"]
+PoseArray = _T["geometry_msgs/msg/PoseArray"]
 Transform = _T["geometry_msgs/msg/Transform"]
 TransformStamped = _T["geometry_msgs/msg/TransformStamped"]
 TFMessage = _T["tf2_msgs/msg/TFMessage"]
@@ -143,10 +144,28 @@ def pose_stamped(
     quaternion_xyzw: Sequence[float],
 ) -> PoseStamped:
     """geometry_msgs/PoseStamped: position (m) and orientation of a frame in ``frame_id``."""
-    x, y, z = finite_floats(position_xyz, "PoseStamped.pose.position", 3)
-    orientation = unit_quaternion(quaternion_xyzw, "PoseStamped.pose.orientation")
-    pose = Pose(position=Point(x=x, y=y, z=z), orientation=orientation)
-    return PoseStamped(header=header(stamp_ns, frame_id), pose=pose)
+    return PoseStamped(header=header(stamp_ns, frame_id),
+                       pose=pose(position_xyz, quaternion_xyzw, "PoseStamped.pose"))
+
+
+def pose(position_xyz: Sequence[float], quaternion_xyzw: Sequence[float], field_name: str = "Pose") -> Pose:
+    """geometry_msgs/Pose: position (m) and unit quaternion (x, y, z, w)."""
+    x, y, z = finite_floats(position_xyz, f"{field_name}.position", 3)
+    orientation = unit_quaternion(quaternion_xyzw, f"{field_name}.orientation")
+    return Pose(position=Point(x=x, y=y, z=z), orientation=orientation)
+
+
+def pose_array(
+    stamp_ns: int,
+    frame_id: str,
+    poses: Iterable[tuple[Sequence[float], Sequence[float]]],
+) -> PoseArray:
+    """geometry_msgs/PoseArray: (position (m), quaternion (x, y, z, w)) of several frames in
+    ``frame_id``, in the given order (the message carries no names: the publisher documents
+    the order)."""
+    return PoseArray(header=header(stamp_ns, frame_id),
+                     poses=[pose(position, quaternion, f"PoseArray.poses[{index}]")
+                            for index, (position, quaternion) in enumerate(poses)])
 
 
 def transform_stamped(

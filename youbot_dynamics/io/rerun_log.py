@@ -2,7 +2,7 @@
 
 Layout of the recording (Rerun 0.41):
 
-- the robot, by Rerun's built-in URDF loader (``log_file_from_path``, static): geometry
+- the robot (if there is one), by Rerun's built-in URDF loader (``log_file_from_path``, static): geometry
   under ``/<robot name>/...`` and the joint transforms at q = 0 on ``/tf_static``;
 - ``/joint_transforms``: one ``Transform3D`` per moving joint per sample, with
   ``parent_frame``/``child_frame`` set to the URDF link names (computed by
@@ -13,7 +13,11 @@ Layout of the recording (Rerun 0.41):
   ``LineStrips3D``;
 - ``/joints/q``, ``/joints/v``, ``/joints/tau``: ``Scalars`` with one series per joint
   (rad or m, rad/s or m/s, N m or N), series named by a static ``SeriesLines``;
-  ``/energy``: total mechanical energy (J).
+  ``/energy``: total mechanical energy (J);
+- ``/free_bodies/<name>``: each free body as its shape (static ``Ellipsoids3D`` for a
+  sphere, ``Boxes3D``, ``Cylinders3D`` or ``Capsules3D``, centred on the body frame as coal
+  places it) with one ``Transform3D`` per sample (translation, m, and quaternion x, y, z, w:
+  the body's pose in the world frame, which is the robot's root frame).
 
 Every sample sits on the ``sim_time`` timeline (a duration: simulated seconds). The
 wall-clock ``log_time`` and ``log_tick`` timelines are disabled and no start time is sent,
@@ -22,7 +26,7 @@ so the content depends only on the data (Rerun's row ids still differ between ru
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
@@ -30,6 +34,7 @@ import numpy as np
 import rerun as rr
 from rerun.urdf import UrdfJoint, UrdfTree
 
+from youbot_dynamics.dynamics.collision import Shape
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.messages import finite_array, finite_floats
@@ -40,6 +45,7 @@ EE_POSITION = "/ee/position"
 EE_PATH = "/ee/path"
 SERIES = {"q": "/joints/q", "v": "/joints/v", "tau": "/joints/tau"}
 ENERGY = "/energy"
+FREE_BODIES = "/free_bodies"
 DEFAULT_BATCH_SIZE = 250
 """Samples ``log_sample`` buffers before sending them in one batch."""
 
@@ -58,12 +64,35 @@ class Samples(NamedTuple):
     ee: np.ndarray
 
 
-class RerunLogger(ClosesOnExit):
-    """Writes one .rrd file for a run of the robot in ``urdf_path``; a context manager.
+def body_entity(name: str) -> str:
+    """Entity path of the free body ``name``."""
+    return f"{FREE_BODIES}/{rr.escape_entity_path_part(name)}"
 
-    ``log_sample`` appends one sample (for a running node; buffered and sent every
-    ``batch_size`` samples); ``log_trajectory`` appends many at once (for offline runs).
-    Both send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
+
+def shape_archetype(name: str, shape: Shape) -> rr.AsComponents:
+    """A solid Rerun primitive of ``shape`` (metres) in its owner's frame, labelled ``name``:
+    coal's sphere, box (full edge lengths), cylinder and capsule (length along z, centred)."""
+    solid = {"fill_mode": rr.components.FillMode.Solid, "labels": [name]}
+    if shape.kind == "sphere":
+        return rr.Ellipsoids3D(half_sizes=[[shape.radius] * 3], **solid)
+    if shape.kind == "box":
+        return rr.Boxes3D(half_sizes=[0.5 * np.asarray(shape.size)], **solid)
+    if shape.kind == "cylinder":
+        return rr.Cylinders3D(lengths=[shape.length], radii=[shape.radius], **solid)
+    if shape.kind == "capsule":   # Rerun's capsule runs from its origin along +z
+        return rr.Capsules3D(lengths=[shape.length], radii=[shape.radius],
+                             translations=[[0.0, 0.0, -0.5 * shape.length]], **solid)
+    raise UserInputError(f"Rerun log: free body {name}: a {shape.kind} is not a finite shape")
+
+
+class RerunLogger(ClosesOnExit):
+    """Writes one .rrd file for a run of the robot in ``urdf_path`` (None: a scene without
+    a robot) and of the ``free_bodies`` (name -> Shape); a context manager.
+
+    ``log_sample`` appends one sample of the robot (for a running node; buffered and sent
+    every ``batch_size`` samples); ``log_trajectory`` appends many at once (for offline
+    runs); ``log_body_poses`` appends one sample of the free bodies (buffered alike). All
+    send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
     is buffered, writes the end-effector path and disconnects so the file gets its footer.
     Joint names must be moving URDF joints (``UserInputError`` otherwise); values must be
     finite (``MessageFieldError``, a ValueError naming the field, otherwise).
@@ -72,32 +101,29 @@ class RerunLogger(ClosesOnExit):
     def __init__(
         self,
         path: str | Path,
-        urdf_path: str | Path,
+        urdf_path: str | Path | None,
         *,
+        free_bodies: Mapping[str, Shape] | None = None,
         recording_name: str,
         application_id: str = "youbot_dynamics",
         recording_id: str | None = None,
         ee_frame: str | None = None,
         batch_size: int = DEFAULT_BATCH_SIZE,
     ) -> None:
-        """Start the recording at ``path`` and log the robot from ``urdf_path``.
+        """Start the recording at ``path``, log the robot from ``urdf_path`` and the shapes
+        of the free bodies.
 
         ``ee_frame`` is the frame the end-effector positions are given in (default: the
         URDF root link).
         """
         self.path = Path(path)
-        urdf_path = Path(urdf_path)
-        if not urdf_path.is_file():
-            raise UserInputError(f"Rerun log: URDF {urdf_path} does not exist")
-        try:
-            self._tree = UrdfTree.from_file_path(urdf_path)
-        except Exception as error:  # the Rust parser raises plain exceptions
-            message = f"Rerun log: URDF {urdf_path} cannot be parsed ({error})"
-            raise UserInputError(message) from error
-        self.urdf_path = urdf_path
-        self._joints: dict[str, UrdfJoint] = {
-            joint.name: joint for joint in self._tree.joints() if joint.joint_type != "fixed"
-        }
+        self.urdf_path = None if urdf_path is None else Path(urdf_path)
+        self._joints: dict[str, UrdfJoint] = {}
+        if self.urdf_path is not None:
+            tree = self._urdf_tree(self.urdf_path)
+            self._joints = {joint.name: joint for joint in tree.joints() if joint.joint_type != "fixed"}
+        self.bodies = tuple(free_bodies or {})
+        self._body_rows: list[tuple[float, list[list[float]], list[list[float]]]] = []
         self.batch_size = max(1, int(batch_size))
         self._series_names: tuple[str, ...] | None = None
         self._pending: list[Samples] = []
@@ -111,10 +137,24 @@ class RerunLogger(ClosesOnExit):
         self._rec.set_log_time_enabled(False)
         self._rec.set_log_tick_enabled(False)
         self._rec.send_recording_name(recording_name)
-        self._rec.log_file_from_path(urdf_path, static=True)
-        self.ee_frame = ee_frame or self._tree.root_link().name
-        self._rec.log(EE_POSITION, rr.CoordinateFrame(self.ee_frame), static=True)
-        self._rec.log(EE_PATH, rr.CoordinateFrame(self.ee_frame), static=True)
+        for name, shape in (free_bodies or {}).items():
+            self._rec.log(body_entity(name), shape_archetype(name, shape), static=True)
+        self.ee_frame = None
+        if self.urdf_path is not None:
+            self._rec.log_file_from_path(self.urdf_path, static=True)
+            self.ee_frame = ee_frame or tree.root_link().name
+            self._rec.log(EE_POSITION, rr.CoordinateFrame(self.ee_frame), static=True)
+            self._rec.log(EE_PATH, rr.CoordinateFrame(self.ee_frame), static=True)
+
+    @staticmethod
+    def _urdf_tree(urdf_path: Path) -> UrdfTree:
+        if not urdf_path.is_file():
+            raise UserInputError(f"Rerun log: URDF {urdf_path} does not exist")
+        try:
+            return UrdfTree.from_file_path(urdf_path)
+        except Exception as error:  # the Rust parser raises plain exceptions
+            message = f"Rerun log: URDF {urdf_path} cannot be parsed ({error})"
+            raise UserInputError(message) from error
 
     @property
     def closed(self) -> bool:
@@ -157,6 +197,20 @@ class RerunLogger(ClosesOnExit):
         if len(self._pending) >= self.batch_size:
             self._flush()
 
+    def log_body_poses(self, t: float, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
+        """Log the free bodies at simulated time ``t`` (s): ``poses`` maps every body named
+        at construction to (translation (m), quaternion (x, y, z, w)) in the world frame.
+        Checked at once, sent in batches of ``batch_size`` like ``log_sample``."""
+        self._recording()
+        if set(poses) != set(self.bodies):
+            raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies {sorted(self.bodies)}")
+        t = finite_floats([t], "Rerun t", 1)[0]
+        translations = [finite_floats(poses[name][0], f"Rerun {name} translation", 3) for name in self.bodies]
+        quaternions = [finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]
+        self._body_rows.append((t, translations, quaternions))
+        if len(self._body_rows) >= self.batch_size:
+            self._flush_bodies()
+
     def log_trajectory(
         self,
         t: Sequence[float],
@@ -191,6 +245,7 @@ class RerunLogger(ClosesOnExit):
         if self._rec is None:
             return
         self._flush()
+        self._flush_bodies()
         rec, self._rec = self._rec, None
         if self._ee_path:
             rec.log(EE_PATH, rr.LineStrips3D([np.concatenate(self._ee_path)]), static=True)
@@ -217,6 +272,19 @@ class RerunLogger(ClosesOnExit):
         if self._pending:
             rows, self._pending = self._pending, []
             self._send(self._pending_names, Samples(*(np.array(column) for column in zip(*rows))))
+
+    def _flush_bodies(self) -> None:
+        """Send the free-body poses buffered by ``log_body_poses``: one Transform3D column
+        per body."""
+        if not self._body_rows:
+            return
+        rows, self._body_rows = self._body_rows, []
+        index = [rr.TimeColumn(TIMELINE, duration=[row[0] for row in rows])]
+        translations = np.array([row[1] for row in rows])    # (samples, bodies, 3)
+        quaternions = np.array([row[2] for row in rows])     # (samples, bodies, 4)
+        for k, name in enumerate(self.bodies):
+            columns = rr.Transform3D.columns(translation=translations[:, k], quaternion=quaternions[:, k])
+            self._recording().send_columns(body_entity(name), indexes=index, columns=columns)
 
     def _send(self, names: tuple[str, ...], samples: Samples) -> None:
         """Send checked samples (arrays as in ``log_trajectory``) with ``send_columns``."""

@@ -1,6 +1,8 @@
 """The ``dynamics_node``: a thin rclpy adapter around :mod:`youbot_dynamics.ros.session`.
 
-simulate mode publishes /clock, /joint_states, /ee_pose and /diagnostics, subscribes
+simulate mode publishes /clock, /joint_states, /ee_pose, /free_bodies (geometry_msgs/PoseArray,
+when the scene has free bodies; a scene without a robot has no /joint_states and /ee_pose)
+and /diagnostics (with the contact events), subscribes
 /joint_commands (sensor_msgs/JointState efforts by joint name) and /joint_trajectory
 (trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
 (std_srvs/SetBool). inverse mode subscribes /joint_states and publishes /computed_torques,
@@ -11,8 +13,8 @@ per wall second; a late tick publishes the samples that are due (up to ``MAX_BUR
 rest at the next ticks), so the average rate holds while the simulation keeps up; only
 after falling ``MAX_LAG`` wall seconds behind does the pacing restart from now. Simulated
 time itself advances by fixed increments, independent of the wall clock. With
-``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched /joint_states
-(or after ``wait_timeout`` wall seconds), so a subscriber started with the node misses none
+``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched the sample
+topic (/joint_states, or /free_bodies without a robot) (or after ``wait_timeout`` wall seconds), so a subscriber started with the node misses none
 of the first samples. On leaving, the node waits (up to ``ACK_TIMEOUT``) until its
 subscribers have acknowledged every message.
 
@@ -43,7 +45,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
 from youbot_dynamics.ros.parameters import check_choice, declare_all
 from youbot_dynamics.ros.qos import RELIABLE_DEEP
-from youbot_dynamics.ros.session import PUBLISHED, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
+from youbot_dynamics.ros.session import TOPIC_TYPES, InverseSession, Outputs, SimulationSession
 from youbot_dynamics.sim.commands import InputRejected
 from youbot_dynamics.sim.scene import load_scene
 
@@ -80,7 +82,7 @@ class DynamicsNode(Node):
             self.session = InverseSession(scene, filter_time_constant=p["acceleration_filter"], **logs)
         self.finished = False
         self.publishers_ = {topic: self.create_publisher(rclpy_class(TOPIC_TYPES[topic]), topic, RELIABLE_DEEP)
-                            for topic in PUBLISHED[p["mode"]]}
+                            for topic in self.session.topics}
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         if p["mode"] == "simulate":
             self.create_subscription(JointState, "/joint_commands", self._on_command, RELIABLE_DEEP)
@@ -108,14 +110,14 @@ class DynamicsNode(Node):
         self._pace_start, self._pace_k0 = time.monotonic(), self.session.k
 
     def _subscribers_ready(self) -> bool:
-        """False while simulated time waits for ``wait_for_subscribers`` subscribers on
-        /joint_states; at the end of the wait the pacing and the diagnostics mark restart."""
-        wanted = self.params["wait_for_subscribers"]
-        count = self.publishers_["/joint_states"].get_subscription_count()
+        """False while simulated time waits for ``wait_for_subscribers`` subscribers on the
+        sample topic; at the end of the wait the pacing and the diagnostics mark restart."""
+        wanted, topic = self.params["wait_for_subscribers"], self.session.sample_topic
+        count = self.publishers_[topic].get_subscription_count()
         if count < wanted:
             if time.monotonic() < self._wait_deadline:
                 return False
-            self.get_logger().warning(f"{count} of {wanted} /joint_states subscribers after "
+            self.get_logger().warning(f"{count} of {wanted} {topic} subscribers after "
                                       f"{self.params['wait_timeout']:g} s; starting anyway")
         self._waiting = False
         self._restart_pacing()

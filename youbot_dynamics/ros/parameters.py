@@ -34,7 +34,7 @@ PARAMETERS: dict[str, Spec] = {
     "scene": Spec("arm_ptp", "scene name under config/scenes/ or a path to a scene YAML"),
     "mode": Spec("simulate", "simulate: integrate the scene and publish its motion; inverse: compute "
                  "torques from /joint_states (" + " | ".join(MODES) + ")"),
-    "publish_rate": Spec(500.0, "samples of /joint_states, /ee_pose and /clock per simulated second (Hz)",
+    "publish_rate": Spec(500.0, "samples of /joint_states, /ee_pose, /free_bodies and /clock per simulated second (Hz)",
                          (1.0, 2000.0)),
     "time_scale": Spec(1.0, "simulated seconds per wall-clock second; 0: as fast as possible", (0.0, 100.0),
                        read_only=False),
@@ -42,7 +42,7 @@ PARAMETERS: dict[str, Spec] = {
                      (0.0, 1.0e6)),
     "solve_horizon": Spec(0.02, "simulated time (s) per integrator run (samples handed out one by one; "
                           "commands take effect at the next run)", (0.0, 1.0)),
-    "frame_id": Spec("", "frame of /ee_pose and root of /tf ('' : the URDF root link)"),
+    "frame_id": Spec("", "frame of /ee_pose and /free_bodies, root of /tf ('' : the URDF root link; world without a robot)"),
     "ee_link": Spec("", "link reported on /ee_pose ('' : the robot's end effector)"),
     "mcap_path": Spec("", "MCAP log (rosbag2 form) of every published topic plus /tf, /tf_static ('' : none)"),
     "rrd_path": Spec("", "Rerun recording ('' : none)"),
@@ -51,8 +51,8 @@ PARAMETERS: dict[str, Spec] = {
     "on_timeout": Spec("hold", "after the timeout: hold (scene controller) | zero_torque", read_only=False),
     "acceleration_filter": Spec(0.0, "inverse mode: low-pass time constant (s) on the central-difference "
                                 "acceleration; 0: none", (0.0, 10.0)),
-    "wait_for_subscribers": Spec(0, "simulate mode: simulated time starts once /joint_states has this many "
-                                 "subscribers (or after wait_timeout); 0: at once", (0, 100)),
+    "wait_for_subscribers": Spec(0, "simulate mode: simulated time starts once /joint_states (/free_bodies "
+                                 "without a robot) has this many subscribers (or after wait_timeout); 0: at once", (0, 100)),
     "wait_timeout": Spec(10.0, "wall-clock seconds to wait for those subscribers; then start anyway, "
                          "with a warning", (0.0, 3600.0)),
     "diagnostics_period": Spec(1.0, "wall-clock seconds between /diagnostics messages", (0.01, 60.0)),

@@ -2,10 +2,20 @@
 torques from joint states (inverse mode), build the messages through ``io.messages`` and log
 them through ``io`` (MCAP in rosbag2 form, Rerun). The node only moves messages in and out.
 
-Every output is a list of ``(topic, message)`` (rosbags objects) that the caller publishes;
-everything published is also logged, plus /tf (every moving link, per sample) and
-/tf_static (every fixed link, once, latched). Stamps and log times are simulated time in
-integer nanoseconds, so two runs of a scene log identical payloads.
+Every output is a list of ``(topic, message)`` (rosbags objects) that the caller publishes
+(``session.topics`` names them); everything published is also logged, plus /tf (every
+moving link and every free body, per sample) and /tf_static (every fixed link, once,
+latched). Stamps and log times are simulated time in integer nanoseconds, so two runs of a
+scene log identical payloads.
+
+Free bodies (simulate mode) appear like the robot's links: on /tf as ``<root frame> ->
+<body name>`` and in the Rerun recording as their shapes; on ROS, as one
+geometry_msgs/PoseArray on /free_bodies per sample (poses in the root frame, in the
+scene's order of ``free_bodies``; the names, in that order, are the ``free_bodies`` value
+of /diagnostics). One message per sample keeps every body at the same stamp, and the topic
+set does not depend on body names (which need not be valid topic names). A scene without
+a robot (``robot: none``) publishes neither /joint_states nor /ee_pose: it has no joints
+and no end effector, and an empty or identity message would read as data.
 
 Simulate mode advances simulated time by fixed increments: sample k is at exactly
 ``k * round(1e9 / publish_rate)`` ns, whatever the wall clock does.
@@ -22,11 +32,12 @@ import numpy as np
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.mcap_log import McapLogger
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
                                           InputRejected, follow, joint_sample, joint_trajectory)
-from youbot_dynamics.sim.frames import LinkFrames
+from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
 from youbot_dynamics.sim.integrators import DivergenceError
 from youbot_dynamics.sim.inverse import AccelerationEstimator, InverseDynamics
 from youbot_dynamics.sim.scene import Scene
@@ -39,31 +50,45 @@ TOPIC_TYPES = {
     "/joint_states": "sensor_msgs/msg/JointState",
     "/computed_torques": "sensor_msgs/msg/JointState",
     "/ee_pose": "geometry_msgs/msg/PoseStamped",
+    "/free_bodies": "geometry_msgs/msg/PoseArray",
     "/clock": "rosgraph_msgs/msg/Clock",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/tf": "tf2_msgs/msg/TFMessage",
     "/tf_static": "tf2_msgs/msg/TFMessage",
 }
-"""Every topic the node publishes or logs, with its type."""
+"""Every topic the node publishes or logs, with its type (/tf and /tf_static are logged
+only: tf2_msgs has no rclpy wheel)."""
 
-PUBLISHED = {"simulate": ("/clock", "/joint_states", "/ee_pose", "/diagnostics"),
-             "inverse": ("/computed_torques", "/ee_pose", "/diagnostics")}
-"""Topics published over ROS per mode (/tf and /tf_static are logged only: tf2_msgs has no
-rclpy wheel)."""
+
+def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
+    """The URDF file of the scene's robot for Rerun: None without a robot; the scene's file;
+    or, for a composed robot (``robot_path`` holds URDF text), that text written next to
+    the recording as ``<rrd name>.urdf``."""
+    if not robot.tree:
+        return None
+    if not scene.robot_path.lstrip().startswith("<"):
+        return Path(scene.robot_path)
+    path = rrd_path.with_suffix(".urdf")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(scene.robot_path, encoding="utf-8")
+    return path
 
 
 class Recorder:
-    """The logs of one node run: an MCAP (``mcap_path``) and a Rerun recording (``rrd_path``);
-    either may be None. ``close`` finalises both and may be called more than once."""
+    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` plus /tf and
+    /tf_static, and a Rerun recording (``rrd_path``) of the robot and (simulate mode) the
+    scene's free bodies; either may be None. ``close`` finalises both and may be called more than once."""
 
-    def __init__(self, mode: str, scene: Scene, mcap_path: str | Path | None,
-                 rrd_path: str | Path | None, root_frame: str) -> None:
+    def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
+                 mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
-            for topic in (*PUBLISHED[mode], "/tf", "/tf_static"):
+            for topic in (*topics, "/tf", "/tf_static"):
                 self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic == "/tf_static")
-        self.rerun = RerunLogger(rrd_path, scene.robot_path, recording_name=f"{scene.name} ({mode})",
-                                 ee_frame=root_frame) if rrd_path else None
+        self.rerun = RerunLogger(
+            rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
+            free_bodies={spec.body.name: spec.shape for spec in scene.free_bodies} if mode == "simulate" else {},
+            ee_frame=root_frame) if rrd_path else None
 
     @property
     def paths(self) -> list[Path]:
@@ -81,6 +106,11 @@ class Recorder:
         if self.rerun is not None and not self.rerun.closed:
             self.rerun.log_sample(t, names, q, v, tau, energy, ee_position)
 
+    def bodies(self, t: float, transforms: Sequence[LinkTransform]) -> None:
+        """The free bodies' poses (root frame) in the Rerun recording at simulated time t (s)."""
+        if self.rerun is not None and not self.rerun.closed:
+            self.rerun.log_body_poses(t, {b.child: (b.translation, b.quaternion_xyzw) for b in transforms})
+
     def close(self) -> None:
         for log in (self.mcap, self.rerun):
             if log is not None:
@@ -88,11 +118,18 @@ class Recorder:
 
 
 class _Frames:
-    """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame``."""
+    """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame`` and /tf and
+    /free_bodies messages of the free bodies ``body_names`` (frame names distinct from the
+    robot's links)."""
 
-    def __init__(self, robot: Robot, root_frame: str, ee_link: str | None) -> None:
+    def __init__(self, robot: Robot, root_frame: str, ee_link: str | None, body_names: Sequence[str] = ()) -> None:
         self.links = LinkFrames(robot, ee_link or None)
         self.root_frame = root_frame or robot.root_link
+        self.has_robot = bool(robot.tree)
+        clash = sorted(set(body_names) & {self.root_frame, *robot.link_names})
+        if clash:
+            raise UserInputError(f"free bodies {clash} have the names of robot frames; /tf needs distinct "
+                                 "frame names: rename the bodies in the scene")
 
     def tf_static(self) -> object:
         transforms = [messages.transform_stamped(0, t.parent, t.child, t.translation, t.quaternion_xyzw)
@@ -102,9 +139,19 @@ class _Frames:
                                                             (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
         return messages.tf_message(transforms)
 
-    def tf(self, stamp_ns: int, q: np.ndarray) -> object:
+    def bodies(self, poses: dict[str, np.ndarray]) -> list[LinkTransform]:
+        """Root frame -> body transforms from the bodies' world poses (4x4, m)."""
+        return body_transforms(self.root_frame, poses)
+
+    def tf(self, stamp_ns: int, q: np.ndarray, bodies: Sequence[LinkTransform] = ()) -> object:
+        """The moving links at q, then the free bodies."""
         return messages.tf_message(messages.transform_stamped(stamp_ns, t.parent, t.child, t.translation,
-                                                              t.quaternion_xyzw) for t in self.links.moving(q))
+                                                              t.quaternion_xyzw)
+                                   for t in (*self.links.moving(q), *bodies))
+
+    def free_bodies(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
+        """/free_bodies: the bodies' poses in the root frame, in order."""
+        return messages.pose_array(stamp_ns, self.root_frame, [(b.translation, b.quaternion_xyzw) for b in bodies])
 
     def ee_pose(self, stamp_ns: int, q: np.ndarray) -> tuple[object, np.ndarray]:
         position, quaternion = self.links.ee_pose(q)
@@ -126,17 +173,19 @@ def reported(value: float | int | str | None) -> float | int | str:
 class _Session:
     """What both modes share: the robot's frames, the input counters, the logs (with
     /tf_static written once at t = 0) and the /diagnostics status. Subclasses say their
-    ``mode`` and keep ``stamp_ns``, the stamp (ns) of their latest output."""
+    ``mode`` and ``topics`` (published, in order) and keep ``stamp_ns``, the stamp (ns) of
+    their latest output."""
 
     mode: str
     stamp_ns: int
+    topics: tuple[str, ...]
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
                  mcap_path: str | Path | None, rrd_path: str | Path | None) -> None:
         self.scene, self.robot = scene, robot
         self.counters = InputCounters()
-        self.frames = _Frames(robot, frame_id, ee_link)
-        self.recorder = Recorder(self.mode, scene, mcap_path, rrd_path, self.frames.root_frame)
+        self.frames = _Frames(robot, frame_id, ee_link, [spec.body.name for spec in scene.free_bodies])
+        self.recorder = Recorder(self.mode, scene, robot, self.topics, mcap_path, rrd_path, self.frames.root_frame)
         self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
@@ -163,6 +212,19 @@ class SimulationSession(_Session):
     """
 
     mode = "simulate"
+
+    @property
+    def topics(self) -> tuple[str, ...]:
+        """/clock, /joint_states and /ee_pose (if the scene has a robot), /free_bodies (if it
+        has free bodies), /diagnostics."""
+        robot = ("/joint_states", "/ee_pose") if self.robot.tree else ()
+        return ("/clock", *robot, *(("/free_bodies",) if self.scene.free_bodies else ()), "/diagnostics")
+
+    @property
+    def sample_topic(self) -> str:
+        """The topic that carries every sample of the motion: /joint_states, or /free_bodies in
+        a scene without a robot (/clock if it has neither)."""
+        return next(topic for topic in ("/joint_states", "/free_bodies", "/clock") if topic in self.topics)
 
     def __init__(self, scene: Scene, publish_rate: float, *, command_timeout: float = 0.5,
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
@@ -196,6 +258,7 @@ class SimulationSession(_Session):
         self.k, self.failure, self.wall_time, self._pending = 0, None, 0.0, []
         self.snapshot = self.simulator.snapshot()
         self.energy0, self.energy_error = self.snapshot.energy, 0.0
+        self._events_start = len(self.simulator.contact.events) if self.simulator.contact else 0
         self._started = False
 
     def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int) -> None:
@@ -244,28 +307,56 @@ class SimulationSession(_Session):
         self.snapshot = snapshot
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
+        bodies = self.frames.bodies(snapshot.bodies)
         try:
-            pose, position = self.frames.ee_pose(stamp, q)
-            outputs = [("/clock", messages.clock(stamp)),
-                       ("/joint_states", messages.joint_state(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau)),
-                       ("/ee_pose", pose)]
-            self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q))], stamp)
+            outputs = [("/clock", messages.clock(stamp))]
+            if self.frames.has_robot:
+                pose, position = self.frames.ee_pose(stamp, q)
+                outputs += [("/joint_states", messages.joint_state(stamp, snapshot.joint_names, q, snapshot.v,
+                                                                   snapshot.tau)), ("/ee_pose", pose)]
+            if bodies:
+                outputs.append(("/free_bodies", self.frames.free_bodies(stamp, bodies)))
+            self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q, bodies))], stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
-        self.recorder.sample(self.t, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy, position)
+        if self.frames.has_robot:
+            self.recorder.sample(self.t, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy, position)
+        if bodies:
+            self.recorder.bodies(self.t, bodies)
         return outputs
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
-        energy (J), input counters; level ERROR after a divergence, WARN when paused. Figures
+        energy (J), input counters, the free bodies (names in /free_bodies order) and the
+        contact events so far; level ERROR after a divergence, WARN when paused. Figures
         not known (counters the integrator does not report) are ``NOT_REPORTED``."""
         stats = {f"integrator.{key}": reported(value) for key, value in self.simulator.stats.as_dict().items()}
         values = {"sim_time": self.t, "real_time_factor": reported(real_time_factor),
                   "energy": self.snapshot.energy, "energy_error": self.energy_error,
-                  "paused": self.paused, "command": self._command_source(), **stats, **self.counters.as_values()}
+                  "paused": self.paused, "command": self._command_source(), **stats, **self.counters.as_values(),
+                  **self._contact_values()}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
         return self._diagnostic_outputs(level, text, values)
+
+    def _contact_values(self) -> dict[str, object]:
+        """``free_bodies`` (names, comma-separated, in /free_bodies order) and the contact
+        events since the last reset up to the current sample (the simulator may have run
+        ahead within its solve horizon): ``contact.events``, ``contact.events.<kind>`` per
+        kind seen (touch, compression, separation, impact, contact: see
+        :class:`~youbot_dynamics.sim.contact_system.ContactEvent`) and ``contact.last_event``.
+        Nothing for a scene without contact."""
+        contact = self.simulator.contact
+        if contact is None:
+            return {}
+        events = [e for e in contact.events[self._events_start:] if e.time <= self.t + 0.5 / NS_PER_S]
+        kinds = sorted({e.kind for e in events})
+        last = events[-1] if events else None
+        return {"free_bodies": ",".join(spec.body.name for spec in self.scene.free_bodies),
+                "contact.events": len(events),
+                **{f"contact.events.{kind}": sum(e.kind == kind for e in events) for kind in kinds},
+                "contact.last_event": "none" if last is None else
+                f"{last.kind} {last.pair} at t = {last.time:.6f} s (value {last.value:.6g})"}
 
     def _command_source(self) -> str:
         if self.commands.active(self.t):
@@ -280,12 +371,15 @@ class InverseSession(_Session):
     :mod:`youbot_dynamics.sim.inverse`), tau = RNEA + friction of the scene's robot."""
 
     mode = "inverse"
+    topics = ("/computed_torques", "/ee_pose", "/diagnostics")
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
                  ee_link: str = "", mcap_path: str | Path | None = None,
                  rrd_path: str | Path | None = None) -> None:
-        super().__init__(scene, robot_with_gravity(scene.robot(), scene.gravity), frame_id, ee_link,
-                         mcap_path, rrd_path)
+        robot = robot_with_gravity(scene.robot(), scene.gravity)
+        if not robot.tree:
+            raise UserInputError(f"{scene.source}: inverse mode needs a robot; the scene has none")
+        super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self.estimator = AccelerationEstimator(filter_time_constant)

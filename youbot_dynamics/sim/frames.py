@@ -1,5 +1,6 @@
 """Frames a running simulation reports: the pose of every link relative to its parent (for
-/tf and /tf_static) and the end-effector pose from the screw-axis kinematics (for /ee_pose).
+/tf and /tf_static), the end-effector pose from the screw-axis kinematics (for /ee_pose) and
+the pose of every free body in the world frame (for /tf and /free_bodies).
 
 Each URDF joint of the Robot's tree is an edge parent -> child. A fixed joint (locked ones
 included, with their value folded into the origin) gives a constant transform (/tf_static);
@@ -11,6 +12,7 @@ Poses are 4x4 homogeneous matrices (m); quaternions are (x, y, z, w).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import NamedTuple
 
 import numpy as np
@@ -39,6 +41,12 @@ def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTransform:
     return LinkTransform(parent, child, transform[:3, 3].copy(), quaternion_from_matrix(transform[:3, :3]))
+
+
+def body_transforms(world_frame: str, poses: Mapping[str, np.ndarray]) -> list[LinkTransform]:
+    """``world_frame`` -> body transforms of free bodies from their world poses (4x4, m) by
+    body name, in the mapping's order; the child frame is the body's name."""
+    return [_link_transform(world_frame, name, pose) for name, pose in poses.items()]
 
 
 class LinkFrames:
