@@ -8,7 +8,12 @@ a shape is ``{type: sphere|box|cylinder|capsule|halfspace, <dimensions>}``, see
     robot: none                       # no robot: free bodies and world geometry only
     robot:                            # several robots as one Robot (names prefixed)
       compose:
-        - {urdf: urdf/youbot.urdf, prefix: yb1_, pose: {xyz: [...], rpy: [...]}}
+        - urdf: urdf/youbot.urdf
+          prefix: yb1_
+          pose: {xyz: [...], rpy: [...]}  # the robot's root link in the common ``world``
+          inertials:                      # optional corrections of the file's link inertials
+            gripper_finger_link_l: {mass: kg, inertia: [Ixx, Iyy, Izz]}   # kg m^2, principal
+                                          # moments about the file's inertial origin and axes
     free_bodies:
       - name: ball
         shape: {type: sphere, radius: 0.05}
@@ -120,7 +125,7 @@ def composed_urdf(reader, value: Mapping[str, Any], scene_path: Path) -> str:
     etree.SubElement(world, "link", name="world")
     for i, entry in enumerate(entries):
         key = f"robot.compose[{i}]"
-        entry = reader.mapping(entry, key, ("urdf", "prefix", "pose"))
+        entry = reader.mapping(entry, key, ("urdf", "prefix", "pose", "inertials"))
         path = next((base / str(entry.get("urdf"))).resolve() for base in (scene_path.parent, package_share())
                     if (base / str(entry.get("urdf"))).is_file()) if entry.get("urdf") else None
         if path is None:
@@ -129,8 +134,10 @@ def composed_urdf(reader, value: Mapping[str, Any], scene_path: Path) -> str:
         prefix = str(entry.get("prefix", ""))
         pose = pose_matrix(reader, entry.get("pose"), f"{key}.pose")
         root = etree.parse(str(path)).getroot()
+        corrected_inertials(reader, root, entry.get("inertials", {}), f"{key}.inertials")
         children = {j.find("child").get("link") for j in root.findall("joint")}
-        for element in root:
+        base = next(link.get("name") for link in root.findall("link") if link.get("name") not in children)
+        for element in list(root):
             if element.tag in ("link", "joint"):
                 element.set("name", prefix + element.get("name"))
                 for role in ("parent", "child"):
@@ -138,13 +145,37 @@ def composed_urdf(reader, value: Mapping[str, Any], scene_path: Path) -> str:
                     if link is not None:
                         link.set("link", prefix + link.get("link"))
                 world.append(element)
-        base = next(link.get("name") for link in root.findall("link") if link.get("name") not in children)
         joint = etree.SubElement(world, "joint", name=f"{prefix}world_joint", type="fixed")
         etree.SubElement(joint, "parent", link="world")
         etree.SubElement(joint, "child", link=prefix + base)
         rpy = pin.rpy.matrixToRpy(pose[:3, :3])
-        etree.SubElement(joint, "origin", xyz=" ".join(map(repr, pose[:3, 3])), rpy=" ".join(map(repr, rpy)))
+        etree.SubElement(joint, "origin", xyz=" ".join(repr(float(x)) for x in pose[:3, 3]),
+                         rpy=" ".join(repr(float(x)) for x in rpy))
     return etree.tostring(world, encoding="unicode")
+
+
+def corrected_inertials(reader, root: etree._Element, value: Any, key: str) -> None:
+    """Replace, in the URDF tree ``root``, the mass and/or the inertia (principal moments,
+    products set to 0) of the links named in ``{link: {mass, inertia: [Ixx, Iyy, Izz]}}``."""
+    from youbot_dynamics.sim.scene import SceneError
+
+    links = {link.get("name"): link for link in root.findall("link")}
+    for name, correction in reader.mapping(value, key).items():
+        where = f"{key}.{name}"
+        correction = reader.mapping(correction, where, ("mass", "inertia"))
+        inertial = links[name].find("inertial") if name in links else None
+        if inertial is None:
+            raise SceneError(reader.source, where, "not a link with an <inertial> in the URDF", name)
+        if "mass" in correction:
+            inertial.find("mass").set("value", repr(reader.positive(correction["mass"], f"{where}.mass")))
+        if "inertia" in correction:
+            moments = reader.vector3(correction["inertia"], f"{where}.inertia")
+            if np.any(moments <= 0) or 2 * moments.max() > moments.sum():
+                raise SceneError(reader.source, f"{where}.inertia", "principal moments must be positive and "
+                                 "obey the triangle inequality", moments.tolist())
+            values = dict(zip(("ixx", "iyy", "izz"), moments), ixy=0.0, ixz=0.0, iyz=0.0)
+            for attribute, number in values.items():
+                inertial.find("inertia").set(attribute, repr(float(number)))
 
 
 def read_free_bodies(reader, value: Any) -> tuple[FreeBodySpec, ...]:

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -227,6 +228,21 @@ class Simulator:
         pin.framesForwardKinematics(self.robot.model, self.data, q)
         return self.data.oMf[self.ee_frame].homogeneous.copy()
 
+    def body_in_link(self, result: SimulationResult, body: str, link: str) -> np.ndarray:
+        """(k, 3) positions (m) of free body ``body``'s centre of mass in the frame of robot
+        link ``link`` at the result's output times: constant while the link holds the body
+        rigidly (a grasp that does not slip)."""
+        index = self.contact.body_index[body] if self.contact and body in self.contact.body_index else None
+        if index is None:
+            raise UserInputError(f"{self.scene.source}: no free body {body!r}")
+        positions = result.x[:, self.layout.slice("p")][:, 3 * index:3 * index + 3]
+        frame = self.robot.frame_id(link)
+        out = np.empty_like(positions)
+        for k, (q, p) in enumerate(zip(result.x[:, self._q], positions)):
+            pin.framesForwardKinematics(self.robot.model, self.data, q)
+            out[k] = self.data.oMf[frame].actInv(p)
+        return out
+
     def clipped(self, tau: np.ndarray) -> np.ndarray:
         """A torque command in joint order, clipped to the effort limits."""
         tau = self.robot.vector(tau, what="tau_command")
@@ -281,7 +297,7 @@ class Simulator:
 
     def _step_constraints(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None) -> Solution:
         """Fixed steps of the constraint stepper from x0 with outputs at t_eval (each output
-        time is reached by a shortened last step); contact events are the steps at which a
+        interval in equal steps of at most dt); contact events are the steps at which a
         pair starts carrying an impulse."""
         import time as clock
 
@@ -294,16 +310,19 @@ class Simulator:
         t, outputs, in_contact = float(t_eval[0]), [x0.copy()], set()
         stats = IntegratorStats(self.integrator.method)
         penetration = 0.0
-        for t_next in t_eval[1:]:
-            while t < t_next - 1e-12:
-                dt = min(h, t_next - t)
+        for t_next in map(float, t_eval[1:]):
+            # equal steps of at most h that end on t_next: a sliver of a step left over by
+            # round-off would turn the overlap correction (depth / dt) into a huge impulse
+            count = max(1, math.ceil((t_next - t) / h - 1e-9))
+            start_interval, dt = t, (t_next - t) / count
+            for i in range(1, count + 1):
                 tau = np.zeros(stepper.model.nv)
                 if nv:
                     qr, vr = q[:nv], v[:nv]
                     command = tau_command if tau_command is not None else self.controller.torque(t, qr, vr)
                     tau[:nv] = command - (self.friction.torque(vr) if self.friction is not None else 0.0)
                 q, v, report = stepper.step(q, v, tau, dt)
-                t += dt
+                t = t_next if i == count else start_interval + i * dt
                 stats.steps += 1
                 stats.nonlinear_iterations += report.iterations
                 penetration = max(penetration, report.penetration)
