@@ -1,8 +1,9 @@
 """Rerun recordings, read back with rerun.chunk.RrdReader.
 
 Checks the entity paths, that samples sit only on the simulated-time timeline, sample
-counts, the logged values, and the joint transforms against the rotation the URDF axis
-gives (a quaternion about z or y of half the joint angle, computed here independently).
+counts, the logged values, the joint transforms against the rotation the URDF axis gives
+(a quaternion about z or y of half the joint angle, computed here independently), and free
+bodies without a robot (shapes and per-sample poses).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 import pytest
 from rerun.chunk import RrdReader
 
+from youbot_dynamics.dynamics.collision import Shape
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
 
@@ -181,3 +183,37 @@ def test_youbot_urdf_loads_and_animates(tmp_path: Path) -> None:
     assert len(rows) == 3 * len(arm)
     assert {r["Transform3D:child_frame"][0] for r in rows} == {children[name] for name in arm}
     assert len(static["/tf_static"]) == len(children)
+
+
+def test_free_bodies_without_a_robot(tmp_path: Path) -> None:
+    """No URDF: only the free bodies, each a static solid of its shape (Rerun's capsule runs
+    from its origin, so it is shifted by half its length to be centred like coal's) and one
+    transform per sample on sim_time; poses must name every body and be finite."""
+    shapes = {"ball": Shape("sphere", radius=0.025), "crate": Shape("box", size=(0.1, 0.2, 0.3)),
+              "can": Shape("cylinder", radius=0.03, length=0.12), "pill": Shape("capsule", radius=0.01, length=0.04)}
+    path = tmp_path / "bodies.rrd"
+    t = np.arange(7) * DT
+    with RerunLogger(path, None, free_bodies=shapes, recording_name="bodies", batch_size=3) as log:
+        for k, time in enumerate(t):
+            turn = [0.0, 0.0, math.sin(0.05 * k), math.cos(0.05 * k)]
+            log.log_body_poses(time, {name: ([0.1 * i, 0.0, 1.0 - time], turn) for i, name in enumerate(shapes)})
+        with pytest.raises(UserInputError, match="expected the free bodies"):
+            log.log_body_poses(1.0, {"ball": ([0, 0, 0], [0, 0, 0, 1])})
+        with pytest.raises(ValueError, match=r"Rerun can translation\[2\]"):
+            log.log_body_poses(1.0, {name: ([0, 0, math.nan if name == "can" else 0], [0, 0, 0, 1]) for name in shapes})
+    temporal, static, timelines = read_rows(path)
+    assert timelines == {"sim_time"}
+    assert set(temporal) == {f"/free_bodies/{name}" for name in shapes}
+    assert "/tf_static" not in static and "/ee/position" not in static
+    assert static["/free_bodies/ball"][0]["Ellipsoids3D:half_sizes"] == [pytest.approx([0.025] * 3)]
+    assert static["/free_bodies/crate"][0]["Boxes3D:half_sizes"] == [pytest.approx([0.05, 0.1, 0.15])]
+    can = static["/free_bodies/can"][0]
+    assert (can["Cylinders3D:lengths"], can["Cylinders3D:radii"]) == ([pytest.approx(0.12)], [pytest.approx(0.03)])
+    pill = static["/free_bodies/pill"][0]
+    assert pill["Capsules3D:translations"] == [pytest.approx([0.0, 0.0, -0.02])]
+    for i, name in enumerate(shapes):
+        rows = sorted(temporal[f"/free_bodies/{name}"], key=seconds)
+        assert [seconds(r) for r in rows] == pytest.approx(t.tolist(), abs=1e-9)
+        assert np.array_equal([r["Transform3D:translation"][0] for r in rows],
+                              np.float32([[0.1 * i, 0.0, 1.0 - time] for time in t]))
+        assert rows[-1]["Transform3D:quaternion"][0] == pytest.approx([0, 0, math.sin(0.3), math.cos(0.3)], abs=1e-7)

@@ -6,8 +6,8 @@
 - ``main-job [--scene NAME] [--duration S] [--out DIR] [--rate HZ]``: the dynamics node in
   simulate mode on the scene for S simulated seconds, publishing on ROS 2 topics and writing
   DIR/<scene>.mcap and DIR/<scene>.rrd; prints the real-time factor, the integrator
-  statistics (n/a for a counter the integrator does not report), the energy error and the
-  file paths.
+  statistics (n/a for a counter the integrator does not report), the energy error, the
+  free bodies and contact events (scenes with contact) and the file paths.
 
 rclpy is imported when a command runs, so the rest of the command line works without ROS.
 """
@@ -74,6 +74,17 @@ def _figure(value: float | int | None, spec: str = "") -> str:
     return NOT_REPORTED if value == NOT_REPORTED else format(value, spec)
 
 
+def _contact_rows(values: dict[str, object]) -> list[tuple[str, str]]:
+    """Summary rows of a scene with contact, from the /diagnostics values of its session."""
+    if not values:
+        return []
+    kinds = ", ".join(f"{key.rsplit('.', 1)[1]} {count}" for key, count in values.items()
+                      if key.startswith("contact.events."))
+    return [("free bodies", f"{values['free_bodies'] or 'none'} (on /tf and /free_bodies)"),
+            ("contact events", f"{values['contact.events']}{f' ({kinds})' if kinds else ''}; "
+                               f"last: {values['contact.last_event']}")]
+
+
 def run_main_job(args: argparse.Namespace) -> int:
     from youbot_dynamics.ros.dynamics_node import run
     from youbot_dynamics.sim.scene import load_scene
@@ -92,7 +103,7 @@ def run_main_job(args: argparse.Namespace) -> int:
     session = node.session
     stats = session.simulator.stats
     energy_error = (f"{session.energy_error:.3e} J (max |E(t) - E(0)|)" if session.simulator.conservative else
-                    "n/a: the scene's controller and friction change the energy "
+                    "n/a: the scene's controller, friction or contact change the energy "
                     f"(E(0) = {session.energy0:.6g} J, E(end) = {session.snapshot.energy:.6g} J)")
     rows = [("scene", f"{name} ({session.scene.source})"),
             ("simulated time", f"{session.t:.3f} s at {args.rate:g} Hz ({session.k + 1} samples per topic)"),
@@ -101,6 +112,7 @@ def run_main_job(args: argparse.Namespace) -> int:
                            f"{_figure(stats.jac_evals)} Jacobians, {_figure(stats.rejected_steps)} rejected, "
                            f"integrator-only real-time factor {_figure(stats.real_time_factor, '.2f')}"),
             ("energy error", energy_error),
+            *_contact_rows(session.contact_values()),
             ("status", session.failure or "ok"),
             *((f"log ({path.suffix[1:]})", str(path)) for path in session.recorder.paths)]
     print(table(("main job", ""), rows))

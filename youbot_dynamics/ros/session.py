@@ -31,6 +31,7 @@ import numpy as np
 
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
@@ -170,9 +171,9 @@ def reported(value: float | int | str | None) -> float | int | str:
     return value
 
 
-class _Session:
+class _Session(ClosesOnExit):
     """What both modes share: the robot's frames, the input counters, the logs (with
-    /tf_static written once at t = 0) and the /diagnostics status. Subclasses say their
+    /tf_static written once at t = 0; ``with`` finalises them) and the /diagnostics status. Subclasses say their
     ``mode`` and ``topics`` (published, in order) and keep ``stamp_ns``, the stamp (ns) of
     their latest output."""
 
@@ -335,11 +336,11 @@ class SimulationSession(_Session):
         values = {"sim_time": self.t, "real_time_factor": reported(real_time_factor),
                   "energy": self.snapshot.energy, "energy_error": self.energy_error,
                   "paused": self.paused, "command": self._command_source(), **stats, **self.counters.as_values(),
-                  **self._contact_values()}
+                  **self.contact_values()}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
         return self._diagnostic_outputs(level, text, values)
 
-    def _contact_values(self) -> dict[str, object]:
+    def contact_values(self) -> dict[str, object]:
         """``free_bodies`` (names, comma-separated, in /free_bodies order) and the contact
         events since the last reset up to the current sample (the simulator may have run
         ahead within its solve horizon): ``contact.events``, ``contact.events.<kind>`` per
