@@ -203,7 +203,8 @@ class RerunLogger(ClosesOnExit):
         Checked at once, sent in batches of ``batch_size`` like ``log_sample``."""
         self._recording()
         if set(poses) != set(self.bodies):
-            raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies {sorted(self.bodies)}")
+            raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies "
+                                 f"{sorted(self.bodies)}")
         t = finite_floats([t], "Rerun t", 1)[0]
         translations = [finite_floats(poses[name][0], f"Rerun {name} translation", 3) for name in self.bodies]
         quaternions = [finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]

@@ -14,8 +14,8 @@ rest at the next ticks), so the average rate holds while the simulation keeps up
 after falling ``MAX_LAG`` wall seconds behind does the pacing restart from now. Simulated
 time itself advances by fixed increments, independent of the wall clock. With
 ``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched the sample
-topic (/joint_states, or /free_bodies without a robot) (or after ``wait_timeout`` wall seconds), so a subscriber started with the node misses none
-of the first samples. On leaving, the node waits (up to ``ACK_TIMEOUT``) until its
+topic, /joint_states or, without a robot, /free_bodies (or after ``wait_timeout`` wall
+seconds), so a subscriber started with the node misses none of the first samples. On leaving, the node waits (up to ``ACK_TIMEOUT``) until its
 subscribers have acknowledged every message.
 
 Run: ``ros2 run youbot_dynamics dynamics_node --ros-args --params-file config/dynamics_node.yaml``
