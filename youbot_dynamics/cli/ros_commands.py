@@ -66,14 +66,6 @@ def run_replay(args: argparse.Namespace) -> int:
     return 0
 
 
-def _figure(value: float | int | None, spec: str = "") -> str:
-    """``value`` formatted with ``spec``, or n/a when it is not known (None, not finite)."""
-    from youbot_dynamics.ros.session import NOT_REPORTED, reported
-
-    value = reported(value)
-    return NOT_REPORTED if value == NOT_REPORTED else format(value, spec)
-
-
 def _contact_rows(values: dict[str, object]) -> list[tuple[str, str]]:
     """Summary rows of a scene with contact, from the /diagnostics values of its session."""
     if not values:
@@ -108,9 +100,7 @@ def run_main_job(args: argparse.Namespace) -> int:
     rows = [("scene", f"{name} ({session.scene.source})"),
             ("simulated time", f"{session.t:.3f} s at {args.rate:g} Hz ({session.k + 1} samples per topic)"),
             ("real-time factor", f"{session.t / wall:.3f} (simulated s per wall s, node start to finish)"),
-            ("integrator", f"{stats.integrator}: {_figure(stats.steps)} steps, {_figure(stats.rhs_evals)} rhs, "
-                           f"{_figure(stats.jac_evals)} Jacobians, {_figure(stats.rejected_steps)} rejected, "
-                           f"integrator-only real-time factor {_figure(stats.real_time_factor, '.2f')}"),
+            ("integrator", f"{stats.summary()} (integrator only)"),
             ("energy error", energy_error),
             *_contact_rows(session.contact_values()),
             ("status", session.failure or "ok"),

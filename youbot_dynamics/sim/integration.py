@@ -53,6 +53,16 @@ class IntegratorStats:
         result["real_time_factor"] = self.real_time_factor
         return result
 
+    def summary(self) -> str:
+        """One readable line: every counter (``n/a`` where the backend reports none), the
+        wall time and the real-time factor."""
+        labels = ("steps", "rhs evaluations", "Jacobians", "rejected steps",
+                  "nonlinear iterations", "convergence failures", "events")
+        counts = ", ".join(f"{'n/a' if getattr(self, name) is None else getattr(self, name)} {label}"
+                           for name, label in zip(COUNTERS, labels))
+        return (f"{self.integrator}: {counts}; wall {self.wall_time:.3f} s, "
+                f"real-time factor {self.real_time_factor:.3g}")
+
     def merge(self, other: IntegratorStats) -> IntegratorStats:
         """Add ``other``'s counters and times to this one (a counter unknown in either
         stays unknown); returns self."""
