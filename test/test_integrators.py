@@ -285,3 +285,13 @@ def test_ida_event_and_jacobian():
 def test_bad_arguments_raise_user_input_error(call, message):
     with pytest.raises(UserInputError, match=message):
         call()
+
+
+def test_summary_says_n_a_for_counters_the_backend_does_not_report():
+    from youbot_dynamics.sim.integrators import IntegratorStats
+    stats = IntegratorStats("cvode_bdf", steps=12, rhs_evals=30, jac_evals=2, rejected_steps=None,
+                            nonlinear_iterations=None, nonlinear_convergence_failures=None,
+                            events=0, wall_time=0.5, simulated_time=2.0)
+    line = stats.summary()
+    assert line.startswith("cvode_bdf: 12 steps, 30 rhs evaluations, 2 Jacobians, n/a rejected steps")
+    assert "None" not in line and "real-time factor 4" in line
