@@ -13,7 +13,13 @@
    (omega = pi / (10 dt), k = omega^2, b = 2 zeta omega), solimp 0.99 (MuJoCo's default
    time-constant form with dampratio = zeta bounces far lower: about 0.07 m); Euler
    (MuJoCo's default) and RK4. The apex is max(z + vz^2 / 2g) over the rising samples.
-3. gripping: not shipped (see the closing report of issue 5), so no real-time factor.
+3. gripping (28 s, two youBots, 7 pairs, constraint stepper PGS at 1 ms): one run of the
+   simulator (outputs at the scene's 50 Hz), then the dynamics node's session without ROS
+   (ros/session.py: the simulator advanced sample by sample, solve horizon 0.02 s, the
+   messages built) at 50 and 500 Hz (the node's default rate), logs off and on (MCAP in
+   rosbag2 form and a Rerun recording, as the node writes them). Real-time factor =
+   simulated / wall time; also the sphere's final place, the deepest overlap and the
+   stepper's statistics. Each row is the best of REPEATS runs.
 
 Run: python bench/bench_contact.py      (needs ``pip install mujoco`` for part 2)
 """
@@ -21,6 +27,7 @@ from __future__ import annotations
 
 import math
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -30,10 +37,13 @@ import yaml
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
 
 from youbot_dynamics.analysis.contact_extremes import ball_drop_data, scene_from  # noqa: E402
-from youbot_dynamics.sim.scene import scene_dir  # noqa: E402
+from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
+from youbot_dynamics.sim.scene import load_scene, scene_dir  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 E, H0, RADIUS, G = 0.8, 1.0, 0.025, 9.81
+#: gripping runs per row; the best wall time is kept (a shared machine slows single runs).
+REPEATS = 2
 
 
 def timed(data: dict) -> tuple[Simulator, object, float]:
@@ -127,7 +137,47 @@ def accuracy() -> None:
     print()
 
 
+def session_wall(rate: float, logs: Path | None) -> float:
+    """Wall time (s) of the node's session over the gripping scene at ``rate`` Hz."""
+    paths = {} if logs is None else {"mcap_path": logs / "gripping.mcap", "rrd_path": logs / "gripping.rrd"}
+    scene = load_scene("gripping")
+    session = SimulationSession(scene, rate, samples_per_solve=max(1, round(0.02 * rate)), **paths)
+    start = time.perf_counter()
+    while session.t < scene.duration:
+        session.step()
+    session.close()
+    return time.perf_counter() - start
+
+
+def gripping() -> None:
+    print("## 3. gripping: the sphere's hand-over and its real-time factor\n")
+    simulator = Simulator(load_scene("gripping"))
+    walls = []
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        result = simulator.run()
+        walls.append(time.perf_counter() - start)
+    wall = min(walls)
+    stats = result.stats
+    final = result.x[-1, simulator.layout.slice("p")]
+    on_plate = simulator.body_in_link(result, "sphere", "yb2_plate_link")[-1]
+    print(f"sphere at the end: ({final[0]:.4f}, {final[1]:.4f}, {final[2]:.4f}) m; in yb2_plate_link "
+          f"({on_plate[0]:+.4f}, {on_plate[1]:+.4f}, {on_plate[2]:+.4f}) m (plate 0.2 x 0.3, top at +0.005)")
+    print(f"deepest overlap {1e3 * result.max_penetration:.3f} mm; {stats.steps} steps, "
+          f"{stats.nonlinear_iterations} PGS iterations, {stats.events} contact events\n")
+    print("| run | rate Hz | logs | wall s | real-time factor |")
+    print("|---|---|---|---|---|")
+    print(f"| Simulator.run | 50 | off | {wall:.2f} | {result.t[-1] / wall:.2f} |")
+    with tempfile.TemporaryDirectory() as folder:
+        for rate in (50.0, 500.0):
+            for logs in (None, Path(folder)):
+                best = min(session_wall(rate, logs) for _ in range(REPEATS))
+                print(f"| session | {rate:g} | {'MCAP + Rerun' if logs else 'off'} | {best:.2f} | "
+                      f"{result.t[-1] / best:.2f} |")
+    print()
+
+
 if __name__ == "__main__":
     contact_cost()
     accuracy()
-    print("## 3. gripping\n\nnot shipped (issue 5 closing report): no real-time factor measured.")
+    gripping()

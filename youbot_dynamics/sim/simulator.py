@@ -307,7 +307,7 @@ class Simulator:
         stepper, h = self.constraint_stepper(), self.integrator.dt
         nv, nb = self.robot.nv, len(self.scene.free_bodies)
         q, v = self._pin_state(stepper, x0)
-        t, outputs, in_contact = float(t_eval[0]), [x0.copy()], set()
+        t, outputs = float(t_eval[0]), [x0.copy()]
         stats = IntegratorStats(self.integrator.method)
         penetration = 0.0
         for t_next in map(float, t_eval[1:]):
@@ -327,16 +327,16 @@ class Simulator:
                 stats.nonlinear_iterations += report.iterations
                 penetration = max(penetration, report.penetration)
                 touching = {name for name, impulse in report.normal_impulse.items() if impulse > 0}
-                for name in sorted(touching - in_contact):
+                for name in sorted(touching - self.stepper_touching):
                     self.contact.events.append(ContactEvent(t, name, "contact", report.normal_impulse[name]))
-                in_contact = touching
+                self.stepper_touching = touching
                 if not np.all(np.isfinite(v)):
                     raise DivergenceError(t, self.integrator.method, dt, "non-finite velocity")
             outputs.append(self._ode_state(stepper, q, v, nb))
         stats.events = len(self.contact.events)
         stats.simulated_time = float(t_eval[-1] - t_eval[0])
         stats.wall_time = clock.perf_counter() - start
-        self.stepper_penetration = penetration
+        self.stepper_penetration = max(self.stepper_penetration, penetration)
         return Solution(np.asarray(t_eval, dtype=float), np.array(outputs), stats, self.layout.names)
 
     def _pin_state(self, stepper: ConstraintStepper, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -384,10 +384,7 @@ class Simulator:
         times); leaves the step-wise state at the end of the run."""
         times = self.scene.output_times if t_eval is None else np.asarray(t_eval, dtype=float)
         x0 = self.initial_state()
-        if self.contact:
-            self.contact.events.clear()
-            self.contact.deepest = 0.0
-            self.contact.awaiting[:] = False
+        self._clear_contact_record()
         solution = self.solve(x0, times)
         series = self._series(solution, set(self.scene.outputs.record) | ({"energy"} if self.conservative else set()))
         energy_error = float(np.max(np.abs(series["energy"] - series["energy"][0]))) if self.conservative else None
@@ -422,8 +419,18 @@ class Simulator:
             x[self._v] = self.robot.vector(v, what="reset v")
         self.t, self.x = 0.0, x
         self.stats = IntegratorStats(self.integrator.method)
+        self._clear_contact_record()
         self._tau = self.controller.torque(0.0, x[self._q], x[self._v]).copy()
         return self.snapshot()
+
+    def _clear_contact_record(self) -> None:
+        """Forget the contact events, the deepest overlap and which pairs touch (a new run).
+        Step-wise calls keep them, so a contact that lasts over several calls is one event."""
+        self.stepper_penetration, self.stepper_touching = 0.0, set()
+        if self.contact:
+            self.contact.events.clear()
+            self.contact.deepest = 0.0
+            self.contact.awaiting[:] = False
 
     def advance(self, t_next: float, tau_command=None) -> Snapshot:
         """Integrate from the current time to ``t_next`` (s); ``tau_command`` (sequence in
