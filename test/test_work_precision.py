@@ -12,6 +12,7 @@ import yaml
 
 from youbot_dynamics.analysis import work_precision as wp
 from youbot_dynamics.cli import main
+from youbot_dynamics.ros.session import SimulationSession
 from youbot_dynamics.sim.scene import load_scene, scene_dir
 
 GRID = {"rk4": (1e-2, 2e-3, 4e-4),
@@ -82,6 +83,8 @@ def test_auto_integrator_cached_per_scene_content(tmp_path, monkeypatch):
 
     monkeypatch.setattr(wp, "sweep", no_sweep)
     assert wp.resolve_integrator(load_scene(path), grid=small, progress=False) == chosen
+    with SimulationSession(load_scene(path), publish_rate=100.0) as session:  # the node's way in
+        assert session.simulator.integrator == chosen
     data["duration"] = 0.25  # the scene changes: its hash, so the cache entry, changes
     path.write_text(yaml.safe_dump(data))
     with pytest.raises(AssertionError, match="swept again"):

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from youbot_dynamics.analysis.work_precision import resolve_integrator
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.closing import ClosesOnExit
@@ -230,7 +231,7 @@ class SimulationSession(_Session):
     def __init__(self, scene: Scene, publish_rate: float, *, command_timeout: float = 0.5,
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
                  mcap_path: str | Path | None = None, rrd_path: str | Path | None = None) -> None:
-        self.simulator = Simulator(scene)
+        self.simulator = Simulator(scene, resolve_integrator(scene, progress=False))
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path)
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         self.samples_per_solve = max(1, int(samples_per_solve))
