@@ -149,3 +149,16 @@ def test_penetration_stays_below_a_millimetre_and_the_statistics_are_complete(ru
     assert stats.nonlinear_iterations > 0 and stats.events == len(result.contact_events)
     assert stats.simulated_time == pytest.approx(28.0) and stats.wall_time > 0.0
     assert np.all(np.isfinite(result.x))
+
+
+def test_resting_contact_over_step_wise_calls_is_one_event():
+    """The node advances the stepper sample by sample: the sphere resting on youBot 1's plate
+    is one contact event however many calls it lasts, and the deepest overlap is kept."""
+    simulator = Simulator(load_scene("gripping"))
+    simulator.advance_through([0.02, 0.04])
+    for t in (0.06, 0.08, 0.10):
+        simulator.advance(t)
+    assert [(e.pair, e.time) for e in simulator.contact.events] == [("yb1_plate/sphere", pytest.approx(0.001))]
+    assert simulator.stepper_penetration > 0.0
+    simulator.reset()
+    assert not simulator.contact.events and simulator.stepper_penetration == 0.0
