@@ -211,3 +211,17 @@ def test_light_body_on_heavy_one_stays_put_with_the_constraint_stepper():
             assert row["light_drift_m"] < 1e-6 and row["max_penetration_m"] < 1e-6
         else:   # compliant: settles by the static deflection (98 N on k = 1e6: (98 / 1e6)^(2/3) = 2.1 mm)
             assert row["heavy_drift_m"] == pytest.approx((10 * G / 1e6) ** (2 / 3), rel=0.05)
+
+
+def test_stepwise_constraint_stepping_counts_each_contact_event_once():
+    """The node advances sample block by sample block: the summed statistics must count a
+    contact event once, as one whole run does."""
+    scene = load_scene("box_slide").with_integrator("pgs", dt=1e-3)
+    whole = Simulator(scene).run()
+    simulator = Simulator(scene)
+    simulator.reset()
+    for block in np.array_split(scene.output_times[1:], 10):
+        simulator.advance_through(block)
+    assert len(whole.contact_events) >= 1
+    assert simulator.stats.events == whole.stats.events == len(whole.contact_events)
+    assert simulator.stats.rhs_evals == simulator.stats.steps and simulator.stats.jac_evals is None

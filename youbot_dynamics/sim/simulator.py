@@ -308,8 +308,10 @@ class Simulator:
         nv, nb = self.robot.nv, len(self.scene.free_bodies)
         q, v = self._pin_state(stepper, x0)
         t, outputs = float(t_eval[0]), [x0.copy()]
-        stats = IntegratorStats(self.integrator.method)
-        penetration = 0.0
+        # one dynamics pass (Delassus operator and solve) per step; no Jacobian counter applies
+        stats = IntegratorStats(self.integrator.method, jac_evals=None,
+                                nonlinear_convergence_failures=None)
+        penetration, events_before = 0.0, len(self.contact.events)
         for t_next in map(float, t_eval[1:]):
             # equal steps of at most h that end on t_next: a sliver of a step left over by
             # round-off would turn the overlap correction (depth / dt) into a huge impulse
@@ -324,6 +326,7 @@ class Simulator:
                 q, v, report = stepper.step(q, v, tau, dt)
                 t = t_next if i == count else start_interval + i * dt
                 stats.steps += 1
+                stats.rhs_evals += 1
                 stats.nonlinear_iterations += report.iterations
                 penetration = max(penetration, report.penetration)
                 touching = {name for name, impulse in report.normal_impulse.items() if impulse > 0}
@@ -333,7 +336,7 @@ class Simulator:
                 if not np.all(np.isfinite(v)):
                     raise DivergenceError(t, self.integrator.method, dt, "non-finite velocity")
             outputs.append(self._ode_state(stepper, q, v, nb))
-        stats.events = len(self.contact.events)
+        stats.events = len(self.contact.events) - events_before
         stats.simulated_time = float(t_eval[-1] - t_eval[0])
         stats.wall_time = clock.perf_counter() - start
         self.stepper_penetration = max(self.stepper_penetration, penetration)
