@@ -14,12 +14,12 @@ import sys
 from youbot_dynamics.errors import UserInputError
 
 COMMAND_MODULES = (
-    "youbot_dynamics.cli.study_commands",
     "youbot_dynamics.cli.model_commands",
-    "youbot_dynamics.cli.mechanism_commands",
-    "youbot_dynamics.cli.pendulum_commands",
     "youbot_dynamics.cli.sim_commands",
     "youbot_dynamics.cli.contact_commands",
+    "youbot_dynamics.cli.pendulum_commands",
+    "youbot_dynamics.cli.mechanism_commands",
+    "youbot_dynamics.cli.study_commands",
     "youbot_dynamics.cli.ros_commands",
 )
 
