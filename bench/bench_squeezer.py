@@ -64,7 +64,8 @@ def main() -> None:
         rtol, run, error = found
         s = run.stats
         print(f"{label} {rtol:8.1e} {s.steps:6d} {s.rhs_evals:8d} "
-              f"{s.jac_evals!s:>8s} {s.rejected_steps!s:>8s} {s.wall_time:8.3f} "
+              f"{'n/a' if s.jac_evals is None else s.jac_evals:>8} "
+              f"{'n/a' if s.rejected_steps is None else s.rejected_steps:>8} {s.wall_time:8.3f} "
               f"{error:11.2e}", flush=True)
     print("\nSeed figures (500 outputs, accuracy not matched):")
     for name, figures in SEED_FIGURES.items():
