@@ -11,7 +11,8 @@
   statistics (n/a for a counter the integrator does not report), the energy error, the
   free bodies and contact events (scenes with contact) and the file paths.
 
-rclpy is imported when a command runs, so the rest of the command line works without ROS.
+ROS 2 (in youbot_dynamics.ros) is imported when a command runs, so the rest of the command
+line works without it.
 """
 from __future__ import annotations
 
@@ -45,25 +46,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run_replay(args: argparse.Namespace) -> int:
-    import rclpy
-
-    from youbot_dynamics.ros.replay_node import ReplayNode
+    from youbot_dynamics.ros.replay_node import replay_once
 
     if not args.fast and not args.rate > 0:
         raise CommandError(f"--rate must be positive, got {args.rate}")
-    rclpy.init()
-    try:
-        node = ReplayNode(args.bag, 0.0 if args.fast else args.rate, args.topic)
-        if args.wait_for and not node.wait_for_subscribers(args.wait_for, timeout=30.0):
-            print(f"replay: no subscriber on {args.wait_for} after 30 s; replaying anyway")
-        start = time.monotonic()
-        count = node.replay()
-        print(f"replay: {count} messages from {args.bag} in {time.monotonic() - start:.3f} s "
-              f"on {', '.join(sorted(node.publishers_))}")
-    except KeyboardInterrupt:
-        print("replay: interrupted")
-    finally:
-        rclpy.try_shutdown()
+    start = time.monotonic()
+    count, bag, topics = replay_once([], bag=args.bag, rate=0.0 if args.fast else args.rate,
+                                     topics=args.topic, wait_for=args.wait_for)
+    print(f"replay: {count} messages from {bag} in {time.monotonic() - start:.3f} s on {', '.join(topics)}")
     return 0
 
 

@@ -35,7 +35,8 @@ from youbot_dynamics.ros.qos import RELIABLE_DEEP, profile
 class ReplayNode(Node):
     """Publishers for the topics of ``bag`` (all, or those named in ``topics``)."""
 
-    def __init__(self, bag: str | Path = "", rate: float = 1.0, topics: Sequence[str] = (), **node_options) -> None:
+    def __init__(self, bag: str | Path = "", rate: float = 1.0, topics: Sequence[str] = (), wait_for: str = "",
+                 **node_options) -> None:
         super().__init__("replay_node", **node_options)
         bag = self.declare_parameter("bag", str(bag), ParameterDescriptor(
             description="bag to replay: a .mcap file or a rosbag2 folder", read_only=True)).value
@@ -44,7 +45,7 @@ class ReplayNode(Node):
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)])).value
         wanted = self.declare_parameter("topics", list(topics) or [""], ParameterDescriptor(
             description="topics to replay (empty: all)", read_only=True)).value
-        self.wait_for = self.declare_parameter("wait_for", "", ParameterDescriptor(
+        self.wait_for = self.declare_parameter("wait_for", wait_for, ParameterDescriptor(
             description="before replaying, wait up to 30 s for a subscriber on this topic ('' : do not wait)",
             read_only=True)).value
         if not bag:
@@ -88,23 +89,34 @@ class ReplayNode(Node):
         return count
 
 
-def main(args: list[str] | None = None) -> int:
-    """Replay the bag of parameter ``bag`` once; SIGINT/SIGTERM stop it."""
+def replay_once(args: list[str] | None = None, **node_arguments) -> tuple[int, Path, list[str]]:
+    """Start ROS 2, replay a bag once (SIGINT/SIGTERM stop it early), shut ROS 2 down.
+
+    ``node_arguments`` go to :class:`ReplayNode` (bag, rate, topics, wait_for); ``args`` are
+    ROS arguments (--ros-args -p bag:=...). Returns the number of messages published, the
+    bag and the topics it went out on. UserInputError for a bag that cannot be read."""
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = []
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda number, frame: stop.append(number))
     try:
-        node = ReplayNode()
+        node = ReplayNode(**node_arguments)
         if node.wait_for and not node.wait_for_subscribers(node.wait_for, timeout=30.0):
             node.get_logger().warning(f"no subscriber on {node.wait_for} after 30 s; replaying anyway")
         count = node.replay(lambda: not stop)
-        node.get_logger().info(f"replayed {count} messages from {node.bag}")
+        return count, node.bag, sorted(node.publishers_)
+    finally:
+        rclpy.try_shutdown()
+
+
+def main(args: list[str] | None = None) -> int:
+    """Replay the bag of parameter ``bag`` once."""
+    try:
+        count, bag, _ = replay_once(args)
     except UserInputError as error:
         print(f"replay_node: error: {error}", file=sys.stderr)
         return 2
-    finally:
-        rclpy.try_shutdown()
+    print(f"replay_node: replayed {count} messages from {bag}")
     return 0
 
 
