@@ -33,6 +33,23 @@ def test_exact_damping_returns_the_restitution(e):
     assert restitution_of_impact(e, "exact") == pytest.approx(e, rel=1e-6)
 
 
+@pytest.mark.parametrize("e", [0.001, 0.01, 0.02])
+def test_exact_damping_returns_small_restitutions(e):
+    """Below e ~ 0.027 the root of the energy balance lies within rounding of 1/e (it used
+    to fail with a bracketing error)."""
+    assert restitution_of_impact(e, "exact") == pytest.approx(e, rel=1e-6)
+
+
+@pytest.mark.parametrize("model", ["exact", "flores"])
+def test_zero_restitution_is_refused_where_damping_would_be_infinite(model):
+    with pytest.raises(ContactLawError, match="needs restitution > 0"):
+        hysteresis_factor(0.0, 1.0, model)
+    spec = {"law": "hunt_crossley", "stiffness": 1e6, "restitution": 0, "friction": 0.2, "damping_model": model}
+    with pytest.raises(ContactLawError, match="pair x/y: .*needs restitution > 0"):
+        contact_law_from_spec(spec, "pair x/y")
+    assert hysteresis_factor(0.0, 2.0, "lankarani_nikravesh") == pytest.approx(0.375)
+
+
 @pytest.mark.parametrize("v0", [0.1, 1.0, 5.0])
 def test_exact_damping_is_independent_of_speed_stiffness_and_mass(v0):
     assert restitution_of_impact(0.6, "exact", v0=v0, k=1e8, m=2.0) == pytest.approx(0.6, rel=1e-6)

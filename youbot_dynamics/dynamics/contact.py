@@ -43,25 +43,32 @@ class ContactLawError(UserInputError):
 def hysteresis_factor(restitution: float, approach_speed: float, model: str = "exact") -> float:
     """Hunt-Crossley hysteresis factor chi (s/m) for restitution e at approach speed v0 (m/s)."""
     e, v0 = float(restitution), abs(float(approach_speed))
+    if model not in DAMPING_MODELS:
+        raise ContactLawError(f"unknown Hunt-Crossley damping model {model!r}; known: {', '.join(DAMPING_MODELS)}")
+    if model != "lankarani_nikravesh" and e <= 0.0:
+        raise ContactLawError(f"Hunt-Crossley damping model {model!r} needs restitution > 0, got {e} "
+                              "(chi grows as 1/e: a perfectly plastic impact needs infinite damping); "
+                              "give a small positive restitution")
     if v0 == 0.0 or e >= 1.0:
         return 0.0
     if model == "flores":
         return 8.0 * (1.0 - e) / (5.0 * e * v0)
     if model == "lankarani_nikravesh":
         return 3.0 * (1.0 - e * e) / (4.0 * v0)
-    if model != "exact":
-        raise ContactLawError(f"unknown Hunt-Crossley damping model {model!r}; known: {', '.join(DAMPING_MODELS)}")
     return exact_hysteresis_product(e) / v0
 
 
 def exact_hysteresis_product(restitution: float) -> float:
-    """x = chi v0 > 0 solving ln(1 - e x) - ln(1 + x) + (1 + e) x = 0, 0 < e < 1."""
+    """x = chi v0 > 0 solving ln(1 - e x) - ln(1 + x) + (1 + e) x = 0, 0 < e < 1 (x < 1/e,
+    and x -> 1/e as e -> 0)."""
     e = restitution
 
     def balance(x: float) -> float:
         return math.log1p(-e * x) - math.log1p(x) + (1.0 + e) * x
 
-    upper = (1.0 - 1e-15) / e if e > 0 else 1e6
+    upper = (1.0 - 1e-15) / e
+    if balance(upper) >= 0.0:  # e < ~0.027: the root lies within rounding of 1 / e
+        return 1.0 / e
     lower = 1e-6 * min(1.0, upper)
     while balance(lower) <= 0.0:
         lower *= 1e-3
@@ -182,6 +189,11 @@ def contact_law_from_spec(spec: Mapping[str, Any], where: str) -> ContactLaw:
         raise ContactLawError(f"{where}: law {name!r} is missing parameter(s) {', '.join(missing)}")
     if not 0.0 <= values["restitution"] <= 1.0:
         raise ContactLawError(f"{where}: restitution must lie in [0, 1], got {values['restitution']}")
-    if name == "hunt_crossley" and (values["stiffness"] <= 0 or values.get("velocity_scale", 1.0) <= 0):
-        raise ContactLawError(f"{where}: stiffness and velocity_scale must be positive")
+    if name == "hunt_crossley":
+        if values["stiffness"] <= 0 or values.get("velocity_scale", 1.0) <= 0:
+            raise ContactLawError(f"{where}: stiffness and velocity_scale must be positive")
+        try:
+            hysteresis_factor(values["restitution"], 1.0, values.get("damping_model", "exact"))
+        except ContactLawError as error:
+            raise ContactLawError(f"{where}: {error}") from None
     return cls(**values)
