@@ -27,6 +27,7 @@ import pinocchio as pin
 from youbot_dynamics.dynamics.collision import BroadPhase, Geometry, PlacedPair
 from youbot_dynamics.dynamics.contact import ConstraintContact
 from youbot_dynamics.dynamics.free_body import FreeBody, add_free_flyer
+from youbot_dynamics.dynamics.rigid_body import symmetrised
 
 SOLVERS = ("pgs", "admm")
 
@@ -134,8 +135,7 @@ class ConstraintStepper:
         for constraint, cdata in zip(constraints, datas):
             constraint.calc(model, data, cdata)
         jacobian = pin.getConstraintsJacobian(model, data, constraints, datas)
-        inverse_mass = pin.computeMinverse(model, data, q)
-        inverse_mass = np.triu(inverse_mass) + np.triu(inverse_mass, 1).T
+        inverse_mass = symmetrised(pin.computeMinverse(model, data, q))
         delassus = jacobian @ inverse_mass @ jacobian.T
         drift = jacobian @ v_free
         before = jacobian @ v

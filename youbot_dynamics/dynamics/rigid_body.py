@@ -48,10 +48,15 @@ def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Ve
     return pin.aba(robot.model, data, q, v, tau)
 
 
+def symmetrised(upper: np.ndarray) -> np.ndarray:
+    """The full symmetric matrix of one of which only the upper triangle is reliable (what
+    Pinocchio's crba and computeMinverse fill); a fresh array."""
+    return np.triu(upper) + np.triu(upper, 1).T
+
+
 def mass_matrix(robot: Robot, data: pin.Data, q: Vector) -> Vector:
     """Joint-space mass matrix M(q) (kg m^2, kg), full and symmetric, armature included."""
-    mass = pin.crba(robot.model, data, q)
-    return np.triu(mass) + np.triu(mass, 1).T  # crba fills at least the upper triangle
+    return symmetrised(pin.crba(robot.model, data, q))
 
 
 def gravity_torque(robot: Robot, data: pin.Data, q: Vector) -> Vector:
