@@ -68,9 +68,8 @@ def orientation(reference: np.ndarray, phi: np.ndarray) -> np.ndarray:
 
 
 def recentred(reference: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """The reference quaternion (x, y, z, w, unit) of R(reference) exp([phi])."""
-    quaternion = quaternion_from_matrix(orientation(reference, phi))
-    return quaternion / np.linalg.norm(quaternion)
+    """The reference quaternion (x, y, z, w, unit, w >= 0) of R(reference) exp([phi])."""
+    return quaternion_from_matrix(orientation(reference, phi))
 
 
 def phi_rate(phi: np.ndarray, rotation: np.ndarray, omega_world: np.ndarray) -> np.ndarray:

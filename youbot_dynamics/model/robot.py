@@ -25,6 +25,7 @@ import yourdfpy
 from lxml import etree
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.lie import exp_se3
 
 MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
 KNOWN_JOINT_TYPES = (*MOVING_JOINT_TYPES, "fixed", "floating", "planar")
@@ -436,11 +437,10 @@ def _joint_of(j: yourdfpy.Joint) -> Joint:
 
 
 def _locked(joint: TreeJoint, value: float) -> TreeJoint:
-    motion = np.eye(4)
-    if joint.type == "prismatic":
-        motion[:3, 3] = joint.axis * value
-    else:
-        motion[:3, :3] = pin.AngleAxis(value, joint.axis).toRotationMatrix()
-    origin = joint.origin @ motion
+    """The joint as a fixed one: its origin times exp([X] value), X = (0, axis) for a
+    prismatic joint and (axis, 0) for a revolute or continuous one (joint frame)."""
+    zero = np.zeros(3)
+    screw = np.concatenate((zero, joint.axis) if joint.type == "prismatic" else (joint.axis, zero))
+    origin = joint.origin @ exp_se3(screw * value)
     origin.setflags(write=False)
     return TreeJoint(joint.name, "fixed", joint.parent, joint.child, origin, joint.axis)
