@@ -31,22 +31,24 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy, potential_energy
-from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integration import DivergenceError
-from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper, StepperSettings
-from youbot_dynamics.dynamics.rigid_body import mass_matrix
+from youbot_dynamics.dynamics.rigid_body import (forward_dynamics, kinetic_energy, mass_matrix,
+                                                 potential_energy)
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_matrix
+from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.contact_system import ContactEvent, ContactSystem
 from youbot_dynamics.sim.controllers import Reference, make_controller
 from youbot_dynamics.sim.events import Mode, simulate_hybrid
-from youbot_dynamics.sim.integrators import IntegratorStats, Solution, integrate, integrate_dae
+from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution, integrate,
+                                             integrate_dae)
 from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
@@ -299,14 +301,12 @@ class Simulator:
         """Fixed steps of the constraint stepper from x0 with outputs at t_eval (each output
         interval in equal steps of at most dt); contact events are the steps at which a
         pair starts carrying an impulse."""
-        import time as clock
-
-        start = clock.perf_counter()
+        start = time.perf_counter()
         if self.layout.slice("z").stop > self.layout.slice("z").start:
             raise UserInputError(f"{self.scene.source}: the constraint stepper does not integrate LuGre bristles")
         stepper, h = self.constraint_stepper(), self.integrator.dt
-        nv, nb = self.robot.nv, len(self.scene.free_bodies)
-        q, v = self._pin_state(stepper, x0)
+        nv = self.robot.nv
+        q, v = self._pin_state(x0)
         t, outputs = float(t_eval[0]), [x0.copy()]
         # one dynamics pass (Delassus operator and solve) per step; no Jacobian counter applies
         stats = IntegratorStats(self.integrator.method, jac_evals=None,
@@ -335,38 +335,39 @@ class Simulator:
                 self.stepper_touching = touching
                 if not np.all(np.isfinite(v)):
                     raise DivergenceError(t, self.integrator.method, dt, "non-finite velocity")
-            outputs.append(self._ode_state(stepper, q, v, nb))
+            outputs.append(self._ode_state(q, v))
         stats.events = len(self.contact.events) - events_before
         stats.simulated_time = float(t_eval[-1] - t_eval[0])
-        stats.wall_time = clock.perf_counter() - start
+        stats.wall_time = time.perf_counter() - start
         self.stepper_penetration = max(self.stepper_penetration, penetration)
         return Solution(np.asarray(t_eval, dtype=float), np.array(outputs), stats, self.layout.names)
 
-    def _pin_state(self, stepper: ConstraintStepper, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Pinocchio (q, v) of the combined model from our state x."""
+    def _pin_state(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pinocchio (q, v) of the combined model from our state x: per free body its
+        position and quaternion (x, y, z, w) and its body-frame (linear, angular) velocity."""
         poses = self.contact.poses_of(x)
         parts = self.layout.split(x)
         q, v = [x[self._q]], [x[self._v]]
         for k, body in enumerate(self.scene.free_bodies):
             pose = poses[body.body.name]
-            q.append(pin.SE3ToXYZQUAT(pin.SE3(pose[:3, :3], pose[:3, 3])))
             rotation = pose[:3, :3]
+            q += [pose[:3, 3], quaternion_from_matrix(rotation)]
             v += [rotation.T @ parts["u"][3 * k:3 * k + 3], rotation.T @ parts["w"][3 * k:3 * k + 3]]
         return np.concatenate(q), np.concatenate(v)
 
-    def _ode_state(self, stepper: ConstraintStepper, q: np.ndarray, v: np.ndarray, nb: int) -> np.ndarray:
+    def _ode_state(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Our state x from Pinocchio's (q, v): orientation in r, phi = 0, velocities in the world frame."""
         nv = self.robot.nv
         blocks = {"q": q[:nv], "v": v[:nv]}
         p, r, u, w = [], [], [], []
-        for k in range(nb):
+        for k in range(len(self.scene.free_bodies)):
             xyzquat = q[nv + 7 * k:nv + 7 * k + 7]
-            rotation = pin.Quaternion(xyzquat[6], *xyzquat[3:6]).toRotationMatrix()
+            rotation = matrix_from_quaternion(xyzquat[3:])
             p.append(xyzquat[:3])
             r.append(xyzquat[3:] / np.linalg.norm(xyzquat[3:]))
             u.append(rotation @ v[nv + 6 * k:nv + 6 * k + 3])
             w.append(rotation @ v[nv + 6 * k + 3:nv + 6 * k + 6])
-        if nb:
+        if p:
             blocks.update(p=np.concatenate(p), r=np.concatenate(r), u=np.concatenate(u), w=np.concatenate(w))
         return self.layout.pack(**blocks)
 
