@@ -134,14 +134,15 @@ def holonomic_system_from_robot(robot: Robot, constraints: Sequence[LoopClosure]
     model = robot.model
     data = model.createData()
     constraint_datas = [closure.constraint.createData() for closure in closures]
+    imposed = [np.array(closure.components) for closure in closures]
     zero_acceleration = np.zeros(model.nv)
 
     def stacked(attribute: str) -> Vector:
         """The imposed components of ``attribute`` of every loop, after calc on ``data``."""
         blocks = []
-        for closure, constraint_data in zip(closures, constraint_datas):
+        for closure, constraint_data, components in zip(closures, constraint_datas, imposed):
             closure.constraint.calc(model, data, constraint_data)
-            blocks.append(getattr(constraint_data, attribute)[list(closure.components)])
+            blocks.append(getattr(constraint_data, attribute)[components])
         return np.concatenate(blocks)
 
     def constraint(q: Vector) -> Vector:
@@ -151,10 +152,10 @@ def holonomic_system_from_robot(robot: Robot, constraints: Sequence[LoopClosure]
     def jacobian(q: Vector) -> np.ndarray:
         pin.computeJointJacobians(model, data, q)
         blocks = []
-        for closure, constraint_data in zip(closures, constraint_datas):
+        for closure, constraint_data, components in zip(closures, constraint_datas, imposed):
             closure.constraint.calc(model, data, constraint_data)
             rows = pin.getConstraintJacobian(model, data, closure.constraint, constraint_data)
-            blocks.append(rows[list(closure.components)])
+            blocks.append(rows[components])
         return np.vstack(blocks)
 
     def curvature(q: Vector, v: Vector) -> Vector:

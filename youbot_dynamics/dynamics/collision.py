@@ -132,18 +132,16 @@ class BroadPhase:
 
     def __init__(self, shapes: Sequence[Shape], pairs: Sequence[tuple[int, int]], margin: float) -> None:
         self.objects = [coal.CollisionObject(shape.coal_geometry(), coal.Transform3s()) for shape in shapes]
-        self.unbounded = [shape.kind == "halfspace" for shape in shapes]
         self.pairs = list(pairs)
+        #: The shapes with a finite box that some pair uses (half-spaces are always close).
+        self.bounded = sorted({i for pair in self.pairs for i in pair if shapes[i].kind != "halfspace"})
         self.margin = margin
         self.narrow_checks = 0
 
     def close_pairs(self, poses: Sequence[np.ndarray]) -> list[int]:
         """Pairs (indices into ``pairs``) worth a narrow-phase query at these world poses."""
         lower, upper = {}, {}
-        used = {i for pair in self.pairs for i in pair}
-        for i in used:
-            if self.unbounded[i]:
-                continue
+        for i in self.bounded:
             obj = self.objects[i]
             obj.setTransform(transform(poses[i]))
             obj.computeAABB()

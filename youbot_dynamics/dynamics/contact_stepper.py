@@ -115,10 +115,12 @@ class ConstraintStepper:
         rows: list[tuple[int, float, str, float]] = []
         for k in self.broad.close_pairs(poses):
             name, a, b, law = self.pairs[k]
-            for c in self.narrow[k].contact_points(poses[a], poses[b], settings.margin):
-                rotation = _contact_rotation(c.normal)
+            points = self.narrow[k].contact_points(poses[a], poses[b], settings.margin)
+            if points:
                 joint1, world1 = self._owner(self.geometries[a])
                 joint2, world2 = self._owner(self.geometries[b])
+            for c in points:
+                rotation = _contact_rotation(c.normal)
                 point = pin.PointContactConstraintModel(
                     model, joint1, world1.actInv(pin.SE3(rotation, c.point1)),
                     joint2, world2.actInv(pin.SE3(rotation, c.point2)))
