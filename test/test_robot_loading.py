@@ -152,6 +152,13 @@ def test_pure_cycle_without_root(tmp_path: Path) -> None:
     assert "kinematic loop" in message
 
 
+def test_names_with_quotes_load() -> None:
+    """The tree checks look links up by name, not through an XPath built from the names
+    (which a quote in a joint name used to break with an lxml SyntaxError)."""
+    robot = load_robot(_two_link(j1=_joint("elbow's joint", "base", "l1")))
+    assert robot.joint_names == ("elbow's joint",)
+
+
 def test_errors_are_user_input_errors() -> None:
     with pytest.raises(UserInputError):
         load_robot("/no/such/robot.urdf")

@@ -282,7 +282,8 @@ def _check_urdf(root: etree._Element, label: str) -> list[str]:
     links = {link.get("name"): link for link in root.findall("link")}
     if not links:
         raise URDFError(f"{label}: the robot has no <link>")
-    parent_of: dict[str, str] = {}
+    parent_of: dict[str, str] = {}  # child link -> its joint's name
+    parent_link: dict[str, str] = {}  # child link -> parent link
     for joint in root.findall("joint"):
         where = _where(label, joint)
         kind = joint.get("type")
@@ -300,6 +301,7 @@ def _check_urdf(root: etree._Element, label: str) -> list[str]:
             raise URDFError(f"{where}: kinematic loop: link '{child}' is already the child of "
                             f"joint '{parent_of[child]}' (closed chains are not supported in URDF)")
         parent_of[child] = joint.get("name")
+        parent_link[child] = joint.find("parent").get("link")
         limit = joint.find("limit")
         if kind in ("revolute", "prismatic"):
             if limit is None:
@@ -322,8 +324,7 @@ def _check_urdf(root: etree._Element, label: str) -> list[str]:
             if link in seen:
                 raise URDFError(f"{label}: kinematic loop through link '{link}'")
             seen.add(link)
-            parent = root.find(f"joint[@name='{parent_of[link]}']/parent").get("link")
-            link = parent
+            link = parent_link[link]
     for link in links.values():
         _check_inertial(link, label)
     return _fidelity_notes(root)
