@@ -26,7 +26,6 @@ import numpy as np
 
 SHAPES = {"sphere": ("radius",), "box": ("size",), "cylinder": ("radius", "length"),
           "capsule": ("radius", "length"), "halfspace": ("normal", "offset")}
-OWNERS = ("world", "body", "link")
 #: Shapes whose overlap with a flat face can be a patch of several points.
 FLAT = ("box", "cylinder", "halfspace")
 
@@ -88,13 +87,12 @@ class PlacedPair:
     """The narrow phase of one declared pair: coal shapes and reusable requests."""
 
     def __init__(self, shape1: Shape, shape2: Shape) -> None:
-        self.kinds = (shape1.kind, shape2.kind)
         self.geometry1, self.geometry2 = shape1.coal_geometry(), shape2.coal_geometry()
         self.distance_request = coal.DistanceRequest()
         self.distance_request.enable_signed_distance = True
         self.collision_request = coal.CollisionRequest()
         self.patch_request = coal.ContactPatchRequest()
-        self.patches = self.kinds[0] in FLAT and self.kinds[1] in FLAT
+        self.patches = shape1.kind in FLAT and shape2.kind in FLAT
 
     def signed_distance(self, pose1: np.ndarray, pose2: np.ndarray) -> float:
         """Signed distance (m, < 0 when overlapping)."""
@@ -136,7 +134,6 @@ class BroadPhase:
         #: The shapes with a finite box that some pair uses (half-spaces are always close).
         self.bounded = sorted({i for pair in self.pairs for i in pair if shapes[i].kind != "halfspace"})
         self.margin = margin
-        self.narrow_checks = 0
 
     def close_pairs(self, poses: Sequence[np.ndarray]) -> list[int]:
         """Pairs (indices into ``pairs``) worth a narrow-phase query at these world poses."""
@@ -152,5 +149,4 @@ class BroadPhase:
             if a in lower and b in lower and (np.any(lower[a] > upper[b]) or np.any(lower[b] > upper[a])):
                 continue
             close.append(k)
-        self.narrow_checks += len(close)
         return close

@@ -97,8 +97,8 @@ def newton_impulse(inverse_mass: np.ndarray, velocity: np.ndarray, normal: np.nd
     ``inverse_mass`` W (3x3, world frame, m/(N s)) maps an impulse P on body 2 (and -P on
     body 1) to the change of the relative contact velocity: u+ = u- + W P. The sticking
     impulse makes u+ = -e (u-.n) n; if its tangential part leaves the cone |P_t| <= mu P_n
-    the impulse slides: P = P_n (n - mu t), t the direction of the sticking impulse's
-    tangential part reversed, with P_n from the normal restitution condition alone.
+    the impulse slides: P = P_n (n + mu t), t the unit direction of the sticking impulse's
+    tangential part, with P_n from the normal restitution condition alone.
     Returns (P (N s, world frame, on body 2), sticking).
     """
     un = float(velocity @ normal)
@@ -106,10 +106,10 @@ def newton_impulse(inverse_mass: np.ndarray, velocity: np.ndarray, normal: np.nd
     sticking = np.linalg.solve(inverse_mass, target - velocity)
     pn = float(sticking @ normal)
     pt = sticking - pn * normal
-    if np.linalg.norm(pt) <= mu * pn:
+    pt_norm = np.linalg.norm(pt)
+    if pt_norm <= mu * pn:
         return sticking, True
-    slip = -pt / np.linalg.norm(pt)
-    direction = normal + mu * (-slip)
+    direction = normal + (mu / pt_norm) * pt
     pn = -(1.0 + restitution) * un / float(normal @ inverse_mass @ direction)
     return pn * direction, False
 

@@ -68,10 +68,11 @@ class ConstraintStepper:
 
     def __init__(self, robot_model: pin.Model, bodies: list[FreeBody], geometries: tuple[Geometry, ...],
                  pairs: list[tuple[str, int, int, ConstraintContact]], settings: StepperSettings) -> None:
+        if settings.solver not in SOLVERS:
+            raise ValueError(f"unknown constraint solver {settings.solver!r}; known: {', '.join(SOLVERS)}")
         self.model = pin.Model(robot_model)
         self.body_joints = [add_free_flyer(self.model, body) for body in bodies]
         self.data = self.model.createData()
-        self.robot_nq = robot_model.nq
         self.geometries = geometries
         self.pairs = pairs
         self.narrow = [PlacedPair(geometries[a].shape, geometries[b].shape) for _, a, b, _ in pairs]
@@ -79,8 +80,6 @@ class ConstraintStepper:
         self.settings = settings
         self.body_index = {body.name: k for k, body in enumerate(bodies)}
         self.frames = {g.owner_name: self.model.getFrameId(g.owner_name) for g in geometries if g.owner == "link"}
-        if settings.solver not in SOLVERS:
-            raise ValueError(f"unknown constraint solver {settings.solver!r}; known: {', '.join(SOLVERS)}")
 
     def _owner(self, geometry: Geometry) -> tuple[int, pin.SE3]:
         """Joint id and the joint's world placement of a geometry's owner."""
