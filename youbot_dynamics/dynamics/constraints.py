@@ -85,6 +85,7 @@ class HolonomicSystem:
 
     @property
     def n_positions(self) -> int:
+        """n, the number of generalised positions."""
         return len(self.position_names)
 
     @property
@@ -154,12 +155,15 @@ class DaeForm:
     m: int
 
     def positions(self, y: np.ndarray) -> np.ndarray:
+        """q from y (or a time series of y along axis 0), a view."""
         return y[..., :self.n]
 
     def velocities(self, y: np.ndarray) -> np.ndarray:
+        """v from y, a view."""
         return y[..., self.n:2 * self.n]
 
     def multipliers(self, y: np.ndarray) -> np.ndarray:
+        """lambda from y (M v' = f - G^T lambda), a view."""
         return y[..., 3 * self.n:3 * self.n + self.m]
 
 

@@ -63,7 +63,8 @@ class FreeBody:
 
 
 def orientation(reference: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """R = R(reference quaternion x, y, z, w) exp([phi])."""
+    """R = R(reference quaternion x, y, z, w) exp([phi]) (phi in rad): the body's axes in
+    the world frame (3x3)."""
     return matrix_from_quaternion(reference) @ exp_so3(phi)
 
 
@@ -73,7 +74,8 @@ def recentred(reference: np.ndarray, phi: np.ndarray) -> np.ndarray:
 
 
 def phi_rate(phi: np.ndarray, rotation: np.ndarray, omega_world: np.ndarray) -> np.ndarray:
-    """d phi/dt = Jr^-1(phi) R^T w (rad/s)."""
+    """d phi/dt = Jr^-1(phi) R^T w (rad/s), w the world-frame angular velocity (rad/s) and
+    R the body's orientation (3x3, body axes in the world frame)."""
     return pin.Jlog3(exp_so3(phi)) @ (rotation.T @ omega_world)
 
 

@@ -141,11 +141,13 @@ class JointFriction:
 
     @property
     def state_names(self) -> tuple[str, ...]:
+        """Names of the LuGre bristle states, ``<joint>/lugre_z``, in joint order."""
         joints = () if self.lugre is None else self.lugre.joints
         return tuple(f"{self.joint_names[i]}/lugre_z" for i in joints)
 
     @property
     def n_states(self) -> int:
+        """Number of LuGre bristle states (0 without LuGre joints)."""
         return 0 if self.lugre is None else len(self.lugre.joints)
 
     @classmethod

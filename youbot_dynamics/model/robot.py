@@ -83,10 +83,12 @@ class Robot:
     # ---- joint-indexed arrays (Pinocchio order) -------------------------------------
     @property
     def joint_names(self) -> tuple[str, ...]:
+        """Moving joints' names in Pinocchio's order (the order of every joint vector)."""
         return tuple(j.name for j in self.joints)
 
     @property
     def nv(self) -> int:
+        """Number of moving joints (== model.nq == model.nv)."""
         return len(self.joints)
 
     def _array(self, attribute: str) -> np.ndarray:
@@ -96,30 +98,37 @@ class Robot:
 
     @property
     def lower(self) -> np.ndarray:
+        """Lower position limits (rad or m; -inf for continuous joints), read-only."""
         return self._array("lower")
 
     @property
     def upper(self) -> np.ndarray:
+        """Upper position limits (rad or m; +inf for continuous joints), read-only."""
         return self._array("upper")
 
     @property
     def velocity_limit(self) -> np.ndarray:
+        """Velocity limits (rad/s or m/s; inf where the URDF gives none), read-only."""
         return self._array("velocity_limit")
 
     @property
     def effort_limit(self) -> np.ndarray:
+        """Effort limits (N m or N; inf where the URDF gives none), read-only."""
         return self._array("effort_limit")
 
     @property
     def damping(self) -> np.ndarray:
+        """URDF viscous damping (N m s/rad or N s/m), read-only."""
         return self._array("damping")
 
     @property
     def friction(self) -> np.ndarray:
+        """URDF Coulomb friction level (N m or N), read-only."""
         return self._array("friction")
 
     @property
     def link_names(self) -> tuple[str, ...]:
+        """Every link of the URDF tree, root first, parents before children."""
         return (self.root_link, *(j.child for j in self.tree))
 
     # ---- look-ups ---------------------------------------------------------------------
