@@ -65,6 +65,13 @@ class ContactEvent:
         return {"time": self.time, "pair": self.pair, "kind": self.kind, "value": self.value}
 
 
+def homogeneous(rotation: np.ndarray, position: np.ndarray) -> np.ndarray:
+    """The 4x4 homogeneous pose of a rotation (3x3) and a position (3,) in m."""
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = rotation, position
+    return pose
+
+
 def body_blocks(names: list[str]) -> dict[str, list[str]]:
     """State blocks of the free bodies: symbol -> component labels (``ball.x`` ...)."""
     axes = {3: ("x", "y", "z"), 4: ("qx", "qy", "qz", "qw")}
@@ -127,9 +134,7 @@ class ContactSystem:
                 poses.append(g.placement)
             elif g.owner == "body":
                 k = self.body_index[g.owner_name]
-                owner = np.eye(4)
-                owner[:3, :3], owner[:3, 3] = rotations[k], positions[k]
-                poses.append(owner @ g.placement)
+                poses.append(homogeneous(rotations[k], positions[k]) @ g.placement)
             else:
                 poses.append(self.data.oMf[self.frames[g.owner_name]].homogeneous @ g.placement)
         return poses
@@ -148,6 +153,13 @@ class ContactSystem:
             origin = self.data.oMf[frame].translation
             jacobian[:, :nv] = full[:3] - skew(point - origin) @ full[3:]
         return jacobian
+
+    def _relative_jacobian(self, k: int, point: np.ndarray, q: np.ndarray, positions) -> np.ndarray:
+        """3 x (nv + 6 nb): velocity at ``point`` (world frame, m) of pair k's second
+        geometry's owner relative to its first's (nu -> relative velocity, m/s)."""
+        a, b = self.sides[k]
+        return self._point_jacobian(self.geometries[b], point, q, positions) - \
+            self._point_jacobian(self.geometries[a], point, q, positions)
 
     def _nu(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         _, _, u, w, _ = self._bodies(x)
@@ -174,10 +186,7 @@ class ContactSystem:
             points = [c for c in self._contacts(k, poses, 0.0) if c.depth > 0.0]
             chi = hysteresis_factor(law.restitution, speeds[j], law.damping_model)
             for c in points:
-                a, b = self.sides[k]
-                middle = 0.5 * (c.point1 + c.point2)
-                relative = self._point_jacobian(self.geometries[b], middle, q, positions) - \
-                    self._point_jacobian(self.geometries[a], middle, q, positions)
+                relative = self._relative_jacobian(k, 0.5 * (c.point1 + c.point2), q, positions)
                 u = relative @ nu
                 un = float(u @ c.normal)
                 fn = hunt_crossley_force(c.depth, -un, law.stiffness, law.exponent, chi) / len(points)
@@ -206,12 +215,7 @@ class ContactSystem:
     def poses_of(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """World pose (4x4) of every free body at state x."""
         positions, rotations, _, _, _ = self._bodies(x)
-        poses = {}
-        for k, body in enumerate(self.bodies):
-            pose = np.eye(4)
-            pose[:3, :3], pose[:3, 3] = rotations[k], positions[k]
-            poses[body.name] = pose
-        return poses
+        return {body.name: homogeneous(rotations[k], positions[k]) for k, body in enumerate(self.bodies)}
 
     # ---- guards and resets -----------------------------------------------------------------
     def transitions(self, q_slice: slice, v_slice: slice, mass_matrix) -> tuple[Transition, ...]:
@@ -245,10 +249,7 @@ class ContactSystem:
         positions, rotations, _, _, _ = self._bodies(x)
         poses = self._poses(q, positions, rotations)
         c = self._contacts(k, poses, np.inf)[0]
-        a, b = self.sides[k]
-        middle = 0.5 * (c.point1 + c.point2)
-        relative = self._point_jacobian(self.geometries[b], middle, q, positions) - \
-            self._point_jacobian(self.geometries[a], middle, q, positions)
+        relative = self._relative_jacobian(k, 0.5 * (c.point1 + c.point2), q, positions)
         return c, relative, relative @ self._nu(x, v)
 
     def _touch(self, j: int, k: int, q_slice: slice, v_slice: slice):

@@ -195,9 +195,10 @@ class Simulator:
         if self.contact:
             tau_contact, wrenches = self.contact.forces(x, q, v)
             tau = tau + tau_contact
+            slices = self.contact.slices
             for symbol, rate in self.contact.body_derivative(x, wrenches).items():
-                dx[self.layout.slice(symbol)] = rate
-            dx[self.layout.slice("s")] = 0.0
+                dx[slices[symbol]] = rate
+            dx[slices["s"]] = 0.0
         if self.robot.nv:
             dx[self._v] = forward_dynamics(self.robot, self.data, q, v, tau, self.friction, z if z.size else None)
         if z.size:
