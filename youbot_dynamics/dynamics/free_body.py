@@ -57,6 +57,11 @@ class FreeBody:
             inertia = pin.Inertia.FromCapsule(mass, shape.radius, shape.length)
         return cls(name, mass, inertia.inertia.copy())
 
+    def world_inertia(self, rotation: np.ndarray) -> np.ndarray:
+        """I_w = R I R^T (kg m^2): the inertia about the centre of mass in world axes, for
+        the orientation R (3x3, body axes in the world frame)."""
+        return rotation @ self.inertia @ rotation.T
+
     def spatial_inertia(self) -> pin.Inertia:
         """Pinocchio's spatial inertia (centre of mass at the body origin)."""
         return pin.Inertia(self.mass, np.zeros(3), self.inertia)
@@ -84,14 +89,14 @@ def newton_euler(body: FreeBody, rotation: np.ndarray, omega_world: np.ndarray, 
     """Linear and angular accelerations (world frame) under the total force (N) and torque
     about the centre of mass (N m), both world frame: m a = f + m g,
     I_w dw/dt = tau - w x I_w w with I_w = R I R^T."""
-    inertia_world = rotation @ body.inertia @ rotation.T
+    inertia_world = body.world_inertia(rotation)
     gyroscopic = np.cross(omega_world, inertia_world @ omega_world)
     return force / body.mass + gravity, np.linalg.solve(inertia_world, torque - gyroscopic)
 
 
 def kinetic_energy(body: FreeBody, rotation: np.ndarray, u: np.ndarray, omega_world: np.ndarray) -> float:
     """Translational plus rotational kinetic energy (J)."""
-    inertia_world = rotation @ body.inertia @ rotation.T
+    inertia_world = body.world_inertia(rotation)
     return 0.5 * body.mass * float(u @ u) + 0.5 * float(omega_world @ inertia_world @ omega_world)
 
 
