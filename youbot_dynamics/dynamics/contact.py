@@ -24,6 +24,7 @@ instead of sticking.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import MISSING, dataclass, fields
 from typing import Any, Mapping
@@ -58,6 +59,7 @@ def hysteresis_factor(restitution: float, approach_speed: float, model: str = "e
     return exact_hysteresis_product(e) / v0
 
 
+@functools.lru_cache(maxsize=64)  # a root solve that depends on e alone, asked for at every force evaluation
 def exact_hysteresis_product(restitution: float) -> float:
     """x = chi v0 > 0 solving ln(1 - e x) - ln(1 + x) + (1 + e) x = 0, 0 < e < 1 (x < 1/e,
     and x -> 1/e as e -> 0)."""
