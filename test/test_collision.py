@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from youbot_dynamics.dynamics.collision import BroadPhase, PlacedPair, Shape
+from youbot_dynamics.dynamics.collision import BroadPhase, Geometry, PlacedPair, Shape
+from youbot_dynamics.errors import UserInputError
 
 
 def pose(xyz, rotation=None) -> np.ndarray:
@@ -79,3 +80,11 @@ def test_broad_phase_hands_only_close_pairs_to_the_narrow_phase():
 def test_half_spaces_are_always_close():
     broad = BroadPhase([FLOOR, Shape("sphere", radius=0.05)], [(0, 1)], margin=0.0)
     assert broad.close_pairs([np.eye(4), pose([0, 0, 10.0])]) == [0]
+
+
+def test_unknown_shape_or_owner_is_refused():
+    """Not silently a half-space (the last branch of coal_geometry) or a link."""
+    with pytest.raises(UserInputError, match="unknown shape kind 'cone'.*sphere"):
+        Shape("cone", radius=0.1)
+    with pytest.raises(UserInputError, match="geometry 'g': unknown owner kind 'robot'"):
+        Geometry("g", Shape("sphere", radius=0.1), "robot", "youbot")

@@ -24,8 +24,11 @@ from typing import Sequence
 import coal
 import numpy as np
 
+from youbot_dynamics.errors import UserInputError
+
 SHAPES = {"sphere": ("radius",), "box": ("size",), "cylinder": ("radius", "length"),
           "capsule": ("radius", "length"), "halfspace": ("normal", "offset")}
+OWNERS = ("world", "body", "link")
 #: Shapes whose overlap with a flat face can be a patch of several points.
 FLAT = ("box", "cylinder", "halfspace")
 
@@ -40,6 +43,10 @@ class Shape:
     size: tuple[float, float, float] = (0.0, 0.0, 0.0)
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     offset: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in SHAPES:
+            raise UserInputError(f"unknown shape kind {self.kind!r}; known: {', '.join(SHAPES)}")
 
     def coal_geometry(self) -> coal.CollisionGeometry:
         """The coal shape."""
@@ -65,6 +72,11 @@ class Geometry:
     owner: str
     owner_name: str
     placement: np.ndarray = field(default_factory=lambda: np.eye(4))
+
+    def __post_init__(self) -> None:
+        if self.owner not in OWNERS:
+            raise UserInputError(f"geometry {self.name!r}: unknown owner kind {self.owner!r}; "
+                                 f"known: {', '.join(OWNERS)}")
 
 
 @dataclass(frozen=True)
