@@ -171,6 +171,30 @@ def test_scene_errors_name_the_file_and_the_pair(tmp_path, mutate, words):
     assert error.value.key.startswith("contacts") or error.value.key.startswith("integrator")
 
 
+@pytest.mark.parametrize("mutate, key", [
+    (lambda d: d["world"].append({"name": "floor", "shape": {"type": "sphere", "radius": 0.1}}), "world[1].name"),
+    (lambda d: d["world"].append({"name": "ball", "shape": {"type": "sphere", "radius": 0.1}}), "world[1].name"),
+    (lambda d: d["free_bodies"].append(dict(d["free_bodies"][0])), "free_bodies[1].name"),
+])
+def test_a_name_used_twice_is_reported_where_it_is_declared_again(tmp_path, mutate, key):
+    data = packaged("ball_drop")
+    mutate(data)
+    with pytest.raises(SceneError, match="name already used by") as error:
+        load_scene(write(tmp_path, data))
+    assert error.value.key == key
+
+
+@pytest.mark.parametrize("urdf, words", [(None, "missing"), ("nowhere.urdf", "file not found"),
+                                         ("broken.urdf", "not valid XML")])
+def test_a_composed_robot_file_that_cannot_be_read_names_its_key(tmp_path, urdf, words):
+    (tmp_path / "broken.urdf").write_text("<robot name='x'><link name='a'></robot>")
+    data = packaged("ball_drop")
+    data["robot"] = {"compose": [{"prefix": "a_"} if urdf is None else {"urdf": urdf, "prefix": "a_"}]}
+    with pytest.raises(SceneError, match=words) as error:
+        load_scene(write(tmp_path, data))
+    assert error.value.key == "robot.compose[0].urdf"
+
+
 def test_constraint_law_needs_the_stepper(tmp_path):
     data = packaged("box_slide")
     data["integrator"] = {"method": "rk45"}

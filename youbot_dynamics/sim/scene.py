@@ -47,7 +47,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -63,6 +62,7 @@ from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
 from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.sim.scene_contacts import (EMPTY_ROBOT, ContactPairSpec, FreeBodySpec, composed_urdf,
                                                 read_contacts, read_free_bodies, read_geometries)
+from youbot_dynamics.sim.scene_reader import SceneError, SceneReader
 
 CONTROLLERS = ("none", "pd", "computed_torque")
 RECORDABLE = ("q", "v", "z", "tau", "energy", "ee_position")
@@ -72,15 +72,6 @@ TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "grav
             "controller", "integrator", "duration", "outputs", *CONTACT_SECTIONS)
 #: Integrators of the constraint stepper (dynamics/contact_stepper.py), fixed step dt.
 STEPPERS = ("pgs", "admm")
-
-
-class SceneError(UserInputError):
-    """A scene file that cannot be used: names the file, the key and the value."""
-
-    def __init__(self, source: str, key: str, problem: str, value: Any = None) -> None:
-        self.source, self.key, self.value = source, key, value
-        shown = "" if value is None else f" (got {value!r})"
-        super().__init__(f"{source}: {key}: {problem}{shown}")
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -206,11 +197,11 @@ class Scene:
         if method is not None and method not in FIXED_STEP + STEPPERS:
             current["dt"] = None
         current.update({k: v for k, v in changes.items() if v is not None})
-        return dataclasses.replace(self, integrator=_integrator(_Reader(self.source), current, "integrator"))
+        return dataclasses.replace(self, integrator=_integrator(SceneReader(self.source), current, "integrator"))
 
     def with_duration(self, duration: float) -> Scene:
         """The same scene over another duration (s)."""
-        return dataclasses.replace(self, duration=_Reader(self.source).positive(duration, "duration"))
+        return dataclasses.replace(self, duration=SceneReader(self.source).positive(duration, "duration"))
 
 
 # ---------------------------------------------------------------------------------------
@@ -239,7 +230,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
     path = find_scene(name_or_path)
     raw = path.read_bytes()
     source = str(path)
-    reader = _Reader(source)
+    reader = SceneReader(source)
     try:
         data = yaml.safe_load(raw.decode("utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError) as error:
@@ -320,27 +311,22 @@ def load_scene(name_or_path: str | Path) -> Scene:
     return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts)
 
 
-def _robot_path(reader: _Reader, scene_path: Path, value: Any) -> Path | str:
+def _robot_path(reader: SceneReader, scene_path: Path, value: Any) -> Path | str:
     if value is None:
         return default_urdf()
     if value == "none":
         return EMPTY_ROBOT
     if isinstance(value, Mapping):
         return composed_urdf(reader, reader.mapping(value, "robot", ("compose",)), scene_path)
-    for base in (scene_path.parent, package_share()):
-        candidate = (base / str(value)).resolve()
-        if candidate.is_file():
-            return candidate
-    raise SceneError(reader.source, "robot", f"file not found next to the scene ({scene_path.parent}) "
-                     f"or in the package share ({package_share()})", value)
+    return reader.file(value, "robot", scene_path)
 
 
-def _moving_vector(reader: _Reader, robot: Robot, value: Any, key: str, default: float) -> np.ndarray:
+def _moving_vector(reader: SceneReader, robot: Robot, value: Any, key: str, default: float) -> np.ndarray:
     values = reader.joint_values(value, key, robot)
     return np.array([values.get(name, default) for name in robot.joint_names])
 
 
-def _per_joint(reader: _Reader, robot: Robot, value: Any, key: str, default: np.ndarray | None) -> np.ndarray:
+def _per_joint(reader: SceneReader, robot: Robot, value: Any, key: str, default: np.ndarray | None) -> np.ndarray:
     """A scalar for every joint, or a mapping by joint name (missing: ``default``)."""
     if value is None:
         if default is None:
@@ -356,7 +342,7 @@ def _per_joint(reader: _Reader, robot: Robot, value: Any, key: str, default: np.
     return np.full(robot.nv, reader.number(value, key))
 
 
-def _controller(reader: _Reader, robot: Robot, value: Any, q0: np.ndarray) -> ControllerSpec:
+def _controller(reader: SceneReader, robot: Robot, value: Any, q0: np.ndarray) -> ControllerSpec:
     data = reader.mapping(value, "controller", ("type", "kp", "kd", "trajectory"))
     kind = data.get("type", "none")
     if kind not in CONTROLLERS:
@@ -378,7 +364,7 @@ def _controller(reader: _Reader, robot: Robot, value: Any, q0: np.ndarray) -> Co
     return ControllerSpec(kind, _frozen(kp), _frozen(kd), trajectory)
 
 
-def _trajectory(reader: _Reader, robot: Robot, value: Any, q0: np.ndarray) -> TrajectorySpec:
+def _trajectory(reader: SceneReader, robot: Robot, value: Any, q0: np.ndarray) -> TrajectorySpec:
     key = "controller.trajectory"
     data = reader.mapping(value, key, ("waypoints", "v_max", "a_max", "dwell"))
     waypoints_raw = data.get("waypoints")
@@ -405,7 +391,7 @@ def _trajectory(reader: _Reader, robot: Robot, value: Any, q0: np.ndarray) -> Tr
     return TrajectorySpec(_frozen(points), _frozen(v_max), _frozen(a_max), dwell)
 
 
-def _integrator(reader: _Reader, value: Any, key: str) -> IntegratorSpec:
+def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
     data = dict(reader.mapping(value, key, ("method", "dt", "rtol", "atol", "target_error", "energy_tolerance")))
     method = data.get("method", "rk45")
     if method not in (*INTEGRATORS, *STEPPERS, "auto"):
@@ -427,70 +413,3 @@ def _integrator(reader: _Reader, value: Any, key: str) -> IntegratorSpec:
         raise SceneError(reader.source, f"{key}.target_error", "missing: method 'auto' needs the target "
                          "final joint-space error (rad)")
     return IntegratorSpec(method, **numbers)
-
-
-class _Reader:
-    """Typed access to parsed YAML with errors naming the file, the key and the value."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def mapping(self, value: Any, key: str, allowed: tuple[str, ...] | None = None) -> Mapping[str, Any]:
-        if not isinstance(value, Mapping):
-            raise SceneError(self.source, key, "expected a mapping", value)
-        if allowed is not None:
-            for name in value:
-                if name not in allowed:
-                    prefix = "" if key == "(top level)" else f"{key}."
-                    raise SceneError(self.source, f"{prefix}{name}", "unknown key; known keys: "
-                                     + ", ".join(allowed), name)
-        return value
-
-    def number(self, value: Any, key: str) -> float:
-        if isinstance(value, bool):
-            raise SceneError(self.source, key, "expected a number", value)
-        try:
-            number = float(value)
-        except (TypeError, ValueError):
-            raise SceneError(self.source, key, "expected a number", value) from None
-        if not math.isfinite(number):
-            raise SceneError(self.source, key, "expected a finite number", value)
-        return number
-
-    def positive(self, value: Any, key: str) -> float:
-        number = self.number(value, key)
-        if number <= 0:
-            raise SceneError(self.source, key, "must be positive", value)
-        return number
-
-    def vector3(self, value: Any, key: str) -> np.ndarray:
-        if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise SceneError(self.source, key, "expected a list of 3 numbers", value)
-        return np.array([self.number(x, f"{key}[{i}]") for i, x in enumerate(value)])
-
-    def joint_list(self, value: Any, key: str, robot: Robot) -> tuple[str, ...]:
-        if not isinstance(value, list) or not value:
-            raise SceneError(self.source, key, "expected a non-empty list of joint names", value)
-        for i, name in enumerate(value):
-            self._joint(robot, name, f"{key}[{i}]")
-        if len(set(value)) != len(value):
-            raise SceneError(self.source, key, "a joint is listed twice", value)
-        return tuple(value)
-
-    def joint_values(self, value: Any, key: str, robot: Robot) -> dict[str, float]:
-        values = self.mapping(value, key)
-        out = {}
-        for name, number in values.items():
-            self._joint(robot, name, f"{key}.{name}")
-            out[name] = self.number(number, f"{key}.{name}")
-        return out
-
-    def within_limits(self, robot: Robot, name: str, value: float, key: str) -> None:
-        joint = robot.joints[robot.joint_index(name)]
-        if not joint.lower - 1e-12 <= value <= joint.upper + 1e-12:
-            raise SceneError(self.source, key, f"outside the joint limits [{joint.lower:g}, {joint.upper:g}]", value)
-
-    def _joint(self, robot: Robot, name: Any, key: str) -> None:
-        if name not in robot.joint_names:
-            raise SceneError(self.source, key, f"not a moving joint of {robot.source} "
-                             f"(joints: {', '.join(robot.joint_names)})", name)

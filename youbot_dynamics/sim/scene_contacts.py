@@ -42,11 +42,11 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
-from youbot_dynamics import package_share
 from youbot_dynamics.dynamics.collision import SHAPES, Geometry, Shape
 from youbot_dynamics.dynamics.contact import ContactLaw, ContactLawError, contact_law_from_spec
 from youbot_dynamics.dynamics.free_body import FreeBody
 from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.sim.scene_reader import SceneError, SceneReader
 
 #: The URDF of ``robot: none``: one link, no joint.
 EMPTY_ROBOT = '<robot name="none"><link name="world"/></robot>'
@@ -75,7 +75,7 @@ class ContactPairSpec:
     law: ContactLaw
 
 
-def pose_matrix(reader, value: Any, key: str) -> np.ndarray:
+def pose_matrix(reader: SceneReader, value: Any, key: str) -> np.ndarray:
     """4x4 pose from ``{xyz, rpy}`` (roll-pitch-yaw, URDF convention)."""
     data = reader.mapping(value if value is not None else {}, key, ("xyz", "rpy"))
     pose = np.eye(4)
@@ -84,10 +84,8 @@ def pose_matrix(reader, value: Any, key: str) -> np.ndarray:
     return pose
 
 
-def read_shape(reader, value: Any, key: str) -> Shape:
+def read_shape(reader: SceneReader, value: Any, key: str) -> Shape:
     """A :class:`Shape` from ``{type, dimensions}``."""
-    from youbot_dynamics.sim.scene import SceneError
-
     data = reader.mapping(value, key, SHAPE_KEYS)
     kind = data.get("type")
     if kind not in SHAPES:
@@ -113,11 +111,9 @@ def read_shape(reader, value: Any, key: str) -> Shape:
     return Shape(kind, **values)
 
 
-def composed_urdf(reader, value: Mapping[str, Any], scene_path: Path) -> str:
+def composed_urdf(reader: SceneReader, value: Mapping[str, Any], scene_path: Path) -> str:
     """One URDF from several: every link and joint name prefixed, each robot's root link
     fixed to a common ``world`` link at its pose."""
-    from youbot_dynamics.sim.scene import SceneError
-
     entries = value.get("compose")
     if not isinstance(entries, list) or not entries:
         raise SceneError(reader.source, "robot.compose", "expected a non-empty list of {urdf, prefix, pose}", entries)
@@ -126,14 +122,13 @@ def composed_urdf(reader, value: Mapping[str, Any], scene_path: Path) -> str:
     for i, entry in enumerate(entries):
         key = f"robot.compose[{i}]"
         entry = reader.mapping(entry, key, ("urdf", "prefix", "pose", "inertials"))
-        path = next((base / str(entry.get("urdf"))).resolve() for base in (scene_path.parent, package_share())
-                    if (base / str(entry.get("urdf"))).is_file()) if entry.get("urdf") else None
-        if path is None:
-            raise SceneError(reader.source, f"{key}.urdf", "file not found next to the scene or in the package share",
-                             entry.get("urdf"))
+        path = reader.file(entry.get("urdf"), f"{key}.urdf", scene_path)
         prefix = str(entry.get("prefix", ""))
         pose = pose_matrix(reader, entry.get("pose"), f"{key}.pose")
-        root = etree.parse(str(path)).getroot()
+        try:
+            root = etree.parse(str(path)).getroot()
+        except etree.XMLSyntaxError as error:
+            raise SceneError(reader.source, f"{key}.urdf", f"{path} is not valid XML: {error}") from None
         corrected_inertials(reader, root, entry.get("inertials", {}), f"{key}.inertials")
         children = {j.find("child").get("link") for j in root.findall("joint")}
         base = next(link.get("name") for link in root.findall("link") if link.get("name") not in children)
@@ -154,11 +149,9 @@ def composed_urdf(reader, value: Mapping[str, Any], scene_path: Path) -> str:
     return etree.tostring(world, encoding="unicode")
 
 
-def corrected_inertials(reader, root: etree._Element, value: Any, key: str) -> None:
+def corrected_inertials(reader: SceneReader, root: etree._Element, value: Any, key: str) -> None:
     """Replace, in the URDF tree ``root``, the mass and/or the inertia (principal moments,
     products set to 0) of the links named in ``{link: {mass, inertia: [Ixx, Iyy, Izz]}}``."""
-    from youbot_dynamics.sim.scene import SceneError
-
     links = {link.get("name"): link for link in root.findall("link")}
     for name, correction in reader.mapping(value, key).items():
         where = f"{key}.{name}"
@@ -178,10 +171,8 @@ def corrected_inertials(reader, root: etree._Element, value: Any, key: str) -> N
                 inertial.find("inertia").set(attribute, repr(float(number)))
 
 
-def read_free_bodies(reader, value: Any) -> tuple[FreeBodySpec, ...]:
+def read_free_bodies(reader: SceneReader, value: Any) -> tuple[FreeBodySpec, ...]:
     """The ``free_bodies`` list."""
-    from youbot_dynamics.sim.scene import SceneError
-
     if not isinstance(value, list):
         raise SceneError(reader.source, "free_bodies", "expected a list of bodies", value)
     specs = []
@@ -220,12 +211,21 @@ def read_free_bodies(reader, value: Any) -> tuple[FreeBodySpec, ...]:
     return tuple(specs)
 
 
-def read_geometries(reader, world: Any, attached: Any, robot: Robot,
+def read_geometries(reader: SceneReader, world: Any, attached: Any, robot: Robot,
                     bodies: Sequence[FreeBodySpec]) -> tuple[Geometry, ...]:
     """World geometry, link geometry and one geometry per free body (its shape)."""
-    from youbot_dynamics.sim.scene import SceneError
+    declared: dict[str, str] = {}  # name -> the key that declared it
 
-    geometries = [Geometry(spec.body.name, spec.shape, "body", spec.body.name) for spec in bodies]
+    def declare(name: str, key: str) -> None:
+        if name in declared:
+            raise SceneError(reader.source, key, f"name already used by {declared[name]} (geometries and free "
+                             "bodies need distinct names)", name)
+        declared[name] = key
+
+    geometries = []
+    for i, spec in enumerate(bodies):
+        declare(spec.body.name, f"free_bodies[{i}].name")
+        geometries.append(Geometry(spec.body.name, spec.shape, "body", spec.body.name))
     for section, value, owner in (("world", world, "world"), ("geometry", attached, "link")):
         if not isinstance(value, list):
             raise SceneError(reader.source, section, "expected a list of {name, shape, pose}", value)
@@ -235,6 +235,7 @@ def read_geometries(reader, world: Any, attached: Any, robot: Robot,
             name = data.get("name")
             if not isinstance(name, str) or not name:
                 raise SceneError(reader.source, f"{key}.name", "missing: give the geometry a name", name)
+            declare(name, f"{key}.name")
             owner_name = "world"
             if owner == "link":
                 owner_name = data.get("link")
@@ -242,17 +243,11 @@ def read_geometries(reader, world: Any, attached: Any, robot: Robot,
                     raise SceneError(reader.source, f"{key}.link", "not a link of the robot", owner_name)
             geometries.append(Geometry(name, read_shape(reader, data.get("shape"), f"{key}.shape"), owner, owner_name,
                                        pose_matrix(reader, data.get("pose"), f"{key}.pose")))
-    names = [g.name for g in geometries]
-    for name in names:
-        if names.count(name) > 1:
-            raise SceneError(reader.source, "world", "two geometries (or a geometry and a free body) share a name", name)
     return tuple(geometries)
 
 
-def read_contacts(reader, value: Any, geometries: Sequence[Geometry]) -> tuple[ContactPairSpec, ...]:
+def read_contacts(reader: SceneReader, value: Any, geometries: Sequence[Geometry]) -> tuple[ContactPairSpec, ...]:
     """The ``contacts`` list: pairs of geometry names and their laws."""
-    from youbot_dynamics.sim.scene import SceneError
-
     if not isinstance(value, list):
         raise SceneError(reader.source, "contacts", "expected a list of {pair: [a, b], law: ..., parameters}", value)
     by_name = {g.name: g for g in geometries}
