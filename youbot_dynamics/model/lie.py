@@ -68,6 +68,11 @@ def _log_coefficient(theta: float) -> float:
     return (1.0 - half * math.cos(half) / math.sin(half)) / (theta * theta)
 
 
+def _rodrigues(theta: float, k: np.ndarray, k2: np.ndarray) -> np.ndarray:
+    """I + sin(theta)/theta [w] + (1 - cos(theta))/theta^2 [w]^2 from k = [w], k2 = [w]^2."""
+    return np.eye(3) + _sin_over(theta) * k + _one_minus_cos_over(theta) * k2
+
+
 def exp_so3(omega_theta: np.ndarray) -> np.ndarray:
     """Rotation matrix exp([omega theta]) from exponential coordinates (rad) (MatrixExp3).
 
@@ -76,7 +81,7 @@ def exp_so3(omega_theta: np.ndarray) -> np.ndarray:
     w = np.asarray(omega_theta, dtype=float)
     theta = math.sqrt(w @ w)
     k = skew(w)
-    return np.eye(3) + _sin_over(theta) * k + _one_minus_cos_over(theta) * (k @ k)
+    return _rodrigues(theta, k, k @ k)
 
 
 def log_so3(rotation: np.ndarray) -> np.ndarray:
@@ -115,7 +120,7 @@ def exp_se3(twist_theta: np.ndarray) -> np.ndarray:
     k = skew(w)
     k2 = k @ k
     t = np.eye(4)
-    t[:3, :3] = np.eye(3) + _sin_over(theta) * k + _one_minus_cos_over(theta) * k2
+    t[:3, :3] = _rodrigues(theta, k, k2)
     t[:3, 3] = v + _one_minus_cos_over(theta) * (k @ v) + _theta_minus_sin_over(theta) * (k2 @ v)
     return t
 
