@@ -249,3 +249,17 @@ def test_stepwise_constraint_stepping_counts_each_contact_event_once():
     assert len(whole.contact_events) >= 1
     assert simulator.stats.events == whole.stats.events == len(whole.contact_events)
     assert simulator.stats.rhs_evals == simulator.stats.steps and simulator.stats.jac_evals is None
+
+
+def test_first_bounce_of_the_stiffness_sweep_reaches_e_squared_of_the_drop():
+    """contact-extremes' bounce figures on the packaged ball_drop (1 m, e = 0.8, exact
+    Hunt-Crossley damping): apex e^2 x 1 m, no energy gained at the impact."""
+    from youbot_dynamics.analysis.contact_extremes import (ball_drop_data, first_bounce, integrator_of,
+                                                           run_case)
+
+    law = {"law": "hunt_crossley", "stiffness": 1e7, "restitution": 0.8, "friction": 0.3}
+    simulator, result, status, _ = run_case(ball_drop_data(law, integrator_of("rk45", None), 1.1))
+    assert status == "ok"
+    bounce = first_bounce(simulator, result, 0.8)
+    assert bounce["apex_m"] == pytest.approx(0.64, rel=2e-3)
+    assert abs(bounce["energy_gain_J"]) < 1e-3 * simulator.scene.free_bodies[0].body.mass * G

@@ -19,15 +19,15 @@ import yaml
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integration import IntegrationError
-from youbot_dynamics.sim.scene import STEPPERS, load_scene, scene_dir
-from youbot_dynamics.sim.simulator import Simulator
+from youbot_dynamics.sim.scene import STEPPERS, Scene, load_scene, scene_dir
+from youbot_dynamics.sim.simulator import SimulationResult, Simulator
 
 STIFFNESSES = (1e3, 1e4, 1e5, 1e6, 1e7, 1e8)
 ODE_METHODS = (("rk45", None), ("radau", None), ("cvode_bdf", None), ("rk4", 1e-4))
 STEPPER_STEPS = (1e-2, 1e-3, 1e-4)
 
 
-def scene_from(data: dict[str, Any]):
+def scene_from(data: dict[str, Any]) -> Scene:
     """Load a scene from a mapping (through a temporary file, checked like any scene)."""
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / f"{data.get('name', 'extreme')}.yaml"
@@ -36,10 +36,11 @@ def scene_from(data: dict[str, Any]):
 
 
 def integrator_of(method: str, dt: float | None) -> dict[str, Any]:
+    """A scene's ``integrator`` section: fixed step dt (s), else rtol 1e-6, atol 1e-9."""
     return {"method": method, "dt": dt} if dt is not None else {"method": method, "rtol": 1e-6, "atol": 1e-9}
 
 
-def run_case(data: dict[str, Any]) -> tuple[Simulator | None, Any, str, float]:
+def run_case(data: dict[str, Any]) -> tuple[Simulator | None, SimulationResult | None, str, float]:
     """(simulator, result or None, status, wall time s): status ``ok`` or the failure."""
     start = time.perf_counter()
     try:
@@ -52,16 +53,19 @@ def run_case(data: dict[str, Any]) -> tuple[Simulator | None, Any, str, float]:
 
 
 def ball_drop_data(law: dict[str, Any], integrator: dict[str, Any], duration: float) -> dict[str, Any]:
+    """The packaged ball_drop scene with another contact law, integrator and duration (s)."""
     data = yaml.safe_load((scene_dir() / "ball_drop.yaml").read_text())
     data["contacts"][0] = {"pair": ["floor", "ball"], **law}
     data["integrator"], data["duration"] = integrator, duration
     return data
 
 
-def first_bounce(simulator: Simulator, result, restitution: float) -> dict[str, float]:
+def first_bounce(simulator: Simulator, result: SimulationResult, restitution: float) -> dict[str, float]:
     """Apex after the first impact (m above the floor) and the energy gained at the impact
-    beyond the law's e^2 (J): E_after - e^2 E_before, gravity potential from the floor."""
-    radius, g = 0.025, 9.81
+    beyond the law's e^2 (J): E_after - e^2 E_before, gravity potential from the floor
+    (the ball's radius and g are the scene's)."""
+    radius = simulator.scene.free_bodies[0].shape.radius
+    g = float(np.linalg.norm(simulator.scene.gravity))
     z = result.x[:, simulator.layout.slice("p")][:, 2] - radius
     vz = result.x[:, simulator.layout.slice("u")][:, 2]
     ballistic = z + vz ** 2 / (2 * g)
