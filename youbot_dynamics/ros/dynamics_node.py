@@ -15,7 +15,8 @@ after falling ``MAX_LAG`` wall seconds behind does the pacing restart from now. 
 time itself advances by fixed increments, independent of the wall clock. With
 ``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched the sample
 topic, /joint_states or, without a robot, /free_bodies (or after ``wait_timeout`` wall
-seconds), so a subscriber started with the node misses none of the first samples. On leaving, the node waits (up to ``ACK_TIMEOUT``) until its
+seconds), so a subscriber started with the node misses none of the first samples. On
+leaving, the node waits (up to :data:`~youbot_dynamics.ros.process.ACK_TIMEOUT`) until its
 subscribers have acknowledged every message.
 
 Run: ``ros2 run youbot_dynamics dynamics_node --ros-args --params-file config/dynamics_node.yaml``
@@ -24,14 +25,12 @@ SIGINT and SIGTERM finalise the logs before the process ends.
 """
 from __future__ import annotations
 
-import signal
 import sys
 import time
 
 import rclpy
 import rclpy.executors
 from rclpy.clock import Clock, ClockType
-from rclpy.duration import Duration
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -44,6 +43,7 @@ from trajectory_msgs.msg import JointTrajectory
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
 from youbot_dynamics.ros.parameters import check_choice, declare_all
+from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import RELIABLE_DEEP
 from youbot_dynamics.ros.session import TOPIC_TYPES, InverseSession, Outputs, SimulationSession
 from youbot_dynamics.sim.commands import InputRejected
@@ -56,8 +56,6 @@ MAX_LAG = 0.25
 real-time factor then drops below the requested time scale)."""
 WARN_THROTTLE = 2.0
 """Seconds between repeated warnings about bad input."""
-ACK_TIMEOUT = 3.0
-"""Longest wait (wall s), on leaving, for subscribers to acknowledge what was published."""
 
 
 def _stamp_ns(stamp) -> int:
@@ -220,16 +218,6 @@ class DynamicsNode(Node):
         """Finalise the logs (idempotent)."""
         self.session.close()
 
-    def wait_for_acknowledgements(self) -> bool:
-        """Wait (at most ``ACK_TIMEOUT`` in all) until every subscriber has acknowledged every
-        message published; False if one has not."""
-        deadline = time.monotonic() + ACK_TIMEOUT
-        acknowledged = True
-        for publisher in self.publishers_.values():
-            left = Duration(nanoseconds=max(0, round((deadline - time.monotonic()) * 1e9)))
-            acknowledged = publisher.wait_for_all_acked(left) and acknowledged
-        return acknowledged
-
 
 def run(args: list[str] | None = None, overrides: dict[str, object] | None = None) -> tuple[int, DynamicsNode | None]:
     """Run the node until ``duration`` is reached, SIGINT or SIGTERM, and finalise the logs.
@@ -238,9 +226,7 @@ def run(args: list[str] | None = None, overrides: dict[str, object] | None = Non
     that beat them. Returns the exit status (2: bad parameters) and the finished node.
     """
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    stop = []
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda number, frame: stop.append(number))
+    stop = stop_requests()
     try:
         node = DynamicsNode(parameter_overrides=[Parameter(k, value=v) for k, v in (overrides or {}).items()])
     except (UserInputError, InvalidParameterValueException) as error:
@@ -254,7 +240,7 @@ def run(args: list[str] | None = None, overrides: dict[str, object] | None = Non
             executor.spin_once(timeout_sec=0.05)
     finally:
         node.close()
-        if not node.wait_for_acknowledgements():
+        if not wait_for_acknowledgements(node.publishers_.values()):
             node.get_logger().warning("some subscribers did not acknowledge the last messages")
         executor.shutdown()
         node.destroy_node()
