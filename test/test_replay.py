@@ -22,6 +22,7 @@ from rclpy.parameter import Parameter  # noqa: E402
 from rosbags.rosbag2 import StoragePlugin, Writer  # noqa: E402
 
 from youbot_dynamics.dynamics.rigid_body import mass_matrix  # noqa: E402
+from youbot_dynamics.errors import UserInputError  # noqa: E402
 from youbot_dynamics.io import messages  # noqa: E402
 from youbot_dynamics.io.bag_reader import read_bag  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
@@ -208,3 +209,19 @@ def test_cli_replay_publishes_with_the_recorded_timing(recorded: Path) -> None:
     assert all(np.array_equal(a.position, b.position) for a, b in zip(got, recorded_states))
     clocks = [c.clock.sec * 10**9 + c.clock.nanosec for c in collector.messages("/clock")]
     assert clocks == [stamp_ns(m) for m in recorded_states]           # /clock driven by the log times
+
+
+def test_replay_refuses_topics_the_bag_does_not_replay(recorded: Path) -> None:
+    """A --topic the bag lacks, or a --wait-for topic that is not replayed, is a user error
+    naming the topic and what the bag has; so is a rate out of range (one line, exit 2)."""
+    with ros_context(16) as (context, _):
+        with pytest.raises(UserInputError, match=r"has no topic /nope \(it has /clock, /diagnostics"):
+            ReplayNode(recorded, 1.0, ["/nope", "/clock"], context=context)
+        with pytest.raises(UserInputError, match=r"wait_for /tf is not a replayed topic .*replayed: /clock\)"):
+            ReplayNode(recorded, 1.0, ["/clock", "/tf"], wait_for="/tf", context=context)
+    process = subprocess.run([sys.executable, "-m", "youbot_dynamics", "replay", str(recorded), "--rate", "5000"],
+                             cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain_id(17))},
+                             capture_output=True, text=True, timeout=120)
+    lines = process.stderr.strip().splitlines()
+    assert process.returncode == 2 and len(lines) == 1, process.stderr
+    assert lines[0].startswith("youbot-dynamics replay: error: ") and "rate" in lines[0] and "5000" in lines[0]

@@ -13,7 +13,6 @@ or ``youbot-dynamics replay BAG [--rate R | --fast]``.
 """
 from __future__ import annotations
 
-import signal
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -21,6 +20,7 @@ from pathlib import Path
 
 import rclpy
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
@@ -29,7 +29,11 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import bag_topics, paced, read_bag
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
+from youbot_dynamics.ros.process import stop_requests
 from youbot_dynamics.ros.qos import RELIABLE_DEEP, profile
+
+WAIT_FOR_TIMEOUT = 30.0
+"""Longest wait (wall s) for a subscriber on ``wait_for`` before replaying anyway."""
 
 
 class ReplayNode(Node):
@@ -46,14 +50,20 @@ class ReplayNode(Node):
         wanted = self.declare_parameter("topics", list(topics) or [""], ParameterDescriptor(
             description="topics to replay (empty: all)", read_only=True)).value
         self.wait_for = self.declare_parameter("wait_for", wait_for, ParameterDescriptor(
-            description="before replaying, wait up to 30 s for a subscriber on this topic ('' : do not wait)",
+            description=f"before replaying, wait up to {WAIT_FOR_TIMEOUT:g} s for a subscriber on this topic "
+                        "('' : do not wait)",
             read_only=True)).value
         if not bag:
             raise UserInputError("replay_node: parameter bag is empty: give a .mcap file or a rosbag2 folder")
         self.bag = Path(bag)
         wanted = {topic for topic in wanted if topic}
+        recorded = bag_topics(self.bag)
+        missing = sorted(wanted - {topic.topic for topic in recorded})
+        if missing:
+            raise UserInputError(f"replay_node: bag {self.bag} has no topic {', '.join(missing)} "
+                                 f"(it has {', '.join(sorted(t.topic for t in recorded)) or 'none'})")
         self.publishers_ = {}
-        for topic in bag_topics(self.bag):
+        for topic in recorded:
             if wanted and topic.topic not in wanted:
                 continue
             try:
@@ -63,6 +73,9 @@ class ReplayNode(Node):
                 continue
             self.publishers_[topic.topic] = self.create_publisher(cls, topic.topic, profile(topic.latched))
         self.clock = None if "/clock" in self.publishers_ else self.create_publisher(Clock, "/clock", RELIABLE_DEEP)
+        if self.wait_for and self.wait_for not in self.publishers_:
+            raise UserInputError(f"replay_node: wait_for {self.wait_for} is not a replayed topic of {self.bag} "
+                                 f"(replayed: {', '.join(sorted(self.publishers_)) or 'none'})")
 
     def wait_for_subscribers(self, topic: str, count: int = 1, timeout: float = 10.0) -> bool:
         """Wait (wall s) until ``topic`` has ``count`` matched subscriptions."""
@@ -94,16 +107,20 @@ def replay_once(args: list[str] | None = None, **node_arguments) -> tuple[int, P
 
     ``node_arguments`` go to :class:`ReplayNode` (bag, rate, topics, wait_for); ``args`` are
     ROS arguments (--ros-args -p bag:=...). Returns the number of messages published, the
-    bag and the topics it went out on. UserInputError for a bag that cannot be read."""
+    bag and the topics it went out on. UserInputError for a bag that cannot be read, a
+    parameter out of range or a topic the bag does not have."""
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    stop = []
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda number, frame: stop.append(number))
+    stop = stop_requests()
     try:
-        node = ReplayNode(**node_arguments)
-        if node.wait_for and not node.wait_for_subscribers(node.wait_for, timeout=30.0):
-            node.get_logger().warning(f"no subscriber on {node.wait_for} after 30 s; replaying anyway")
+        try:
+            node = ReplayNode(**node_arguments)
+        except InvalidParameterValueException as error:
+            raise UserInputError(f"replay_node: {error}") from None
+        if node.wait_for and not node.wait_for_subscribers(node.wait_for, timeout=WAIT_FOR_TIMEOUT):
+            node.get_logger().warning(f"no subscriber on {node.wait_for} after {WAIT_FOR_TIMEOUT:g} s; "
+                                      "replaying anyway")
         count = node.replay(lambda: not stop)
+        node.destroy_node()
         return count, node.bag, sorted(node.publishers_)
     finally:
         rclpy.try_shutdown()
