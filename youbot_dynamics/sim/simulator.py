@@ -34,6 +34,7 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -53,6 +54,8 @@ from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
+#: A torque command: a sequence in joint order or a mapping by joint name (N m, N).
+TorqueCommand = Sequence[float] | np.ndarray | Mapping[str, float]
 #: A joint velocity beyond this multiple of its URDF limit is divergence.
 VELOCITY_LIMIT_FACTOR = 100.0
 
@@ -170,15 +173,18 @@ class Simulator:
         self.ee_frame = self.robot.frame_id(self.robot.end_effector)
         self.bounds = self.layout.velocity_bounds(self.robot.velocity_limit, VELOCITY_LIMIT_FACTOR)
         self._q, self._v, self._z = (self.layout.slice(s) for s in ("q", "v", "z"))
+        self._stepper: ConstraintStepper | None = None
         self.reset()
 
     # ---- the model ----------------------------------------------------------------------
     @property
     def joint_names(self) -> tuple[str, ...]:
+        """The moving joints, in the order of q, v and tau."""
         return self.robot.joint_names
 
     @property
     def state_dim(self) -> int:
+        """Dimension of the continuous state x."""
         return self.layout.size
 
     def initial_state(self) -> np.ndarray:
@@ -235,9 +241,11 @@ class Simulator:
         """(k, 3) positions (m) of free body ``body``'s centre of mass in the frame of robot
         link ``link`` at the result's output times: constant while the link holds the body
         rigidly (a grasp that does not slip)."""
-        index = self.contact.body_index[body] if self.contact and body in self.contact.body_index else None
-        if index is None:
-            raise UserInputError(f"{self.scene.source}: no free body {body!r}")
+        bodies = self.contact.body_index if self.contact else {}
+        if body not in bodies:
+            raise UserInputError(f"{self.scene.source}: no free body {body!r} (free_bodies: "
+                                 f"{', '.join(bodies) or 'none'})")
+        index = bodies[body]
         positions = result.x[:, self.layout.slice("p")][:, 3 * index:3 * index + 3]
         frame = self.robot.frame_id(link)
         out = np.empty_like(positions)
@@ -246,7 +254,7 @@ class Simulator:
             out[k] = self.data.oMf[frame].actInv(p)
         return out
 
-    def clipped(self, tau: np.ndarray) -> np.ndarray:
+    def clipped(self, tau: TorqueCommand) -> np.ndarray:
         """A torque command in joint order, clipped to the effort limits."""
         tau = self.robot.vector(tau, what="tau_command")
         return np.clip(tau, -self.effort_limit, self.effort_limit)
@@ -255,11 +263,11 @@ class Simulator:
     def solve(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None = None) -> Solution:
         """Integrate from x0 at t_eval[0] with outputs at t_eval (s), with the divergence
         checks; ``tau_command`` (held) replaces the controller."""
-        rhs = self.rhs if tau_command is None else (lambda t, x: self.derivative(t, x, tau_command))
         spec, names = self.integrator, self.layout.names
-        monitor = self._energy_monitor(self.energy_of(x0)) if self.conservative and tau_command is None else None
         if spec.method in STEPPERS:
             return self._step_constraints(x0, t_eval, tau_command)
+        rhs = self.rhs if tau_command is None else (lambda t, x: self.derivative(t, x, tau_command))
+        monitor = self._energy_monitor(self.energy_of(x0)) if self.conservative and tau_command is None else None
         if self.contact:
             return self._solve_hybrid(rhs, x0, t_eval, monitor)
         if spec.method == "ida":
@@ -272,7 +280,8 @@ class Simulator:
         return integrate(rhs, x0, t_eval, spec.method, dt=spec.dt, rtol=spec.rtol, atol=spec.atol,
                          state_names=names, n_positions=self.robot.nv, bounds=self.bounds, monitor=monitor)
 
-    def _solve_hybrid(self, rhs, x0: np.ndarray, t_eval: np.ndarray, monitor) -> Solution:
+    def _solve_hybrid(self, rhs: Callable[[float, np.ndarray], np.ndarray], x0: np.ndarray, t_eval: np.ndarray,
+                      monitor: Callable[[float, np.ndarray], str | None] | None) -> Solution:
         """The contact scene as a hybrid run (impacts, touches, re-centring are guards);
         returns the samples at ``t_eval`` (after any reset at the same time)."""
         spec = self.integrator
@@ -285,12 +294,12 @@ class Simulator:
         elif spec.method != "ida" and self.contact.impulsive:
             options["max_step"] = self.contact.shortest_flight(float(np.linalg.norm(self.scene.gravity)))
         hybrid = simulate_hybrid([mode], "contact", x0, t_eval, spec.method, **options)
-        keep = [int(np.flatnonzero(hybrid.t == t)[-1]) for t in t_eval]
+        keep = np.searchsorted(hybrid.t, t_eval, side="right") - 1  # the last sample at each t
         return Solution(hybrid.t[keep], hybrid.x[keep], hybrid.stats, hybrid.state_names)
 
     def constraint_stepper(self) -> ConstraintStepper:
         """The scene's constraint stepper (built on first use)."""
-        if getattr(self, "_stepper", None) is None:
+        if self._stepper is None:
             index = {g.name: i for i, g in enumerate(self.scene.geometries)}
             pairs = [(p.name, index[p.geometry1], index[p.geometry2], p.law) for p in self.scene.contacts]
             self._stepper = ConstraintStepper(self.robot.model, [b.body for b in self.scene.free_bodies],
@@ -303,7 +312,7 @@ class Simulator:
         interval in equal steps of at most dt); contact events are the steps at which a
         pair starts carrying an impulse."""
         start = time.perf_counter()
-        if self.layout.slice("z").stop > self.layout.slice("z").start:
+        if self._z.stop > self._z.start:
             raise UserInputError(f"{self.scene.source}: the constraint stepper does not integrate LuGre bristles")
         stepper, h = self.constraint_stepper(), self.integrator.dt
         nv = self.robot.nv
@@ -372,7 +381,7 @@ class Simulator:
             blocks.update(p=np.concatenate(p), r=np.concatenate(r), u=np.concatenate(u), w=np.concatenate(w))
         return self.layout.pack(**blocks)
 
-    def _energy_monitor(self, energy0: float):
+    def _energy_monitor(self, energy0: float) -> Callable[[float, np.ndarray], str | None]:
         tolerance = self.integrator.energy_tolerance
 
         def monitor(t: float, x: np.ndarray) -> str | None:
@@ -437,12 +446,13 @@ class Simulator:
             self.contact.deepest = 0.0
             self.contact.awaiting[:] = False
 
-    def advance(self, t_next: float, tau_command=None) -> Snapshot:
+    def advance(self, t_next: float, tau_command: TorqueCommand | None = None) -> Snapshot:
         """Integrate from the current time to ``t_next`` (s); ``tau_command`` (sequence in
         joint order or mapping by joint name, N m) replaces the controller until then."""
         return self.advance_through([t_next], tau_command)[-1]
 
-    def advance_through(self, times, tau_command=None) -> list[Snapshot]:
+    def advance_through(self, times: Sequence[float] | np.ndarray,
+                        tau_command: TorqueCommand | None = None) -> list[Snapshot]:
         """``advance`` with a snapshot at each of ``times`` (s, increasing, after the current
         time) from ONE integrator run (cheaper than one ``advance`` per time: no restart in
         between); ``tau_command`` is held over all of them."""
@@ -463,14 +473,17 @@ class Simulator:
 
     @property
     def q(self) -> np.ndarray:
+        """Joint positions (rad, m) at the current time."""
         return self.x[self._q].copy()
 
     @property
     def v(self) -> np.ndarray:
+        """Joint velocities (rad/s, m/s) at the current time."""
         return self.x[self._v].copy()
 
     @property
     def z(self) -> np.ndarray:
+        """LuGre bristle deflections (rad, m; empty without LuGre joints)."""
         return self.x[self._z].copy()
 
     @property
@@ -480,10 +493,12 @@ class Simulator:
 
     @property
     def energy(self) -> float:
+        """Kinetic plus potential energy (J) at the current time."""
         return self.energy_of(self.x)
 
     @property
     def ee_pose(self) -> np.ndarray:
+        """4x4 end-effector pose (m) in the root frame at the current time."""
         return self.ee_pose_of(self.x[self._q])
 
     def snapshot(self) -> Snapshot:
