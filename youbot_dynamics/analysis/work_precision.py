@@ -87,9 +87,11 @@ class SweepPoint:
 
     @property
     def spec(self) -> IntegratorSpec:
+        """The integrator settings of this point (see :func:`spec_for`)."""
         return spec_for(self.integrator, self.value)
 
     def meets(self, target: float) -> bool:
+        """Whether the run succeeded with a joint-space error of at most ``target`` (rad)."""
         return self.failure is None and self.q_error <= target
 
 
@@ -155,6 +157,7 @@ def recommend(points: Iterable[SweepPoint], target_error: float) -> SweepPoint |
 # Output files
 # ---------------------------------------------------------------------------------------
 def write_csv(points: Sequence[SweepPoint], path: Path) -> None:
+    """The sweep as CSV, one row per point, columns :data:`FIELDS` (SI units)."""
     with open(path, "w", newline="", encoding="utf-8") as handle:
         writer = csv.DictWriter(handle, fieldnames=FIELDS)
         writer.writeheader()
@@ -162,7 +165,7 @@ def write_csv(points: Sequence[SweepPoint], path: Path) -> None:
             writer.writerow(dataclasses.asdict(point))
 
 
-def _cell(value) -> str:
+def _cell(value: float | int | None) -> str:
     if value is None:
         return "-"
     if isinstance(value, float):

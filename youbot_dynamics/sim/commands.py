@@ -48,6 +48,7 @@ class InputCounters:
     accepted: int = 0
 
     def reject(self, error: InputRejected) -> None:
+        """Count a rejected input under its kind."""
         self.rejected[error.kind] += 1
 
     def as_values(self) -> dict[str, int]:

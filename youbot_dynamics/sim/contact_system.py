@@ -62,6 +62,7 @@ class ContactEvent:
     value: float
 
     def as_dict(self) -> dict:
+        """The event as plain data (time in s, value in the unit of its kind)."""
         return {"time": self.time, "pair": self.pair, "kind": self.kind, "value": self.value}
 
 
@@ -105,6 +106,8 @@ class ContactSystem:
         self.slices = slices
 
     def extra_blocks(self) -> dict[str, list[str]]:
+        """The state blocks this system adds (symbol -> component labels): the free bodies'
+        p, r, phi, u, w and the compliant pairs' approach speeds s."""
         blocks = body_blocks([b.name for b in self.bodies])
         blocks["s"] = [self.pairs[k].name for k in self.compliant]
         return blocks

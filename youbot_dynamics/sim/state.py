@@ -28,6 +28,7 @@ class StateBlock:
 
     @property
     def size(self) -> int:
+        """Number of components."""
         return len(self.labels)
 
 
@@ -49,6 +50,7 @@ class StateLayout:
 
     @property
     def blocks(self) -> tuple[StateBlock, ...]:
+        """Every block in state order: q, v, then the extra blocks."""
         return (StateBlock("q", self.joint_names), StateBlock("v", self.joint_names), *self.extra)
 
     @property

@@ -125,6 +125,7 @@ class StudyRow:
     seed: str
 
     def as_dict(self) -> dict:
+        """The row as plain data."""
         return dict(self.__dict__)
 
 

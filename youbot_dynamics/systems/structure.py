@@ -140,17 +140,18 @@ class PantelidesResult:
     @property
     def differentiations(self) -> dict[str, int]:
         """How often each given equation was differentiated (only those that were)."""
-        counts = {}
+        counts, given = {}, set(self.given_names)
         for i, name in enumerate(self.equation_names):
             count, k = 0, self.equation_association[i]
             while k is not None:
                 count, k = count + 1, self.equation_association[k]
-            if count and name in self.given_names:
+            if count and name in given:
                 counts[name] = count
         return counts
 
     @property
     def given_names(self) -> list[str]:
+        """Names of the equations as given (not made by differentiation)."""
         made = {k for k in self.equation_association if k is not None}
         return [name for i, name in enumerate(self.equation_names) if i not in made]
 
@@ -170,14 +171,17 @@ class PantelidesResult:
         return [i for i, b in enumerate(self.equation_association) if b is None]
 
     def vmap(self) -> dict[str, str]:
+        """Variable association by name: variable -> its derivative (e.g. x -> x')."""
         return {variable_name(self.variables[j]): variable_name(self.variables[k])
                 for j, k in enumerate(self.variable_association) if k is not None}
 
     def eqmap(self) -> dict[str, str]:
+        """Equation association by name: equation -> the equation made by differentiating it."""
         return {self.equation_names[i]: self.equation_names[k]
                 for i, k in enumerate(self.equation_association) if k is not None}
 
     def assignment_names(self) -> dict[str, str]:
+        """The final assignment by name: variable -> the equation it is solved from."""
         return {variable_name(self.variables[j]): self.equation_names[i]
                 for j, i in sorted(self.assignment.items())}
 
@@ -233,7 +237,8 @@ def pantelides(equations: Sequence[sp.Expr], t: sp.Symbol,
                 break
             for j in colored_vars:
                 name, order = variables[j]
-                A[j] = index.get((name, order + 1)) or add_variable((name, order + 1))
+                derivative_of_j = (name, order + 1)
+                A[j] = index[derivative_of_j] if derivative_of_j in index else add_variable(derivative_of_j)
             made = []
             for l in colored_eqs:
                 derivative = sp.expand(equations[l].diff(t))
