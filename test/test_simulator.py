@@ -15,6 +15,7 @@ import yaml
 from scipy.integrate import solve_ivp
 
 from youbot_dynamics.cli import main
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import DivergenceError
 from youbot_dynamics.sim.scene import IntegratorSpec, load_scene, scene_dir
 from youbot_dynamics.sim.simulator import Simulator
@@ -114,7 +115,7 @@ def test_stepwise_advance_equals_run():
     np.testing.assert_allclose(state.v, result.x[-1, 5:], atol=1e-12)
     assert simulator.stats.steps == result.stats.steps
     assert state.ee_pose.shape == (4, 4) and state.ee_pose[3, 3] == 1.0
-    with pytest.raises(Exception, match="after the current time"):
+    with pytest.raises(UserInputError, match="after the current time"):
         simulator.advance(0.1)
 
 

@@ -73,8 +73,10 @@ def test_zero_length_segment_only_dwells():
     np.testing.assert_allclose(trajectory.evaluate(0.2)[0], POINTS[1])
 
 
-@pytest.mark.parametrize("kwargs", [{"v_max": [1.0, 0.0, 1.0]}, {"a_max": -1.0}, {"dwell": -0.1}])
-def test_bad_limits_rejected(kwargs):
+@pytest.mark.parametrize("kwargs, words", [({"v_max": [1.0, 0.0, 1.0]}, "v_max must be positive"),
+                                            ({"a_max": -1.0}, "a_max must be positive"),
+                                            ({"dwell": -0.1}, "dwell must be >= 0")])
+def test_bad_limits_rejected(kwargs, words):
     arguments = {"v_max": V_MAX, "a_max": A_MAX, "dwell": 0.0, **kwargs}
-    with pytest.raises(UserInputError):
+    with pytest.raises(UserInputError, match=words):
         PointToPointTrajectory.through(POINTS, **arguments)
