@@ -82,7 +82,7 @@ def pose_record(transform: np.ndarray) -> dict[str, Any]:
 
 
 def finite_or_none(value: float) -> float | None:
-    """JSON has no infinity: unbounded limits become null."""
+    """JSON has no infinity or NaN: unbounded limits and unknown figures become null."""
     return float(value) if math.isfinite(value) else None
 
 
@@ -109,4 +109,21 @@ def table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
     for raw, row in zip(rows, cells):
         lines.append("  ".join(c.ljust(w) if isinstance(r, str) else c.rjust(w)
                                for r, c, w in zip(raw, row, widths)).rstrip())
+    return "\n".join(lines)
+
+
+def cell(value: object, digits: int = 4) -> str:
+    """A figure for a statistics or study table: '-' when not known (None or NaN), integers
+    and text as they are, other numbers to ``digits`` significant digits."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "-"
+    if isinstance(value, (str, bool, int, np.integer)):
+        return str(value)
+    return f"{value:.{digits}g}"
+
+
+def markdown_table(header: Sequence[str], rows: Iterable[Sequence[Any]], digits: int = 4) -> str:
+    """A markdown table; cells formatted with :func:`cell`."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(cell(value, digits) for value in row) + " |" for row in rows]
     return "\n".join(lines)

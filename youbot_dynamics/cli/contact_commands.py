@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 
 from youbot_dynamics.analysis.contact_extremes import TABLES
+from youbot_dynamics.cli.common import finite_or_none, markdown_table
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -23,18 +23,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     command.set_defaults(run=run_contact_extremes)
 
 
-def shown(value) -> str:
-    if isinstance(value, float):
-        return "-" if math.isnan(value) else f"{value:.4g}"
-    return str(value)
-
-
 def markdown(rows: list[dict]) -> str:
     """A markdown table over the union of the rows' keys (missing: -)."""
     keys = list(dict.fromkeys(key for row in rows for key in row))
-    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-    lines += ["| " + " | ".join(shown(row.get(key, "-")) for key in keys) + " |" for row in rows]
-    return "\n".join(lines)
+    return markdown_table(keys, [[row.get(key) for key in keys] for row in rows])
 
 
 def run_contact_extremes(args: argparse.Namespace) -> int:
@@ -42,7 +34,7 @@ def run_contact_extremes(args: argparse.Namespace) -> int:
     names = args.table or list(TABLES)
     tables = {name: TABLES[name]() for name in names}
     if args.json:
-        print(json.dumps({name: [{k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in row.items()}
+        print(json.dumps({name: [{k: finite_or_none(v) if isinstance(v, float) else v for k, v in row.items()}
                                  for row in rows] for name, rows in tables.items()}))
         return 0
     for name, rows in tables.items():

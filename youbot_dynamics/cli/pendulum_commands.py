@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from youbot_dynamics.cli.common import markdown_table
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError
 from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, SEED_STATE0,
@@ -71,18 +72,8 @@ def run_pendulum(args: argparse.Namespace) -> int:
     print(f"elastic pendulum k={args.k:g}, {args.integrator}, t={solution.t[-1]:g} s")
     print("final state: " + ", ".join(f"{name}={value:.9g}" for name, value in final.items()))
     print(f"energy error max|E-E0|: {energy_error:.3e}")
-    for name, value in solution.stats.as_dict().items():
-        print(f"  {name:32s} {value if isinstance(value, str) else format_number(value)}")
+    print(f"statistics: {solution.stats.summary()}")
     return 0
-
-
-def format_number(value) -> str:
-    """A counter or figure for a table cell ('-' when not reported)."""
-    if value is None:
-        return "-"
-    if isinstance(value, int):
-        return str(value)
-    return f"{value:.3g}"
 
 
 TABLE_TITLES = {
@@ -105,11 +96,6 @@ def run_study(args: argparse.Namespace) -> int:
         return 0
     for table, title in TABLE_TITLES.items():
         print(f"\n{title}\n")
-        print("| " + " | ".join(COLUMNS) + " |")
-        print("|" + "---|" * len(COLUMNS))
-        for row in rows:
-            if row.table == table:
-                cells = [(getattr(row, c) or "-") if c in TEXT_COLUMNS
-                         else format_number(getattr(row, c)) for c in COLUMNS]
-                print("| " + " | ".join(cells) + " |")
+        print(markdown_table(COLUMNS, ([(getattr(row, c) or "-") if c in TEXT_COLUMNS else getattr(row, c)
+                                        for c in COLUMNS] for row in rows if row.table == table), digits=3))
     return 0

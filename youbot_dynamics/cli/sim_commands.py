@@ -5,11 +5,10 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import sys
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
-from youbot_dynamics.cli.common import CommandError
+from youbot_dynamics.cli.common import CommandError, finite_or_none
 from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError
 from youbot_dynamics.sim.scene import Scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
@@ -91,10 +90,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         print(f"contact events: {len(result.contact_events)}, max penetration {result.max_penetration or 0.0:.3e} m")
         for event in result.contact_events[:20]:
             print(f"  t={event.time:.6f} s  {event.pair:24s} {event.kind:10s} {event.value:.6g}")
-    print("statistics:")
-    for name, value in result.stats.as_dict().items():
-        shown = "-" if value is None else value if isinstance(value, (str, int)) else f"{value:.4g}"
-        print(f"  {name:32s} {shown}")
+    print(f"statistics: {result.stats.summary()}")
     if args.output:
         print(f"trajectory written to {args.output}")
     return 0
@@ -110,7 +106,7 @@ def run_work_precision(args: argparse.Namespace) -> int:
                           "reference_error_estimate": study.reference.error_estimate,
                           "files": [str(f) for f in study.files],
                           "recommendation": None if best is None else best.spec.describe(),
-                          "points": [{k: None if isinstance(v, float) and math.isnan(v) else v
+                          "points": [{k: finite_or_none(v) if isinstance(v, float) else v
                                       for k, v in dataclasses.asdict(p).items()} for p in study.points]}))
         return 0
     print(study.files[1].read_text(encoding="utf-8"))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from youbot_dynamics.cli.common import cell
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import INTEGRATORS, FIXED_STEP, IntegratorStats
 
@@ -34,13 +35,7 @@ def stats_table(rows: dict[str, dict]) -> str:
     header = f"{'run':<24}" + "".join(f"{title:>14}" for _, title in STAT_COLUMNS)
     lines = [header]
     for name, stats in rows.items():
-        cells = []
-        for key, _ in STAT_COLUMNS:
-            value = stats.get(key)
-            text = "-" if value is None else (str(value) if isinstance(value, int)
-                                               else format(value, ".4g"))
-            cells.append(f"{text:>14}")
-        lines.append(f"{name:<24}" + "".join(cells))
+        lines.append(f"{name:<24}" + "".join(f"{cell(stats.get(key)):>14}" for key, _ in STAT_COLUMNS))
     return "\n".join(lines)
 
 
