@@ -136,11 +136,10 @@ from youbot_dynamics.ros.qos import RELIABLE_DEEP
 rclpy.init()
 node = rclpy.create_node("listener")
 got = []
-node.create_subscription(JointState, "/joint_states", lambda m: got.append(list(m.position)), RELIABLE_DEEP)
+subscription = node.create_subscription(JointState, "/joint_states", lambda m: got.append(list(m.position)),
+                                        RELIABLE_DEEP)
 deadline = time.monotonic() + float(sys.argv[2])
-while node.count_publishers("/joint_states") == 0 and time.monotonic() < deadline:
-    rclpy.spin_once(node, timeout_sec=0.05)
-for _ in range(10):                      # let endpoint discovery settle on this side too
+while subscription.get_publisher_count() == 0 and time.monotonic() < deadline:   # matched on this side
     rclpy.spin_once(node, timeout_sec=0.05)
 print("ready", flush=True)
 while len(got) < int(sys.argv[1]) and time.monotonic() < deadline:

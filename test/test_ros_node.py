@@ -7,7 +7,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -169,7 +168,7 @@ def test_stale_command_is_rejected() -> None:
 
 def test_pause_and_reset_services() -> None:
     with ros_context(3) as (context, _):
-        node = make_node(context, scene="arm_swing", publish_rate=100.0)
+        node = make_node(context, scene="arm_swing", publish_rate=100.0, diagnostics_period=0.05)
         client_node = Collector(context, OUTPUTS)
         pause = client_node.create_client(SetBool, "/dynamics_node/pause")
         reset = client_node.create_client(Trigger, "/dynamics_node/reset")
@@ -180,7 +179,10 @@ def test_pause_and_reset_services() -> None:
             wait_until(future.done, what="pause")
             assert future.result().success
             frozen = node.session.t
-            time.sleep(0.3)
+
+            def paused_reports() -> int:
+                return sum(diagnostic_values(m)["paused"] == "True" for m in client_node.messages("/diagnostics"))
+            wait_until(lambda: paused_reports() >= 5, what="/diagnostics while paused")   # the timers ran
             assert node.session.t == frozen
             future = reset.call_async(Trigger.Request())
             wait_until(future.done, what="reset")
