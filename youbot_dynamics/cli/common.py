@@ -87,6 +87,7 @@ def finite_or_none(value: float) -> float | None:
 
 
 def print_json(record: dict[str, Any]) -> None:
+    """Print ``record`` as indented JSON (NaN or infinity is an error: use finite_or_none)."""
     print(json.dumps(record, indent=2, allow_nan=False))
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Iterable
 
 from youbot_dynamics.dynamics.constraints import FORMULATIONS
 from youbot_dynamics.errors import UserInputError
@@ -14,6 +15,7 @@ from youbot_dynamics.systems.structure import STRUCTURE_EXAMPLES, structure_repo
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add `squeezer` and `structure`."""
     squeezer = subparsers.add_parser(
         "squeezer", help="Andrew's squeezer: a constrained mechanism in one formulation")
     squeezer.add_argument("--formulation", choices=FORMULATIONS, default="index1-projection")
@@ -47,11 +49,14 @@ INDEX3_CAVEAT = ("scikit-sundae 1.2 cannot take v, w and lambda out of IDA's err
                  "error is 1e2 to 1e4 times rtol; prefer ggl or index1-projection")
 
 
-def format_vector(values) -> str:
+def format_vector(values: Iterable[float]) -> str:
+    """Numbers side by side, 10 significant digits, signs aligned."""
     return " ".join(f"{value: .10g}" for value in values)
 
 
 def run_squeezer(args: argparse.Namespace) -> int:
+    """Simulate the squeezer; print end state, residuals, statistics and the error against
+    the reference (or JSON); exit 1 if the integrator fails."""
     from youbot_dynamics.systems.squeezer import (POSITION_NAMES, T_REFERENCE, plot_drift,
                                                   reference_error, simulate_squeezer)
     if not args.rtol > 0:
@@ -101,6 +106,7 @@ def run_squeezer(args: argparse.Namespace) -> int:
 
 
 def run_structure(args: argparse.Namespace) -> int:
+    """Print the structural analysis of an example (or JSON)."""
     report = structure_report(args.example)
     if args.json:
         print(json.dumps(report, indent=2))

@@ -93,6 +93,7 @@ def _dynamics_arguments(parser: argparse.ArgumentParser, flag: str, meaning: str
 
 # ---- info ---------------------------------------------------------------------------------
 def run_info(args: argparse.Namespace) -> int:
+    """Joints, limits, friction and the fidelity report."""
     robot = robot_from(args)
     if args.json:
         print_json({"name": robot.name, "source": robot.source, "nq": robot.model.nq,
@@ -126,6 +127,7 @@ def _frame(robot: Robot, args: argparse.Namespace) -> str:
 
 
 def run_fk(args: argparse.Namespace) -> int:
+    """Pose of --frame in the root frame at --q (PoE)."""
     robot = robot_from(args)
     link = _frame(robot, args)
     q = joint_vector(robot, args.q)
@@ -142,6 +144,7 @@ def run_fk(args: argparse.Namespace) -> int:
 
 
 def run_screws(args: argparse.Namespace) -> int:
+    """Space screw axes and home pose of the chain to --frame."""
     robot = robot_from(args)
     chain = screw_chain(robot, _frame(robot, args))
     if args.json:
@@ -160,6 +163,7 @@ def run_screws(args: argparse.Namespace) -> int:
 
 
 def run_jacobian(args: argparse.Namespace) -> int:
+    """The --kind Jacobian of --frame at --q."""
     robot = robot_from(args)
     link = _frame(robot, args)
     q = joint_vector(robot, args.q)
@@ -204,6 +208,7 @@ def _print_joint_values(args: argparse.Namespace, robot: Robot, key: str, values
 
 
 def run_inverse_dynamics(args: argparse.Namespace) -> int:
+    """tau from --q, --v, --a (RNEA plus URDF friction unless --no-friction)."""
     robot, q, v, a, friction = _dynamics_inputs(args, "--a")
     tau = inverse_dynamics(robot, robot.model.createData(), q, v, a, friction)
     _print_joint_values(args, robot, "tau", tau, "N m or N", {"q": q, "v": v, "a": a})
@@ -211,6 +216,7 @@ def run_inverse_dynamics(args: argparse.Namespace) -> int:
 
 
 def run_forward_dynamics(args: argparse.Namespace) -> int:
+    """a from --q, --v, --tau (ABA, URDF friction unless --no-friction)."""
     robot, q, v, tau, friction = _dynamics_inputs(args, "--tau")
     a = forward_dynamics(robot, robot.model.createData(), q, v, tau, friction)
     _print_joint_values(args, robot, "a", a, "rad/s^2 or m/s^2", {"q": q, "v": v, "tau": tau})

@@ -26,6 +26,7 @@ DEFAULT_SCENE = "gripping"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add `replay` and `main-job`."""
     replay = subparsers.add_parser("replay", help="publish a recorded bag on its ROS 2 topics")
     replay.add_argument("bag", help=".mcap file or rosbag2 folder (with metadata.yaml)")
     speed = replay.add_mutually_exclusive_group()
@@ -46,6 +47,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run_replay(args: argparse.Namespace) -> int:
+    """Replay the bag once; print how many messages went out, how fast, on which topics."""
     from youbot_dynamics.ros.replay_node import replay_once
 
     if not args.fast and not args.rate > 0:
@@ -69,6 +71,8 @@ def _contact_rows(values: dict[str, object]) -> list[tuple[str, str]]:
 
 
 def run_main_job(args: argparse.Namespace) -> int:
+    """Run the dynamics node on the scene with MCAP and Rerun logs; print the summary table
+    (exit 1 if the simulation failed, 2 for bad parameters)."""
     from youbot_dynamics.ros.dynamics_node import run
     from youbot_dynamics.sim.scene import load_scene
 

@@ -7,6 +7,7 @@ import json
 
 from youbot_dynamics.cli.common import cell
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.sim.events import HybridSolution
 from youbot_dynamics.sim.integrators import INTEGRATORS, FIXED_STEP, IntegratorStats
 
 #: Columns of the statistics tables, as in the seed's tables 15 and 16.
@@ -39,7 +40,7 @@ def stats_table(rows: dict[str, dict]) -> str:
     return "\n".join(lines)
 
 
-def woodpecker_summary(solution, stats: IntegratorStats) -> dict:
+def woodpecker_summary(solution: HybridSolution, stats: IntegratorStats) -> dict:
     """The woodpecker run's figures as plain data."""
     from youbot_dynamics.systems.woodpecker import BEAK
     return {
@@ -53,6 +54,8 @@ def woodpecker_summary(solution, stats: IntegratorStats) -> dict:
 
 
 def run_woodpecker(args: argparse.Namespace) -> int:
+    """Simulate the woodpecker toy; print beak hits, mode switches, final state and the
+    statistics beside the seed's (or JSON); optionally plot."""
     from youbot_dynamics.systems.woodpecker import (SEED_BEAK_HITS, SEED_FIGURES, Woodpecker,
                                                     plot_woodpecker)
     if args.integrator in FIXED_STEP and args.dt is None:
@@ -86,6 +89,8 @@ def run_woodpecker(args: argparse.Namespace) -> int:
 
 
 def run_lagrange(args: argparse.Namespace) -> int:
+    """Derive the pendulum's equations with sympy, simulate them and print the equations,
+    final state, energy drift and statistics (or JSON)."""
     import numpy as np
 
     from youbot_dynamics.sim.integrators import integrate
@@ -123,7 +128,7 @@ def run_lagrange(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``woodpecker`` and ``lagrange`` sub-commands."""
     parser = subparsers.add_parser("woodpecker", help="the woodpecker toy: state events, "
                                    "impacts, beak hits and statistics")

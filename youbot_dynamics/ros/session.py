@@ -94,6 +94,7 @@ class Recorder:
 
     @property
     def paths(self) -> list[Path]:
+        """The log files being written."""
         return [log.path for log in (self.mcap, self.rerun) if log is not None]
 
     def write(self, outputs: Outputs, stamp_ns: int) -> None:
@@ -114,6 +115,7 @@ class Recorder:
             self.rerun.log_body_poses(t, {b.child: (b.translation, b.quaternion_xyzw) for b in transforms})
 
     def close(self) -> None:
+        """Finalise both logs (idempotent)."""
         for log in (self.mcap, self.rerun):
             if log is not None:
                 log.close()
@@ -134,6 +136,7 @@ class _Frames:
                                  "frame names: rename the bodies in the scene")
 
     def tf_static(self) -> object:
+        """/tf_static: every fixed link, and root frame -> URDF root link if they differ."""
         transforms = [messages.transform_stamped(0, t.parent, t.child, t.translation, t.quaternion_xyzw)
                       for t in self.links.static]
         if self.root_frame != self.links.root_link:
@@ -156,6 +159,7 @@ class _Frames:
         return messages.pose_array(stamp_ns, self.root_frame, [(b.translation, b.quaternion_xyzw) for b in bodies])
 
     def ee_pose(self, stamp_ns: int, q: np.ndarray) -> tuple[object, np.ndarray]:
+        """/ee_pose at q and the end-effector position (m, root frame)."""
         position, quaternion = self.links.ee_pose(q)
         return messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion), position
 
@@ -248,6 +252,7 @@ class SimulationSession(_Session):
 
     @property
     def stamp_ns(self) -> int:
+        """Stamp (ns) of the current sample."""
         return self.k * self.step_ns
 
     def reset(self) -> None:
