@@ -48,6 +48,8 @@ def _element_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any]
 
 
 def _field_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any] | None:
+    """Converter of one field (base, nested message, array or sequence); None when the value
+    passes unchanged."""
     node_type, detail = description
     if node_type.name in ("BASE", "NAME"):
         return _element_converter(description, to_ros)
@@ -56,14 +58,12 @@ def _field_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any] |
     if inner is not None:
         return lambda values: [inner(value) for value in values]
     base = element[1][0] if element[0].name == "BASE" else None
-    if base in _TYPECODES:
-        if to_ros:
-            code = _TYPECODES[base]
-            if node_type.name == "SEQUENCE":
-                return lambda values: array.array(code, np.ascontiguousarray(values, dtype=base).tobytes())
-            return lambda values: np.asarray(values, dtype=base)
-        return lambda values: np.asarray(values, dtype=base)
-    return list
+    if base not in _TYPECODES:
+        return list
+    if to_ros and node_type.name == "SEQUENCE":     # rclpy keeps sequences in array.array
+        code = _TYPECODES[base]
+        return lambda values: array.array(code, np.ascontiguousarray(values, dtype=base).tobytes())
+    return lambda values: np.asarray(values, dtype=base)
 
 
 @lru_cache(maxsize=None)
