@@ -33,8 +33,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     speed.add_argument("--rate", type=float, default=1.0, help="playback speed (default 1.0: as recorded)")
     speed.add_argument("--fast", action="store_true",
                        help="as fast as possible (driving /clock); a subscriber slower than the "
-                            "replay keeps only its newest 1000 messages (reliable, keep-last "
-                            "1000): pace with --rate to hand a slow consumer every message")
+                            "replay misses messages (reliable, keep-last 1000, and the replay "
+                            "does not wait for slow readers): pace with --rate when every "
+                            "message must arrive")
     replay.add_argument("--topic", action="append", default=[], help="replay only this topic (repeatable)")
     replay.add_argument("--wait-for", default="", metavar="TOPIC",
                         help="wait up to 30 s for a subscriber on TOPIC before starting")
