@@ -25,6 +25,7 @@ from youbot_dynamics.dynamics.rigid_body import mass_matrix  # noqa: E402
 from youbot_dynamics.errors import UserInputError  # noqa: E402
 from youbot_dynamics.io import messages  # noqa: E402
 from youbot_dynamics.io.bag_reader import read_bag  # noqa: E402
+from youbot_dynamics.io.mcap_log import McapLogger  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.replay_node import ReplayNode  # noqa: E402
 from youbot_dynamics.ros.session import InverseSession  # noqa: E402
@@ -208,6 +209,38 @@ def test_cli_replay_publishes_with_the_recorded_timing(recorded: Path) -> None:
     assert all(np.array_equal(a.position, b.position) for a, b in zip(got, recorded_states))
     clocks = [c.clock.sec * 10**9 + c.clock.nanosec for c in collector.messages("/clock")]
     assert clocks == [stamp_ns(m) for m in recorded_states]           # /clock driven by the log times
+
+
+def test_cli_fast_replay_loses_nothing_into_a_slower_inverse_node(tmp_path: Path) -> None:
+    """`youbot-dynamics replay BAG --fast` in a process of its own, 3000 samples into an
+    inverse-mode node that handles them more slowly than the replay sends them: keep-all on both
+    sides, the replay retrying while its writer's history is full and waiting for the
+    acknowledgements before it leaves, so there is a torque for every interior sample."""
+    scene = load_scene("arm_ptp")
+    count, bag = 3000, tmp_path / "many.mcap"
+    with McapLogger(bag) as log:
+        log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
+        for k in range(count):
+            q = 1.0 + 0.1 * np.sin(np.full(len(scene.moving), k * 1e-3))
+            log.write("/joint_states", messages.joint_state(k * 10**6, scene.moving, q, np.zeros(len(scene.moving))),
+                      k * 10**6)
+    with ros_context(18) as (context, domain):
+        node = DynamicsNode(context=context, parameter_overrides=[
+            Parameter("scene", value="arm_ptp"), Parameter("mode", value="inverse")])
+        collector = Collector(context, TORQUES)
+        with spinning(context, node, collector, single_threaded=True):
+            wait_until(lambda: node.publishers_["/computed_torques"].get_subscription_count() > 0,
+                       what="the collector")
+            process = subprocess.run(
+                [sys.executable, "-m", "youbot_dynamics", "replay", str(bag), "--fast",
+                 "--wait-for", "/joint_states"],
+                cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain)}, capture_output=True, text=True,
+                timeout=120)
+            assert process.returncode == 0, process.stderr
+            assert f"replay: {count} messages" in process.stdout
+            wait_until(lambda: collector.count("/computed_torques") >= count - 2, what="every torque sample")
+            got = [stamp_ns(m) for m in collector.messages("/computed_torques")]
+    assert got == [k * 10**6 for k in range(1, count - 1)]
 
 
 def test_replay_refuses_topics_the_bag_does_not_replay(recorded: Path) -> None:

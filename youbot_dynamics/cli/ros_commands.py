@@ -32,10 +32,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     speed = replay.add_mutually_exclusive_group()
     speed.add_argument("--rate", type=float, default=1.0, help="playback speed (default 1.0: as recorded)")
     speed.add_argument("--fast", action="store_true",
-                       help="as fast as possible (driving /clock); a subscriber slower than the "
-                            "replay misses messages (reliable, keep-last 1000, and the replay "
-                            "does not wait for slow readers): pace with --rate when every "
-                            "message must arrive")
+                       help="as fast as possible (driving /clock); topics reliable, keep-all: the "
+                            "replay waits for slow readers, so a keep-all subscriber (the "
+                            "inverse-mode node) gets every message, and it waits for their "
+                            "acknowledgements (up to 30 s) before leaving")
     replay.add_argument("--topic", action="append", default=[], help="replay only this topic (repeatable)")
     replay.add_argument("--wait-for", default="", metavar="TOPIC",
                         help="wait up to 30 s for a subscriber on TOPIC before starting")

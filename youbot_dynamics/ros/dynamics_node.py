@@ -5,7 +5,8 @@ when the scene has free bodies; a scene without a robot has no /joint_states and
 and /diagnostics (with the contact events), subscribes
 /joint_commands (sensor_msgs/JointState efforts by joint name) and /joint_trajectory
 (trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
-(std_srvs/SetBool). inverse mode subscribes /joint_states and publishes /computed_torques,
+(std_srvs/SetBool). inverse mode subscribes /joint_states (reliable, keep-all: a replay as
+fast as possible loses no sample) and publishes /computed_torques,
 /ee_pose and /diagnostics. Parameters: :mod:`youbot_dynamics.ros.parameters`.
 
 Timing (simulate): a steady-clock timer paces the samples at ``publish_rate x time_scale``
@@ -44,7 +45,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
 from youbot_dynamics.ros.parameters import check_choice, declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
-from youbot_dynamics.ros.qos import RELIABLE_DEEP
+from youbot_dynamics.ros.qos import RELIABLE_ALL, RELIABLE_DEEP
 from youbot_dynamics.ros.session import TOPIC_TYPES, InverseSession, Outputs, SimulationSession
 from youbot_dynamics.sim.commands import InputRejected
 from youbot_dynamics.sim.scene import load_scene
@@ -92,7 +93,7 @@ class DynamicsNode(Node):
             self._restart_pacing()
             self.create_timer(1.0 / p["publish_rate"], self._on_tick, clock=steady)
         else:
-            self.create_subscription(JointState, "/joint_states", self._on_joint_state, RELIABLE_DEEP)
+            self.create_subscription(JointState, "/joint_states", self._on_joint_state, RELIABLE_ALL)
         self._diagnostics_mark = (time.monotonic(), self.session.t)
         self.create_timer(p["diagnostics_period"], self._on_diagnostics, clock=steady)
         self.add_on_set_parameters_callback(self._on_set_parameters)

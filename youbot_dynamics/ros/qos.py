@@ -8,11 +8,20 @@ RELIABLE_DEEP = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliabil
 """Reliable, keep the last 1000: a replay or a 1 kHz stream is not thinned out by a slow
 reader for up to a second."""
 
+RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.VOLATILE)
+"""Reliable, keep all: nothing is dropped for a slow reader. A reader keeps what it has not
+taken (Fast DDS: up to 5000 samples) and acknowledges a sample only once it has room for it;
+a writer keeps what is not yet acknowledged and, with its history full, blocks a publish for
+100 ms and then refuses it (rclpy raises RCLError), so the writer must retry."""
+
 LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 """Transient local, depth 1 (as /tf_static): late subscribers get the last message."""
 
 
-def profile(latched: bool) -> QoSProfile:
-    """The profile to offer a topic with."""
-    return LATCHED if latched else RELIABLE_DEEP
+def profile(latched: bool, keep_all: bool = False) -> QoSProfile:
+    """The profile to offer a topic with (``keep_all``: :data:`RELIABLE_ALL` unless latched)."""
+    if latched:
+        return LATCHED
+    return RELIABLE_ALL if keep_all else RELIABLE_DEEP

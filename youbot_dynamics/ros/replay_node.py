@@ -3,10 +3,15 @@
 A bag is a single .mcap file or a rosbag2 folder with metadata.yaml (read by
 :func:`youbot_dynamics.io.bag_reader.read_bag`). Messages go out in log-time order with the
 recorded spacing scaled by ``rate`` (1.0: as recorded), or as fast as possible
-(``rate`` 0). Unless the bag has its own /clock, the node drives /clock with each message's
-log time, so nodes with use_sim_time follow the bag. Topics recorded latched (/tf_static)
-are offered transient-local. Types without an rclpy message package (tf2_msgs with these
-wheels) are skipped with a warning.
+(``rate`` 0). Paced topics are offered reliable, keep-last 1000; as fast as possible they are
+offered reliable, keep-all, and a publish that finds the writer's history full (a reader
+behind) is retried until the readers have made room, so a keep-all subscriber gets every
+message however slow it is. Before leaving, the node waits until its subscribers have
+acknowledged every message (up to ``ACK_TIMEOUT_FAST`` wall s as fast as possible,
+:data:`~youbot_dynamics.ros.process.ACK_TIMEOUT` paced). Unless the bag has its own /clock,
+the node drives /clock with each message's log time, so nodes with use_sim_time follow the
+bag. Topics recorded latched (/tf_static) are offered transient-local. Types without an rclpy
+message package (tf2_msgs with these wheels) are skipped with a warning.
 
 Run: ``ros2 run youbot_dynamics replay_node --ros-args -p bag:=out/run.mcap -p rate:=0.0``
 or ``youbot-dynamics replay BAG [--rate R | --fast]``.
@@ -21,6 +26,7 @@ from pathlib import Path
 import rclpy
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.exceptions import InvalidParameterValueException
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
@@ -29,11 +35,17 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import bag_topics, paced, read_bag
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
-from youbot_dynamics.ros.process import stop_requests
+from youbot_dynamics.ros.process import ACK_TIMEOUT, stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import RELIABLE_DEEP, profile
 
 WAIT_FOR_TIMEOUT = 30.0
 """Longest wait (wall s) for a subscriber on ``wait_for`` before replaying anyway."""
+BLOCK_TIMEOUT = 30.0
+"""Longest time (wall s), as fast as possible, that one message may wait for room in the
+writer's history (subscribers taking nothing) before the replay fails."""
+ACK_TIMEOUT_FAST = 30.0
+"""Longest wait (wall s), after replaying as fast as possible, for subscribers to acknowledge
+every message (a keep-all reader acknowledges a sample once it has room for it)."""
 
 
 class ReplayNode(Node):
@@ -71,7 +83,8 @@ class ReplayNode(Node):
             except (ImportError, AttributeError):
                 self.get_logger().warning(f"{topic.topic}: no rclpy message {topic.msgtype} here; not replayed")
                 continue
-            self.publishers_[topic.topic] = self.create_publisher(cls, topic.topic, profile(topic.latched))
+            self.publishers_[topic.topic] = self.create_publisher(
+                cls, topic.topic, profile(topic.latched, keep_all=self.rate == 0.0))
         self.clock = None if "/clock" in self.publishers_ else self.create_publisher(Clock, "/clock", RELIABLE_DEEP)
         if self.wait_for and self.wait_for not in self.publishers_:
             raise UserInputError(f"replay_node: wait_for {self.wait_for} is not a replayed topic of {self.bag} "
@@ -97,9 +110,33 @@ class ReplayNode(Node):
                 continue
             if self.clock is not None:
                 self.clock.publish(to_rclpy(messages.clock(item.log_time_ns)))
-            publisher.publish(to_rclpy(item.message))
+            if not self._publish(item.topic, publisher, to_rclpy(item.message), keep_going):
+                break
             count += 1
         return count
+
+    def _publish(self, topic: str, publisher, message: object, keep_going: Callable[[], bool]) -> bool:
+        """Publish ``message``; as fast as possible, retry while the writer's history is full
+        (each attempt blocks up to 100 ms in Fast DDS). False if ``keep_going`` turned false
+        meanwhile; RuntimeError after :data:`BLOCK_TIMEOUT` s without room."""
+        deadline = time.monotonic() + BLOCK_TIMEOUT
+        while True:
+            try:
+                publisher.publish(message)
+                return True
+            except _rclpy.RCLError:
+                if self.rate != 0.0:
+                    raise
+                if not keep_going():
+                    return False
+                if time.monotonic() > deadline:
+                    raise RuntimeError(f"replay_node: {topic}: no room in the writer's history for "
+                                       f"{BLOCK_TIMEOUT:g} s (a subscriber takes nothing)") from None
+
+    @property
+    def all_publishers(self) -> list:
+        """The topic publishers and the /clock publisher (if the node drives /clock)."""
+        return list(self.publishers_.values()) + ([self.clock] if self.clock is not None else [])
 
 
 def replay_once(args: list[str] | None = None, **node_arguments) -> tuple[int, Path, list[str]]:
@@ -120,6 +157,9 @@ def replay_once(args: list[str] | None = None, **node_arguments) -> tuple[int, P
             node.get_logger().warning(f"no subscriber on {node.wait_for} after {WAIT_FOR_TIMEOUT:g} s; "
                                       "replaying anyway")
         count = node.replay(lambda: not stop)
+        timeout = ACK_TIMEOUT_FAST if node.rate == 0.0 and not stop else ACK_TIMEOUT
+        if not wait_for_acknowledgements(node.all_publishers, timeout):
+            node.get_logger().warning(f"some subscribers did not acknowledge every message within {timeout:g} s")
         node.destroy_node()
         return count, node.bag, sorted(node.publishers_)
     finally:
