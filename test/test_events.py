@@ -83,3 +83,38 @@ def test_a_zeno_run_raises_instead_of_looping():
     with pytest.raises(IntegrationError, match="more than 20 guard crossings"):
         simulate_hybrid(bouncing_ball(0.5), "flight", [HEIGHT, 0.0], [0.0, 5.0], "dop853",
                         max_switches=20)
+
+
+class BiasedStepper:
+    """x(t) = t - 0.55 in steps of 0.1 s, whose interpolant is off by -0.1: between 0.5 and
+    0.6 the step ends show the crossing and the interpolant shows none (as an implicit
+    solver's interpolant can, near a guard)."""
+
+    def __init__(self) -> None:
+        self.t, self.h = 0.0, 0.0
+        self.x = np.array([-0.55])
+
+    def advance(self, t_target: float) -> None:
+        self.h = min(0.1, t_target - self.t)
+        self.t += self.h
+        self.x = np.array([self.t - 0.55])
+
+    def interpolate(self, t: float) -> np.ndarray:
+        return np.array([t - 0.55 - 0.1])
+
+    def finish(self, stats) -> None:
+        pass
+
+
+def test_a_crossing_the_interpolant_does_not_show_falls_back_to_the_step_end():
+    from youbot_dynamics.sim.integration import Event, StateCheck, drive, locate_crossings
+    names = ("x",)
+    solution = drive(BiasedStepper(), "biased", np.array([0.0, 1.0]),
+                     [Event("zero", lambda t, x: x[0], 1)], StateCheck("biased", names, None, None),
+                     names)
+    assert solution.terminated_by == "zero"
+    assert solution.t[-1] == pytest.approx(0.6, abs=1e-15)
+    # where the interpolant does bracket the crossing, Brent's method finds it on it
+    exact = locate_crossings([Event("zero", lambda t, x: x[0], 1)], [-0.05], [0.05], 0.5, 0.6,
+                             lambda t: np.array([t - 0.55]))
+    assert exact == [(pytest.approx(0.55, abs=1e-14), 0)]

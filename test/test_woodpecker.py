@@ -129,3 +129,14 @@ def test_command_line_reports_the_hits_and_rejects_a_fixed_step_run_without_dt(c
     assert report["stats"]["events"] >= len(report["switches"])
     assert main(["woodpecker", "--integrator", "rk4"]) == 2
     assert "--dt" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("rtol", ["1e-4", "1e-6", "1e-8"])
+def test_command_line_ida_gives_the_seeds_hits_at_every_tolerance(rtol, capsys):
+    """`woodpecker --integrator ida` (which once handed Brent's method an interval without
+    a sign change on the interpolant) at the acceptance tolerances."""
+    import json
+
+    from youbot_dynamics.cli import main
+    assert main(["woodpecker", "--integrator", "ida", "--rtol", rtol, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["beak_hits"] == SEED_BEAK_HITS

@@ -4,7 +4,8 @@ the divergence checks and the one output/event loop that drives a stepper.
 A backend supplies a *stepper* (see :class:`Stepper`): ``advance`` takes one step (or, for
 fixed-step methods without events, the steps up to the next output time) and
 ``interpolate`` gives the state anywhere inside the last step. :func:`drive` does the rest:
-outputs at the requested times, event location by Brent's method on ``interpolate``,
+outputs at the requested times, event location by Brent's method on ``interpolate``
+(step end when the interpolant shows no sign change),
 terminal events, and the checks that make divergence loud.
 """
 from __future__ import annotations
@@ -212,15 +213,33 @@ def crossed(g_old: float, g_new: float, direction: int) -> bool:
 def locate_crossings(events: Sequence[Event], g_old: list[float], g_new: list[float],
                      t_a: float, t_b: float,
                      state_at: Callable[[float], np.ndarray]) -> list[tuple[float, int]]:
-    """Times of the zero crossings in [t_a, t_b], earliest first, by Brent's method on
-    g(t, state_at(t)); t located to 4 eps |t| + 1e-14 s."""
+    """Times of the zero crossings in [t_a, t_b], earliest first.
+
+    A crossing is detected on the step-end states (``g_old``, ``g_new``) and located by
+    Brent's method on the one function g(t, state_at(t)), bracketed by that same function's
+    values at t_a and t_b (t to 4 eps |t| + 1e-14 s). The interpolant's ends can differ from
+    the step-end states (by round-off, or an implicit solver's interpolation error); where
+    they show no sign change, the crossing is put at the step end t_b, where it was seen.
+    """
     found = []
     for i, event in enumerate(events):
         if crossed(g_old[i], g_new[i], event.direction):
-            xtol = 4 * np.finfo(float).eps * max(abs(t_a), abs(t_b)) + 1e-14
-            root = brentq(lambda t, f=event.function: f(t, state_at(t)), t_a, t_b, xtol=xtol)
-            found.append((root, i))
+            found.append((root_on_interpolant(event.function, t_a, t_b, state_at), i))
     return sorted(found)
+
+
+def root_on_interpolant(function: Callable[[float, np.ndarray], float], t_a: float,
+                        t_b: float, state_at: Callable[[float], np.ndarray]) -> float:
+    """The zero of g(t) = function(t, state_at(t)) in [t_a, t_b] (s) by Brent's method,
+    or t_b if g shows no sign change between the two ends."""
+    def g(t: float) -> float:
+        return function(t, state_at(t))
+
+    g_a, g_b = g(t_a), g(t_b)
+    if not (np.isfinite(g_a) and np.isfinite(g_b)) or np.sign(g_a) * np.sign(g_b) > 0:
+        return t_b
+    xtol = 4 * np.finfo(float).eps * max(abs(t_a), abs(t_b)) + 1e-14
+    return brentq(g, t_a, t_b, xtol=xtol)
 
 
 def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequence[Event],
