@@ -39,6 +39,30 @@ def add_joint_argument(parser: argparse.ArgumentParser, flag: str, meaning: str)
                         "first value is negative")
 
 
+def add_tolerance_arguments(parser: argparse.ArgumentParser, rtol: float | None = None,
+                            atol: float | None = None) -> None:
+    """--tol (the one accuracy knob) and --rtol/--atol (for experts; they override it)."""
+    parser.add_argument("--tol", type=float,
+                        help="accuracy: rtol = TOL and atol_i = TOL * max(|x0_i|, 1e-3) per "
+                             "state component; --rtol/--atol override either")
+    parser.add_argument("--rtol", type=float, default=rtol,
+                        help="relative tolerance" + (f" (default {rtol:g})" if rtol else ""))
+    parser.add_argument("--atol", type=float, default=atol,
+                        help="absolute tolerance" + (f" (default {atol:g})" if atol else ""))
+
+
+def tolerances(args: argparse.Namespace, x0) -> tuple[float | None, Any]:
+    """(rtol, atol) from --tol, --rtol and --atol: an explicit --rtol or --atol wins, the
+    other comes from --tol (see sim.integrators.tolerances_from_tol)."""
+    from youbot_dynamics.sim.integrators import tolerances_from_tol
+    if args.tol is None:
+        return args.rtol, args.atol
+    if not args.tol > 0:
+        raise CommandError(f"--tol must be positive, got {args.tol!r}")
+    rtol, atol = tolerances_from_tol(args.tol, x0)
+    return (rtol if args.rtol is None else args.rtol), (atol if args.atol is None else args.atol)
+
+
 def robot_from(args: argparse.Namespace) -> Robot:
     """The robot of --urdf, or the packaged youBot."""
     return load_robot(args.urdf if args.urdf else default_urdf())

@@ -26,13 +26,28 @@ from youbot_dynamics.sim.integration import (DivergenceError, Event, EventRecord
 from youbot_dynamics.sim.sundials import CVODE_METHODS, CvodeStepper, IdaStepper
 
 __all__ = ["INTEGRATORS", "FIXED_STEP", "IntegratorStats", "Event", "EventRecord", "Solution",
-           "IntegrationError", "DivergenceError", "integrate", "integrate_dae"]
+           "IntegrationError", "DivergenceError", "integrate", "integrate_dae",
+           "tolerances_from_tol"]
 
 INTEGRATORS: tuple[str, ...] = ("euler", "symplectic_euler", "rk4", "rk45", "dop853", "radau",
                                 "bdf", "cvode_bdf", "cvode_adams", "ida")
 FIXED_STEP: tuple[str, ...] = tuple(FIXED_STEP_METHODS)
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
+
+#: Smallest nominal magnitude of a state component (SI units: 1 mm, 1 mrad, 1 mm/s, ...),
+#: so that a component that starts at 0 still gets a positive absolute tolerance.
+NOMINAL_FLOOR = 1e-3
+
+
+def tolerances_from_tol(tol: float, x0, nominal=None) -> tuple[float, np.ndarray]:
+    """The one accuracy knob, as Modia and Dymola derive it: rtol = tol and, per state
+    component, atol_i = tol * nominal_i with nominal_i = max(|x0_i|, NOMINAL_FLOOR) (or the
+    given ``nominal`` scales, same units as x). Returns (rtol, atol array)."""
+    checked_positive("tol", tol)
+    scale = np.abs(checked_state("x0", x0)) if nominal is None else np.abs(
+        np.asarray(nominal, dtype=float).ravel())
+    return float(tol), float(tol) * np.maximum(scale, NOMINAL_FLOOR)
 
 
 def checked_times(t_eval) -> np.ndarray:
