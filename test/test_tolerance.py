@@ -73,3 +73,47 @@ def test_pendulum_at_tol_1e_12_ends_within_1e_9_of_an_independent_reference(caps
     final = json.loads(capsys.readouterr().out)["final_state"]
     ours = np.array([final[name] for name in ("x", "y", "vx", "vy")])
     assert np.max(np.abs(ours - reference)) < 1e-9
+
+
+def simulated_arm(capsys, *options: str) -> np.ndarray:
+    """The packaged arm_swing scene over 0.5 s with the given options: final q and v."""
+    assert main(["simulate", "--scene", "arm_swing", "--duration", "0.5", "--json",
+                 *options]) == 0
+    return np.array(list(json.loads(capsys.readouterr().out)["final_state"].values()))
+
+
+def test_simulate_tol_sets_the_accuracy_and_atol_overrides_it(capsys):
+    """Against dop853 at rtol 2.3e-14, atol 1e-16 (measured: --tol 1e-6 -> 6.7e-5,
+    1e-10 -> 2.1e-9, 1e-12 -> 1.6e-11; --tol 1e-10 --atol 1e-3 -> 1.4e-3)."""
+    reference = simulated_arm(capsys, "--rtol", "2.3e-14", "--atol", "1e-16")
+    errors = {tol: np.max(np.abs(simulated_arm(capsys, "--tol", tol) - reference))
+              for tol in ("1e-6", "1e-10")}
+    assert errors["1e-10"] < 2e-8          # measured 2.1e-9
+    assert errors["1e-6"] > 1e3 * errors["1e-10"]  # measured ratio 3.2e4
+    loosened = np.max(np.abs(simulated_arm(capsys, "--tol", "1e-10", "--atol", "1e-3")
+                             - reference))
+    assert loosened > 1e3 * errors["1e-10"]  # measured 1.4e-3
+
+
+def test_scene_tol_key_sets_rtol_and_a_nominal_atol(tmp_path):
+    import yaml
+
+    from youbot_dynamics import package_share
+    from youbot_dynamics.sim.scene import load_scene
+    from youbot_dynamics.sim.scene_reader import SceneError
+    data = yaml.safe_load((package_share() / "config" / "scenes" / "arm_swing.yaml").read_text())
+    data["integrator"] = {"method": "dop853", "tol": 1e-9}
+    path = tmp_path / "swing_tol.yaml"
+    path.write_text(yaml.safe_dump(data))
+    spec = load_scene(path).integrator
+    x0 = np.array([2.9, -0.5, 0.0])
+    assert spec.rtol == 1e-9 and spec.atol is None
+    np.testing.assert_array_equal(spec.absolute_tolerance(x0), tolerances_from_tol(1e-9, x0)[1])
+    data["integrator"] = {"method": "dop853", "tol": 1e-9, "rtol": 1e-5, "atol": 1e-7}
+    path.write_text(yaml.safe_dump(data))
+    spec = load_scene(path).integrator
+    assert (spec.rtol, spec.absolute_tolerance(x0)) == (1e-5, 1e-7)
+    data["integrator"] = {"method": "rk4", "dt": 1e-3, "tol": 1e-9}
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(SceneError, match=r"integrator\.tol: only for adaptive methods"):
+        load_scene(path)

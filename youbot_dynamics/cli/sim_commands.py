@@ -8,7 +8,7 @@ import json
 import sys
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
-from youbot_dynamics.cli.common import CommandError, finite_or_none
+from youbot_dynamics.cli.common import CommandError, add_tolerance_arguments, finite_or_none
 from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError
 from youbot_dynamics.sim.scene import Scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
@@ -23,8 +23,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--scene", required=True, metavar="NAME_OR_PATH")
     run.add_argument("--integrator", help=f"override: one of {', '.join(INTEGRATORS)}")
     run.add_argument("--dt", type=float, help="step size of a fixed-step integrator, s")
-    run.add_argument("--rtol", type=float, help="relative tolerance of an adaptive integrator")
-    run.add_argument("--atol", type=float, help="absolute tolerance of an adaptive integrator")
+    add_tolerance_arguments(run)
     run.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
     run.add_argument("--output", metavar="FILE.csv", help="write the trajectory as CSV")
     run.add_argument("--json", action="store_true", help="print JSON")
@@ -46,15 +45,16 @@ def scene_from(args: argparse.Namespace) -> Scene:
     scene = load_scene(args.scene)
     if getattr(args, "duration", None) is not None:
         scene = scene.with_duration(args.duration)
-    override = [getattr(args, name, None) for name in ("integrator", "dt", "rtol", "atol")]
+    override = [getattr(args, name, None) for name in ("integrator", "dt", "tol", "rtol", "atol")]
     if any(value is not None for value in override):
         method = args.integrator or scene.integrator.method
         if args.dt is not None and method not in FIXED_STEP:
             raise CommandError(f"--dt applies to fixed-step integrators ({', '.join(FIXED_STEP)}), "
-                               f"not {method!r}; use --rtol/--atol")
-        if method in FIXED_STEP and (args.rtol is not None or args.atol is not None):
-            raise CommandError(f"--rtol/--atol apply to adaptive integrators, not {method!r}; use --dt")
-        scene = scene.with_integrator(args.integrator, dt=args.dt, rtol=args.rtol, atol=args.atol)
+                               f"not {method!r}; use --tol or --rtol/--atol")
+        if method in FIXED_STEP and any(value is not None for value in (args.tol, args.rtol, args.atol)):
+            raise CommandError(f"--tol/--rtol/--atol apply to adaptive integrators, not {method!r}; use --dt")
+        scene = scene.with_integrator(args.integrator, dt=args.dt, rtol=args.rtol, atol=args.atol,
+                                      tol=args.tol)
     return scene
 
 

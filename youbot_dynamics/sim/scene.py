@@ -27,8 +27,10 @@ Keys (units SI, angles rad; joint values are mappings by joint name)::
     integrator:
       method: rk45 | ... | auto     # see sim.integrators.INTEGRATORS
       dt: s                         # fixed-step methods only
-      rtol: 1e-6                    # adaptive methods
-      atol: 1e-8
+      tol: 1e-8                     # adaptive methods: the one accuracy knob, rtol = tol and
+                                    # atol_i = tol * max(|x0_i|, 1e-3) per state component
+      rtol: 1e-6                    # for experts: override tol's (default 1e-6 without tol)
+      atol: 1e-8                    # (default 1e-8 without tol)
       target_error: rad             # auto only: final joint-space error to meet
       energy_tolerance: J           # conservative scenes: allowed energy growth
     duration: s
@@ -59,7 +61,7 @@ from youbot_dynamics import default_urdf, package_share
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
-from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS
+from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, tolerances_from_tol
 from youbot_dynamics.sim.scene_contacts import (EMPTY_ROBOT, ContactPairSpec, FreeBodySpec, composed_urdf,
                                                 read_contacts, read_free_bodies, read_geometries)
 from youbot_dynamics.sim.scene_reader import SceneError, SceneReader
@@ -107,9 +109,14 @@ class IntegratorSpec:
     method: str
     dt: float | None = None
     rtol: float = 1e-6
-    atol: float = 1e-8
+    atol: float | None = 1e-8  # None: tol * each state's nominal scale (absolute_tolerance)
     target_error: float | None = None
     energy_tolerance: float = 1e-2
+    tol: float | None = None
+
+    def absolute_tolerance(self, x0: np.ndarray) -> float | np.ndarray:
+        """atol for a run from state x0: the given atol, else tol * max(|x0_i|, 1e-3)."""
+        return self.atol if self.atol is not None else tolerances_from_tol(self.tol, x0)[1]
 
     def describe(self) -> str:
         """``rk4 dt=0.001`` or ``rk45 rtol=1e-06 atol=1e-08`` or ``auto target_error=...``."""
@@ -117,7 +124,8 @@ class IntegratorSpec:
             return f"auto target_error={self.target_error:g}"
         if self.method in FIXED_STEP + STEPPERS:
             return f"{self.method} dt={self.dt:g}"
-        return f"{self.method} rtol={self.rtol:g} atol={self.atol:g}"
+        atol = f"{self.atol:g}" if self.atol is not None else f"{self.tol:g}*nominal"
+        return f"{self.method} rtol={self.rtol:g} atol={atol}"
 
 
 @dataclass(frozen=True)
@@ -190,12 +198,18 @@ class Scene:
 
     def with_integrator(self, method: str | None = None, *, dt: float | None = None,
                         rtol: float | None = None, atol: float | None = None,
-                        target_error: float | None = None) -> Scene:
-        """The same scene with other integrator settings (validated like the file's)."""
+                        target_error: float | None = None, tol: float | None = None) -> Scene:
+        """The same scene with other integrator settings (validated like the file's); a new
+        ``tol`` replaces the file's rtol and atol unless these are given too."""
         current = dataclasses.asdict(self.integrator)
-        changes = {"method": method, "dt": dt, "rtol": rtol, "atol": atol, "target_error": target_error}
+        changes = {"method": method, "dt": dt, "rtol": rtol, "atol": atol, "target_error": target_error,
+                   "tol": tol}
         if method is not None and method not in FIXED_STEP + STEPPERS:
             current["dt"] = None
+        if method in FIXED_STEP + STEPPERS:
+            current["tol"] = None
+        if tol is not None:
+            current["rtol"] = current["atol"] = None
         current.update({k: v for k, v in changes.items() if v is not None})
         return dataclasses.replace(self, integrator=_integrator(SceneReader(self.source), current, "integrator"))
 
@@ -392,13 +406,14 @@ def _trajectory(reader: SceneReader, robot: Robot, value: Any, q0: np.ndarray) -
 
 
 def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
-    data = dict(reader.mapping(value, key, ("method", "dt", "rtol", "atol", "target_error", "energy_tolerance")))
+    data = dict(reader.mapping(value, key, ("method", "dt", "tol", "rtol", "atol", "target_error",
+                                            "energy_tolerance")))
     method = data.get("method", "rk45")
     if method not in (*INTEGRATORS, *STEPPERS, "auto"):
         raise SceneError(reader.source, f"{key}.method", f"expected auto or one of "
                          f"{', '.join(INTEGRATORS + STEPPERS)}", method)
     numbers = {name: reader.number(data[name], f"{key}.{name}") for name in
-               ("dt", "rtol", "atol", "target_error", "energy_tolerance") if data.get(name) is not None}
+               ("dt", "tol", "rtol", "atol", "target_error", "energy_tolerance") if data.get(name) is not None}
     for name, number in numbers.items():
         if number < 0:
             raise SceneError(reader.source, f"{key}.{name}", "must not be negative", number)
@@ -409,6 +424,12 @@ def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
     if method not in FIXED_STEP + STEPPERS and "dt" in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"only for fixed-step methods "
                          f"({', '.join(FIXED_STEP)}); {method!r} uses rtol/atol", numbers["dt"])
+    if "tol" in numbers:
+        if method in FIXED_STEP + STEPPERS:
+            raise SceneError(reader.source, f"{key}.tol", f"only for adaptive methods; {method!r} uses dt",
+                             numbers["tol"])
+        numbers.setdefault("rtol", numbers["tol"])
+        numbers.setdefault("atol", None)
     if method == "auto" and "target_error" not in numbers:
         raise SceneError(reader.source, f"{key}.target_error", "missing: method 'auto' needs the target "
                          "final joint-space error (rad)")

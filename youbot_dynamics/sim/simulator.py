@@ -275,9 +275,9 @@ class Simulator:
                 return yp - rhs(t, y)
 
             return integrate_dae(residual, x0, rhs(t_eval[0], x0), t_eval, algebraic=[False] * x0.size,
-                                 rtol=spec.rtol, atol=spec.atol, state_names=names, bounds=self.bounds,
+                                 rtol=spec.rtol, atol=spec.absolute_tolerance(x0), state_names=names, bounds=self.bounds,
                                  monitor=monitor)
-        return integrate(rhs, x0, t_eval, spec.method, dt=spec.dt, rtol=spec.rtol, atol=spec.atol,
+        return integrate(rhs, x0, t_eval, spec.method, dt=spec.dt, rtol=spec.rtol, atol=spec.absolute_tolerance(x0),
                          state_names=names, n_positions=self.robot.nv, bounds=self.bounds, monitor=monitor)
 
     def _solve_hybrid(self, rhs: Callable[[float, np.ndarray], np.ndarray], x0: np.ndarray, t_eval: np.ndarray,
@@ -287,7 +287,7 @@ class Simulator:
         spec = self.integrator
         mode = Mode("contact", rhs, self.contact.transitions(
             self._q, self._v, lambda q: mass_matrix(self.robot, self.data, q)))
-        options = {"rtol": spec.rtol, "atol": spec.atol, "state_names": self.layout.names,
+        options = {"rtol": spec.rtol, "atol": spec.absolute_tolerance(x0), "state_names": self.layout.names,
                    "bounds": self.bounds, "monitor": monitor}
         if spec.dt is not None:
             options.update(dt=spec.dt, n_positions=self.robot.nv or None)
