@@ -24,6 +24,13 @@ def tree(folder: str) -> list[tuple[str, list[str]]]:
     return sorted(entries.items())
 
 
+def requirements(path: Path) -> list[str]:
+    """The requirement lines of a pip requirements file (comments, blanks and options such
+    as ``-r`` dropped): requirements.txt is the one list of runtime dependencies."""
+    lines = (line.split("#", 1)[0].strip() for line in path.read_text().splitlines())
+    return [line for line in lines if line and not line.startswith("-")]
+
+
 setup(
     name=PACKAGE,
     version="0.1.0",
@@ -35,7 +42,7 @@ setup(
         *tree("config"),
         (f"lib/{PACKAGE}", sorted(str(p.relative_to(HERE)) for p in (HERE / "scripts").iterdir())),
     ],
-    install_requires=["setuptools"],
+    install_requires=requirements(HERE / "requirements.txt"),
     zip_safe=True,
     maintainer="youbot_dynamics developers",
     maintainer_email="dev@youbot-dynamics.invalid",
