@@ -5,8 +5,8 @@ A backend supplies a *stepper* (see :class:`Stepper`): ``advance`` takes one ste
 fixed-step methods without events, the steps up to the next output time) and
 ``interpolate`` gives the state anywhere inside the last step. :func:`drive` does the rest:
 outputs at the requested times, event location by Brent's method on ``interpolate``
-(step end when the interpolant shows no sign change),
-terminal events, and the checks that make divergence loud.
+(step end when the interpolant shows no sign change) unless the stepper locates events
+itself (SUNDIALS' rootfinding), terminal events, and the checks that make divergence loud.
 """
 from __future__ import annotations
 
@@ -203,6 +203,12 @@ class Stepper(Protocol):
         """Copy the backend's counters into stats."""
 
 
+def located_by_stepper(stepper: Stepper) -> bool:
+    """Whether the stepper stops at event roots itself (then ``stepper.roots`` lists the
+    indices of the events whose root is at ``stepper.t`` after each ``advance``)."""
+    return getattr(stepper, "locates_events", False)
+
+
 def crossed(g_old: float, g_new: float, direction: int) -> bool:
     """Whether an event function crossed zero between two steps in the given direction."""
     rising = g_old < 0.0 <= g_new
@@ -255,7 +261,8 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
     xp_out = [] if derivative_at is None else [derivative_at(float(t_eval[0]))]
     records: list[EventRecord] = []
     terminated_by = None
-    g_old = [e.function(stepper.t, stepper.x) for e in events]
+    own_roots = located_by_stepper(stepper)
+    g_old = [] if own_roots else [e.function(stepper.t, stepper.x) for e in events]
     k, n_out = 1, len(t_eval)
 
     def emit(t: float, x: np.ndarray, h: float) -> None:
@@ -273,14 +280,18 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
             check.step(t_b, stepper.x, h)
             stop_at = t_b
             if events:
-                g_new = [e.function(t_b, stepper.x) for e in events]
-                for t_r, i in locate_crossings(events, g_old, g_new, t_a, t_b,
-                                               stepper.interpolate):
-                    records.append(EventRecord(t_r, events[i].name, stepper.interpolate(t_r)))
+                if own_roots:
+                    found = [(t_b, i) for i in stepper.roots]
+                else:
+                    g_new = [e.function(t_b, stepper.x) for e in events]
+                    found = locate_crossings(events, g_old, g_new, t_a, t_b, stepper.interpolate)
+                    g_old = g_new
+                for t_r, i in found:
+                    x_r = stepper.x.copy() if t_r == t_b else stepper.interpolate(t_r)
+                    records.append(EventRecord(t_r, events[i].name, x_r))
                     if events[i].terminal:
                         terminated_by, stop_at = events[i].name, t_r
                         break
-                g_old = g_new
             while k < n_out and t_eval[k] <= stop_at:
                 t_k = float(t_eval[k])
                 x_k = stepper.x.copy() if t_k == t_b else stepper.interpolate(t_k)

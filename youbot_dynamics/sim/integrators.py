@@ -118,7 +118,8 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
                                    max_step, min_step)
         else:
             stepper = CvodeStepper(CVODE_METHODS[integrator], integrator, rhs, times[0], x,
-                                   times[-1], rtol, atol, jac, max_step, min_step)
+                                   times[-1], rtol, atol, jac, max_step, min_step,
+                                   tuple(events))
     solution = drive(stepper, integrator, times, events, check, names)
     solution.stats.wall_time = time.perf_counter() - start
     return solution
@@ -162,7 +163,7 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
     checked_positive("atol", atol)
     check = StateCheck("ida", names, bounds, monitor)
     stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0], rtol, atol, jac,
-                         dict(ida_options or {}))
+                         dict(ida_options or {}), tuple(events))
     solution = drive(stepper, "ida", times, events, check, names,
                      derivative_at=stepper.derivative_at)
     solution.stats.wall_time = time.perf_counter() - start

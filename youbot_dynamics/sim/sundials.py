@@ -3,6 +3,12 @@ per ``advance`` (``method='onestep'`` with ``tstop`` = t_end) so that steps are 
 states between steps come from SUNDIALS' own interpolation (``method='normal'`` with a time
 inside the last step, which takes no step and evaluates nothing).
 
+Events are located by SUNDIALS' own rootfinding (``eventsfn``) on the solver's interpolant:
+a step that holds a root returns at the root first (``roots`` names the events there, and
+:func:`~youbot_dynamics.sim.integration.drive` takes them as they are), then at its end.
+A guard that reads exactly 0 at the start is inactive until it leaves 0 (SUNDIALS' rule),
+which is how a hybrid restart ignores the crossing it just handled.
+
 scikit-sundae 1.2 reports only right-hand-side (residual) and Jacobian evaluations, so
 rejected steps (error-test failures) and nonlinear iterations are ``None``. It does not
 expose IDASetSuppressAlg either, so components cannot be excluded from IDA's error test
@@ -11,22 +17,53 @@ on them, and a measured index-1 test problem then gave algebraic errors of 0.5).
 """
 from __future__ import annotations
 
+import os
 from typing import Callable
 
 import numpy as np
 from sksundae.cvode import CVODE
 from sksundae.ida import IDA
 
-from youbot_dynamics.sim.integration import DivergenceError, IntegrationError, IntegratorStats
+from youbot_dynamics.sim.integration import (DivergenceError, Event, IntegrationError,
+                                             IntegratorStats)
+
+#: SUNDIALS' logger writes warnings straight to stderr. The one these runs raise says that a
+#: guard reads exactly 0 at a restart (the sleeve sitting at its stop), which is the rule
+#: relied on above; set the variable to a file name (or "stderr") to see SUNDIALS' warnings.
+os.environ.setdefault("SUNLOGGER_WARNING_FILENAME", os.devnull)
 
 CVODE_METHODS = {"cvode_bdf": "BDF", "cvode_adams": "Adams"}
 #: SUNDIALS flags meaning the step size collapsed (error or convergence test failures at
 #: the minimum step, or accuracy beyond machine precision): divergence, not a usage error.
 COLLAPSE_FLAGS = (-2, -3, -4)
+#: SUNDIALS' flag for a return at a located root (CV_ROOT_RETURN, IDA_ROOT_RETURN).
+ROOT_RETURN = 2
+
+
+def events_options(events: tuple[Event, ...], with_yp: bool) -> dict:
+    """sksundae options that make SUNDIALS locate the zero crossings of the events'
+    functions g(t, y) in their directions (every root stops the solver; :func:`drive`
+    decides what is terminal). ``with_yp``: IDA's signature g(t, y, yp, out)."""
+    if not events:
+        return {}
+    functions = [event.function for event in events]
+
+    def values(t, y, out):
+        for i, function in enumerate(functions):
+            out[i] = function(t, y)
+
+    eventsfn = (lambda t, y, yp, out: values(t, y, out)) if with_yp else values
+    eventsfn.direction = [event.direction for event in events]
+    eventsfn.terminal = [True] * len(events)
+    return {"eventsfn": eventsfn, "num_events": len(events)}
 
 
 class SundialsStepper:
-    """Shared stepping for CVODE and IDA: one new internal step per ``advance``."""
+    """Shared stepping for CVODE and IDA: one new internal step per ``advance``, or the
+    part of it up to a root that SUNDIALS located (``roots``: the events' indices there;
+    ``steps`` counts the internal steps, not the returns at roots)."""
+
+    locates_events = True
 
     def __init__(self, name: str, solver, t0: float, t_end: float, initial) -> None:
         self.name, self.solver, self.t_end = name, solver, t_end
@@ -34,6 +71,7 @@ class SundialsStepper:
         self.h = 0.0
         self.steps = 0
         self.last = initial
+        self.roots: list[int] = []
 
     def checked(self, result):
         """The solver's result, or the typed error for its failure flag."""
@@ -51,7 +89,9 @@ class SundialsStepper:
         while result.t <= self.t:
             result = self.checked(self.solver.step(self.t_end, method="onestep",
                                                    tstop=self.t_end))
-        self.steps += 1
+        at_root = result.status == ROOT_RETURN
+        self.roots = np.flatnonzero(result.i_events[-1]).tolist() if at_root else []
+        self.steps += not at_root
         self.h = float(result.t) - self.t
         self.t, self.x, self.last = float(result.t), np.array(result.y), result
 
@@ -77,11 +117,12 @@ class CvodeStepper(SundialsStepper):
 
     def __init__(self, method: str, name: str, rhs: Callable, t0: float, x0: np.ndarray,
                  t_end: float, rtol: float, atol, jac, max_step: float,
-                 min_step: float | None) -> None:
+                 min_step: float | None, events: tuple[Event, ...] = ()) -> None:
         def rhsfn(t, y, yp):
             yp[:] = rhs(t, y)
 
         options = common_options(rtol, atol, max_step, min_step)
+        options.update(events_options(events, with_yp=False))
         if jac is not None:
             def jacfn(t, y, yp, jj):
                 jj[:, :] = jac(t, y)
@@ -97,11 +138,12 @@ class IdaStepper(SundialsStepper):
 
     def __init__(self, residual: Callable, t0: float, y0: np.ndarray, yp0: np.ndarray,
                  t_end: float, algebraic: np.ndarray, rtol: float, atol, jac,
-                 extra: dict | None = None) -> None:
+                 extra: dict | None = None, events: tuple[Event, ...] = ()) -> None:
         def resfn(t, y, yp, res):
             res[:] = residual(t, y, yp)
 
         options = common_options(rtol, atol, np.inf, None)
+        options.update(events_options(events, with_yp=True))
         options["algebraic_idx"] = np.flatnonzero(algebraic) if algebraic.any() else None
         if jac is not None:
             def jacfn(t, y, yp, res, cj, jj):
