@@ -39,26 +39,32 @@ def add_joint_argument(parser: argparse.ArgumentParser, flag: str, meaning: str)
                         "first value is negative")
 
 
+def positive(text: str) -> float:
+    """An argparse type: a positive float."""
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
 def add_tolerance_arguments(parser: argparse.ArgumentParser, rtol: float | None = None,
-                            atol: float | None = None) -> None:
+                            atol_help: str = "absolute tolerance") -> None:
     """--tol (the one accuracy knob) and --rtol/--atol (for experts; they override it)."""
-    parser.add_argument("--tol", type=float,
+    parser.add_argument("--tol", type=positive,
                         help="accuracy: rtol = TOL and atol_i = TOL * max(|x0_i|, 1e-3) per "
                              "state component; --rtol/--atol override either")
-    parser.add_argument("--rtol", type=float, default=rtol,
+    parser.add_argument("--rtol", type=positive,
                         help="relative tolerance" + (f" (default {rtol:g})" if rtol else ""))
-    parser.add_argument("--atol", type=float, default=atol,
-                        help="absolute tolerance" + (f" (default {atol:g})" if atol else ""))
+    parser.add_argument("--atol", type=positive, help=atol_help)
 
 
 def tolerances(args: argparse.Namespace, x0) -> tuple[float | None, Any]:
     """(rtol, atol) from --tol, --rtol and --atol: an explicit --rtol or --atol wins, the
-    other comes from --tol (see sim.integrators.tolerances_from_tol)."""
+    other comes from --tol (see sim.integrators.tolerances_from_tol); None where none of
+    them gives one (the command's default applies)."""
     from youbot_dynamics.sim.integrators import tolerances_from_tol
     if args.tol is None:
         return args.rtol, args.atol
-    if not args.tol > 0:
-        raise CommandError(f"--tol must be positive, got {args.tol!r}")
     rtol, atol = tolerances_from_tol(args.tol, x0)
     return (rtol if args.rtol is None else args.rtol), (atol if args.atol is None else args.atol)
 

@@ -50,7 +50,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help=f"one of {', '.join(n for n in INTEGRATORS if n != 'ida')} "
                           f"(default {DEFAULT_INTEGRATOR}; with --tol {ACCURATE_INTEGRATOR})")
     run.add_argument("--dt", type=float, help="step size for fixed-step integrators, s")
-    add_tolerance_arguments(run)
+    add_tolerance_arguments(run, DEFAULT_RTOL, f"absolute tolerance (default {DEFAULT_ATOL:g})")
     run.add_argument("--json", action="store_true", help="print JSON")
     run.set_defaults(run=run_pendulum)
     study = subparsers.add_parser("pendulum-study", help="the seed's elastic-pendulum tables",

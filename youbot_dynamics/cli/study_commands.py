@@ -5,22 +5,16 @@ from __future__ import annotations
 import argparse
 import json
 
-from youbot_dynamics.cli.common import cell
+from youbot_dynamics.cli.common import add_tolerance_arguments, cell, positive, tolerances
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.events import HybridSolution
 from youbot_dynamics.sim.integrators import INTEGRATORS, FIXED_STEP, IntegratorStats
 
+#: Tolerances without --tol/--rtol: the woodpecker's (atol = rtol/100), lagrange's (atol = rtol).
+WOODPECKER_RTOL, LAGRANGE_RTOL = 1e-6, 1e-12
 #: Columns of the statistics tables, as in the seed's tables 15 and 16.
 STAT_COLUMNS = (("steps", "steps"), ("rhs_evals", "f-evals"), ("jac_evals", "J-evals"),
                 ("events", "state events"), ("wall_time", "CPU time (s)"))
-
-
-def positive(text: str) -> float:
-    """An argparse type: a positive float."""
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
 
 
 def non_negative(text: str) -> float:
@@ -56,14 +50,17 @@ def woodpecker_summary(solution: HybridSolution, stats: IntegratorStats) -> dict
 def run_woodpecker(args: argparse.Namespace) -> int:
     """Simulate the woodpecker toy; print beak hits, mode switches, final state and the
     statistics beside the seed's (or JSON); optionally plot."""
-    from youbot_dynamics.systems.woodpecker import (SEED_BEAK_HITS, SEED_FIGURES, Woodpecker,
+    from youbot_dynamics.systems.woodpecker import (SEED_BEAK_HITS, SEED_FIGURES,
+                                                    SEED_INITIAL_STATE, Woodpecker,
                                                     plot_woodpecker)
     if args.integrator in FIXED_STEP and args.dt is None:
         raise UserInputError(f"--integrator {args.integrator} is fixed-step: give --dt")
     woodpecker = Woodpecker()
     options = {} if args.dt is None else {"dt": args.dt}
-    solution = woodpecker.simulate(args.t_end, args.integrator, rtol=args.rtol,
-                                   atol=args.rtol * 1e-2,
+    rtol, atol = tolerances(args, SEED_INITIAL_STATE)
+    rtol = WOODPECKER_RTOL if rtol is None else rtol
+    solution = woodpecker.simulate(args.t_end, args.integrator, rtol=rtol,
+                                   atol=rtol * 1e-2 if atol is None else atol,
                                    n_out=int(args.t_end * 2000) if args.plot else 0,
                                    **options)
     summary = woodpecker_summary(solution, solution.stats)
@@ -75,7 +72,7 @@ def run_woodpecker(args: argparse.Namespace) -> int:
         print(json.dumps(summary, indent=2))
         return 0
     print(f"woodpecker toy over [0, {args.t_end:g}] s with {args.integrator} "
-          f"(rtol {args.rtol:g}): {summary['beak_hits']} beak hits "
+          f"(rtol {rtol:g}): {summary['beak_hits']} beak hits "
           f"(seed over 2 s: {SEED_BEAK_HITS})")
     for switch in summary["switches"]:
         print(f"  t = {switch['time']:.6f} s  {switch['kind']:<12} "
@@ -98,8 +95,10 @@ def run_lagrange(args: argparse.Namespace) -> int:
     lagrange = model(args.problem)
     p = lagrange.parameter_values({"c": args.friction})
     q0, u0 = SEED_INITIAL[args.problem]
+    rtol, atol = tolerances(args, np.r_[q0, u0])
+    rtol = LAGRANGE_RTOL if rtol is None else rtol
     solution = integrate(lagrange.rhs(p), np.r_[q0, u0], np.linspace(0.0, args.t_end, 201),
-                         args.integrator, rtol=args.rtol, atol=args.rtol,
+                         args.integrator, rtol=rtol, atol=rtol if atol is None else atol,
                          state_names=[*map(str, lagrange.q), *map(str, lagrange.u)])
     energy = lagrange.energy_of(solution.x, p)
     summary = {
@@ -134,8 +133,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                    "impacts, beak hits and statistics")
     parser.add_argument("--t-end", type=positive, default=2.0, help="end time (s)")
     parser.add_argument("--integrator", choices=INTEGRATORS, default="dop853")
-    parser.add_argument("--rtol", type=positive, default=1e-6,
-                        help="relative tolerance (atol = rtol/100)")
+    add_tolerance_arguments(parser, WOODPECKER_RTOL, "absolute tolerance (default rtol/100)")
     parser.add_argument("--dt", type=positive, help="step (s) for fixed-step integrators")
     parser.add_argument("--plot", metavar="PNG", help="write a plot of the run")
     parser.add_argument("--json", action="store_true", help="print JSON")
@@ -150,7 +148,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--integrator", choices=[n for n in INTEGRATORS
                                                  if n not in FIXED_STEP and n != "ida"],
                         default="dop853")
-    parser.add_argument("--rtol", type=positive, default=1e-12,
-                        help="relative (and absolute) tolerance")
+    add_tolerance_arguments(parser, LAGRANGE_RTOL, "absolute tolerance (default rtol)")
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.set_defaults(run=run_lagrange)
