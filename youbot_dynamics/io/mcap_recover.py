@@ -141,9 +141,9 @@ def recover_mcap(broken: str | Path, fixed: str | Path | None = None) -> Recover
     """
     broken = Path(broken)
     fixed = default_recovered_path(broken) if fixed is None else Path(fixed)
-    _check_source(broken)
-    if fixed.exists() and fixed.resolve() == broken.resolve():
+    if fixed.resolve() == broken.resolve():
         raise UserInputError(f"MCAP recovery: the output {fixed} would overwrite the file being recovered")
+    _check_source(broken)
     fixed.parent.mkdir(parents=True, exist_ok=True)
     partial = fixed.with_name(f".{fixed.name}.partial")
     size = broken.stat().st_size
