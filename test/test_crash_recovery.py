@@ -188,3 +188,152 @@ def test_recover_refuses_a_missing_file_and_overwriting_its_input(complete: Path
         recover_mcap(tmp_path / "missing.mcap")
     with pytest.raises(UserInputError, match="would overwrite"):
         recover_mcap(complete, complete)
+
+
+# ---- a logging node killed -------------------------------------------------------------------
+RATE = 200.0                 # node samples per simulated second
+SAMPLE_NS = 5_000_000        # 1 / RATE
+LOSS_BOUND_NS = 1_000_000_000
+"""MCAP: the chunk bound. Measured worst 0.975 s over 20 kills (+5 in the short form: 0.63 s)."""
+RERUN_LOSS_BOUND_NS = 1_500_000_000
+"""Rerun: 1 s of samples buffered, plus 0.5 s for Rerun's writer thread (its flush is started,
+not awaited). Measured worst 0.98 s over 25 kills; margin 0.5 s."""
+KILLS_CI, KILLS_ACCEPTANCE = 5, 20
+
+
+class NodeRun:
+    """One dynamics-node process (scene arm_swing at RATE, real time, logging MCAP and Rerun
+    in ``folder``), watched on /joint_states from this process: once a sample stamped at or
+    after ``target_ns`` arrives, the callback sends ``signum`` to the process."""
+
+    def __init__(self, context, domain: int, folder: Path, name: str, target_ns: int, signum: int) -> None:
+        from rclpy.node import Node
+        from sensor_msgs.msg import JointState
+
+        from youbot_dynamics.ros.qos import RELIABLE_DEEP
+
+        self.mcap, self.rrd = folder / f"{name}.mcap", folder / f"{name}.rrd"
+        self.target_ns, self.signum = target_ns, signum
+        self.seen_ns = -1
+        self.sent = threading.Event()
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "youbot_dynamics.ros.dynamics_node", "--ros-args", "-p", "scene:=arm_swing",
+             "-p", f"publish_rate:={RATE}", "-p", f"mcap_path:={self.mcap}", "-p", f"rrd_path:={self.rrd}",
+             "-p", "wait_for_subscribers:=1"],
+            cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain)}, stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE, text=True)
+        self.node = Node(f"watch_{name}", context=context)
+        self.node.create_subscription(JointState, "/joint_states", self._on_sample, RELIABLE_DEEP)
+
+    def _on_sample(self, msg) -> None:
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        self.seen_ns = max(self.seen_ns, stamp)
+        if stamp >= self.target_ns and not self.sent.is_set():
+            os.kill(self.process.pid, self.signum)
+            self.sent.set()
+
+    def run(self, context) -> int:
+        """Spin until the process has ended; its exit status."""
+        from ros_support import WAIT, spinning
+
+        try:
+            with spinning(context, self.node, single_threaded=True):
+                self.process.wait(timeout=4 * WAIT)
+        finally:
+            if self.process.poll() is None:
+                self.process.kill()
+                self.process.wait()
+        return self.process.returncode
+
+
+def joint_state_stamps(path: Path) -> list[int]:
+    """Header stamps (ns) of the /joint_states messages of a bag, by rosbags' AnyReader."""
+    from youbot_dynamics.io.bag_reader import read_bag
+
+    return [m.message.header.stamp.sec * 1_000_000_000 + m.message.header.stamp.nanosec
+            for m in read_bag(path) if m.topic == "/joint_states"]
+
+
+def rerun_last_sample_ns(path: Path) -> int:
+    """Latest sim_time (ns) on /joints/q in a .rrd, read by Rerun's streaming reader
+    (-SAMPLE_NS: none)."""
+    import pyarrow as pa
+    from rerun.chunk import RrdReader
+
+    last = -SAMPLE_NS
+    for chunk in RrdReader(str(path)).stream():
+        batch = chunk.to_record_batch()
+        columns = [name for name in batch.schema.names if "sim_time" in name]   # none in static chunks
+        if chunk.entity_path == "/joints/q" and columns:
+            last = max(last, max(batch.column(columns[0]).cast(pa.int64()).to_pylist()))
+    return last
+
+
+def kill_and_recover(tmp_path: Path, kills: int, seed: int) -> list[tuple[float, float, float]]:
+    """Kill ``kills`` node processes with SIGKILL at random simulated times in [0.1, 2.5] s;
+    check each recovered MCAP; return (target, MCAP loss, Rerun loss) in s per kill: the
+    latest sample a subscriber received before the process died minus the latest sample
+    kept (one sample period more than the time lost between them; the whole run plus one
+    period when nothing was kept)."""
+    from ros_support import ros_context
+
+    rng = random.Random(seed)
+    losses = []
+    with ros_context(20) as (context, domain):
+        for k in range(kills):
+            target_ns = SAMPLE_NS * rng.randrange(20, 500)
+            run = NodeRun(context, domain, tmp_path, f"kill{k}", target_ns, signal.SIGKILL)
+            status = run.run(context)
+            assert status == -signal.SIGKILL and run.sent.is_set(), run.process.stderr.read()
+            with pytest.raises(UserInputError, match="cannot be read"):    # the killed file itself
+                joint_state_stamps(run.mcap)
+            result = recover_mcap(run.mcap)
+            assert not result.complete
+            stamps = joint_state_stamps(result.target)
+            assert stamps == [SAMPLE_NS * i for i in range(len(stamps))]   # from t = 0, no gap
+            with result.target.open("rb") as stream:
+                reader = make_reader(stream)
+                assert reader.get_summary().statistics.message_count == result.messages == \
+                    sum(1 for _ in reader.iter_messages())
+            kept_ns = stamps[-1] if stamps else -SAMPLE_NS        # nothing kept: lost from t = 0 on
+            mcap_loss = run.seen_ns - kept_ns
+            rerun_loss = run.seen_ns - rerun_last_sample_ns(run.rrd)
+            assert mcap_loss <= LOSS_BOUND_NS, (k, target_ns, run.seen_ns, kept_ns)
+            assert rerun_loss <= RERUN_LOSS_BOUND_NS, (k, target_ns, run.seen_ns, rerun_loss)
+            losses.append((target_ns * 1e-9, mcap_loss * 1e-9, rerun_loss * 1e-9))
+    print(f"\nSIGKILL x {kills}: (target s, MCAP loss s, Rerun loss s) {losses}\n"
+          f"worst MCAP loss {max(loss[1] for loss in losses):.3f} s, "
+          f"worst Rerun loss {max(loss[2] for loss in losses):.3f} s")
+    return losses
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
+def test_sigkill_loses_at_most_one_second_short(tmp_path: Path) -> None:
+    kill_and_recover(tmp_path, KILLS_CI, seed=15)
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+@pytest.mark.timeout(1800)
+def test_sigkill_loses_at_most_one_second(tmp_path: Path) -> None:
+    kill_and_recover(tmp_path, KILLS_ACCEPTANCE, seed=2026)
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(300)
+def test_sighup_leaves_a_complete_log(tmp_path: Path) -> None:
+    """SIGHUP (the terminal closed) finalises both logs: the MCAP reads without recovery up
+    to at least the last sample received, the .rrd has its footer (``store()`` works only then)."""
+    from rerun.chunk import RrdReader
+
+    from ros_support import ros_context
+
+    with ros_context(21) as (context, domain):
+        run = NodeRun(context, domain, tmp_path, "hup", 100 * SAMPLE_NS, signal.SIGHUP)
+        assert run.run(context) == 0, run.process.stderr.read()
+    stamps = joint_state_stamps(run.mcap)
+    assert stamps == [SAMPLE_NS * i for i in range(len(stamps))] and stamps[-1] >= run.seen_ns >= 100 * SAMPLE_NS
+    assert recover_mcap(run.mcap, tmp_path / "again.mcap").complete
+    assert rerun_last_sample_ns(run.rrd) == stamps[-1]
+    assert RrdReader(str(run.rrd)).store() is not None
