@@ -20,17 +20,23 @@ import sys
 import threading
 from pathlib import Path
 
+import pyarrow as pa
 import pytest
 from mcap.reader import make_reader
 from mcap.writer import Writer
+from rerun.chunk import RrdReader
 from rosbags.highlevel import AnyReader
 
+from youbot_dynamics import default_urdf
 from youbot_dynamics.cli import main as cli_main
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.bag_reader import read_bag
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.mcap_recover import default_recovered_path, recover_mcap
 from youbot_dynamics.io.messages import TYPESTORE
+from youbot_dynamics.io.rerun_log import RerunLogger
+from youbot_dynamics.io.rrd_recover import recover_rrd
 
 REPO = Path(__file__).resolve().parent.parent
 SPAN_NS = 100_000_000        # 0.1 s chunks in the file-level tests: many chunks in a small file
@@ -183,6 +189,50 @@ def test_cli_refuses_what_is_not_an_mcap_file_in_one_line(tmp_path: Path, capsys
     assert match in err and str(bad) in err and err.count("\n") == 1
 
 
+def rerun_sample_times_ns(path: Path, entity: str = "/energy") -> list[int]:
+    """Every sim_time (ns) on ``entity`` of a .rrd, sorted, by Rerun's streaming reader."""
+    times: list[int] = []
+    for chunk in RrdReader(str(path)).stream():
+        batch = chunk.to_record_batch()
+        columns = [name for name in batch.schema.names if "sim_time" in name]   # none in static chunks
+        if chunk.entity_path == entity and columns:
+            times += batch.column(columns[0]).cast(pa.int64()).to_pylist()
+    return sorted(times)
+
+
+def test_a_rerun_recording_cut_inside_a_message_is_recovered(tmp_path: Path, capsys) -> None:
+    """Rerun's reader refuses an .rrd cut inside a message; the recovered file has a footer
+    (``store()`` works only then) and the samples of a prefix of the recording, from t = 0."""
+    complete = tmp_path / "run.rrd"
+    joints = [f"arm_joint_{j}" for j in range(1, 6)]
+    with RerunLogger(complete, default_urdf(), recording_name="cut", flush_span=0.1) as log:
+        for k in range(300):
+            q = [0.001 * k] * 5
+            log.log_sample(k * 0.01, joints, q, q, q, 1.0, [0.0, 0.0, 0.001 * k])
+    data = complete.read_bytes()
+    broken = tmp_path / "cut.rrd"
+    for cut in (len(data) // 2, len(data) // 2 + 1):      # one of two neighbours lies inside a message
+        broken.write_bytes(data[:cut])
+        try:
+            rerun_sample_times_ns(broken)
+        except RuntimeError as error:
+            assert "exceeds file size" in str(error)
+            break
+    else:
+        raise AssertionError("both cuts fell between messages")
+    assert cli_main(["log", "recover", str(broken)]) == 0
+    fixed = tmp_path / "cut.recovered.rrd"
+    assert str(fixed) in capsys.readouterr().out
+    assert len(RrdReader(str(fixed)).store()) > 0
+    times = [round(t / 10_000_000) for t in rerun_sample_times_ns(fixed)]   # float s: 1 ns off the grid
+    assert 0 < len(times) < 300 and times == list(range(len(times)))
+    assert [round(t / 10_000_000) for t in rerun_sample_times_ns(complete)] == list(range(300))
+    (tmp_path / "text.rrd").write_bytes(b"hello")
+    with pytest.raises(UserInputError, match="not a Rerun"):
+        recover_rrd(tmp_path / "text.rrd")
+    assert cli_main(["log", "recover", str(broken), "-o", str(tmp_path / "x.mcap")]) == 2
+
+
 def test_recover_refuses_a_missing_file_and_overwriting_its_input(complete: Path, tmp_path: Path) -> None:
     with pytest.raises(UserInputError, match="no such file"):
         recover_mcap(tmp_path / "missing.mcap")
@@ -248,25 +298,8 @@ class NodeRun:
 
 def joint_state_stamps(path: Path) -> list[int]:
     """Header stamps (ns) of the /joint_states messages of a bag, by rosbags' AnyReader."""
-    from youbot_dynamics.io.bag_reader import read_bag
-
     return [m.message.header.stamp.sec * 1_000_000_000 + m.message.header.stamp.nanosec
             for m in read_bag(path) if m.topic == "/joint_states"]
-
-
-def rerun_last_sample_ns(path: Path) -> int:
-    """Latest sim_time (ns) on /joints/q in a .rrd, read by Rerun's streaming reader
-    (-SAMPLE_NS: none)."""
-    import pyarrow as pa
-    from rerun.chunk import RrdReader
-
-    last = -SAMPLE_NS
-    for chunk in RrdReader(str(path)).stream():
-        batch = chunk.to_record_batch()
-        columns = [name for name in batch.schema.names if "sim_time" in name]   # none in static chunks
-        if chunk.entity_path == "/joints/q" and columns:
-            last = max(last, max(batch.column(columns[0]).cast(pa.int64()).to_pylist()))
-    return last
 
 
 def kill_and_recover(tmp_path: Path, kills: int, seed: int) -> list[tuple[float, float, float]]:
@@ -297,7 +330,8 @@ def kill_and_recover(tmp_path: Path, kills: int, seed: int) -> list[tuple[float,
                     sum(1 for _ in reader.iter_messages())
             kept_ns = stamps[-1] if stamps else -SAMPLE_NS        # nothing kept: lost from t = 0 on
             mcap_loss = run.seen_ns - kept_ns
-            rerun_loss = run.seen_ns - rerun_last_sample_ns(run.rrd)
+            rerun_times = rerun_sample_times_ns(recover_rrd(run.rrd).target, "/joints/q")
+            rerun_loss = run.seen_ns - (rerun_times[-1] if rerun_times else -SAMPLE_NS)
             assert mcap_loss <= LOSS_BOUND_NS, (k, target_ns, run.seen_ns, kept_ns)
             assert rerun_loss <= RERUN_LOSS_BOUND_NS, (k, target_ns, run.seen_ns, rerun_loss)
             losses.append((target_ns * 1e-9, mcap_loss * 1e-9, rerun_loss * 1e-9))
@@ -325,8 +359,6 @@ def test_sigkill_loses_at_most_one_second(tmp_path: Path) -> None:
 def test_sighup_leaves_a_complete_log(tmp_path: Path) -> None:
     """SIGHUP (the terminal closed) finalises both logs: the MCAP reads without recovery up
     to at least the last sample received, the .rrd has its footer (``store()`` works only then)."""
-    from rerun.chunk import RrdReader
-
     from ros_support import ros_context
 
     with ros_context(21) as (context, domain):
@@ -335,5 +367,5 @@ def test_sighup_leaves_a_complete_log(tmp_path: Path) -> None:
     stamps = joint_state_stamps(run.mcap)
     assert stamps == [SAMPLE_NS * i for i in range(len(stamps))] and stamps[-1] >= run.seen_ns >= 100 * SAMPLE_NS
     assert recover_mcap(run.mcap, tmp_path / "again.mcap").complete
-    assert rerun_last_sample_ns(run.rrd) == stamps[-1]
+    assert round(rerun_sample_times_ns(run.rrd, "/joints/q")[-1] / SAMPLE_NS) == stamps[-1] // SAMPLE_NS
     assert RrdReader(str(run.rrd)).store() is not None

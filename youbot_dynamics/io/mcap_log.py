@@ -103,6 +103,7 @@ class McapLogger(ClosesOnExit):
         self._stream: IO[bytes] | None = self.path.open("wb")
         self._writer = Writer(self._stream, compression=compression)
         self._writer.start(profile="ros2", library="youbot_dynamics (mcap-python)")
+        self._stream.flush()          # the header on disk at once: even an early crash leaves an MCAP
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, tuple[int, str]] = {}
         self._sequences: dict[str, int] = {}
