@@ -124,9 +124,7 @@ def _complete_records(source: IO[bytes]) -> Iterator[tuple[object, int]]:
             record = next(records)
             if isinstance(record, Chunk):
                 record = breakup_chunk(record, validate_crc=True)
-        except StopIteration:
-            return
-        except _DAMAGED:
+        except (StopIteration, *_DAMAGED):
             return
         yield record, source.tell()
 
@@ -154,21 +152,25 @@ def recover_mcap(broken: str | Path, fixed: str | Path | None = None) -> Recover
         if first is None or not isinstance(first[0], Header):
             raise UserInputError(f"{broken} ends before its header record: nothing to recover")
         header, end = first
-        with partial.open("wb") as target:
-            writer = Writer(target, compression=CompressionType.ZSTD)
-            writer.start(profile=header.profile, library=header.library)
-            copier = _Copier(writer)
-            chunks = 0
-            for record, end in records:
-                if isinstance(record, list):
-                    chunks += 1
-                    for inner in record:
-                        copier.copy(inner)
-                else:
-                    copier.copy(record)
-            writer.finish()
-            target.flush()
-            os.fsync(target.fileno())
+        try:
+            with partial.open("wb") as target:
+                writer = Writer(target, compression=CompressionType.ZSTD)
+                writer.start(profile=header.profile, library=header.library)
+                copier = _Copier(writer)
+                chunks = 0
+                for record, end in records:
+                    if isinstance(record, list):
+                        chunks += 1
+                        for inner in record:
+                            copier.copy(inner)
+                    else:
+                        copier.copy(record)
+                writer.finish()
+                target.flush()
+                os.fsync(target.fileno())
+        except BaseException:
+            partial.unlink(missing_ok=True)
+            raise
     partial.replace(fixed)
     return Recovery(broken, fixed, copier.messages, chunks, tuple(sorted(set(copier.topics.values()))),
                     copier.first, copier.last, 0 if complete else size - end, complete)
