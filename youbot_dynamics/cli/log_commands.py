@@ -10,7 +10,6 @@
 from __future__ import annotations
 
 import argparse
-
 from pathlib import Path
 
 from youbot_dynamics.cli.common import CommandError
