@@ -16,7 +16,10 @@ the stream and fsyncs the file) before a message that would make it span
 ``chunk_span_ns`` of log time (default 1 s) or that arrives ``chunk_wall_s`` wall seconds
 (default 1 s) after the chunk's first message, whichever comes first; mcap's own bound of
 1 MiB per chunk also holds. A SIGKILL or a power cut therefore loses only the open chunk:
-less than 1 s of log time. The truncated file lacks its summary and footer;
+less than 1 s of log time. The bounds are checked when a message is written: a writer that
+falls silent keeps its last chunk open until its next message (the node writes /diagnostics
+every ``diagnostics_period``). Closing a chunk took 1.4 to 6 ms (500 Hz /joint_states and
+/tf, fsync included). The truncated file lacks its summary and footer;
 :func:`youbot_dynamics.io.mcap_recover.recover_mcap` (``youbot-dynamics log recover``)
 rebuilds it.
 """
