@@ -21,6 +21,7 @@ COMMAND_MODULES = (
     "youbot_dynamics.cli.mechanism_commands",
     "youbot_dynamics.cli.study_commands",
     "youbot_dynamics.cli.ros_commands",
+    "youbot_dynamics.cli.log_commands",
 )
 
 

@@ -48,6 +48,10 @@ ENERGY = "/energy"
 FREE_BODIES = "/free_bodies"
 DEFAULT_BATCH_SIZE = 250
 """Samples ``log_sample`` buffers before sending them in one batch."""
+DEFAULT_FLUSH_SPAN = 1.0
+"""Simulated seconds of samples ``log_sample`` / ``log_body_poses`` buffer at most: a batch
+is sent (and Rerun's pipeline flushed towards the file) once it spans this long, so a crash
+loses less than this much of the recording."""
 
 
 class Samples(NamedTuple):
@@ -90,7 +94,7 @@ class RerunLogger(ClosesOnExit):
     a robot) and of the ``free_bodies`` (name -> Shape); a context manager.
 
     ``log_sample`` appends one sample of the robot (for a running node; buffered and sent
-    every ``batch_size`` samples); ``log_trajectory`` appends many at once (for offline
+    every ``batch_size`` samples or ``flush_span`` simulated seconds, whichever comes first); ``log_trajectory`` appends many at once (for offline
     runs); ``log_body_poses`` appends one sample of the free bodies (buffered alike). All
     send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
     is buffered, writes the end-effector path and disconnects so the file gets its footer.
@@ -109,6 +113,7 @@ class RerunLogger(ClosesOnExit):
         recording_id: str | None = None,
         ee_frame: str | None = None,
         batch_size: int = DEFAULT_BATCH_SIZE,
+        flush_span: float = DEFAULT_FLUSH_SPAN,
     ) -> None:
         """Start the recording at ``path``, log the robot from ``urdf_path`` and the shapes
         of the free bodies.
@@ -125,6 +130,7 @@ class RerunLogger(ClosesOnExit):
         self.bodies = tuple(free_bodies or {})
         self._body_rows: list[tuple[float, list[list[float]], list[list[float]]]] = []
         self.batch_size = max(1, int(batch_size))
+        self.flush_span = float(flush_span)
         self._series_names: tuple[str, ...] | None = None
         self._pending: list[Samples] = []
         self._pending_names: tuple[str, ...] = ()
@@ -175,8 +181,9 @@ class RerunLogger(ClosesOnExit):
         ``v``, efforts ``tau`` (ordered as ``joint_names``), total energy (J) and the
         end-effector position (m, in ``ee_frame``); the joint transforms follow ``q``.
 
-        Samples are checked at once and sent in batches of ``batch_size`` (one Rerun call
-        per entity per batch instead of one per sample); ``close`` sends the rest.
+        Samples are checked at once and sent in batches of ``batch_size`` or spanning
+        ``flush_span`` s (one Rerun call per entity per batch instead of one per sample);
+        ``close`` sends the rest.
         """
         self._recording()
         names = tuple(joint_names)
@@ -194,7 +201,7 @@ class RerunLogger(ClosesOnExit):
             self._flush()
             self._pending_names = names
         self._pending.append(row)
-        if len(self._pending) >= self.batch_size:
+        if len(self._pending) >= self.batch_size or row.t - self._pending[0].t >= self.flush_span:
             self._flush()
 
     def log_body_poses(self, t: float, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
@@ -209,7 +216,7 @@ class RerunLogger(ClosesOnExit):
         translations = [finite_floats(poses[name][0], f"Rerun {name} translation", 3) for name in self.bodies]
         quaternions = [finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]
         self._body_rows.append((t, translations, quaternions))
-        if len(self._body_rows) >= self.batch_size:
+        if len(self._body_rows) >= self.batch_size or t - self._body_rows[0][0] >= self.flush_span:
             self._flush_bodies()
 
     def log_trajectory(
@@ -273,6 +280,7 @@ class RerunLogger(ClosesOnExit):
         if self._pending:
             rows, self._pending = self._pending, []
             self._send(self._pending_names, Samples(*(np.array(column) for column in zip(*rows))))
+            self._recording().flush(timeout_sec=0.0)     # start writing to the file, do not wait
 
     def _flush_bodies(self) -> None:
         """Send the free-body poses buffered by ``log_body_poses``: one Transform3D column
@@ -286,6 +294,7 @@ class RerunLogger(ClosesOnExit):
         for k, name in enumerate(self.bodies):
             columns = rr.Transform3D.columns(translation=translations[:, k], quaternion=quaternions[:, k])
             self._recording().send_columns(body_entity(name), indexes=index, columns=columns)
+        self._recording().flush(timeout_sec=0.0)
 
     def _send(self, names: tuple[str, ...], samples: Samples) -> None:
         """Send checked samples (arrays as in ``log_trajectory``) with ``send_columns``."""

@@ -1,5 +1,5 @@
-"""What both node processes do around their work: note SIGINT / SIGTERM instead of dying
-mid-write, and, before leaving, wait until subscribers have acknowledged what was published
+"""What both node processes do around their work: note SIGINT / SIGTERM / SIGHUP instead of
+dying mid-write, and, before leaving, wait until subscribers have acknowledged what was published
 (a reliable publisher's queue is lost when the process ends)."""
 from __future__ import annotations
 
@@ -14,11 +14,15 @@ ACK_TIMEOUT = 3.0
 """Longest wait (wall s), on leaving, for subscribers to acknowledge what was published."""
 
 
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+"""Signals that stop a node cleanly: Ctrl-C, ``kill``, and closing its terminal (SIGHUP)."""
+
+
 def stop_requests() -> list[int]:
-    """Handle SIGINT and SIGTERM by appending the signal number to the returned list (the
-    caller's loop ends when it is non-empty), so logs are finalised and queues drained."""
+    """Handle SIGINT, SIGTERM and SIGHUP by appending the signal number to the returned list
+    (the caller's loop ends when it is non-empty), so logs are finalised and queues drained."""
     requests: list[int] = []
-    for signum in (signal.SIGINT, signal.SIGTERM):
+    for signum in STOP_SIGNALS:
         signal.signal(signum, lambda number, frame: requests.append(number))
     return requests
 
