@@ -17,6 +17,14 @@ set does not depend on body names (which need not be valid topic names). A scene
 a robot (``robot: none``) publishes neither /joint_states nor /ee_pose: it has no joints
 and no end effector, and an empty or identity message would read as data.
 
+End effectors: /ee_pose is the pose of the ``ee_link`` parameter's link, by default the
+robot's end effector (the youBot's gripper palm). A scene of several robots composed into
+one model (``robot: {compose: [...]}``) has one end effector per robot
+(``Robot.end_effectors``): /ee_pose is then the first robot's (unless ``ee_link`` names
+another link) and /ee_poses, a geometry_msgs/PoseArray, carries every robot's in
+composition order (the link names, in that order, are the ``ee_links`` value of
+/diagnostics), all in the root frame.
+
 Simulate mode advances simulated time by fixed increments: sample k is at exactly
 ``k * round(1e9 / publish_rate)`` ns, whatever the wall clock does.
 """
@@ -52,6 +60,7 @@ TOPIC_TYPES = {
     "/joint_states": "sensor_msgs/msg/JointState",
     "/computed_torques": "sensor_msgs/msg/JointState",
     "/ee_pose": "geometry_msgs/msg/PoseStamped",
+    "/ee_poses": "geometry_msgs/msg/PoseArray",
     "/free_bodies": "geometry_msgs/msg/PoseArray",
     "/clock": "rosgraph_msgs/msg/Clock",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
@@ -158,10 +167,19 @@ class _Frames:
         """/free_bodies: the bodies' poses in the root frame, in order."""
         return messages.pose_array(stamp_ns, self.root_frame, [(b.translation, b.quaternion_xyzw) for b in bodies])
 
-    def ee_pose(self, stamp_ns: int, q: np.ndarray) -> tuple[object, np.ndarray]:
-        """/ee_pose at q and the end-effector position (m, root frame)."""
+    @property
+    def ee_topics(self) -> tuple[str, ...]:
+        """/ee_pose, and /ee_poses for a model of several robots."""
+        return ("/ee_pose", "/ee_poses") if len(self.links.ee_links) > 1 else ("/ee_pose",)
+
+    def ee_outputs(self, stamp_ns: int, q: np.ndarray) -> tuple[Outputs, np.ndarray]:
+        """/ee_pose (and /ee_poses, see ``ee_topics``) at q, and the position (m, root frame)
+        of the /ee_pose link."""
         position, quaternion = self.links.ee_pose(q)
-        return messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion), position
+        outputs: Outputs = [("/ee_pose", messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion))]
+        if len(self.links.ee_links) > 1:
+            outputs.append(("/ee_poses", messages.pose_array(stamp_ns, self.root_frame, self.links.ee_poses(q))))
+        return outputs, position
 
 
 NOT_REPORTED = "n/a"
@@ -195,7 +213,12 @@ class _Session(ClosesOnExit):
         self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
-        """/diagnostics with one status of this session (also logged)."""
+        """/diagnostics with one status of this session (also logged); with a robot, its
+        values name the /ee_pose link (``ee_link``) and the /ee_poses links in order
+        (``ee_links``, comma-separated)."""
+        if self.frames.has_robot:
+            values = {"ee_link": self.frames.links.ee_link, "ee_links": ",".join(self.frames.links.ee_links),
+                      **values}
         status = messages.diagnostic_status(f"dynamics_node: {self.scene.name} ({self.mode})", level, text,
                                             hardware_id=self.robot.name, values=values)
         outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
@@ -221,9 +244,9 @@ class SimulationSession(_Session):
 
     @property
     def topics(self) -> tuple[str, ...]:
-        """/clock, /joint_states and /ee_pose (if the scene has a robot), /free_bodies (if it
-        has free bodies), /diagnostics."""
-        robot = ("/joint_states", "/ee_pose") if self.robot.tree else ()
+        """/clock, /joint_states and /ee_pose (and /ee_poses for several robots) if the scene
+        has a robot, /free_bodies (if it has free bodies), /diagnostics."""
+        robot = ("/joint_states", *self.frames.ee_topics) if self.robot.tree else ()
         return ("/clock", *robot, *(("/free_bodies",) if self.scene.free_bodies else ()), "/diagnostics")
 
     @property
@@ -318,9 +341,9 @@ class SimulationSession(_Session):
         try:
             outputs = [("/clock", messages.clock(stamp))]
             if self.frames.has_robot:
-                pose, position = self.frames.ee_pose(stamp, q)
+                poses, position = self.frames.ee_outputs(stamp, q)
                 outputs += [("/joint_states", messages.joint_state(stamp, snapshot.joint_names, q, snapshot.v,
-                                                                   snapshot.tau)), ("/ee_pose", pose)]
+                                                                   snapshot.tau)), *poses]
             if bodies:
                 outputs.append(("/free_bodies", self.frames.free_bodies(stamp, bodies)))
             self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q, bodies))], stamp)
@@ -378,7 +401,11 @@ class InverseSession(_Session):
     :mod:`youbot_dynamics.sim.inverse`), tau = RNEA + friction of the scene's robot."""
 
     mode = "inverse"
-    topics = ("/computed_torques", "/ee_pose", "/diagnostics")
+
+    @property
+    def topics(self) -> tuple[str, ...]:
+        """/computed_torques, /ee_pose (and /ee_poses for several robots), /diagnostics."""
+        return ("/computed_torques", *self.frames.ee_topics, "/diagnostics")
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
                  ee_link: str = "", mcap_path: str | Path | None = None,
@@ -415,9 +442,9 @@ class InverseSession(_Session):
         stamp = round(middle.t * NS_PER_S)
         tau = self.dynamics.torque(middle.q, middle.v, a)
         try:
-            pose, position_ee = self.frames.ee_pose(stamp, middle.q)
+            poses, position_ee = self.frames.ee_outputs(stamp, middle.q)
             outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
-                                                                  middle.v, tau)), ("/ee_pose", pose)]
+                                                                  middle.v, tau)), *poses]
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             return []

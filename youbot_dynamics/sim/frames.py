@@ -50,14 +50,19 @@ def body_transforms(world_frame: str, poses: Mapping[str, np.ndarray]) -> list[L
 
 
 class LinkFrames:
-    """Parent -> child transforms of every link of ``robot`` and the pose of ``ee_link``
-    (default: ``robot.end_effector``) in the root link's frame."""
+    """Parent -> child transforms of every link of ``robot``, the pose of ``ee_link``
+    (default: the first of ``robot.end_effectors``, the robot's end effector or, for
+    several robots composed into one model, the first robot's) and the poses of every
+    robot's end effector (``ee_links``), all in the root link's frame."""
 
     def __init__(self, robot: Robot, ee_link: str | None = None) -> None:
         self.robot = robot
         self.root_link = robot.root_link
-        self.chain = screw_chain(robot, ee_link)
+        self.ee_links = robot.end_effectors
+        self.chain = screw_chain(robot, ee_link or self.ee_links[0])
         self.ee_link = self.chain.link
+        self._ee_chains = tuple(self.chain if link == self.ee_link else screw_chain(robot, link)
+                                for link in self.ee_links)
         self.static = tuple(_link_transform(j.parent, j.child, j.origin) for j in robot.tree if j.type == "fixed")
         self._moving = tuple((j, robot.joint_index(j.name), quaternion_from_matrix(j.origin[:3, :3]))
                              for j in robot.tree if j.type != "fixed")
@@ -82,6 +87,13 @@ class LinkFrames:
         return out
 
     def ee_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """End-effector position (3,) m and quaternion (x, y, z, w) in the root link frame."""
-        pose = fkin_space(self.chain, q)
-        return pose[:3, 3].copy(), quaternion_from_matrix(pose[:3, :3])
+        """Position (3,) m and quaternion (x, y, z, w) of ``ee_link`` in the root link frame."""
+        return _position_quaternion(fkin_space(self.chain, q))
+
+    def ee_poses(self, q: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """``ee_pose`` of every link of ``ee_links``, in that order."""
+        return [_position_quaternion(fkin_space(chain, q)) for chain in self._ee_chains]
+
+
+def _position_quaternion(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return pose[:3, 3].copy(), quaternion_from_matrix(pose[:3, :3])

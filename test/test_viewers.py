@@ -1,0 +1,107 @@
+"""What a viewer sees of the gripping scene (two youBots composed into one model, a sphere,
+a table), through the session layer without DDS: /ee_pose and /ee_poses name real links
+(checked against Pinocchio's forward kinematics at the logged joint positions), every
+logged time is on the step grid in integer nanoseconds, the Rerun recording draws the
+sphere in a named frame under ``world`` and the table, and the MCAP carries both as
+visualization_msgs/MarkerArray."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from rosbags.highlevel import AnyReader
+
+from youbot_dynamics.ros.session import SimulationSession
+from youbot_dynamics.sim.scene import load_scene
+
+RATE = 100.0
+STEP_NS = 10_000_000
+N = 151                    # samples at t = 0, 0.01, ..., 1.5 s: youBot 1's arm starts turning
+
+
+def read_mcap(path: Path) -> dict[str, list]:
+    """Messages per topic of an MCAP, decoded by rosbags' AnyReader."""
+    by_topic: dict[str, list] = {}
+    with AnyReader([path]) as reader:
+        for connection, _, raw in reader.messages():
+            by_topic.setdefault(connection.topic, []).append(reader.deserialize(raw, connection.msgtype))
+    return by_topic
+
+
+def stamp_ns(message: object) -> int:
+    return message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+
+
+@pytest.fixture(scope="module")
+def gripping(tmp_path_factory: pytest.TempPathFactory) -> dict:
+    out = tmp_path_factory.mktemp("gripping")
+    scene = load_scene("gripping")
+    with SimulationSession(scene, RATE, mcap_path=out / "run.mcap", rrd_path=out / "run.rrd") as session:
+        published = [dict(session.step()) for _ in range(N)]
+        topics = session.topics
+    return {"scene": scene, "published": published, "topics": topics, "mcap": read_mcap(out / "run.mcap"),
+            "rrd": out / "run.rrd"}
+
+
+def palm_poses(scene, names: list[str], q: list[float]) -> dict[str, pin.SE3]:
+    """World poses of both palms by Pinocchio's forward kinematics at q given by joint name."""
+    robot = scene.robot()
+    config = pin.neutral(robot.model)
+    for name, value in zip(names, q, strict=True):
+        joint = robot.model.joints[robot.model.getJointId(name)]
+        config[joint.idx_q] = value
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, config)
+    return {link: data.oMf[robot.model.getFrameId(link)]
+            for link in ("yb1_gripper_palm_link", "yb2_gripper_palm_link")}
+
+
+def assert_pose(pose, expected: pin.SE3) -> None:
+    """position and orientation of a geometry_msgs/Pose equal ``expected``: measured 6.7e-16 m
+    and 4.4e-16 (quaternion, up to sign) over the run; bound 1e-12, a margin of 1500."""
+    position = [pose.position.x, pose.position.y, pose.position.z]
+    quaternion = np.array([pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w])
+    reference = pin.Quaternion(expected.rotation).coeffs()            # x, y, z, w
+    assert position == pytest.approx(expected.translation, abs=1e-12)
+    assert min(np.abs(quaternion - reference).max(), np.abs(quaternion + reference).max()) < 1e-12
+
+
+def test_ee_pose_is_youbot_1s_palm_and_ee_poses_both_palms(gripping) -> None:
+    """In the MCAP, every /ee_pose is youBot 1's palm and /ee_poses both palms, in the world
+    frame, at the q of /joint_states of the same stamp; the palm moves (not the identity)."""
+    assert gripping["topics"] == ("/clock", "/joint_states", "/ee_pose", "/ee_poses", "/free_bodies", "/diagnostics")
+    logged = gripping["mcap"]
+    assert len(logged["/ee_pose"]) == len(logged["/ee_poses"]) == len(logged["/joint_states"]) == N
+    for state, ee, both in zip(logged["/joint_states"], logged["/ee_pose"], logged["/ee_poses"]):
+        assert stamp_ns(state) == stamp_ns(ee) == stamp_ns(both)
+        assert ee.header.frame_id == both.header.frame_id == "world"
+        palms = palm_poses(gripping["scene"], state.name, state.position)
+        assert_pose(ee.pose, palms["yb1_gripper_palm_link"])
+        assert_pose(both.poses[0], palms["yb1_gripper_palm_link"])
+        assert_pose(both.poses[1], palms["yb2_gripper_palm_link"])
+    first, last = logged["/ee_pose"][0].pose.position, logged["/ee_pose"][-1].pose.position
+    # upright arm: the palm 0.665 m above the floor, above youBot 1's arm base; then it turns away
+    assert [first.x, first.z] == pytest.approx([-0.371, 0.665], abs=1e-3)
+    assert np.hypot(last.x - first.x, last.y - first.y) > 0.01
+
+
+def test_diagnostics_name_the_end_effector_links(gripping) -> None:
+    session = SimulationSession(gripping["scene"], RATE)
+    try:
+        (_, array), = session.diagnostics(1.0)
+    finally:
+        session.close()
+    values = {kv.key: kv.value for kv in array.status[0].values}
+    assert values["ee_link"] == "yb1_gripper_palm_link"
+    assert values["ee_links"] == "yb1_gripper_palm_link,yb2_gripper_palm_link"
+
+
+def test_ee_link_parameter_chooses_youbot_2s_palm() -> None:
+    scene = load_scene("gripping")
+    with SimulationSession(scene, RATE, ee_link="yb2_gripper_palm_link") as session:
+        outputs = dict(session.step())
+    palms = palm_poses(scene, outputs["/joint_states"].name, outputs["/joint_states"].position)
+    assert_pose(outputs["/ee_pose"].pose, palms["yb2_gripper_palm_link"])
+    assert_pose(outputs["/ee_poses"].poses[0], palms["yb1_gripper_palm_link"])
