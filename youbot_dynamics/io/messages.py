@@ -81,6 +81,18 @@ def finite_floats(values: Iterable[float], field_name: str, length: int) -> list
     return floats
 
 
+def stamps_ns(values: Iterable[int], field_name: str) -> np.ndarray:
+    """``values`` as an int64 vector of stamps (integer nanoseconds, >= 0). Raises
+    ``MessageFieldError`` naming ``field_name`` for a float (even a whole one: times are
+    never carried in float seconds here), a bool or a negative stamp."""
+    array = np.asarray(values).reshape(-1)
+    if array.size and not (np.issubdtype(array.dtype, np.integer) and array.dtype != np.bool_):
+        raise MessageFieldError(field_name, f"must be integer nanoseconds, got {array.dtype} values")
+    if array.size and array.min() < 0:
+        raise MessageFieldError(field_name, f"must be >= 0 ns, got {int(array.min())}")
+    return array.astype(np.int64)
+
+
 def _not_finite(field_name: str, index: int, value: float) -> MessageFieldError:
     return MessageFieldError(f"{field_name}[{index}]", f"is {value}, not finite")
 

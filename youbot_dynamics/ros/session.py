@@ -87,8 +87,9 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
 
 class Recorder:
     """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` plus /tf and
-    /tf_static, and a Rerun recording (``rrd_path``) of the robot and (simulate mode) the
-    scene's free bodies; either may be None. ``close`` finalises both and may be called more than once."""
+    /tf_static, and a Rerun recording (``rrd_path``) of the robot, the scene's static
+    geometry and (simulate mode) its free bodies; either may be None. ``close`` finalises
+    both and may be called more than once."""
 
     def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
                  mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
@@ -98,8 +99,8 @@ class Recorder:
                 self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic == "/tf_static")
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
-            free_bodies={spec.body.name: spec.shape for spec in scene.free_bodies} if mode == "simulate" else {},
-            ee_frame=root_frame) if rrd_path else None
+            geometries=[g for g in scene.geometries if mode == "simulate" or g.owner != "body"],
+            world_frame=root_frame) if rrd_path else None
 
     @property
     def paths(self) -> list[Path]:
@@ -112,16 +113,16 @@ class Recorder:
             for topic, message in outputs:
                 self.mcap.write(topic, message, stamp_ns)
 
-    def sample(self, t: float, names: Sequence[str], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+    def sample(self, stamp_ns: int, names: Sequence[str], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
                energy: float, ee_position: np.ndarray) -> None:
-        """One Rerun sample at simulated time t (s)."""
+        """One Rerun sample at simulated time ``stamp_ns`` (ns)."""
         if self.rerun is not None and not self.rerun.closed:
-            self.rerun.log_sample(t, names, q, v, tau, energy, ee_position)
+            self.rerun.log_sample(stamp_ns, names, q, v, tau, energy, ee_position)
 
-    def bodies(self, t: float, transforms: Sequence[LinkTransform]) -> None:
-        """The free bodies' poses (root frame) in the Rerun recording at simulated time t (s)."""
+    def bodies(self, stamp_ns: int, transforms: Sequence[LinkTransform]) -> None:
+        """The free bodies' poses (root frame) in the Rerun recording at ``stamp_ns`` (ns)."""
         if self.rerun is not None and not self.rerun.closed:
-            self.rerun.log_body_poses(t, {b.child: (b.translation, b.quaternion_xyzw) for b in transforms})
+            self.rerun.log_body_poses(stamp_ns, {b.child: (b.translation, b.quaternion_xyzw) for b in transforms})
 
     def close(self) -> None:
         """Finalise both logs (idempotent)."""
@@ -351,9 +352,9 @@ class SimulationSession(_Session):
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
         if self.frames.has_robot:
-            self.recorder.sample(self.t, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy, position)
+            self.recorder.sample(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy, position)
         if bodies:
-            self.recorder.bodies(self.t, bodies)
+            self.recorder.bodies(stamp, bodies)
         return outputs
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
@@ -451,7 +452,7 @@ class InverseSession(_Session):
         self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, middle.q))], stamp)
         data = self.dynamics.data
         energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
-        self.recorder.sample(middle.t, self.robot.joint_names, middle.q, middle.v, tau, energy, position_ee)
+        self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, position_ee)
         self.stamp_ns, self.samples = stamp, self.samples + 1
         return outputs
 
