@@ -244,8 +244,8 @@ def test_free_bodies_without_a_robot(tmp_path: Path) -> None:
         assert rows[-1]["Transform3D:quaternion"][0] == pytest.approx([0, 0, math.sin(0.3), math.cos(0.3)], abs=1e-7)
     floor, box = static["/geometry/floor"][0], static["/geometry/shelf"][0]
     assert floor["CoordinateFrame:frame"] == box["CoordinateFrame:frame"] == ["world"]
-    assert floor["Boxes3D:half_sizes"] == [pytest.approx([2.0, 2.0, 0.0])]
-    assert floor["Boxes3D:centers"] == [pytest.approx([0.0, 0.0, 0.1])]
+    assert floor["Boxes3D:half_sizes"] == [pytest.approx([2.0, 2.0, 0.0005])]     # a 1 mm plate
+    assert floor["Boxes3D:centers"] == [pytest.approx([0.0, 0.0, 0.0995])]         # its top on the plane
     assert floor["Boxes3D:quaternions"] == [pytest.approx([0.0, 0.0, 0.0, 1.0])]
     assert (box["Boxes3D:centers"], box["Boxes3D:half_sizes"]) == \
         ([pytest.approx([0.5, -0.25, 0.75])], [pytest.approx([0.2, 0.1, 0.01])])

@@ -111,7 +111,8 @@ def test_free_bodies_topic_carries_the_same_poses(ball_drop_run) -> None:
     """/free_bodies over ROS equals its MCAP copy and /tf; no /joint_states or /ee_pose."""
     received, logged, tf = (ball_drop_run["received"]["/free_bodies"], ball_drop_run["mcap"]["/free_bodies"],
                             ball_drop_run["mcap"]["/tf"])
-    assert ball_drop_run["published"] == {"/clock", "/free_bodies", "/diagnostics"}
+    assert ball_drop_run["published"] == {"/clock", "/free_bodies", "/free_bodies_markers", "/scene_markers",
+                                          "/diagnostics"}
     assert not {"/joint_states", "/ee_pose"} & set(ball_drop_run["mcap"])
     assert len(received) == len(logged) == N
     for got, kept, transform in zip(received, logged, tf):

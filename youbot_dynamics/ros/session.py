@@ -8,6 +8,12 @@ moving link and every free body, per sample) and /tf_static (every fixed link, o
 latched). Stamps and log times are simulated time in integer nanoseconds, so two runs of a
 scene log identical payloads.
 
+Shapes for viewers (visualization_msgs/MarkerArray, namespace = the shape's name):
+/free_bodies_markers draws every free body at every sample (in the root frame);
+/scene_markers, latched (transient local, published once at start and logged at t = 0),
+draws the static world geometry (root frame) and the geometry on links (in the link's
+frame, frame-locked). A halfspace is drawn as a plate (``sim.frames.drawn_shape``).
+
 Free bodies (simulate mode) appear like the robot's links: on /tf as ``<root frame> ->
 <body name>`` and in the Rerun recording as their shapes; on ROS, as one
 geometry_msgs/PoseArray on /free_bodies per sample (poses in the root frame, in the
@@ -38,12 +44,14 @@ from pathlib import Path
 import numpy as np
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator
+from youbot_dynamics.dynamics.collision import Geometry
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
+from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
                                           InputRejected, follow, joint_sample, joint_trajectory)
@@ -62,6 +70,8 @@ TOPIC_TYPES = {
     "/ee_pose": "geometry_msgs/msg/PoseStamped",
     "/ee_poses": "geometry_msgs/msg/PoseArray",
     "/free_bodies": "geometry_msgs/msg/PoseArray",
+    "/free_bodies_markers": "visualization_msgs/msg/MarkerArray",
+    "/scene_markers": "visualization_msgs/msg/MarkerArray",
     "/clock": "rosgraph_msgs/msg/Clock",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/tf": "tf2_msgs/msg/TFMessage",
@@ -69,6 +79,14 @@ TOPIC_TYPES = {
 }
 """Every topic the node publishes or logs, with its type (/tf and /tf_static are logged
 only: tf2_msgs has no rclpy wheel)."""
+
+LATCHED_TOPICS = frozenset({"/tf_static", "/scene_markers"})
+"""Topics published once and offered transient-local (latched), in the MCAP too."""
+
+FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)
+"""Colour (r, g, b, a in 0..1) of the free bodies' markers (light wood)."""
+GEOMETRY_RGBA = (0.55, 0.55, 0.60, 1.0)
+"""Colour of the scene's static and link geometry markers (grey)."""
 
 
 def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
@@ -96,7 +114,7 @@ class Recorder:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
             for topic in (*topics, "/tf", "/tf_static"):
-                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic == "/tf_static")
+                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic in LATCHED_TOPICS)
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
             geometries=[g for g in scene.geometries if mode == "simulate" or g.owner != "body"],
@@ -132,15 +150,18 @@ class Recorder:
 
 
 class _Frames:
-    """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame`` and /tf and
-    /free_bodies messages of the free bodies ``body_names`` (frame names distinct from the
-    robot's links)."""
+    """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame``, /tf, /free_bodies
+    and /free_bodies_markers messages of the free bodies among ``geometries`` (frame names
+    distinct from the robot's links) and the /scene_markers of the others."""
 
-    def __init__(self, robot: Robot, root_frame: str, ee_link: str | None, body_names: Sequence[str] = ()) -> None:
+    def __init__(self, robot: Robot, root_frame: str, ee_link: str | None,
+                 geometries: Sequence[Geometry] = ()) -> None:
         self.links = LinkFrames(robot, ee_link or None)
         self.root_frame = root_frame or robot.root_link
         self.has_robot = bool(robot.tree)
-        clash = sorted(set(body_names) & {self.root_frame, *robot.link_names})
+        self.body_shapes = {g.name: (g.shape, g.placement) for g in geometries if g.owner == "body"}
+        self.static_geometry = tuple(g for g in geometries if g.owner != "body")
+        clash = sorted(set(self.body_shapes) & {self.root_frame, *robot.link_names})
         if clash:
             raise UserInputError(f"free bodies {clash} have the names of robot frames; /tf needs distinct "
                                  "frame names: rename the bodies in the scene")
@@ -167,6 +188,32 @@ class _Frames:
     def free_bodies(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
         """/free_bodies: the bodies' poses in the root frame, in order."""
         return messages.pose_array(stamp_ns, self.root_frame, [(b.translation, b.quaternion_xyzw) for b in bodies])
+
+    def free_body_markers(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
+        """/free_bodies_markers: each body's shape at its pose in the root frame (namespace:
+        the body's name; the same ids every sample, so each replaces the last)."""
+        markers = []
+        for body in bodies:
+            shape, placement = self.body_shapes[body.child]
+            pose = np.eye(4)
+            pose[:3, :3], pose[:3, 3] = matrix_from_quaternion(body.quaternion_xyzw), body.translation
+            markers += messages.shape_markers(stamp_ns, self.root_frame, body.child, shape, pose @ placement,
+                                              FREE_BODY_RGBA)
+        return messages.marker_array(markers)
+
+    def scene_markers(self) -> object:
+        """/scene_markers (latched, stamp 0): the static world geometry in the root frame and
+        the geometry on links in the link's frame (frame-locked: it moves with the link);
+        namespace: the geometry's name."""
+        return messages.marker_array(
+            marker for g in self.static_geometry
+            for marker in messages.shape_markers(0, self.root_frame if g.owner == "world" else g.owner_name, g.name,
+                                                 g.shape, g.placement, GEOMETRY_RGBA, frame_locked=g.owner == "link"))
+
+    @property
+    def scene_topics(self) -> tuple[str, ...]:
+        """/scene_markers if there is static geometry."""
+        return ("/scene_markers",) if self.static_geometry else ()
 
     @property
     def ee_topics(self) -> tuple[str, ...]:
@@ -209,9 +256,12 @@ class _Session(ClosesOnExit):
                  mcap_path: str | Path | None, rrd_path: str | Path | None) -> None:
         self.scene, self.robot = scene, robot
         self.counters = InputCounters()
-        self.frames = _Frames(robot, frame_id, ee_link, [spec.body.name for spec in scene.free_bodies])
+        geometries = [g for g in scene.geometries if self.mode == "simulate" or g.owner != "body"]
+        self.frames = _Frames(robot, frame_id, ee_link, geometries)
+        self.latched: Outputs = [("/scene_markers", self.frames.scene_markers())] if "/scene_markers" in self.topics else []
+        """Messages to publish once, latched (transient local), when the node starts."""
         self.recorder = Recorder(self.mode, scene, robot, self.topics, mcap_path, rrd_path, self.frames.root_frame)
-        self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
+        self.recorder.write([("/tf_static", self.frames.tf_static()), *self.latched], 0)
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
         """/diagnostics with one status of this session (also logged); with a robot, its
@@ -246,9 +296,11 @@ class SimulationSession(_Session):
     @property
     def topics(self) -> tuple[str, ...]:
         """/clock, /joint_states and /ee_pose (and /ee_poses for several robots) if the scene
-        has a robot, /free_bodies (if it has free bodies), /diagnostics."""
+        has a robot, /free_bodies and /free_bodies_markers if it has free bodies,
+        /scene_markers if it has static geometry, /diagnostics."""
         robot = ("/joint_states", *self.frames.ee_topics) if self.robot.tree else ()
-        return ("/clock", *robot, *(("/free_bodies",) if self.scene.free_bodies else ()), "/diagnostics")
+        bodies = ("/free_bodies", "/free_bodies_markers") if self.frames.body_shapes else ()
+        return ("/clock", *robot, *bodies, *self.frames.scene_topics, "/diagnostics")
 
     @property
     def sample_topic(self) -> str:
@@ -346,7 +398,8 @@ class SimulationSession(_Session):
                 outputs += [("/joint_states", messages.joint_state(stamp, snapshot.joint_names, q, snapshot.v,
                                                                    snapshot.tau)), *poses]
             if bodies:
-                outputs.append(("/free_bodies", self.frames.free_bodies(stamp, bodies)))
+                outputs += [("/free_bodies", self.frames.free_bodies(stamp, bodies)),
+                            ("/free_bodies_markers", self.frames.free_body_markers(stamp, bodies))]
             self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q, bodies))], stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
@@ -405,8 +458,9 @@ class InverseSession(_Session):
 
     @property
     def topics(self) -> tuple[str, ...]:
-        """/computed_torques, /ee_pose (and /ee_poses for several robots), /diagnostics."""
-        return ("/computed_torques", *self.frames.ee_topics, "/diagnostics")
+        """/computed_torques, /ee_pose (and /ee_poses for several robots), /scene_markers if
+        the scene has static geometry, /diagnostics."""
+        return ("/computed_torques", *self.frames.ee_topics, *self.frames.scene_topics, "/diagnostics")
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
                  ee_link: str = "", mcap_path: str | Path | None = None,

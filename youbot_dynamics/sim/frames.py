@@ -27,7 +27,9 @@ from youbot_dynamics.model.screws import fkin_space, screw_chain
 
 
 HALFSPACE_DRAWN_SIDE = 4.0
-"""Side (m) of the square drawn for a halfspace."""
+"""Side (m) of the square plate drawn for a halfspace."""
+HALFSPACE_DRAWN_THICKNESS = 0.001
+"""Thickness (m) of that plate (viewers draw no box of zero thickness)."""
 
 
 class LinkTransform(NamedTuple):
@@ -54,8 +56,9 @@ def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTrans
 def drawn_shape(shape: Shape, placement: np.ndarray) -> tuple[Shape, np.ndarray]:
     """The finite shape a viewer draws for ``shape`` placed by ``placement`` (4x4, m, in its
     owner's frame) and where: the shape itself, or for a halfspace {x : n . x <= offset} a
-    box of HALFSPACE_DRAWN_SIDE x HALFSPACE_DRAWN_SIDE x 0 on its boundary plane, centred on
-    offset n with its z axis along the unit normal n."""
+    plate of HALFSPACE_DRAWN_SIDE x HALFSPACE_DRAWN_SIDE x HALFSPACE_DRAWN_THICKNESS inside
+    it, its top face on the boundary plane and centred on offset n, its z axis along the
+    unit normal n."""
     if shape.kind != "halfspace":
         return shape, placement
     normal = np.asarray(shape.normal, dtype=float) / np.linalg.norm(shape.normal)
@@ -63,9 +66,10 @@ def drawn_shape(shape: Shape, placement: np.ndarray) -> tuple[Shape, np.ndarray]
     angle = math.atan2(np.linalg.norm(axis), normal[2])
     axis = axis / np.linalg.norm(axis) if np.linalg.norm(axis) > 0.0 else np.array([1.0, 0.0, 0.0])
     plane = np.eye(4)
-    plane[:3, :3], plane[:3, 3] = exp_so3(axis * angle), shape.offset * normal
+    plane[:3, :3] = exp_so3(axis * angle)
+    plane[:3, 3] = (shape.offset - 0.5 * HALFSPACE_DRAWN_THICKNESS) * normal
     side = HALFSPACE_DRAWN_SIDE
-    return Shape("box", size=(side, side, 0.0)), placement @ plane
+    return Shape("box", size=(side, side, HALFSPACE_DRAWN_THICKNESS)), placement @ plane
 
 
 def body_transforms(world_frame: str, poses: Mapping[str, np.ndarray]) -> list[LinkTransform]:
