@@ -19,6 +19,7 @@ from rosbags.highlevel import AnyReader
 
 from youbot_dynamics.ros.session import SimulationSession
 from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.sim.simulator import Simulator
 
 RATE = 100.0
 STEP_NS = 10_000_000
@@ -119,6 +120,16 @@ def test_diagnostics_name_the_end_effector_links(gripping) -> None:
     values = {kv.key: kv.value for kv in array.status[0].values}
     assert values["ee_link"] == "yb1_gripper_palm_link"
     assert values["ee_links"] == "yb1_gripper_palm_link,yb2_gripper_palm_link"
+
+
+def test_offline_simulator_records_youbot_1s_palm_too() -> None:
+    """The simulator's own end-effector pose (Snapshot.ee_pose, recorded ee_position) is the
+    first robot's palm, not ``world``."""
+    scene = load_scene("gripping")
+    simulator = Simulator(scene)
+    robot = simulator.robot
+    palms = palm_poses(scene, list(robot.joint_names), simulator.q.tolist())
+    assert simulator.snapshot().ee_pose == pytest.approx(palms["yb1_gripper_palm_link"].homogeneous, abs=1e-12)
 
 
 def test_ee_link_parameter_chooses_youbot_2s_palm() -> None:
