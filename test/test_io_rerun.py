@@ -196,6 +196,25 @@ def body(name: str, shape: Shape) -> Geometry:
     return Geometry(name, shape, "body", name)
 
 
+def test_world_frame_link_geometry_and_body_names(tmp_path: Path) -> None:
+    """A world frame other than the URDF root link (``odom``) is joined to it by a static
+    identity transform; geometry on a link is drawn in that link's frame; a free body may
+    not take a link's name."""
+    urdf = Path(__file__).resolve().parents[1] / "urdf" / "youbot.urdf"
+    plate = Geometry("plate_top", Shape("box", size=(0.2, 0.3, 0.01)), "link", "plate_link")
+    with RerunLogger(tmp_path / "odom.rrd", urdf, geometries=[plate], recording_name="odom", world_frame="odom"):
+        pass
+    _, static, _ = read_rows(tmp_path / "odom.rrd")
+    (join,) = static["/world_frame"]
+    assert (join["Transform3D:parent_frame"], join["Transform3D:child_frame"]) == (["odom"], ["base_footprint"])
+    assert static["/geometry/plate_top"][0]["CoordinateFrame:frame"] == ["plate_link"]
+    assert static["/ee/position"][0]["CoordinateFrame:frame"] == ["odom"]
+    with pytest.raises(UserInputError, match=r"free bodies \['base_link'\] have the names of robot frames"):
+        RerunLogger(tmp_path / "clash.rrd", urdf, geometries=[body("base_link", Shape("sphere", radius=0.1))],
+                    recording_name="clash")
+    assert not (tmp_path / "clash.rrd").exists()          # refused before the recording starts
+
+
 def test_free_bodies_without_a_robot(tmp_path: Path) -> None:
     """No URDF: the free bodies, each a static solid of its shape (Rerun's capsule runs
     from its origin, so it is shifted by half its length to be centred like coal's) in the

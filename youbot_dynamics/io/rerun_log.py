@@ -22,8 +22,8 @@ Layout of the recording (Rerun 0.41):
   frame);
 - ``/geometry/<name>``: the scene's static world geometry (in the world frame) and its
   geometry on robot links (in the link's frame, which the URDF loader names after the
-  link), static solids placed as the scene places them; a halfspace is drawn as a square of
-  its boundary plane (``sim.frames.drawn_shape``);
+  link), static solids placed as the scene places them; a halfspace is drawn as a thin
+  square plate on its boundary plane (``sim.frames.drawn_shape``);
 - ``/world_frame``: if the world frame is not the URDF root link (a ``frame_id`` such as
   ``odom``), a static identity transform world frame -> root link joins the two trees.
 
@@ -160,6 +160,12 @@ class RerunLogger(ClosesOnExit):
             self._joints = {joint.name: joint for joint in tree.joints() if joint.joint_type != "fixed"}
         bodies = [g for g in geometries if g.owner == "body"]
         self.bodies = tuple(g.name for g in bodies)
+        root_link = None if self.urdf_path is None else tree.root_link().name
+        self.world_frame = world_frame or root_link or "world"
+        links = set() if self.urdf_path is None else {root_link, *(joint.child_link for joint in tree.joints())}
+        clash = sorted(set(self.bodies) & (links | {self.world_frame}))
+        if clash:
+            raise UserInputError(f"Rerun log: free bodies {clash} have the names of robot frames; rename them")
         self._body_rows: list[tuple[int, list[list[float]], list[list[float]]]] = []
         self.batch_size = max(1, int(batch_size))
         self._series_names: tuple[str, ...] | None = None
@@ -174,12 +180,6 @@ class RerunLogger(ClosesOnExit):
         self._rec.set_log_time_enabled(False)
         self._rec.set_log_tick_enabled(False)
         self._rec.send_recording_name(recording_name)
-        root_link = None if self.urdf_path is None else tree.root_link().name
-        self.world_frame = world_frame or root_link or "world"
-        links = set() if self.urdf_path is None else {root_link, *(joint.child_link for joint in tree.joints())}
-        clash = sorted(set(self.bodies) & (links | {self.world_frame}))
-        if clash:
-            raise UserInputError(f"Rerun log: free bodies {clash} have the names of robot frames; rename them")
         for body in bodies:
             self._rec.log(body_entity(body.name), shape_archetype(body.name, body.shape, body.placement),
                           rr.CoordinateFrame(body.name), static=True)
