@@ -14,10 +14,11 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 import numpy as np
+import pyarrow as pa
 import pytest
 from rerun.chunk import RrdReader
 
-from youbot_dynamics.dynamics.collision import Shape
+from youbot_dynamics.dynamics.collision import Geometry, Shape
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
 
@@ -42,7 +43,7 @@ AXES = {"joint_1": 2, "joint_2": 1}  # index of the joint axis in x, y, z
 ORIGINS = {"joint_1": [0.0, 0.0, 0.1], "joint_2": [0.0, 0.0, 0.3]}
 CHILDREN = {"joint_1": "link_1", "joint_2": "link_2"}
 N_LIVE, N_BATCH = 12, 25
-DT = 0.004
+DT_NS = 4_000_000
 
 
 @pytest.fixture(scope="module")
@@ -54,10 +55,11 @@ def urdf(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def trajectory(n: int, start: int = 0) -> dict[str, np.ndarray]:
     k = np.arange(start, start + n)
-    t = k * DT
+    stamps = k * DT_NS
+    t = stamps / 1e9
     q = np.stack([np.sin(3.0 * t), 0.5 * np.cos(2.0 * t)], axis=1)
     return {
-        "t": t,
+        "t": stamps,
         "q": q,
         "v": np.stack([3.0 * np.cos(3.0 * t), -np.sin(2.0 * t)], axis=1),
         "tau": q * 2.5 + 0.125,
@@ -83,20 +85,25 @@ def recording(urdf: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Pat
 
 
 def read_rows(path: Path) -> tuple[dict[str, list[dict]], dict[str, list[dict]], set[str]]:
-    """Temporal and static rows per entity path, and every timeline name seen."""
+    """Temporal and static rows per entity path (``sim_time`` as integer ns, read from the
+    Arrow duration column, not through datetime.timedelta's microseconds), and every
+    timeline name seen."""
     temporal: dict[str, list[dict]] = defaultdict(list)
     static: dict[str, list[dict]] = defaultdict(list)
     timelines: set[str] = set()
     for chunk in RrdReader(path).stream():
         timelines.update(chunk.timeline_names)
-        columns = chunk.to_record_batch().to_pydict()
+        batch = chunk.to_record_batch()
+        columns = batch.to_pydict()
+        if "sim_time" in columns:
+            columns["sim_time"] = batch.column("sim_time").cast(pa.int64()).to_pylist()
         rows = [dict(zip(columns, values)) for values in zip(*columns.values())]
         (static if chunk.is_static else temporal)[chunk.entity_path].extend(rows)
     return temporal, static, timelines
 
 
-def seconds(row: dict) -> float:
-    return row["sim_time"].total_seconds()
+def stamp(row: dict) -> int:
+    return row["sim_time"]
 
 
 def test_entities_timeline_and_sample_counts(recording) -> None:
@@ -120,12 +127,12 @@ def test_time_series_values(recording) -> None:
     path, data = recording
     temporal, static, _ = read_rows(path)
     for key, entity in (("q", "/joints/q"), ("v", "/joints/v"), ("tau", "/joints/tau")):
-        rows = sorted(temporal[entity], key=seconds)
-        assert [seconds(r) for r in rows] == pytest.approx(data["t"].tolist(), abs=1e-9)
+        rows = sorted(temporal[entity], key=stamp)
+        assert [stamp(r) for r in rows] == data["t"].tolist()      # integer ns, exactly
         assert np.array([r["Scalars:scalars"] for r in rows]) == pytest.approx(data[key], abs=0)
-    energy = sorted(temporal["/energy"], key=seconds)
+    energy = sorted(temporal["/energy"], key=stamp)
     assert [r["Scalars:scalars"][0] for r in energy] == data["energy"].tolist()
-    ee = sorted(temporal["/ee/position"], key=seconds)
+    ee = sorted(temporal["/ee/position"], key=stamp)
     # Rerun stores positions as float32
     assert np.array_equal([r["Points3D:positions"][0] for r in ee], data["ee"].astype(np.float32))
     (path_row,) = [r for r in static["/ee/path"] if "LineStrips3D:strips" in r]
@@ -137,7 +144,7 @@ def test_joint_transforms_follow_q(recording) -> None:
     temporal, _, _ = read_rows(path)
     rows = temporal["/joint_transforms"]
     for j, joint in enumerate(JOINTS):
-        mine = sorted((r for r in rows if r["Transform3D:child_frame"] == [CHILDREN[joint]]), key=seconds)
+        mine = sorted((r for r in rows if r["Transform3D:child_frame"] == [CHILDREN[joint]]), key=stamp)
         assert len(mine) == len(data["t"])
         for row, q in zip(mine, data["q"][:, j]):
             expected = [0.0, 0.0, 0.0, math.cos(q / 2)]
@@ -155,15 +162,15 @@ def test_refuses_unknown_joints_nan_and_missing_urdf(urdf: Path, tmp_path: Path)
         RerunLogger(tmp_path / "z.rrd", broken, recording_name="z")
     with RerunLogger(tmp_path / "y.rrd", urdf, recording_name="y") as log:
         with pytest.raises(UserInputError, match="tool_joint"):
-            log.log_sample(0.0, ["tool_joint"], [0.0], [0.0], [0.0], 0.0, [0, 0, 0])
+            log.log_sample(0, ["tool_joint"], [0.0], [0.0], [0.0], 0.0, [0, 0, 0])
         with pytest.raises(ValueError, match=r"Rerun v\[1\]"):
-            log.log_sample(0.0, JOINTS, [0.0, 0.0], [0.0, math.nan], [0.0, 0.0], 0.0, [0, 0, 0])
+            log.log_sample(0, JOINTS, [0.0, 0.0], [0.0, math.nan], [0.0, 0.0], 0.0, [0, 0, 0])
         with pytest.raises(ValueError, match="Rerun energy"):
-            log.log_sample(0.0, JOINTS, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], math.inf, [0, 0, 0])
+            log.log_sample(0, JOINTS, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], math.inf, [0, 0, 0])
     log.close()
     assert log.closed
     with pytest.raises(RuntimeError, match="closed"):
-        log.log_sample(0.0, JOINTS, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], 0.0, [0, 0, 0])
+        log.log_sample(0, JOINTS, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], 0.0, [0, 0, 0])
 
 
 def test_youbot_urdf_loads_and_animates(tmp_path: Path) -> None:
@@ -173,7 +180,7 @@ def test_youbot_urdf_loads_and_animates(tmp_path: Path) -> None:
     arm = [f"arm_joint_{i}" for i in range(1, 6)]
     with RerunLogger(tmp_path / "youbot.rrd", urdf, recording_name="youbot") as log:
         for k in range(3):
-            log.log_sample(k * 0.01, arm, [0.1 * k] * 5, [0.0] * 5, [0.0] * 5, 1.0, [0.3, 0.0, 0.4])
+            log.log_sample(k * 10_000_000, arm, [0.1 * k] * 5, [0.0] * 5, [0.0] * 5, 1.0, [0.3, 0.0, 0.4])
     temporal, static, _ = read_rows(tmp_path / "youbot.rrd")
     children = {
         joint.get("name"): joint.find("child").get("link")
@@ -185,22 +192,56 @@ def test_youbot_urdf_loads_and_animates(tmp_path: Path) -> None:
     assert len(static["/tf_static"]) == len(children)
 
 
+def body(name: str, shape: Shape) -> Geometry:
+    return Geometry(name, shape, "body", name)
+
+
+def test_world_frame_link_geometry_and_body_names(tmp_path: Path) -> None:
+    """A world frame other than the URDF root link (``odom``) is joined to it by a static
+    identity transform; geometry on a link is drawn in that link's frame; a free body may
+    not take a link's name."""
+    urdf = Path(__file__).resolve().parents[1] / "urdf" / "youbot.urdf"
+    plate = Geometry("plate_top", Shape("box", size=(0.2, 0.3, 0.01)), "link", "plate_link")
+    with RerunLogger(tmp_path / "odom.rrd", urdf, geometries=[plate], recording_name="odom", world_frame="odom"):
+        pass
+    _, static, _ = read_rows(tmp_path / "odom.rrd")
+    (join,) = static["/world_frame"]
+    assert (join["Transform3D:parent_frame"], join["Transform3D:child_frame"]) == (["odom"], ["base_footprint"])
+    assert static["/geometry/plate_top"][0]["CoordinateFrame:frame"] == ["plate_link"]
+    assert static["/ee/position"][0]["CoordinateFrame:frame"] == ["odom"]
+    with pytest.raises(UserInputError, match=r"free bodies \['base_link'\] have the names of robot frames"):
+        RerunLogger(tmp_path / "clash.rrd", urdf, geometries=[body("base_link", Shape("sphere", radius=0.1))],
+                    recording_name="clash")
+    assert not (tmp_path / "clash.rrd").exists()          # refused before the recording starts
+
+
 def test_free_bodies_without_a_robot(tmp_path: Path) -> None:
-    """No URDF: only the free bodies, each a static solid of its shape (Rerun's capsule runs
-    from its origin, so it is shifted by half its length to be centred like coal's) and one
-    transform per sample on sim_time; poses must name every body and be finite."""
+    """No URDF: the free bodies, each a static solid of its shape (Rerun's capsule runs
+    from its origin, so it is shifted by half its length to be centred like coal's) in the
+    named frame of the body, and one transform world -> body per sample on sim_time; the
+    world geometry: a box where the scene places it and a halfspace as a square of its
+    plane, in the world frame. Poses must name every body and be finite."""
     shapes = {"ball": Shape("sphere", radius=0.025), "crate": Shape("box", size=(0.1, 0.2, 0.3)),
               "can": Shape("cylinder", radius=0.03, length=0.12), "pill": Shape("capsule", radius=0.01, length=0.04)}
+    shelf = np.eye(4)
+    shelf[:3, 3] = [0.5, -0.25, 0.75]
+    world = [Geometry("floor", Shape("halfspace", normal=(0.0, 0.0, 2.0), offset=0.1), "world", "world"),
+             Geometry("shelf", Shape("box", size=(0.4, 0.2, 0.02)), "world", "world", shelf)]
     path = tmp_path / "bodies.rrd"
-    t = np.arange(7) * DT
-    with RerunLogger(path, None, free_bodies=shapes, recording_name="bodies", batch_size=3) as log:
-        for k, time in enumerate(t):
+    stamps = np.arange(7) * DT_NS
+    with RerunLogger(path, None, geometries=[*(body(n, s) for n, s in shapes.items()), *world],
+                     recording_name="bodies", batch_size=3) as log:
+        for k, stamp_ns in enumerate(stamps):
             turn = [0.0, 0.0, math.sin(0.05 * k), math.cos(0.05 * k)]
-            log.log_body_poses(time, {name: ([0.1 * i, 0.0, 1.0 - time], turn) for i, name in enumerate(shapes)})
+            log.log_body_poses(stamp_ns, {name: ([0.1 * i, 0.0, 1.0 - 1e-9 * stamp_ns], turn)
+                                          for i, name in enumerate(shapes)})
         with pytest.raises(UserInputError, match="expected the free bodies"):
-            log.log_body_poses(1.0, {"ball": ([0, 0, 0], [0, 0, 0, 1])})
+            log.log_body_poses(10**9, {"ball": ([0, 0, 0], [0, 0, 0, 1])})
         with pytest.raises(ValueError, match=r"Rerun can translation\[2\]"):
-            log.log_body_poses(1.0, {name: ([0, 0, math.nan if name == "can" else 0], [0, 0, 0, 1]) for name in shapes})
+            log.log_body_poses(10**9, {name: ([0, 0, math.nan if name == "can" else 0], [0, 0, 0, 1])
+                                       for name in shapes})
+        with pytest.raises(ValueError, match="Rerun stamp_ns: must be integer nanoseconds"):
+            log.log_body_poses(1.0, {name: ([0, 0, 0], [0, 0, 0, 1]) for name in shapes})
     temporal, static, timelines = read_rows(path)
     assert timelines == {"sim_time"}
     assert set(temporal) == {f"/free_bodies/{name}" for name in shapes}
@@ -212,8 +253,34 @@ def test_free_bodies_without_a_robot(tmp_path: Path) -> None:
     pill = static["/free_bodies/pill"][0]
     assert pill["Capsules3D:translations"] == [pytest.approx([0.0, 0.0, -0.02])]
     for i, name in enumerate(shapes):
-        rows = sorted(temporal[f"/free_bodies/{name}"], key=seconds)
-        assert [seconds(r) for r in rows] == pytest.approx(t.tolist(), abs=1e-9)
+        assert static[f"/free_bodies/{name}"][0]["CoordinateFrame:frame"] == [name]
+        rows = sorted(temporal[f"/free_bodies/{name}"], key=stamp)
+        assert [stamp(r) for r in rows] == stamps.tolist()
+        assert all(r["Transform3D:parent_frame"] == ["world"] and r["Transform3D:child_frame"] == [name]
+                   for r in rows)
         assert np.array_equal([r["Transform3D:translation"][0] for r in rows],
-                              np.float32([[0.1 * i, 0.0, 1.0 - time] for time in t]))
+                              np.float32([[0.1 * i, 0.0, 1.0 - 1e-9 * s] for s in stamps]))
         assert rows[-1]["Transform3D:quaternion"][0] == pytest.approx([0, 0, math.sin(0.3), math.cos(0.3)], abs=1e-7)
+    floor, box = static["/geometry/floor"][0], static["/geometry/shelf"][0]
+    assert floor["CoordinateFrame:frame"] == box["CoordinateFrame:frame"] == ["world"]
+    assert floor["Boxes3D:half_sizes"] == [pytest.approx([2.0, 2.0, 0.0005])]     # a 1 mm plate
+    assert floor["Boxes3D:centers"] == [pytest.approx([0.0, 0.0, 0.0995])]         # its top on the plane
+    assert floor["Boxes3D:quaternions"] == [pytest.approx([0.0, 0.0, 0.0, 1.0])]
+    assert (box["Boxes3D:centers"], box["Boxes3D:half_sizes"]) == \
+        ([pytest.approx([0.5, -0.25, 0.75])], [pytest.approx([0.2, 0.1, 0.01])])
+
+
+def test_times_stay_on_the_step_grid(tmp_path: Path) -> None:
+    """28 001 samples at 1 ms (the gripping scene's run) sit exactly on the grid: stamps go in
+    as integer ns. Float seconds through Rerun's conversion (truncation of t * 1e9) would
+    put 545 of them 1 ns early (counted here), which is what this guards against."""
+    stamps = np.arange(28_001) * 1_000_000
+    truncated = (stamps / 1e9 * 1e9).astype("timedelta64[ns]").astype(np.int64)
+    assert np.count_nonzero(truncated != stamps) == 545
+    path = tmp_path / "grid.rrd"
+    with RerunLogger(path, None, geometries=[body("ball", Shape("sphere", radius=0.1))],
+                     recording_name="grid", batch_size=5000) as log:
+        for stamp_ns in stamps:
+            log.log_body_poses(int(stamp_ns), {"ball": ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])})
+    temporal, _, _ = read_rows(path)
+    assert sorted(stamp(r) for r in temporal["/free_bodies/ball"]) == stamps.tolist()

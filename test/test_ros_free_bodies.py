@@ -14,11 +14,14 @@ from ros_support import Collector, diagnostic_values, ros_context, spinning, sta
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(240)]
 
+from rclpy.node import Node  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 
 from youbot_dynamics.errors import UserInputError  # noqa: E402
 from youbot_dynamics.model.lie import quaternion_from_matrix  # noqa: E402
+from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
+from youbot_dynamics.ros.qos import LATCHED  # noqa: E402
 from youbot_dynamics.ros.session import InverseSession, SimulationSession  # noqa: E402
 from youbot_dynamics.sim.scene import load_scene  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
@@ -27,7 +30,8 @@ RATE, DURATION = 100.0, 1.0
 STEP_NS = 10_000_000
 N = 101                                  # samples at t = 0, 0.01, ..., 1.0 s
 TOPICS = {"/free_bodies": "geometry_msgs/msg/PoseArray", "/clock": "rosgraph_msgs/msg/Clock",
-          "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"}
+          "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+          "/free_bodies_markers": "visualization_msgs/msg/MarkerArray"}
 
 
 def read_mcap(path: Path) -> dict[str, list]:
@@ -69,11 +73,18 @@ def ball_drop_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
             scene="ball_drop", publish_rate=RATE, duration=DURATION, solve_horizon=DURATION, time_scale=0.0,
             wait_for_subscribers=1, **paths).items()])
         collector = Collector(context, TOPICS)
-        with spinning(context, node, collector):
+        with spinning(context, node, collector) as executor:
             wait_until(lambda: node.finished, what="the node to finish")
-            wait_until(lambda: collector.count("/free_bodies") == N and collector.count("/diagnostics") > 0,
-                       what=f"{N} /free_bodies samples")
+            wait_until(lambda: collector.count("/free_bodies") == N and collector.count("/diagnostics") > 0
+                       and collector.count("/free_bodies_markers") == N, what=f"{N} /free_bodies samples")
+            # a subscriber that comes after the run still gets the latched /scene_markers
+            late, latched = Node("late", context=context), []
+            late.create_subscription(rclpy_class("visualization_msgs/msg/MarkerArray"), "/scene_markers",
+                                     lambda message: latched.append(from_rclpy(message)), LATCHED)
+            executor.add_node(late)
+            wait_until(lambda: latched, what="the latched /scene_markers")
         received = {topic: collector.messages(topic) for topic in TOPICS}
+        received["/scene_markers"] = latched
         published = set(node.publishers_)
     # The simulator alone, from the same initial state over the same times.
     offline = Simulator(load_scene("ball_drop")).run(np.arange(N) * STEP_NS / 1e9)
@@ -111,7 +122,8 @@ def test_free_bodies_topic_carries_the_same_poses(ball_drop_run) -> None:
     """/free_bodies over ROS equals its MCAP copy and /tf; no /joint_states or /ee_pose."""
     received, logged, tf = (ball_drop_run["received"]["/free_bodies"], ball_drop_run["mcap"]["/free_bodies"],
                             ball_drop_run["mcap"]["/tf"])
-    assert ball_drop_run["published"] == {"/clock", "/free_bodies", "/diagnostics"}
+    assert ball_drop_run["published"] == {"/clock", "/free_bodies", "/free_bodies_markers", "/scene_markers",
+                                          "/diagnostics"}
     assert not {"/joint_states", "/ee_pose"} & set(ball_drop_run["mcap"])
     assert len(received) == len(logged) == N
     for got, kept, transform in zip(received, logged, tf):
@@ -181,3 +193,26 @@ def test_robot_free_scene_is_refused_by_inverse_mode_and_names_must_be_distinct(
     clash.write_text(source.replace("name: ball\n", "name: world\n").replace("[floor, ball]", "[floor, world]"))
     with pytest.raises(UserInputError, match=r"free bodies \['world'\] have the names of robot frames"):
         SimulationSession(load_scene(str(clash)), RATE)
+
+
+def test_markers_draw_the_ball_live_and_the_floor_latched(ball_drop_run) -> None:
+    """/free_bodies_markers over ROS equals its MCAP copy: the ball (a sphere of 5 cm
+    diameter) at the /free_bodies pose; /scene_markers reaches a late subscriber once
+    (latched) and draws the floor halfspace as a 4 m square 1 mm plate, top face at z = 0."""
+    received, logged = ball_drop_run["received"], ball_drop_run["mcap"]
+    for got, kept, poses in zip(received["/free_bodies_markers"], logged["/free_bodies_markers"],
+                                logged["/free_bodies"], strict=True):
+        (marker,) = got.markers
+        assert (marker.ns, marker.type, marker.header.frame_id) == ("ball", marker.SPHERE, "world")
+        assert xyz(marker.scale) == pytest.approx([0.05] * 3)
+        assert xyz(marker.pose.position) == xyz(kept.markers[0].pose.position) == xyz(poses.poses[0].position)
+        assert stamp_ns(marker) == stamp_ns(poses)
+    (scene,) = received["/scene_markers"]
+    (floor,) = scene.markers
+    assert (floor.ns, floor.type, floor.header.frame_id) == ("floor", floor.CUBE, "world")
+    assert xyz(floor.scale) == pytest.approx([4.0, 4.0, 0.001])
+    assert floor.pose.position.z + 0.5 * floor.scale.z == pytest.approx(0.0, abs=1e-15)
+    (kept,) = logged["/scene_markers"]
+    assert [(m.ns, m.type, xyz(m.pose.position), xyzw(m.pose.orientation), xyz(m.scale)) for m in kept.markers] == \
+        [(floor.ns, floor.type, xyz(floor.pose.position), xyzw(floor.pose.orientation), xyz(floor.scale))]
+    assert [floor.color.r, floor.color.a] == pytest.approx([0.55, 1.0])      # float32 in the message

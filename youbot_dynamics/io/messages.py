@@ -15,8 +15,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
+
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
+
+from youbot_dynamics.dynamics.collision import Shape
+from youbot_dynamics.model.lie import quaternion_from_matrix
+from youbot_dynamics.sim.frames import drawn_shape
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 """The rosbags typestore (ROS 2 Jazzy) every message here comes from."""
@@ -38,6 +43,12 @@ Clock = _T["rosgraph_msgs/msg/Clock"]
 KeyValue = _T["diagnostic_msgs/msg/KeyValue"]
 DiagnosticStatus = _T["diagnostic_msgs/msg/DiagnosticStatus"]
 DiagnosticArray = _T["diagnostic_msgs/msg/DiagnosticArray"]
+Duration = _T["builtin_interfaces/msg/Duration"]
+ColorRGBA = _T["std_msgs/msg/ColorRGBA"]
+CompressedImage = _T["sensor_msgs/msg/CompressedImage"]
+MeshFile = _T["visualization_msgs/msg/MeshFile"]
+Marker = _T["visualization_msgs/msg/Marker"]
+MarkerArray = _T["visualization_msgs/msg/MarkerArray"]
 
 NS_PER_S = 1_000_000_000
 UNIT_QUATERNION_TOLERANCE = 1e-6
@@ -79,6 +90,18 @@ def finite_floats(values: Iterable[float], field_name: str, length: int) -> list
         if not math.isfinite(value):
             raise _not_finite(field_name, index, value)
     return floats
+
+
+def stamps_ns(values: Iterable[int], field_name: str) -> np.ndarray:
+    """``values`` as an int64 vector of stamps (integer nanoseconds, >= 0). Raises
+    ``MessageFieldError`` naming ``field_name`` for a float (even a whole one: times are
+    never carried in float seconds here), a bool or a negative stamp."""
+    array = np.asarray(values).reshape(-1)
+    if array.size and not (np.issubdtype(array.dtype, np.integer) and array.dtype != np.bool_):
+        raise MessageFieldError(field_name, f"must be integer nanoseconds, got {array.dtype} values")
+    if array.size and array.min() < 0:
+        raise MessageFieldError(field_name, f"must be >= 0 ns, got {int(array.min())}")
+    return array.astype(np.int64)
 
 
 def _not_finite(field_name: str, index: int, value: float) -> MessageFieldError:
@@ -242,3 +265,52 @@ def _diagnostic_value(status: str, key: str, value: object) -> str:
 def diagnostic_array(stamp_ns: int, statuses: Iterable[DiagnosticStatus]) -> DiagnosticArray:
     """diagnostic_msgs/DiagnosticArray at ``stamp_ns`` holding ``statuses``."""
     return DiagnosticArray(header=header(stamp_ns, ""), status=list(statuses))
+
+
+def marker(stamp_ns: int, frame_id: str, namespace: str, marker_id: int, kind: int,
+           pose_in_frame: Pose, scale: Sequence[float], rgba: Sequence[float], *,
+           frame_locked: bool = False) -> Marker:
+    """visualization_msgs/Marker to ADD (or replace: same ``namespace`` and ``marker_id``) a
+    primitive ``kind`` (Marker.CUBE, SPHERE, CYLINDER) at ``pose_in_frame`` in ``frame_id``,
+    of ``scale`` (m: the box's edges; the sphere's or cylinder's diameters along x, y and
+    its height along z) and colour ``rgba`` (0..1), shown until replaced (zero lifetime).
+    ``frame_locked`` asks viewers to move it with its frame (for shapes on robot links)."""
+    sx, sy, sz = finite_floats(scale, f"Marker[{namespace}].scale", 3)
+    r, g, b, a = finite_floats(rgba, f"Marker[{namespace}].color", 4)
+    return Marker(header=header(stamp_ns, frame_id), ns=str(namespace), id=int(marker_id), type=int(kind),
+                  action=Marker.ADD, pose=pose_in_frame, scale=Vector3(x=sx, y=sy, z=sz),
+                  color=ColorRGBA(r=r, g=g, b=b, a=a), lifetime=Duration(sec=0, nanosec=0),
+                  frame_locked=bool(frame_locked), points=[], colors=[], texture_resource="",
+                  texture=CompressedImage(header=header(0, ""), format="", data=np.zeros(0, np.uint8)),
+                  uv_coordinates=[], text="", mesh_resource="",
+                  mesh_file=MeshFile(filename="", data=np.zeros(0, np.uint8)), mesh_use_embedded_materials=False)
+
+
+def shape_markers(stamp_ns: int, frame_id: str, name: str, shape: Shape, placement: np.ndarray,
+                  rgba: Sequence[float], *, frame_locked: bool = False) -> list[Marker]:
+    """The markers that draw ``shape`` (m) placed by ``placement`` (4x4) in ``frame_id``,
+    in namespace ``name``: a sphere, box or cylinder is one marker (id 0); a capsule (no
+    marker type of its own) a cylinder (id 0) and its two end spheres (ids 1, 2); a
+    halfspace the plate ``sim.frames.drawn_shape`` draws."""
+    shape, placement = drawn_shape(shape, placement)
+    radius, length = shape.radius, shape.length
+
+    def placed(kind: int, marker_id: int, scale: Sequence[float], along_z: float = 0.0) -> Marker:
+        position = placement[:3, 3] + along_z * placement[:3, 2]
+        where = pose(position, quaternion_from_matrix(placement[:3, :3]), f"Marker[{name}].pose")
+        return marker(stamp_ns, frame_id, name, marker_id, kind, where, scale, rgba, frame_locked=frame_locked)
+
+    if shape.kind == "sphere":
+        return [placed(Marker.SPHERE, 0, [2 * radius] * 3)]
+    if shape.kind == "box":
+        return [placed(Marker.CUBE, 0, shape.size)]
+    cylinder = placed(Marker.CYLINDER, 0, [2 * radius, 2 * radius, length])
+    if shape.kind == "cylinder":
+        return [cylinder]
+    return [cylinder, *(placed(Marker.SPHERE, k, [2 * radius] * 3, end * 0.5 * length)
+                        for k, end in ((1, 1.0), (2, -1.0)))]
+
+
+def marker_array(markers: Iterable[Marker]) -> MarkerArray:
+    """visualization_msgs/MarkerArray holding ``markers``."""
+    return MarkerArray(markers=list(markers))

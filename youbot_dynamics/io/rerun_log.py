@@ -16,12 +16,27 @@ Layout of the recording (Rerun 0.41):
   ``/energy``: total mechanical energy (J);
 - ``/free_bodies/<name>``: each free body as its shape (static ``Ellipsoids3D`` for a
   sphere, ``Boxes3D``, ``Cylinders3D`` or ``Capsules3D``, centred on the body frame as coal
-  places it) with one ``Transform3D`` per sample (translation, m, and quaternion x, y, z, w:
-  the body's pose in the world frame, which is the robot's root frame).
+  places it) in the named coordinate frame ``<name>`` (a static ``CoordinateFrame``), with
+  one ``Transform3D`` per sample from ``parent_frame`` = the world frame to ``child_frame``
+  = ``<name>`` (translation, m, and quaternion x, y, z, w: the body's pose in the world
+  frame);
+- ``/geometry/<name>``: the scene's static world geometry (in the world frame) and its
+  geometry on robot links (in the link's frame, which the URDF loader names after the
+  link), static solids placed as the scene places them; a halfspace is drawn as a thin
+  square plate on its boundary plane (``sim.frames.drawn_shape``);
+- ``/world_frame``: if the world frame is not the URDF root link (a ``frame_id`` such as
+  ``odom``), a static identity transform world frame -> root link joins the two trees.
 
-Every sample sits on the ``sim_time`` timeline (a duration: simulated seconds). The
-wall-clock ``log_time`` and ``log_tick`` timelines are disabled and no start time is sent,
-so the content depends only on the data (Rerun's row ids still differ between runs).
+The world frame is the frame free-body poses, end-effector positions and world geometry are
+given in (the robot's root frame; ``world`` without a robot). Every frame is a named frame
+whose chain of parents ends at the world frame, so a 3D view rooted anywhere in the tree
+finds a transform path to every entity.
+
+Every sample sits on the ``sim_time`` timeline, a duration logged as integer nanoseconds
+(the stamps of the MCAP messages: never float seconds, which Rerun truncates to whole
+nanoseconds). The wall-clock ``log_time`` and ``log_tick`` timelines are disabled and no
+start time is sent, so the content depends only on the data (Rerun's row ids still differ
+between runs).
 """
 
 from __future__ import annotations
@@ -34,10 +49,12 @@ import numpy as np
 import rerun as rr
 from rerun.urdf import UrdfJoint, UrdfTree
 
-from youbot_dynamics.dynamics.collision import Shape
+from youbot_dynamics.dynamics.collision import Geometry, Shape
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.closing import ClosesOnExit
-from youbot_dynamics.io.messages import finite_array, finite_floats
+from youbot_dynamics.io.messages import finite_array, finite_floats, stamps_ns
+from youbot_dynamics.model.lie import quaternion_from_matrix
+from youbot_dynamics.sim.frames import drawn_shape
 
 TIMELINE = "sim_time"
 JOINT_TRANSFORMS = "/joint_transforms"
@@ -46,6 +63,8 @@ EE_PATH = "/ee/path"
 SERIES = {"q": "/joints/q", "v": "/joints/v", "tau": "/joints/tau"}
 ENERGY = "/energy"
 FREE_BODIES = "/free_bodies"
+GEOMETRY = "/geometry"
+WORLD_FRAME = "/world_frame"
 DEFAULT_BATCH_SIZE = 250
 """Samples ``log_sample`` buffers before sending them in one batch."""
 DEFAULT_FLUSH_SPAN = 1.0
@@ -55,7 +74,7 @@ loses less than this much of the recording."""
 
 
 class Samples(NamedTuple):
-    """Samples of a run: t (N,) s; q, v, tau (N, n); energy (N,) J; ee (N, 3) m.
+    """Samples of a run: t (N,) integer ns; q, v, tau (N, n); energy (N,) J; ee (N, 3) m.
 
     ``log_sample`` buffers one sample per instance (floats and lists).
     """
@@ -73,25 +92,40 @@ def body_entity(name: str) -> str:
     return f"{FREE_BODIES}/{rr.escape_entity_path_part(name)}"
 
 
-def shape_archetype(name: str, shape: Shape) -> rr.AsComponents:
-    """A solid Rerun primitive of ``shape`` (metres) in its owner's frame, labelled ``name``:
-    coal's sphere, box (full edge lengths), cylinder and capsule (length along z, centred)."""
-    solid = {"fill_mode": rr.components.FillMode.Solid, "labels": [name]}
+def geometry_entity(name: str) -> str:
+    """Entity path of the static or link geometry ``name``."""
+    return f"{GEOMETRY}/{rr.escape_entity_path_part(name)}"
+
+
+def durations(stamps: np.ndarray) -> np.ndarray:
+    """Integer nanoseconds as the numpy durations Rerun's ``sim_time`` timeline takes exactly."""
+    return np.asarray(stamps, dtype=np.int64).astype("timedelta64[ns]")
+
+
+def shape_archetype(name: str, shape: Shape, placement: np.ndarray | None = None) -> rr.AsComponents:
+    """A solid Rerun primitive of ``shape`` (metres) placed by ``placement`` (4x4, default the
+    identity) in its owner's frame, labelled ``name``: coal's sphere, box (full edge
+    lengths), cylinder and capsule (length along z, centred); a halfspace as
+    ``drawn_shape`` draws it."""
+    shape, placement = drawn_shape(shape, np.eye(4) if placement is None else placement)
+    rotation, centre = placement[:3, :3], placement[:3, 3]
+    solid = {"fill_mode": rr.components.FillMode.Solid, "labels": [name],
+             "quaternions": [quaternion_from_matrix(rotation)]}
     if shape.kind == "sphere":
-        return rr.Ellipsoids3D(half_sizes=[[shape.radius] * 3], **solid)
+        return rr.Ellipsoids3D(half_sizes=[[shape.radius] * 3], centers=[centre], **solid)
     if shape.kind == "box":
-        return rr.Boxes3D(half_sizes=[0.5 * np.asarray(shape.size)], **solid)
+        return rr.Boxes3D(half_sizes=[0.5 * np.asarray(shape.size)], centers=[centre], **solid)
     if shape.kind == "cylinder":
-        return rr.Cylinders3D(lengths=[shape.length], radii=[shape.radius], **solid)
-    if shape.kind == "capsule":   # Rerun's capsule runs from its origin along +z
-        return rr.Capsules3D(lengths=[shape.length], radii=[shape.radius],
-                             translations=[[0.0, 0.0, -0.5 * shape.length]], **solid)
-    raise UserInputError(f"Rerun log: free body {name}: a {shape.kind} is not a finite shape")
+        return rr.Cylinders3D(lengths=[shape.length], radii=[shape.radius], centers=[centre], **solid)
+    # a capsule: Rerun's runs from its origin along +z
+    return rr.Capsules3D(lengths=[shape.length], radii=[shape.radius],
+                         translations=[centre - 0.5 * shape.length * rotation[:, 2]], **solid)
 
 
 class RerunLogger(ClosesOnExit):
     """Writes one .rrd file for a run of the robot in ``urdf_path`` (None: a scene without
-    a robot) and of the ``free_bodies`` (name -> Shape); a context manager.
+    a robot) and of the scene's ``geometries`` (free bodies: owner ``body``; static: owner
+    ``world`` or ``link``); a context manager.
 
     ``log_sample`` appends one sample of the robot (for a running node; buffered and sent
     every ``batch_size`` samples or ``flush_span`` simulated seconds, whichever comes first); ``log_trajectory`` appends many at once (for offline
@@ -99,7 +133,8 @@ class RerunLogger(ClosesOnExit):
     send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
     is buffered, writes the end-effector path and disconnects so the file gets its footer.
     Joint names must be moving URDF joints (``UserInputError`` otherwise); values must be
-    finite (``MessageFieldError``, a ValueError naming the field, otherwise).
+    finite and times integer nanoseconds (``MessageFieldError``, a ValueError naming the
+    field, otherwise).
     """
 
     def __init__(
@@ -107,19 +142,20 @@ class RerunLogger(ClosesOnExit):
         path: str | Path,
         urdf_path: str | Path | None,
         *,
-        free_bodies: Mapping[str, Shape] | None = None,
+        geometries: Sequence[Geometry] = (),
         recording_name: str,
         application_id: str = "youbot_dynamics",
         recording_id: str | None = None,
-        ee_frame: str | None = None,
+        world_frame: str | None = None,
         batch_size: int = DEFAULT_BATCH_SIZE,
         flush_span: float = DEFAULT_FLUSH_SPAN,
     ) -> None:
-        """Start the recording at ``path``, log the robot from ``urdf_path`` and the shapes
-        of the free bodies.
+        """Start the recording at ``path``, log the robot from ``urdf_path``, the shapes of
+        the free bodies and the static geometry.
 
-        ``ee_frame`` is the frame the end-effector positions are given in (default: the
-        URDF root link).
+        ``world_frame`` is the frame free-body poses, end-effector positions and world
+        geometry are given in (default: the URDF root link; ``world`` without a robot).
+        Free bodies need names distinct from the URDF's links and the world frame.
         """
         self.path = Path(path)
         self.urdf_path = None if urdf_path is None else Path(urdf_path)
@@ -127,8 +163,15 @@ class RerunLogger(ClosesOnExit):
         if self.urdf_path is not None:
             tree = self._urdf_tree(self.urdf_path)
             self._joints = {joint.name: joint for joint in tree.joints() if joint.joint_type != "fixed"}
-        self.bodies = tuple(free_bodies or {})
-        self._body_rows: list[tuple[float, list[list[float]], list[list[float]]]] = []
+        bodies = [g for g in geometries if g.owner == "body"]
+        self.bodies = tuple(g.name for g in bodies)
+        root_link = None if self.urdf_path is None else tree.root_link().name
+        self.world_frame = world_frame or root_link or "world"
+        links = set() if self.urdf_path is None else {root_link, *(joint.child_link for joint in tree.joints())}
+        clash = sorted(set(self.bodies) & (links | {self.world_frame}))
+        if clash:
+            raise UserInputError(f"Rerun log: free bodies {clash} have the names of robot frames; rename them")
+        self._body_rows: list[tuple[int, list[list[float]], list[list[float]]]] = []
         self.batch_size = max(1, int(batch_size))
         self.flush_span = float(flush_span)
         self._series_names: tuple[str, ...] | None = None
@@ -143,14 +186,21 @@ class RerunLogger(ClosesOnExit):
         self._rec.set_log_time_enabled(False)
         self._rec.set_log_tick_enabled(False)
         self._rec.send_recording_name(recording_name)
-        for name, shape in (free_bodies or {}).items():
-            self._rec.log(body_entity(name), shape_archetype(name, shape), static=True)
-        self.ee_frame = None
-        if self.urdf_path is not None:
+        for body in bodies:
+            self._rec.log(body_entity(body.name), shape_archetype(body.name, body.shape, body.placement),
+                          rr.CoordinateFrame(body.name), static=True)
+        for geometry in geometries:
+            if geometry.owner != "body":
+                frame = self.world_frame if geometry.owner == "world" else geometry.owner_name
+                self._rec.log(geometry_entity(geometry.name), rr.CoordinateFrame(frame),
+                              shape_archetype(geometry.name, geometry.shape, geometry.placement), static=True)
+        if root_link is not None:
             self._rec.log_file_from_path(self.urdf_path, static=True)
-            self.ee_frame = ee_frame or tree.root_link().name
-            self._rec.log(EE_POSITION, rr.CoordinateFrame(self.ee_frame), static=True)
-            self._rec.log(EE_PATH, rr.CoordinateFrame(self.ee_frame), static=True)
+            if self.world_frame != root_link:
+                self._rec.log(WORLD_FRAME, rr.Transform3D(parent_frame=self.world_frame, child_frame=root_link),
+                              static=True)
+            self._rec.log(EE_POSITION, rr.CoordinateFrame(self.world_frame), static=True)
+            self._rec.log(EE_PATH, rr.CoordinateFrame(self.world_frame), static=True)
 
     @staticmethod
     def _urdf_tree(urdf_path: Path) -> UrdfTree:
@@ -169,7 +219,7 @@ class RerunLogger(ClosesOnExit):
 
     def log_sample(
         self,
-        t: float,
+        stamp_ns: int,
         joint_names: Sequence[str],
         q: Sequence[float],
         v: Sequence[float],
@@ -177,9 +227,9 @@ class RerunLogger(ClosesOnExit):
         energy: float,
         ee_position: Sequence[float],
     ) -> None:
-        """Log one sample at simulated time ``t`` (s): joint positions ``q``, velocities
-        ``v``, efforts ``tau`` (ordered as ``joint_names``), total energy (J) and the
-        end-effector position (m, in ``ee_frame``); the joint transforms follow ``q``.
+        """Log one sample at simulated time ``stamp_ns`` (integer ns): joint positions ``q``,
+        velocities ``v``, efforts ``tau`` (ordered as ``joint_names``), total energy (J) and
+        the end-effector position (m, in ``world_frame``); the joint transforms follow ``q``.
 
         Samples are checked at once and sent in batches of ``batch_size`` or spanning
         ``flush_span`` s (one Rerun call per entity per batch instead of one per sample);
@@ -190,7 +240,7 @@ class RerunLogger(ClosesOnExit):
         self._resolve(names)
         n = len(names)
         row = Samples(
-            t=finite_floats([t], "Rerun t", 1)[0],
+            t=int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0]),
             q=finite_floats(q, "Rerun q", n),
             v=finite_floats(v, "Rerun v", n),
             tau=finite_floats(tau, "Rerun tau", n),
@@ -204,15 +254,16 @@ class RerunLogger(ClosesOnExit):
         if len(self._pending) >= self.batch_size or row.t - self._pending[0].t >= self.flush_span:
             self._flush()
 
-    def log_body_poses(self, t: float, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
-        """Log the free bodies at simulated time ``t`` (s): ``poses`` maps every body named
-        at construction to (translation (m), quaternion (x, y, z, w)) in the world frame.
-        Checked at once, sent in batches of ``batch_size`` like ``log_sample``."""
+    def log_body_poses(self, stamp_ns: int, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
+        """Log the free bodies at simulated time ``stamp_ns`` (integer ns): ``poses`` maps
+        every body named at construction to (translation (m), quaternion (x, y, z, w)) in
+        the world frame. Checked at once, sent in batches of ``batch_size`` like
+        ``log_sample``."""
         self._recording()
         if set(poses) != set(self.bodies):
             raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies "
                                  f"{sorted(self.bodies)}")
-        t = finite_floats([t], "Rerun t", 1)[0]
+        t = int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0])
         translations = [finite_floats(poses[name][0], f"Rerun {name} translation", 3) for name in self.bodies]
         quaternions = [finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]
         self._body_rows.append((t, translations, quaternions))
@@ -221,7 +272,7 @@ class RerunLogger(ClosesOnExit):
 
     def log_trajectory(
         self,
-        t: Sequence[float],
+        stamps: Sequence[int],
         joint_names: Sequence[str],
         q: np.ndarray,
         v: np.ndarray,
@@ -229,12 +280,12 @@ class RerunLogger(ClosesOnExit):
         energy: Sequence[float],
         ee_position: np.ndarray,
     ) -> None:
-        """Log N samples at once: ``t`` (N,) in s; ``q``, ``v``, ``tau`` (N, n) ordered as
-        ``joint_names``; ``energy`` (N,) in J; ``ee_position`` (N, 3) in m."""
+        """Log N samples at once: ``stamps`` (N,) in integer ns; ``q``, ``v``, ``tau`` (N, n)
+        ordered as ``joint_names``; ``energy`` (N,) in J; ``ee_position`` (N, 3) in m."""
         self._recording()
         names = tuple(joint_names)
         self._resolve(names)
-        times = finite_array(t, "Rerun t")
+        times = stamps_ns(stamps, "Rerun stamps")
         count, n = times.size, len(names)
         samples = Samples(
             t=times,
@@ -288,11 +339,12 @@ class RerunLogger(ClosesOnExit):
         if not self._body_rows:
             return
         rows, self._body_rows = self._body_rows, []
-        index = [rr.TimeColumn(TIMELINE, duration=[row[0] for row in rows])]
+        index = [rr.TimeColumn(TIMELINE, duration=durations([row[0] for row in rows]))]
         translations = np.array([row[1] for row in rows])    # (samples, bodies, 3)
         quaternions = np.array([row[2] for row in rows])     # (samples, bodies, 4)
         for k, name in enumerate(self.bodies):
-            columns = rr.Transform3D.columns(translation=translations[:, k], quaternion=quaternions[:, k])
+            columns = rr.Transform3D.columns(translation=translations[:, k], quaternion=quaternions[:, k],
+                                             parent_frame=[self.world_frame] * len(rows), child_frame=[name] * len(rows))
             self._recording().send_columns(body_entity(name), indexes=index, columns=columns)
         self._recording().flush(timeout_sec=0.0)
 
@@ -303,7 +355,7 @@ class RerunLogger(ClosesOnExit):
             for entity in SERIES.values():
                 rec.log(entity, rr.SeriesLines(names=list(names)), static=True)
             self._series_names = names
-        index = [rr.TimeColumn(TIMELINE, duration=samples.t)]
+        index = [rr.TimeColumn(TIMELINE, duration=durations(samples.t))]
         for joint, values in zip(self._resolve(names), samples.q.T):
             columns = joint.compute_transform_columns(values.tolist(), clamp=False)
             rec.send_columns(JOINT_TRANSFORMS, indexes=index, columns=columns)

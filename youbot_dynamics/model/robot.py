@@ -171,14 +171,35 @@ class Robot:
         """Default end-effector link: the common ancestor of the links with the most joints
         above them (the gripper palm of the youBot, locked fingers or not; the last link of a
         serial arm)."""
-        depth = {link: len(self.chain_to(link)) for link in self.link_names}
+        return self._deepest_common_link(self.link_names)
+
+    @property
+    def end_effectors(self) -> tuple[str, ...]:
+        """One end-effector link per robot of a composed model (several robots fixed to a
+        common root link): for each child of the root link whose subtree has a moving joint,
+        the ``end_effector`` rule applied to that subtree (the youBots' gripper palms), in
+        the order of the subtrees' first moving joints (Pinocchio's joint order, the URDF's).
+        A single robot (the root has at most one such child): its ``end_effector``."""
+        first_joint = {}
+        for top in (j.child for j in self.tree if j.parent == self.root_link):
+            links = [link for link in self.link_names if top in (j.child for j in self.chain_to(link))]
+            moving = {j.name for link in links for j in self.chain_to(link) if j.type != "fixed"}
+            if moving:
+                first_joint[min(self.joint_names.index(name) for name in moving)] = links
+        if len(first_joint) < 2:
+            return (self.end_effector,)
+        return tuple(self._deepest_common_link(first_joint[k]) for k in sorted(first_joint))
+
+    def _deepest_common_link(self, links: Sequence[str]) -> str:
+        """The common ancestor of those of ``links`` with the most joints above them."""
+        depth = {link: len(self.chain_to(link)) for link in links}
         deepest = [link for link, d in depth.items() if d == max(depth.values())]
         chains = [[self.root_link, *(j.child for j in self.chain_to(link))] for link in deepest]
         common = self.root_link
-        for links in zip(*chains):
-            if len(set(links)) != 1:
+        for tiers in zip(*chains):
+            if len(set(tiers)) != 1:
                 break
-            common = links[0]
+            common = tiers[0]
         return common
 
     def vector(self, values: Mapping[str, float] | Sequence[float] | np.ndarray, *,

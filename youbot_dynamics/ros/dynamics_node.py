@@ -1,8 +1,10 @@
 """The ``dynamics_node``: a thin rclpy adapter around :mod:`youbot_dynamics.ros.session`.
 
-simulate mode publishes /clock, /joint_states, /ee_pose, /free_bodies (geometry_msgs/PoseArray,
-when the scene has free bodies; a scene without a robot has no /joint_states and /ee_pose)
-and /diagnostics (with the contact events), subscribes
+simulate mode publishes /clock, /joint_states, /ee_pose (/ee_poses for composed robots),
+/free_bodies (geometry_msgs/PoseArray) and /free_bodies_markers (visualization_msgs/
+MarkerArray) when the scene has free bodies (a scene without a robot has no /joint_states
+and /ee_pose), /scene_markers (latched) when it has static geometry, and /diagnostics (with
+the contact events), subscribes
 /joint_commands (sensor_msgs/JointState efforts by joint name) and /joint_trajectory
 (trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
 (std_srvs/SetBool). inverse mode subscribes /joint_states (reliable, keep-all: a replay as
@@ -45,8 +47,8 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
 from youbot_dynamics.ros.parameters import check_choice, declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
-from youbot_dynamics.ros.qos import RELIABLE_ALL, RELIABLE_DEEP
-from youbot_dynamics.ros.session import TOPIC_TYPES, InverseSession, Outputs, SimulationSession
+from youbot_dynamics.ros.qos import RELIABLE_ALL, RELIABLE_DEEP, profile
+from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
 from youbot_dynamics.sim.commands import InputRejected
 from youbot_dynamics.sim.scene import load_scene
 
@@ -80,8 +82,10 @@ class DynamicsNode(Node):
         else:
             self.session = InverseSession(scene, filter_time_constant=p["acceleration_filter"], **logs)
         self.finished = False
-        self.publishers_ = {topic: self.create_publisher(rclpy_class(TOPIC_TYPES[topic]), topic, RELIABLE_DEEP)
+        self.publishers_ = {topic: self.create_publisher(rclpy_class(TOPIC_TYPES[topic]), topic,
+                                                         profile(topic in LATCHED_TOPICS))
                             for topic in self.session.topics}
+        self._publish(self.session.latched)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         if p["mode"] == "simulate":
             self.create_subscription(JointState, "/joint_commands", self._on_command, RELIABLE_DEEP)

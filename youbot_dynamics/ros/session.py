@@ -8,6 +8,12 @@ moving link and every free body, per sample) and /tf_static (every fixed link, o
 latched). Stamps and log times are simulated time in integer nanoseconds, so two runs of a
 scene log identical payloads.
 
+Shapes for viewers (visualization_msgs/MarkerArray, namespace = the shape's name):
+/free_bodies_markers draws every free body at every sample (in the root frame);
+/scene_markers, latched (transient local, published once at start and logged at t = 0),
+draws the static world geometry (root frame) and the geometry on links (in the link's
+frame, frame-locked). A halfspace is drawn as a plate (``sim.frames.drawn_shape``).
+
 Free bodies (simulate mode) appear like the robot's links: on /tf as ``<root frame> ->
 <body name>`` and in the Rerun recording as their shapes; on ROS, as one
 geometry_msgs/PoseArray on /free_bodies per sample (poses in the root frame, in the
@@ -16,6 +22,14 @@ of /diagnostics). One message per sample keeps every body at the same stamp, and
 set does not depend on body names (which need not be valid topic names). A scene without
 a robot (``robot: none``) publishes neither /joint_states nor /ee_pose: it has no joints
 and no end effector, and an empty or identity message would read as data.
+
+End effectors: /ee_pose is the pose of the ``ee_link`` parameter's link, by default the
+robot's end effector (the youBot's gripper palm). A scene of several robots composed into
+one model (``robot: {compose: [...]}``) has one end effector per robot
+(``Robot.end_effectors``): /ee_pose is then the first robot's (unless ``ee_link`` names
+another link) and /ee_poses, a geometry_msgs/PoseArray, carries every robot's in
+composition order (the link names, in that order, are the ``ee_links`` value of
+/diagnostics), all in the root frame.
 
 Simulate mode advances simulated time by fixed increments: sample k is at exactly
 ``k * round(1e9 / publish_rate)`` ns, whatever the wall clock does.
@@ -30,12 +44,14 @@ from pathlib import Path
 import numpy as np
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator
+from youbot_dynamics.dynamics.collision import Geometry
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
+from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
                                           InputRejected, follow, joint_sample, joint_trajectory)
@@ -52,7 +68,10 @@ TOPIC_TYPES = {
     "/joint_states": "sensor_msgs/msg/JointState",
     "/computed_torques": "sensor_msgs/msg/JointState",
     "/ee_pose": "geometry_msgs/msg/PoseStamped",
+    "/ee_poses": "geometry_msgs/msg/PoseArray",
     "/free_bodies": "geometry_msgs/msg/PoseArray",
+    "/free_bodies_markers": "visualization_msgs/msg/MarkerArray",
+    "/scene_markers": "visualization_msgs/msg/MarkerArray",
     "/clock": "rosgraph_msgs/msg/Clock",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/tf": "tf2_msgs/msg/TFMessage",
@@ -60,6 +79,14 @@ TOPIC_TYPES = {
 }
 """Every topic the node publishes or logs, with its type (/tf and /tf_static are logged
 only: tf2_msgs has no rclpy wheel)."""
+
+LATCHED_TOPICS = frozenset({"/tf_static", "/scene_markers"})
+"""Topics published once and offered transient-local (latched), in the MCAP too."""
+
+FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)
+"""Colour (r, g, b, a in 0..1) of the free bodies' markers (light wood)."""
+GEOMETRY_RGBA = (0.55, 0.55, 0.60, 1.0)
+"""Colour of the scene's static and link geometry markers (grey)."""
 
 
 def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
@@ -78,19 +105,20 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
 
 class Recorder:
     """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` plus /tf and
-    /tf_static, and a Rerun recording (``rrd_path``) of the robot and (simulate mode) the
-    scene's free bodies; either may be None. ``close`` finalises both and may be called more than once."""
+    /tf_static, and a Rerun recording (``rrd_path``) of the robot, the scene's static
+    geometry and (simulate mode) its free bodies; either may be None. ``close`` finalises
+    both and may be called more than once."""
 
     def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
                  mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
             for topic in (*topics, "/tf", "/tf_static"):
-                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic == "/tf_static")
+                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic in LATCHED_TOPICS)
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
-            free_bodies={spec.body.name: spec.shape for spec in scene.free_bodies} if mode == "simulate" else {},
-            ee_frame=root_frame) if rrd_path else None
+            geometries=[g for g in scene.geometries if mode == "simulate" or g.owner != "body"],
+            world_frame=root_frame) if rrd_path else None
 
     @property
     def paths(self) -> list[Path]:
@@ -103,16 +131,16 @@ class Recorder:
             for topic, message in outputs:
                 self.mcap.write(topic, message, stamp_ns)
 
-    def sample(self, t: float, names: Sequence[str], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+    def sample(self, stamp_ns: int, names: Sequence[str], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
                energy: float, ee_position: np.ndarray) -> None:
-        """One Rerun sample at simulated time t (s)."""
+        """One Rerun sample at simulated time ``stamp_ns`` (ns)."""
         if self.rerun is not None and not self.rerun.closed:
-            self.rerun.log_sample(t, names, q, v, tau, energy, ee_position)
+            self.rerun.log_sample(stamp_ns, names, q, v, tau, energy, ee_position)
 
-    def bodies(self, t: float, transforms: Sequence[LinkTransform]) -> None:
-        """The free bodies' poses (root frame) in the Rerun recording at simulated time t (s)."""
+    def bodies(self, stamp_ns: int, transforms: Sequence[LinkTransform]) -> None:
+        """The free bodies' poses (root frame) in the Rerun recording at ``stamp_ns`` (ns)."""
         if self.rerun is not None and not self.rerun.closed:
-            self.rerun.log_body_poses(t, {b.child: (b.translation, b.quaternion_xyzw) for b in transforms})
+            self.rerun.log_body_poses(stamp_ns, {b.child: (b.translation, b.quaternion_xyzw) for b in transforms})
 
     def close(self) -> None:
         """Finalise both logs (idempotent)."""
@@ -122,15 +150,18 @@ class Recorder:
 
 
 class _Frames:
-    """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame`` and /tf and
-    /free_bodies messages of the free bodies ``body_names`` (frame names distinct from the
-    robot's links)."""
+    """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame``, /tf, /free_bodies
+    and /free_bodies_markers messages of the free bodies among ``geometries`` (frame names
+    distinct from the robot's links) and the /scene_markers of the others."""
 
-    def __init__(self, robot: Robot, root_frame: str, ee_link: str | None, body_names: Sequence[str] = ()) -> None:
+    def __init__(self, robot: Robot, root_frame: str, ee_link: str | None,
+                 geometries: Sequence[Geometry] = ()) -> None:
         self.links = LinkFrames(robot, ee_link or None)
         self.root_frame = root_frame or robot.root_link
         self.has_robot = bool(robot.tree)
-        clash = sorted(set(body_names) & {self.root_frame, *robot.link_names})
+        self.body_shapes = {g.name: (g.shape, g.placement) for g in geometries if g.owner == "body"}
+        self.static_geometry = tuple(g for g in geometries if g.owner != "body")
+        clash = sorted(set(self.body_shapes) & {self.root_frame, *robot.link_names})
         if clash:
             raise UserInputError(f"free bodies {clash} have the names of robot frames; /tf needs distinct "
                                  "frame names: rename the bodies in the scene")
@@ -158,10 +189,45 @@ class _Frames:
         """/free_bodies: the bodies' poses in the root frame, in order."""
         return messages.pose_array(stamp_ns, self.root_frame, [(b.translation, b.quaternion_xyzw) for b in bodies])
 
-    def ee_pose(self, stamp_ns: int, q: np.ndarray) -> tuple[object, np.ndarray]:
-        """/ee_pose at q and the end-effector position (m, root frame)."""
+    def free_body_markers(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
+        """/free_bodies_markers: each body's shape at its pose in the root frame (namespace:
+        the body's name; the same ids every sample, so each replaces the last)."""
+        markers = []
+        for body in bodies:
+            shape, placement = self.body_shapes[body.child]
+            pose = np.eye(4)
+            pose[:3, :3], pose[:3, 3] = matrix_from_quaternion(body.quaternion_xyzw), body.translation
+            markers += messages.shape_markers(stamp_ns, self.root_frame, body.child, shape, pose @ placement,
+                                              FREE_BODY_RGBA)
+        return messages.marker_array(markers)
+
+    def scene_markers(self) -> object:
+        """/scene_markers (latched, stamp 0): the static world geometry in the root frame and
+        the geometry on links in the link's frame (frame-locked: it moves with the link);
+        namespace: the geometry's name."""
+        return messages.marker_array(
+            marker for g in self.static_geometry
+            for marker in messages.shape_markers(0, self.root_frame if g.owner == "world" else g.owner_name, g.name,
+                                                 g.shape, g.placement, GEOMETRY_RGBA, frame_locked=g.owner == "link"))
+
+    @property
+    def scene_topics(self) -> tuple[str, ...]:
+        """/scene_markers if there is static geometry."""
+        return ("/scene_markers",) if self.static_geometry else ()
+
+    @property
+    def ee_topics(self) -> tuple[str, ...]:
+        """/ee_pose, and /ee_poses for a model of several robots."""
+        return ("/ee_pose", "/ee_poses") if len(self.links.ee_links) > 1 else ("/ee_pose",)
+
+    def ee_outputs(self, stamp_ns: int, q: np.ndarray) -> tuple[Outputs, np.ndarray]:
+        """/ee_pose (and /ee_poses, see ``ee_topics``) at q, and the position (m, root frame)
+        of the /ee_pose link."""
         position, quaternion = self.links.ee_pose(q)
-        return messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion), position
+        outputs: Outputs = [("/ee_pose", messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion))]
+        if len(self.links.ee_links) > 1:
+            outputs.append(("/ee_poses", messages.pose_array(stamp_ns, self.root_frame, self.links.ee_poses(q))))
+        return outputs, position
 
 
 NOT_REPORTED = "n/a"
@@ -190,12 +256,20 @@ class _Session(ClosesOnExit):
                  mcap_path: str | Path | None, rrd_path: str | Path | None) -> None:
         self.scene, self.robot = scene, robot
         self.counters = InputCounters()
-        self.frames = _Frames(robot, frame_id, ee_link, [spec.body.name for spec in scene.free_bodies])
+        geometries = [g for g in scene.geometries if self.mode == "simulate" or g.owner != "body"]
+        self.frames = _Frames(robot, frame_id, ee_link, geometries)
+        self.latched: Outputs = [("/scene_markers", self.frames.scene_markers())] if "/scene_markers" in self.topics else []
+        """Messages to publish once, latched (transient local), when the node starts."""
         self.recorder = Recorder(self.mode, scene, robot, self.topics, mcap_path, rrd_path, self.frames.root_frame)
-        self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
+        self.recorder.write([("/tf_static", self.frames.tf_static()), *self.latched], 0)
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
-        """/diagnostics with one status of this session (also logged)."""
+        """/diagnostics with one status of this session (also logged); with a robot, its
+        values name the /ee_pose link (``ee_link``) and the /ee_poses links in order
+        (``ee_links``, comma-separated)."""
+        if self.frames.has_robot:
+            values = {"ee_link": self.frames.links.ee_link, "ee_links": ",".join(self.frames.links.ee_links),
+                      **values}
         status = messages.diagnostic_status(f"dynamics_node: {self.scene.name} ({self.mode})", level, text,
                                             hardware_id=self.robot.name, values=values)
         outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
@@ -221,10 +295,12 @@ class SimulationSession(_Session):
 
     @property
     def topics(self) -> tuple[str, ...]:
-        """/clock, /joint_states and /ee_pose (if the scene has a robot), /free_bodies (if it
-        has free bodies), /diagnostics."""
-        robot = ("/joint_states", "/ee_pose") if self.robot.tree else ()
-        return ("/clock", *robot, *(("/free_bodies",) if self.scene.free_bodies else ()), "/diagnostics")
+        """/clock, /joint_states and /ee_pose (and /ee_poses for several robots) if the scene
+        has a robot, /free_bodies and /free_bodies_markers if it has free bodies,
+        /scene_markers if it has static geometry, /diagnostics."""
+        robot = ("/joint_states", *self.frames.ee_topics) if self.robot.tree else ()
+        bodies = ("/free_bodies", "/free_bodies_markers") if self.frames.body_shapes else ()
+        return ("/clock", *robot, *bodies, *self.frames.scene_topics, "/diagnostics")
 
     @property
     def sample_topic(self) -> str:
@@ -318,19 +394,20 @@ class SimulationSession(_Session):
         try:
             outputs = [("/clock", messages.clock(stamp))]
             if self.frames.has_robot:
-                pose, position = self.frames.ee_pose(stamp, q)
+                poses, position = self.frames.ee_outputs(stamp, q)
                 outputs += [("/joint_states", messages.joint_state(stamp, snapshot.joint_names, q, snapshot.v,
-                                                                   snapshot.tau)), ("/ee_pose", pose)]
+                                                                   snapshot.tau)), *poses]
             if bodies:
-                outputs.append(("/free_bodies", self.frames.free_bodies(stamp, bodies)))
+                outputs += [("/free_bodies", self.frames.free_bodies(stamp, bodies)),
+                            ("/free_bodies_markers", self.frames.free_body_markers(stamp, bodies))]
             self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q, bodies))], stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
         if self.frames.has_robot:
-            self.recorder.sample(self.t, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy, position)
+            self.recorder.sample(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy, position)
         if bodies:
-            self.recorder.bodies(self.t, bodies)
+            self.recorder.bodies(stamp, bodies)
         return outputs
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
@@ -378,7 +455,12 @@ class InverseSession(_Session):
     :mod:`youbot_dynamics.sim.inverse`), tau = RNEA + friction of the scene's robot."""
 
     mode = "inverse"
-    topics = ("/computed_torques", "/ee_pose", "/diagnostics")
+
+    @property
+    def topics(self) -> tuple[str, ...]:
+        """/computed_torques, /ee_pose (and /ee_poses for several robots), /scene_markers if
+        the scene has static geometry, /diagnostics."""
+        return ("/computed_torques", *self.frames.ee_topics, *self.frames.scene_topics, "/diagnostics")
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
                  ee_link: str = "", mcap_path: str | Path | None = None,
@@ -415,16 +497,16 @@ class InverseSession(_Session):
         stamp = round(middle.t * NS_PER_S)
         tau = self.dynamics.torque(middle.q, middle.v, a)
         try:
-            pose, position_ee = self.frames.ee_pose(stamp, middle.q)
+            poses, position_ee = self.frames.ee_outputs(stamp, middle.q)
             outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
-                                                                  middle.v, tau)), ("/ee_pose", pose)]
+                                                                  middle.v, tau)), *poses]
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             return []
         self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, middle.q))], stamp)
         data = self.dynamics.data
         energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
-        self.recorder.sample(middle.t, self.robot.joint_names, middle.q, middle.v, tau, energy, position_ee)
+        self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, position_ee)
         self.stamp_ns, self.samples = stamp, self.samples + 1
         return outputs
 

@@ -8,6 +8,9 @@ a moving joint gives origin @ motion(q): a rotation of q (rad) about the joint a
 revolute and continuous joints, a translation of q (m) along it for prismatic joints
 (computed on quaternions: this runs for every link at every published sample).
 Poses are 4x4 homogeneous matrices (m); quaternions are (x, y, z, w).
+
+Also what viewers draw of a scene's shapes (``drawn_shape``): a halfspace has no finite
+extent and is drawn as a square of its boundary plane.
 """
 from __future__ import annotations
 
@@ -17,9 +20,16 @@ from typing import NamedTuple
 
 import numpy as np
 
-from youbot_dynamics.model.lie import quaternion_from_matrix
+from youbot_dynamics.dynamics.collision import Shape
+from youbot_dynamics.model.lie import exp_so3, quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.model.screws import fkin_space, screw_chain
+
+
+HALFSPACE_DRAWN_SIDE = 4.0
+"""Side (m) of the square plate drawn for a halfspace."""
+HALFSPACE_DRAWN_THICKNESS = 0.001
+"""Thickness (m) of that plate (viewers draw no box of zero thickness)."""
 
 
 class LinkTransform(NamedTuple):
@@ -43,6 +53,25 @@ def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTrans
     return LinkTransform(parent, child, transform[:3, 3].copy(), quaternion_from_matrix(transform[:3, :3]))
 
 
+def drawn_shape(shape: Shape, placement: np.ndarray) -> tuple[Shape, np.ndarray]:
+    """The finite shape a viewer draws for ``shape`` placed by ``placement`` (4x4, m, in its
+    owner's frame) and where: the shape itself, or for a halfspace {x : n . x <= offset} a
+    plate of HALFSPACE_DRAWN_SIDE x HALFSPACE_DRAWN_SIDE x HALFSPACE_DRAWN_THICKNESS inside
+    it, its top face on the boundary plane and centred on offset n, its z axis along the
+    unit normal n."""
+    if shape.kind != "halfspace":
+        return shape, placement
+    normal = np.asarray(shape.normal, dtype=float) / np.linalg.norm(shape.normal)
+    axis = np.cross([0.0, 0.0, 1.0], normal)
+    angle = math.atan2(np.linalg.norm(axis), normal[2])
+    axis = axis / np.linalg.norm(axis) if np.linalg.norm(axis) > 0.0 else np.array([1.0, 0.0, 0.0])
+    plane = np.eye(4)
+    plane[:3, :3] = exp_so3(axis * angle)
+    plane[:3, 3] = (shape.offset - 0.5 * HALFSPACE_DRAWN_THICKNESS) * normal
+    side = HALFSPACE_DRAWN_SIDE
+    return Shape("box", size=(side, side, HALFSPACE_DRAWN_THICKNESS)), placement @ plane
+
+
 def body_transforms(world_frame: str, poses: Mapping[str, np.ndarray]) -> list[LinkTransform]:
     """``world_frame`` -> body transforms of free bodies from their world poses (4x4, m) by
     body name, in the mapping's order; the child frame is the body's name."""
@@ -50,14 +79,19 @@ def body_transforms(world_frame: str, poses: Mapping[str, np.ndarray]) -> list[L
 
 
 class LinkFrames:
-    """Parent -> child transforms of every link of ``robot`` and the pose of ``ee_link``
-    (default: ``robot.end_effector``) in the root link's frame."""
+    """Parent -> child transforms of every link of ``robot``, the pose of ``ee_link``
+    (default: the first of ``robot.end_effectors``, the robot's end effector or, for
+    several robots composed into one model, the first robot's) and the poses of every
+    robot's end effector (``ee_links``), all in the root link's frame."""
 
     def __init__(self, robot: Robot, ee_link: str | None = None) -> None:
         self.robot = robot
         self.root_link = robot.root_link
-        self.chain = screw_chain(robot, ee_link)
+        self.ee_links = robot.end_effectors
+        self.chain = screw_chain(robot, ee_link or self.ee_links[0])
         self.ee_link = self.chain.link
+        self._ee_chains = tuple(self.chain if link == self.ee_link else screw_chain(robot, link)
+                                for link in self.ee_links)
         self.static = tuple(_link_transform(j.parent, j.child, j.origin) for j in robot.tree if j.type == "fixed")
         self._moving = tuple((j, robot.joint_index(j.name), quaternion_from_matrix(j.origin[:3, :3]))
                              for j in robot.tree if j.type != "fixed")
@@ -82,6 +116,13 @@ class LinkFrames:
         return out
 
     def ee_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """End-effector position (3,) m and quaternion (x, y, z, w) in the root link frame."""
-        pose = fkin_space(self.chain, q)
-        return pose[:3, 3].copy(), quaternion_from_matrix(pose[:3, :3])
+        """Position (3,) m and quaternion (x, y, z, w) of ``ee_link`` in the root link frame."""
+        return _position_quaternion(fkin_space(self.chain, q))
+
+    def ee_poses(self, q: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """``ee_pose`` of every link of ``ee_links``, in that order."""
+        return [_position_quaternion(fkin_space(chain, q)) for chain in self._ee_chains]
+
+
+def _position_quaternion(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return pose[:3, 3].copy(), quaternion_from_matrix(pose[:3, :3])

@@ -74,7 +74,8 @@ def robot_with_gravity(robot: Robot, gravity: np.ndarray) -> Robot:
 class Snapshot:
     """The simulation at one instant: t (s), q (rad, m), v (rad/s, m/s), z (LuGre bristle
     deflections), tau (applied joint torque, N m or N), energy (kinetic + potential, J) and
-    ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m);
+    ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m;
+    the first robot's for composed robots, ``Robot.end_effectors``);
     bodies: the world pose (4x4, m) of each free body by name, in the scene's order."""
 
     t: float
@@ -170,7 +171,7 @@ class Simulator:
                                           self.friction)
         self.conservative = self.friction is None and spec.type == "none" and not scene.contacts
         self.effort_limit = np.asarray(self.robot.effort_limit)
-        self.ee_frame = self.robot.frame_id(self.robot.end_effector)
+        self.ee_frame = self.robot.frame_id(self.robot.end_effectors[0])
         self.bounds = self.layout.velocity_bounds(self.robot.velocity_limit, VELOCITY_LIMIT_FACTOR)
         self._q, self._v, self._z = (self.layout.slice(s) for s in ("q", "v", "z"))
         self._stepper: ConstraintStepper | None = None
