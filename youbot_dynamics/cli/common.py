@@ -26,8 +26,11 @@ class CommandError(UserInputError):
 
 
 def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
-    """--urdf and --json, which every model sub-command takes."""
+    """--urdf, --strict and --json, which every model sub-command takes."""
     parser.add_argument("--urdf", help="URDF file (default: the packaged youBot)")
+    parser.add_argument("--strict", action="store_true",
+                        help="refuse a URDF with warnings (physically invalid inertias, a "
+                        "singular mass matrix) instead of listing them in the fidelity report")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
@@ -40,8 +43,8 @@ def add_joint_argument(parser: argparse.ArgumentParser, flag: str, meaning: str)
 
 
 def robot_from(args: argparse.Namespace) -> Robot:
-    """The robot of --urdf, or the packaged youBot."""
-    return load_robot(args.urdf if args.urdf else default_urdf())
+    """The robot of --urdf, or the packaged youBot (--strict: warnings are errors)."""
+    return load_robot(args.urdf if args.urdf else default_urdf(), strict=getattr(args, "strict", False))
 
 
 def joint_vector(robot: Robot, text: str, flag: str = "--q") -> np.ndarray:

@@ -105,7 +105,10 @@ def run_info(args: argparse.Namespace) -> int:
                                 "effort_limit": finite_or_none(j.effort_limit),
                                 "damping": j.damping, "friction": j.friction}
                                for j in robot.joints],
-                    "links": list(robot.link_names), "fidelity": list(robot.fidelity)})
+                    "links": list(robot.link_names), "fidelity": list(robot.fidelity),
+                    "warnings": list(robot.warnings),
+                    "mimic": [{"joint": m.joint, "primary": m.primary, "multiplier": m.multiplier,
+                               "offset": m.offset} for m in robot.mimic.values()]})
         return 0
     print(f"robot '{robot.name}' from {robot.source}: {robot.nv} moving joints, "
           f"root link {robot.root_link}, end effector {robot.end_effector}")
@@ -114,7 +117,8 @@ def run_info(args: argparse.Namespace) -> int:
                   j.friction) for j in robot.joints]))
     print("units: rad, rad/s, N m, N m s/rad (revolute); m, m/s, N, N s/m (prismatic)")
     print("fidelity report (what the model ignores or approximates):")
-    for note in robot.fidelity or ("nothing",):
+    notes = (*robot.fidelity, *(w for w in robot.warnings if w not in robot.fidelity))
+    for note in notes or ("nothing",):
         print(f"  - {note}")
     return 0
 
@@ -149,14 +153,14 @@ def run_screws(args: argparse.Namespace) -> int:
     chain = screw_chain(robot, _frame(robot, args))
     if args.json:
         print_json({"frame": chain.link, "reference_frame": robot.root_link, "order": "omega, v",
-                    "joints": list(chain.joint_names),
+                    "joints": list(chain.axis_names),
                     "S": [chain.S[:, i].tolist() for i in range(chain.n)],
                     "B": [chain.B[:, i].tolist() for i in range(chain.n)],
                     "M": chain.M.tolist()})
         return 0
     print(f"space screw axes S_i = (omega, v) of the chain {robot.root_link} -> {chain.link}, "
           f"in {robot.root_link} (v in m)")
-    print(table(("joint", *TWIST_ROWS), [(name, *chain.S[:, i]) for i, name in enumerate(chain.joint_names)]))
+    print(table(("joint", *TWIST_ROWS), [(name, *chain.S[:, i]) for i, name in enumerate(chain.axis_names)]))
     print(f"home configuration M (pose of {chain.link} at q = 0):")
     print(matrix_text(chain.M))
     return 0
@@ -169,8 +173,9 @@ def run_jacobian(args: argparse.Namespace) -> int:
     q = joint_vector(robot, args.q)
     if args.kind in PINOCCHIO_FRAMES:
         data = robot.model.createData()
+        # 6 x nv: Pinocchio hands a 1-DoF robot's Jacobian back as a flat array.
         matrix = pin.computeFrameJacobian(robot.model, data, q, robot.frame_id(link),
-                                          PINOCCHIO_FRAMES[args.kind])
+                                          PINOCCHIO_FRAMES[args.kind]).reshape(6, robot.model.nv)
         rows, columns = PINOCCHIO_ROWS, robot.joint_names
     else:
         chain = screw_chain(robot, link)
@@ -198,7 +203,7 @@ def _dynamics_inputs(args: argparse.Namespace, flag: str) -> tuple[Robot, np.nda
 def _print_joint_values(args: argparse.Namespace, robot: Robot, key: str, values: np.ndarray,
                         unit: str, inputs: dict[str, np.ndarray]) -> None:
     if args.json:
-        print_json({key: dict(zip(robot.joint_names, values.tolist())),
+        print_json({key: dict(zip(robot.joint_names, map(finite_or_none, values.tolist()))),
                     "friction": not args.no_friction,
                     **{name: dict(zip(robot.joint_names, x.tolist())) for name, x in inputs.items()}})
         return

@@ -42,9 +42,17 @@ def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vect
 def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Vector,
                      friction: JointFriction | None = None, z: Vector | None = None) -> Vector:
     """a = ABA(q, v, tau - tau_friction(v, z)): joint accelerations (rad/s^2, m/s^2) under
-    applied torques tau (N m, N)."""
+    applied torques tau (N m, N).
+
+    Raises :class:`~youbot_dynamics.errors.SingularMassMatrixError` (naming the massless
+    joints) when the robot's mass matrix is singular, instead of returning inf or NaN. With
+    mimic joints, a = M(q)^-1 (tau - C(q, v) v - g(q)): Pinocchio 4.1's aba refuses them.
+    """
+    robot.require_regular_mass_matrix()
     if friction is not None:
         tau = tau - friction.torque(v, z)
+    if robot.mimic:
+        return np.linalg.solve(mass_matrix(robot, data, q), tau - bias_torque(robot, data, q, v))
     return pin.aba(robot.model, data, q, v, tau)
 
 

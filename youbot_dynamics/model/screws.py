@@ -9,7 +9,10 @@ the root-link ("space") frame {s}, B_i = [Ad_{M^-1}] S_i in the frame {b} of the
 link at home. M = T_sb(0), positions in metres. Joint values are rad (revolute, continuous)
 or m (prismatic). Functions take the ROBOT's full joint vector q (shape (nv,), or (..., nv)
 for a batch) and pick the chain's joints with ``chain.joints``; Jacobians have one column per
-chain joint, in chain order (root first), and map joint rates to twists (omega, v).
+robot joint that moves the chain, in chain order (root first), and map those joint rates to
+twists (omega, v). A mimic joint in the chain (theta = multiplier q_primary + offset) has a
+screw axis of its own but no column: its column, times the multiplier, adds to its
+primary's, as Pinocchio's mimic joints do.
 
 Speed: a call costs a fixed number of numpy calls plus one 4x4 product per joint, which is
 what matters for one configuration (each numpy call costs ~0.3 us, the arithmetic far less).
@@ -33,6 +36,18 @@ from youbot_dynamics.model.lie import adjoint, inverse_transform, skew
 from youbot_dynamics.model.robot import Robot
 
 
+class MimicCoupling(NamedTuple):
+    """How a chain with mimic joints reads the robot's joint vector: the chain joint i
+    (screw axis S_i, named ``names[i]``) turns by theta_i = multiplier[i] q[index[i]] +
+    offset[i] (rad or m), and d theta / d q[chain.joints] = ``matrix`` (n, columns)."""
+
+    names: tuple[str, ...]
+    index: np.ndarray
+    multiplier: np.ndarray
+    offset: np.ndarray
+    matrix: np.ndarray
+
+
 class ExponentialMap(NamedTuple):
     """exp([X_i] theta_i) for all joints of a chain as one affine map of the coefficients
     c = (theta_1..theta_n, sin theta_1..sin theta_n, cos theta_1..cos theta_n) (rad or m).
@@ -50,9 +65,11 @@ class ExponentialMap(NamedTuple):
 class ScrewChain:
     """The chain from a robot's root link to ``link``: S (6, n), M (4, 4), B (6, n).
 
-    ``joints`` are the indices of the chain's moving joints in the robot's joint vector (of
-    length ``nv``) and ``joint_names`` their names, root first. Build it once per (robot, link) with
-    :func:`screw_chain` and keep it: it is immutable.
+    ``joints`` are the indices in the robot's joint vector (of length ``nv``) of the joints
+    that move the chain (the Jacobians' columns) and ``joint_names`` their names, root first;
+    without mimic joints they are the chain's moving joints, one per screw axis. ``coupling``
+    (None without mimic joints) maps the robot's joint vector to the n screw axes' angles.
+    Build it once per (robot, link) with :func:`screw_chain` and keep it: it is immutable.
     """
 
     link: str
@@ -61,6 +78,7 @@ class ScrewChain:
     nv: int
     S: np.ndarray
     M: np.ndarray
+    coupling: MimicCoupling | None = None
     B: np.ndarray = field(init=False)
     _space_pose: ExponentialMap = field(init=False, repr=False)
     _body_pose: ExponentialMap = field(init=False, repr=False)
@@ -97,8 +115,13 @@ class ScrewChain:
 
     @property
     def n(self) -> int:
-        """Number of moving joints in the chain."""
+        """Number of moving joints (screw axes) in the chain, mimic joints included."""
         return self.S.shape[1]
+
+    @property
+    def axis_names(self) -> tuple[str, ...]:
+        """The joint of each screw axis (column of S and B), root first."""
+        return self.joint_names if self.coupling is None else self.coupling.names
 
 
 def screw_chain(robot: Robot, link: str | None = None) -> ScrewChain:
@@ -108,6 +131,7 @@ def screw_chain(robot: Robot, link: str | None = None) -> ScrewChain:
     Walking down the chain, T accumulates the joint origins; a revolute (or continuous) joint
     with world axis omega through the point p has S = (omega, -omega x p), a prismatic joint
     along the world direction d has S = (0, d), a fixed joint only moves T. M is T at the end.
+    A mimic joint (``robot.mimic``) is read from its primary's value.
     """
     link = robot.end_effector if link is None else link
     transform = np.eye(4)
@@ -123,9 +147,30 @@ def screw_chain(robot: Robot, link: str | None = None) -> ScrewChain:
             axes.append(np.concatenate([direction, -np.cross(direction, transform[:3, 3])]))
         names.append(joint.name)
     S = np.array(axes, dtype=float).reshape(-1, 6).T
-    indices = np.array([robot.joint_index(name) for name in names], dtype=int)
-    return ScrewChain(link=link, joint_names=tuple(names), joints=indices, nv=robot.nv, S=S,
-                      M=transform)
+    mimic = [robot.mimic.get(name) for name in names]
+    drivers = [name if m is None else m.primary for name, m in zip(names, mimic)]
+    columns = tuple(dict.fromkeys(drivers))  # the driving joints, each once, root first
+    indices = np.array([robot.joint_index(name) for name in columns], dtype=int)
+    return ScrewChain(link=link, joint_names=columns, joints=indices, nv=robot.nv, S=S,
+                      M=transform, coupling=mimic_coupling(robot, names, columns) if any(mimic) else None)
+
+
+def mimic_coupling(robot: Robot, names: list[str], columns: tuple[str, ...]) -> MimicCoupling:
+    """The :class:`MimicCoupling` of chain joints ``names`` driven by the robot joints
+    ``columns`` (each chain joint is one of them or mimics one)."""
+    relations = [robot.mimic.get(name) for name in names]
+    drivers = [name if m is None else m.primary for name, m in zip(names, relations)]
+    multiplier = np.array([1.0 if m is None else m.multiplier for m in relations])
+    matrix = np.zeros((len(names), len(columns)))
+    matrix[np.arange(len(names)), [columns.index(d) for d in drivers]] = multiplier
+    coupling = MimicCoupling(names=tuple(names),
+                             index=np.array([robot.joint_index(d) for d in drivers], dtype=int),
+                             multiplier=multiplier,
+                             offset=np.array([0.0 if m is None else m.offset for m in relations]),
+                             matrix=matrix)
+    for array in coupling[1:]:
+        array.setflags(write=False)
+    return coupling
 
 
 def exponential_terms(axes: np.ndarray) -> np.ndarray:
@@ -180,11 +225,21 @@ def _exponentials(exponential: ExponentialMap, theta: np.ndarray) -> np.ndarray:
 
 
 def _joint_values(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
+    """The screw axes' angles theta (..., n) (rad or m) from the robot's joint vector(s)."""
     q = np.asarray(q, dtype=float)
     if q.ndim == 0 or q.shape[-1] != chain.nv:
         raise UserInputError(f"chain to '{chain.link}' needs the robot's joint vector of "
                              f"{chain.nv} values; got shape {q.shape}")
-    return q.take(chain.joints, axis=-1)
+    if chain.coupling is None:
+        return q.take(chain.joints, axis=-1)
+    coupling = chain.coupling
+    return q.take(coupling.index, axis=-1) * coupling.multiplier + coupling.offset
+
+
+def _joint_columns(chain: ScrewChain, columns: np.ndarray) -> np.ndarray:
+    """Jacobian columns per screw axis (..., 6, n) -> per driving joint (..., 6, len(joints)):
+    a mimic joint's column, times its multiplier, adds to its primary's."""
+    return columns if chain.coupling is None else columns @ chain.coupling.matrix
 
 
 def _running_products(factors: np.ndarray) -> list[np.ndarray]:
@@ -240,7 +295,7 @@ def jacobian_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     link's spatial twist in the root frame (JacobianSpace). Column i is
     [Ad_{exp([S_1] q_1) ... exp([S_{i-1}] q_{i-1})}] S_i."""
     theta = _joint_values(chain, q)
-    return _adjoint_columns(_exponentials(chain._space_factors, theta), chain._space_axes)
+    return _joint_columns(chain, _adjoint_columns(_exponentials(chain._space_factors, theta), chain._space_axes))
 
 
 def jacobian_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
@@ -248,4 +303,4 @@ def jacobian_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     body twist (JacobianBody). Column i is [Ad_{exp(-[B_n] q_n) ... exp(-[B_{i+1}] q_{i+1})}] B_i:
     J_s's formula for the factors exp([-B_j] q_j) from j = n down, columns reversed."""
     theta = _joint_values(chain, q)[..., ::-1]
-    return _adjoint_columns(_exponentials(chain._body_factors, theta), chain._body_axes)[..., ::-1]
+    return _joint_columns(chain, _adjoint_columns(_exponentials(chain._body_factors, theta), chain._body_axes)[..., ::-1])
