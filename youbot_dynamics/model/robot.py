@@ -416,7 +416,7 @@ def _check_numbers(owner: etree._Element, element: etree._Element, label: str) -
     spec = NUMERIC_ATTRIBUTES.get(element.tag)
     if spec is None:
         return
-    where = f"{_where(label, owner)}: <{element.tag}>"
+    where = f"{label}:{element.sourceline}: {owner.tag} '{owner.get('name')}': <{element.tag}>"
     for attribute in REQUIRED_ATTRIBUTES.get(element.tag, ()):
         if element.get(attribute) is None:
             raise URDFError(f"{where}: missing attribute '{attribute}'")
