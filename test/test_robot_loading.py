@@ -17,6 +17,8 @@ from youbot_dynamics.errors import SingularMassMatrixError, UserInputError
 from youbot_dynamics.model.robot import (INERTIA_RTOL, URDFError, keep_joints, load_robot,
                                          lock_joints)
 
+from test_example_robots import URDFS
+
 INERTIA = '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>'
 
 
@@ -304,6 +306,38 @@ def test_fidelity_report_lists_what_is_ignored(tmp_path: Path) -> None:
         assert expected in report, report
     # The mimic joint follows j1; the floating joint is not a coordinate.
     assert robot.joint_names == ("j1", "wheel")
+
+
+def test_fidelity_report_lists_contact_control_sensors_and_collision_shapes() -> None:
+    """solo, bolt and anymal carry PyBullet <contact> values; ros2_control, sensors and
+    collision primitives are not modelled either: the report says so."""
+    foot = ('<link name="foot"><contact><lateral_friction value="1"/><restitution value="0.5"/></contact>'
+            '<collision><geometry><sphere radius="0.02"/></geometry></collision>'
+            '<collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>')
+    text = _urdf(_link("base").replace("</link>", '<collision><geometry><box size="1 1 1"/></geometry>'
+                                                  '</collision></link>'),
+                 _link("l1"), foot, _joint("j1", "base", "l1"), _joint("ankle", "l1", "foot", kind="fixed", limit=""),
+                 '<ros2_control name="arm_hw" type="system"><joint name="j1"/></ros2_control>',
+                 '<gazebo reference="foot"><sensor name="touch" type="contact"/></gazebo>')
+    report = "\n".join(load_robot(text).fidelity)
+    for expected in ("link 'foot': <contact> (lateral_friction 1, restitution 0.5) ignored",
+                     "1 <ros2_control> element(s) ignored: 'arm_hw'", "1 <sensor> element(s) ignored",
+                     "<collision> geometry not used (contact shapes come from the scene): 2 box, 1 sphere"):
+        assert expected in report, report
+
+
+def test_tiago_pro_fingers_follow_their_motor_joint() -> None:
+    """tiago_pro's 10 finger joints mimic the two gripper joints: they are no coordinates
+    (they used to fall freely), and forward dynamics runs through the mimic solve."""
+    path = next((p for p in URDFS if p.name == "tiago_pro.urdf"), None)
+    assert path is not None, "example-robot-data is not installed"
+    robot = load_robot(path)
+    assert len(robot.mimic) == 10 and robot.nv == 23 == robot.model.nv
+    assert {m.primary for m in robot.mimic.values()} == {"gripper_left_finger_joint", "gripper_right_finger_joint"}
+    assert not set(robot.mimic) & set(robot.joint_names)
+    q = np.zeros(robot.nv)
+    a = forward_dynamics(robot, robot.model.createData(), q, q, q)
+    assert a.shape == (23,) and np.all(np.isfinite(a))
 
 
 def test_youbot_fidelity_report_mentions_continuous_wheels() -> None:
