@@ -17,7 +17,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from youbot_dynamics.dynamics.rigid_body import forward_dynamics, inverse_dynamics, mass_matrix
+from youbot_dynamics.dynamics.rigid_body import (forward_dynamics, inverse_dynamics, mass_matrix,
+                                                 potential_energy)
 from youbot_dynamics.errors import SingularMassMatrixError
 from youbot_dynamics.model.robot import Robot, load_robot
 from youbot_dynamics.model.screws import fkin_space, jacobian_body, jacobian_space, screw_chain
@@ -133,7 +134,7 @@ def test_dynamics_equal_pinocchio_from_the_file(robots: dict[Path, Robot], path:
     model, G = _reference(path, robot)
     data, reference = robot.model.createData(), model.createData()
     rng = np.random.default_rng(2)
-    errors = dict.fromkeys(("rnea", "crba", "aba"), 0.0)
+    errors = dict.fromkeys(("rnea", "crba", "potential", "aba"), 0.0)
     for q in _configurations(robot, 3):
         v, a, tau = rng.uniform(-1.0, 1.0, (3, robot.nv))
         q_ref = _reference_q(model, robot, q)
@@ -142,6 +143,9 @@ def test_dynamics_equal_pinocchio_from_the_file(robots: dict[Path, Robot], path:
         upper = pin.crba(model, reference, q_ref)
         m_ref = G.T @ (np.triu(upper) + np.triu(upper, 1).T) @ G
         errors["crba"] = max(errors["crba"], _relative(mass_matrix(robot, data, q), m_ref))
+        energy = np.array([potential_energy(robot, data, q)])
+        errors["potential"] = max(errors["potential"],
+                                  _relative(energy, np.array([pin.computePotentialEnergy(model, reference, q_ref)])))
         if robot.mass_matrix_defect:
             with pytest.raises(SingularMassMatrixError, match="no mass moves with joint"):
                 forward_dynamics(robot, data, q, v, tau)
@@ -152,5 +156,6 @@ def test_dynamics_equal_pinocchio_from_the_file(robots: dict[Path, Robot], path:
             a_ref = pin.aba(model, reference, q_ref, v, tau)
         errors["aba"] = max(errors["aba"], _relative(forward_dynamics(robot, data, q, v, tau), a_ref))
     # Measured (relative to max(1, |reference|)), worst over all robots: rnea 4.9e-18, crba
-    # 3.9e-19, aba 6.5e-16 (all tiago_pro, the mimic solve); bound 1e-10 (1.5e5x margin).
+    # 3.9e-19, aba 6.5e-16 (all tiago_pro, the mimic solve), potential energy 6.8e-16 (romeo,
+    # through the centre of mass); bound 1e-10 (1.5e5x margin).
     assert max(errors.values()) <= 1e-10, f"{path.name}: {errors}"

@@ -88,5 +88,10 @@ def kinetic_energy(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> float:
 
 def potential_energy(robot: Robot, data: pin.Data, q: Vector) -> float:
     """V(q) = -sum_i m_i gravity . c_i (J), c_i the centre of mass of link i in the root
-    frame; zero with every centre of mass at the root's height (gravity along -z)."""
+    frame; zero with every centre of mass at the root's height (gravity along -z). With mimic
+    joints (which Pinocchio 4.1's computePotentialEnergy refuses): -m gravity . c of the whole
+    robot, the same sum."""
+    if robot.mimic:
+        com = pin.centerOfMass(robot.model, data, q)  # fills data.mass[0], the total mass (kg)
+        return float(-data.mass[0] * robot.model.gravity.linear @ com)
     return float(pin.computePotentialEnergy(robot.model, data, q))
