@@ -73,7 +73,7 @@ def test_youbot_loads_with_joint_data() -> None:
     assert isinstance(robot.model, pin.Model)
     with pytest.raises(UserInputError, match="unknown joint 'elbow'"):
         robot.joint_index("elbow")
-    with pytest.raises(UserInputError, match="unknown link frame 'nowhere'"):
+    with pytest.raises(UserInputError, match="unknown frame 'nowhere': no link of that name"):
         robot.frame_id("nowhere")
 
 
@@ -242,7 +242,7 @@ def test_frames_by_type_when_a_link_and_a_joint_share_a_name() -> None:
     assert link != joint
     assert robot.model.frames[link].type == pin.FrameType.BODY
     assert robot.model.frames[joint].type == pin.FrameType.JOINT
-    with pytest.raises(UserInputError, match="unknown joint frame 'base'"):
+    with pytest.raises(UserInputError, match="unknown frame 'base': no joint of that name"):
         robot.frame_id("base", kind="joint")
 
 

@@ -231,8 +231,8 @@ class Robot:
         if not self.model.existFrame(name, types[kind]):
             names = self.link_names if kind == "link" else tuple(j.name for j in self.tree)
             raise UserInputError(
-                f"unknown {kind} frame '{name}' in robot '{self.name}' ({self.source}); "
-                f"{kind}s: {', '.join(names)}"
+                f"unknown frame '{name}': no {kind} of that name in robot '{self.name}' "
+                f"({self.source}); {kind}s: {', '.join(names)}"
             )
         return self.model.getFrameId(name, types[kind])
 
