@@ -28,7 +28,7 @@ import re
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Iterator, Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -37,9 +37,6 @@ from lxml import etree
 
 from youbot_dynamics.errors import SingularMassMatrixError, URDFError, UserInputError
 from youbot_dynamics.model.lie import exp_se3
-
-__all__ = ["Joint", "Mimic", "Robot", "TreeJoint", "URDFError", "keep_joints", "load_robot",
-           "lock_joints"]
 
 MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
 KNOWN_JOINT_TYPES = (*MOVING_JOINT_TYPES, "fixed", "floating", "planar")
@@ -51,7 +48,8 @@ INERTIA_RTOL = 1e-6
 #: ... or below this, kg m^2 (iCub's "zero" inertias are 1e-20..4e-18 kg m^2).
 INERTIA_ATOL = 1e-12
 #: A joint-space mass matrix is singular where a diagonal entry, or its smallest eigenvalue,
-#: is below this fraction of the largest one.
+#: is below this fraction of the largest one (example-robot-data: the singular ones have 0 and
+#: round-off -1e-17, the regular ones 2.2e-7 (tiago_no_hand) and more).
 MASS_MATRIX_RTOL = 1e-12
 WARNING = "warning: "  # prefix of the fidelity notes that strict loading turns into errors
 INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
@@ -394,7 +392,7 @@ def _floats(element: etree._Element | None, attribute: str, default: str) -> np.
     return np.array([float(x) for x in (element.get(attribute, default) if element is not None else default).split()])
 
 
-def _urdf_elements(root: etree._Element):
+def _urdf_elements(root: etree._Element) -> Iterator[tuple[etree._Element, etree._Element]]:
     """(owner, element) for every element whose attributes urdfdom reads: a joint's children,
     and the children of a link's <inertial>, <visual> and <collision> with their shapes."""
     for joint in root.findall("joint"):
@@ -439,18 +437,15 @@ def _check_numbers(owner: etree._Element, element: etree._Element, label: str) -
 def _check_urdf(root: etree._Element, label: str) -> list[str]:
     """Validate the URDF; returns the fidelity notes: warnings first, then what the model
     ignores."""
-    links: dict[str, etree._Element] = {}
-    joint_lines: dict[str, int] = {}
+    first_line: dict[tuple[str, str], int] = {}  # (tag, name) -> line
     for element in root:
-        if element.tag not in ("link", "joint"):
-            continue
-        seen = links if element.tag == "link" else joint_lines
-        name = element.get("name")
-        if name in seen:
-            first = seen[name] if element.tag == "joint" else seen[name].sourceline
-            raise URDFError(f"{_where(label, element)}: the name is already used by the {element.tag} "
-                            f"at line {first}")
-        seen[name] = element if element.tag == "link" else element.sourceline
+        if element.tag in ("link", "joint"):
+            key = (element.tag, element.get("name"))
+            if key in first_line:
+                raise URDFError(f"{_where(label, element)}: the name is already used by the "
+                                f"{element.tag} at line {first_line[key]}")
+            first_line[key] = element.sourceline
+    links = {link.get("name"): link for link in root.findall("link")}
     if not links:
         raise URDFError(f"{label}: the robot has no <link>")
     for owner, element in _urdf_elements(root):
