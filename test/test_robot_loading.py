@@ -340,6 +340,26 @@ def test_tiago_pro_fingers_follow_their_motor_joint() -> None:
     assert a.shape == (23,) and np.all(np.isfinite(a))
 
 
+def test_mimic_chains_unknown_primaries_and_primaries_below() -> None:
+    """A mimic of a mimic resolves to the independent joint (q_c = 3 (2 q_a + 0.1) - 0.2); a
+    <mimic> of no joint is a warning (urdfdom loads it; alex_psyonic_hands has 8); a mimic
+    above its primary in Pinocchio's order (Talos' grippers, Romeo's hands) moves on its own,
+    as Pinocchio cannot hold it."""
+    def mimic(primary: str, multiplier: str = "1", offset: str = "0") -> str:
+        return f'<mimic joint="{primary}" multiplier="{multiplier}" offset="{offset}"/>'
+    text = _urdf(_link("base"), *(_link(name) for name in ("la", "lb", "lc", "ld", "le", "lf")),
+                 _joint("a", "base", "la"), _joint("b", "la", "lb", extra=mimic("a", "2", "0.1")),
+                 _joint("c", "lb", "lc", extra=mimic("b", "3", "-0.2")),
+                 _joint("d", "lc", "ld", extra=mimic("ghost")),
+                 _joint("e", "base", "le", extra=mimic("f")), _joint("f", "le", "lf"))
+    robot = load_robot(text)
+    c = robot.mimic["c"]
+    assert (c.primary, c.multiplier, c.offset) == ("a", 6.0, pytest.approx(0.1))
+    assert set(robot.mimic) == {"b", "c"} and robot.joint_names == ("a", "d", "e", "f")
+    assert any("joint 'd' (line" in w and "names no other moving joint" in w for w in robot.warnings)
+    assert any("joint 'e': <mimic> of 'f' ignored" in note for note in robot.fidelity)
+
+
 def test_youbot_fidelity_report_mentions_continuous_wheels() -> None:
     report = "\n".join(load_robot(default_urdf()).fidelity)
     assert report.count("continuous") == 4
