@@ -147,30 +147,32 @@ def screw_chain(robot: Robot, link: str | None = None) -> ScrewChain:
             axes.append(np.concatenate([direction, -np.cross(direction, transform[:3, 3])]))
         names.append(joint.name)
     S = np.array(axes, dtype=float).reshape(-1, 6).T
-    mimic = [robot.mimic.get(name) for name in names]
-    drivers = [name if m is None else m.primary for name, m in zip(names, mimic)]
-    columns = tuple(dict.fromkeys(drivers))  # the driving joints, each once, root first
+    columns, coupling = mimic_coupling(robot, tuple(names))
     indices = np.array([robot.joint_index(name) for name in columns], dtype=int)
     return ScrewChain(link=link, joint_names=columns, joints=indices, nv=robot.nv, S=S,
-                      M=transform, coupling=mimic_coupling(robot, names, columns) if any(mimic) else None)
+                      M=transform, coupling=coupling)
 
 
-def mimic_coupling(robot: Robot, names: list[str], columns: tuple[str, ...]) -> MimicCoupling:
-    """The :class:`MimicCoupling` of chain joints ``names`` driven by the robot joints
-    ``columns`` (each chain joint is one of them or mimics one)."""
+def mimic_coupling(robot: Robot, names: tuple[str, ...]) -> tuple[tuple[str, ...], MimicCoupling | None]:
+    """The robot joints that drive the chain joints ``names`` (each once, root first: a joint
+    drives itself, a mimic joint is driven by its primary) and their :class:`MimicCoupling`
+    (None when no chain joint mimics another)."""
     relations = [robot.mimic.get(name) for name in names]
     drivers = [name if m is None else m.primary for name, m in zip(names, relations)]
+    columns = tuple(dict.fromkeys(drivers))
+    if not any(relations):
+        return columns, None
     multiplier = np.array([1.0 if m is None else m.multiplier for m in relations])
     matrix = np.zeros((len(names), len(columns)))
     matrix[np.arange(len(names)), [columns.index(d) for d in drivers]] = multiplier
-    coupling = MimicCoupling(names=tuple(names),
+    coupling = MimicCoupling(names=names,
                              index=np.array([robot.joint_index(d) for d in drivers], dtype=int),
                              multiplier=multiplier,
                              offset=np.array([0.0 if m is None else m.offset for m in relations]),
                              matrix=matrix)
     for array in coupling[1:]:
         array.setflags(write=False)
-    return coupling
+    return columns, coupling
 
 
 def exponential_terms(axes: np.ndarray) -> np.ndarray:
