@@ -6,10 +6,26 @@ moving joints in Pinocchio's order with their limits, damping and friction, and 
 report of what the model ignores or approximates. What the robot is DOING lives elsewhere
 (Pinocchio ``Data`` and the simulation state); nothing here changes after loading.
 
-Joint coordinates: one number per moving joint (angle in rad for revolute and continuous
-joints, displacement in m for prismatic ones), in Pinocchio's joint order, so nq == nv.
+Joint coordinates: one number per moving joint of the URDF (angle in rad for revolute and
+continuous joints, displacement in m for prismatic ones), in Pinocchio's joint order.
 Continuous joints are given to Pinocchio as revolute joints without position limits (the
 angle is not wrapped); the fidelity report says so.
+
+The root joint, chosen at load time, joins the root link to the world (Pinocchio's layout;
+its coordinates come FIRST in q and v, named in :data:`ROOT_COORDINATES`):
+
+- ``fixed`` (default): the root link is welded to the world; q and v hold the joints only,
+  nq == nv == number of moving joints.
+- ``floating``: Pinocchio's free-flyer. q = (x, y, z, qx, qy, qz, qw, joints): position of
+  the root link in the world (m) and its orientation as a unit quaternion (x, y, z, w);
+  v = (vx, vy, vz, wx, wy, wz, joint rates): the root link's twist in its own frame (body
+  twist, linear part first, m/s and rad/s). nq = nv + 1.
+- ``planar``: the root link slides on the world's x-y plane and turns about z (the youBot
+  base on the floor). q = (x, y, cos yaw, sin yaw, joints); v = (vx, vy, wz, joint rates),
+  velocity in the root link's frame. nq = nv + 1.
+
+Where nq != nv a configuration is not moved by q + v dt: use
+:mod:`youbot_dynamics.model.configuration` (``pin.integrate`` on the manifold).
 """
 from __future__ import annotations
 
@@ -30,6 +46,17 @@ from youbot_dynamics.model.lie import exp_se3
 MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
 KNOWN_JOINT_TYPES = (*MOVING_JOINT_TYPES, "fixed", "floating", "planar")
 UNBOUNDED = 1e10  # position limit handed to Pinocchio for continuous joints, rad
+
+#: Names of the root joint's coordinates in q and in v, per root kind (Pinocchio's layout).
+ROOT_COORDINATES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "fixed": ((), ()),
+    "floating": (("root_x", "root_y", "root_z", "root_qx", "root_qy", "root_qz", "root_qw"),
+                 ("root_vx", "root_vy", "root_vz", "root_wx", "root_wy", "root_wz")),
+    "planar": (("root_x", "root_y", "root_cos", "root_sin"), ("root_vx", "root_vy", "root_wz")),
+}
+ROOTS = tuple(ROOT_COORDINATES)
+ROOT_JOINT_NAME = "root_joint"  # the Pinocchio joint of a floating or planar root
+_ROOT_JOINT_MODELS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}
 
 
 class URDFError(UserInputError):
@@ -69,7 +96,13 @@ class Joint:
 
 @dataclass(frozen=True)
 class Robot:
-    """Immutable robot description. Do not mutate ``model``; make Data with ``model.createData()``."""
+    """Immutable robot description. Do not mutate ``model``; make Data with ``model.createData()``.
+
+    ``root`` is the root joint (``fixed``, ``floating`` or ``planar``, see the module
+    docstring). The per-joint arrays (``lower``, ``upper``, ``velocity_limit``,
+    ``effort_limit``, ``damping``, ``friction``) and ``joint_names`` cover the URDF's moving
+    joints only: joint i sits at q[root_nq + i] and v[root_nv + i].
+    """
 
     name: str
     source: str
@@ -79,17 +112,44 @@ class Robot:
     root_link: str
     fidelity: tuple[str, ...]
     locked: Mapping[str, float] = field(default_factory=dict)
+    root: str = "fixed"
 
     # ---- joint-indexed arrays (Pinocchio order) -------------------------------------
     @property
     def joint_names(self) -> tuple[str, ...]:
-        """Moving joints' names in Pinocchio's order (the order of every joint vector)."""
+        """Moving joints' names in Pinocchio's order (the order of every joint array)."""
         return tuple(j.name for j in self.joints)
 
     @property
+    def nq(self) -> int:
+        """Size of a configuration q: root coordinates plus one per moving joint."""
+        return self.model.nq
+
+    @property
     def nv(self) -> int:
-        """Number of moving joints (== model.nq == model.nv)."""
-        return len(self.joints)
+        """Size of a velocity v (and of a, tau): root DoFs plus one per moving joint; equal to
+        the number of moving joints for a fixed root."""
+        return self.model.nv
+
+    @property
+    def root_nq(self) -> int:
+        """Number of root coordinates at the head of q (7 floating, 4 planar, 0 fixed)."""
+        return len(ROOT_COORDINATES[self.root][0])
+
+    @property
+    def root_nv(self) -> int:
+        """Number of root DoFs at the head of v (6 floating, 3 planar, 0 fixed)."""
+        return len(ROOT_COORDINATES[self.root][1])
+
+    @property
+    def q_names(self) -> tuple[str, ...]:
+        """Names of the entries of q: root coordinates, then the moving joints."""
+        return ROOT_COORDINATES[self.root][0] + self.joint_names
+
+    @property
+    def v_names(self) -> tuple[str, ...]:
+        """Names of the entries of v (and a, tau): root DoFs, then the moving joints."""
+        return ROOT_COORDINATES[self.root][1] + self.joint_names
 
     def _array(self, attribute: str) -> np.ndarray:
         values = np.array([getattr(j, attribute) for j in self.joints], dtype=float)
@@ -133,7 +193,7 @@ class Robot:
 
     # ---- look-ups ---------------------------------------------------------------------
     def joint_index(self, name: str) -> int:
-        """Index of a moving joint in the joint-coordinate vector."""
+        """Index of a moving joint in the joint arrays (q[root_nq + i], v[root_nv + i])."""
         try:
             return self.joint_names.index(name)
         except ValueError:
@@ -182,48 +242,98 @@ class Robot:
         return common
 
     def vector(self, values: Mapping[str, float] | Sequence[float] | np.ndarray, *,
-               default: float | None = 0.0, what: str = "joint values") -> np.ndarray:
-        """Joint-coordinate vector from a sequence in model order or a mapping by joint name.
+               default: float | None = 0.0, what: str = "joint values", of: str = "v") -> np.ndarray:
+        """A configuration (``of="q"``, nq values) or a velocity-sized vector (``of="v"``, nv
+        values: v, a, tau) from a sequence in model order (root coordinates first, see
+        ``q_names`` / ``v_names``) or a mapping by coordinate name.
 
-        Joints missing from a mapping take ``default`` (an error when ``default`` is None).
+        Joints missing from a mapping take ``default`` (an error when ``default`` is None);
+        root coordinates missing from it take the neutral pose (origin, identity orientation)
+        or zero velocity. A configuration's root quaternion (x, y, z, w) or (cos, sin) pair is
+        normalised; a zero or non-finite one is an error.
         """
+        names = self.q_names if of == "q" else self.v_names
+        offset = self.root_nq if of == "q" else self.root_nv
         if isinstance(values, Mapping):
-            out = np.full(self.nv, np.nan if default is None else default)
+            out = np.full(len(names), np.nan if default is None else default)
+            out[:offset] = pin.neutral(self.model)[:offset] if of == "q" else 0.0
             for name, value in values.items():
-                out[self.joint_index(name)] = float(value)
-            missing = [n for n, v in zip(self.joint_names, out) if np.isnan(v)]
+                if name in names[:offset]:
+                    out[names.index(name)] = float(value)
+                else:
+                    out[offset + self.joint_index(name)] = float(value)
+            missing = [n for n, v in zip(names, out) if np.isnan(v)]
             if missing:
                 raise UserInputError(f"{what}: no value for joint(s) {', '.join(missing)}")
-            return out
-        out = np.asarray(values, dtype=float).reshape(-1)
-        if out.size != self.nv:
-            raise UserInputError(
-                f"{what}: expected {self.nv} values in joint order "
-                f"({', '.join(self.joint_names)}), got {out.size}"
-            )
+        else:
+            out = np.asarray(values, dtype=float).reshape(-1)
+            if out.size != len(names):
+                raise UserInputError(
+                    f"{what}: expected {len(names)} values ({'nq' if of == 'q' else 'nv'} of a "
+                    f"{self.root} root) in the order {', '.join(names)}; got {out.size}"
+                )
+        if of == "q" and self.root != "fixed":
+            out = self._normalised_root(out, what)
         return out
+
+    def _normalised_root(self, q: np.ndarray, what: str) -> np.ndarray:
+        """q with its root orientation (quaternion or cos, sin) scaled to unit norm."""
+        rotation = slice(3, 7) if self.root == "floating" else slice(2, 4)
+        norm = float(np.linalg.norm(q[rotation]))
+        if not (math.isfinite(norm) and norm > 0.0):
+            names = ", ".join(self.q_names[rotation])
+            raise UserInputError(f"{what}: the {self.root} root's orientation ({names}) must be "
+                                 f"finite and non-zero; got {q[rotation].tolist()}")
+        q = q.copy()
+        q[rotation] /= norm
+        return q
 
 
 # ---------------------------------------------------------------------------------------
 # Loading
 # ---------------------------------------------------------------------------------------
-def load_robot(source: str | Path) -> Robot:
+def load_robot(source: str | Path, *, root: str = "fixed") -> Robot:
     """Build a Robot from a URDF file path or a URDF XML string.
+
+    ``root`` joins the URDF's root link to the world: ``fixed`` (welded), ``floating``
+    (Pinocchio free-flyer) or ``planar`` (x, y, yaw on the floor); see the module docstring
+    for the q and v layouts. An unknown root is a UserInputError.
 
     Raises :class:`URDFError` naming the file, the element (with its line) and the reason for
     a missing file, malformed XML, an unknown joint type, a missing parent or child link, a
     non-positive mass, an inertia that is not positive definite or violates the triangle
     inequality, a lower limit above the upper one, or a kinematic loop.
     """
+    if root not in ROOTS:
+        raise UserInputError(f"root '{root}' is unknown: expected one of {', '.join(ROOTS)}")
     text, label = _read_source(source)
-    root = _parse_xml(text, label)
-    fidelity = _check_urdf(root, label)
+    element = _parse_xml(text, label)
+    fidelity = _check_urdf(element, label)
     urdf = yourdfpy.URDF.load(io.StringIO(text), build_scene_graph=False, load_meshes=False)
     tree, root_link = _kinematic_tree(urdf)
-    model = pin.buildModelFromXML(_pinocchio_xml(root))
-    joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(1, model.njoints))
-    return Robot(name=root.get("name", "robot"), source=label, model=model, joints=joints,
-                 tree=tree, root_link=root_link, fidelity=tuple(fidelity))
+    model = _pinocchio_model(_pinocchio_xml(element), root)
+    first = 1 if root == "fixed" else 2  # Pinocchio joint 0 is the universe, 1 the root joint
+    joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(first, model.njoints))
+    return Robot(name=element.get("name", "robot"), source=label, model=model, joints=joints,
+                 tree=tree, root_link=root_link, fidelity=(_root_note(root, root_link), *fidelity),
+                 root=root)
+
+
+def _pinocchio_model(xml: str, root: str) -> pin.Model:
+    """Pinocchio's model of the URDF text with the chosen root joint (named ROOT_JOINT_NAME)."""
+    if root == "fixed":
+        return pin.buildModelFromXML(xml)
+    return pin.buildModelFromXML(xml, _ROOT_JOINT_MODELS[root](), ROOT_JOINT_NAME)
+
+
+def _root_note(root: str, root_link: str) -> str:
+    """The fidelity report's line on the root joint."""
+    if root == "fixed":
+        return (f"root: fixed: link '{root_link}' is welded to the world "
+                "(load with root 'floating' or 'planar' to free it)")
+    q_names, v_names = ROOT_COORDINATES[root]
+    return (f"root: {root}: joint '{ROOT_JOINT_NAME}' between the world and link '{root_link}' "
+            f"(q starts {', '.join(q_names)}; v starts {', '.join(v_names)}, in the link's frame)")
 
 
 def lock_joints(robot: Robot, positions: Mapping[str, float]) -> Robot:
@@ -234,17 +344,17 @@ def lock_joints(robot: Robot, positions: Mapping[str, float]) -> Robot:
     """
     if not positions:
         return robot
-    indices = [robot.joint_index(name) for name in positions]
-    q_ref = np.zeros(robot.nv)
-    for i, value in zip(indices, positions.values()):
-        q_ref[i] = float(value)
+    for name in positions:
+        robot.joint_index(name)  # only moving joints can be locked, never the root
+    q_ref = robot.vector(dict(positions), of="q", what="locked joint positions")
     joint_ids = [robot.model.getJointId(name) for name in positions]
     model = pin.buildReducedModel(robot.model, joint_ids, q_ref)
     tree = tuple(_locked(j, positions[j.name]) if j.name in positions else j for j in robot.tree)
     kept = tuple(j for j in robot.joints if j.name not in positions)
     return Robot(name=robot.name, source=robot.source, model=model, joints=kept, tree=tree,
                  root_link=robot.root_link, fidelity=robot.fidelity,
-                 locked={**robot.locked, **{k: float(v) for k, v in positions.items()}})
+                 locked={**robot.locked, **{k: float(v) for k, v in positions.items()}},
+                 root=robot.root)
 
 
 def keep_joints(robot: Robot, moving: Sequence[str], positions: Mapping[str, float] | None = None) -> Robot:
