@@ -9,7 +9,8 @@ the root-link ("space") frame {s}, B_i = [Ad_{M^-1}] S_i in the frame {b} of the
 link at home. M = T_sb(0), positions in metres. Joint values are rad (revolute, continuous)
 or m (prismatic). Functions take the ROBOT's full configuration q (shape (nq,), or (..., nq)
 for a batch) and pick the chain's joints with ``chain.joints``; Jacobians have one column per
-chain joint, in chain order (root first), and map joint rates to twists (omega, v).
+chain joint, in chain order (root first), after the root joint's columns for a floating or
+planar root, and map velocities v (``chain.columns`` of them) to twists (omega, v).
 
 Root joint (see :mod:`youbot_dynamics.model.robot`): with a floating or planar root the
 space frame {s} is the world, T_sb(q) = T_root(q_root) T_chain(q_joints), and the Jacobians
