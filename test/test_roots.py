@@ -15,10 +15,12 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from lxml import etree
 
 from youbot_dynamics.cli import main
 from youbot_dynamics.dynamics.friction import JointFriction
-from youbot_dynamics.dynamics.rigid_body import forward_dynamics, inverse_dynamics, mass_matrix
+from youbot_dynamics.dynamics.rigid_body import (bias_torque, forward_dynamics, gravity_torque,
+                                                 inverse_dynamics, mass_matrix)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import (difference, integrate, neutral,
                                                  random_configuration)
@@ -256,6 +258,17 @@ def test_free_fall_from_rest_accelerates_the_root_by_g(path: Path) -> None:
     assert worst <= 1e-12  # measured 3.0e-14 (g1); bound 1e-12: the base falls at g, nothing turns
 
 
+def test_gravity_torque_on_a_floating_root_holds_up_the_whole_weight() -> None:
+    robot = load_robot(G1, root="floating")
+    mass = sum(float(m.get("value")) for m in etree.parse(str(G1)).getroot().iterfind("link/inertial/mass"))
+    q = random_configuration(robot, np.random.default_rng(4))
+    holding = gravity_torque(robot, robot.model.createData(), q)
+    # The root's entries are the body-frame wrench (f, n) that holds the robot: f = -m R^T g.
+    weight = mass * 9.81
+    np.testing.assert_allclose(matrix_from_quaternion(q[3:7]) @ holding[:3], -mass * GRAVITY, rtol=0,
+                               atol=1e-12 * weight)  # measured 7.2e-14 N = 2.2e-16 weight; bound 1e-12 weight
+
+
 def test_wrong_sizes_name_nq_and_nv() -> None:
     robot = load_robot(YOUBOT, root="floating")
     data = robot.model.createData()
@@ -266,6 +279,10 @@ def test_wrong_sizes_name_nq_and_nv() -> None:
         inverse_dynamics(robot, data, neutral(robot), zeros, np.zeros(robot.nq))
     with pytest.raises(UserInputError, match=r"^q: expected 18 values"):
         mass_matrix(robot, data, zeros)
+    with pytest.raises(UserInputError, match=r"^q: expected 18 values"):
+        gravity_torque(robot, data, zeros)
+    with pytest.raises(UserInputError, match=r"^v: expected 17 values"):
+        bias_torque(robot, data, neutral(robot), np.zeros(robot.nq))
     with pytest.raises(UserInputError, match=r"needs the robot's configuration q of nq = 18"):
         fkin_space(screw_chain(robot), zeros)
 

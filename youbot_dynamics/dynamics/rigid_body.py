@@ -47,7 +47,7 @@ def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vect
         if friction is not None:
             tau[robot.root_nv:] += friction.torque(v[robot.root_nv:], z)
     except (ValueError, TypeError):
-        _check_sizes(robot, q, v, a, "a")
+        _check_sizes(robot, q, v=v, a=a)
         raise
     return tau
 
@@ -62,16 +62,17 @@ def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Ve
             tau[robot.root_nv:] -= friction.torque(v[robot.root_nv:], z)
         return pin.aba(robot.model, data, q, v, tau)
     except (ValueError, TypeError):
-        _check_sizes(robot, q, v, tau, "tau")
+        _check_sizes(robot, q, v=v, tau=tau)
         raise
 
 
-def _check_sizes(robot: Robot, q: Vector, v: Vector, third: Vector, name: str) -> None:
+def _check_sizes(robot: Robot, q: Vector, **velocity_sized: Vector) -> None:
     """After Pinocchio refused its input: a UserInputError naming the vector whose size is
-    not nq (q) or nv (v, ``name``), if one is (checked only then: no cost on the way)."""
+    not nq (q) or nv (the keyword arguments, by name), if one is; checked only then, so that
+    a call with the right sizes pays nothing."""
     sized(robot, q, "q", "q")
-    sized(robot, v, "v", "v")
-    sized(robot, third, "v", name)
+    for name, x in velocity_sized.items():
+        sized(robot, x, "v", name)
 
 
 def symmetrised(upper: np.ndarray) -> np.ndarray:
@@ -86,22 +87,32 @@ def mass_matrix(robot: Robot, data: pin.Data, q: Vector) -> Vector:
     try:
         return symmetrised(pin.crba(robot.model, data, q))
     except (ValueError, TypeError):
-        sized(robot, q, "q", "q")
+        _check_sizes(robot, q)
         raise
 
 
 def gravity_torque(robot: Robot, data: pin.Data, q: Vector) -> Vector:
-    """g(q) (N m, N): the torques that hold the robot still against gravity."""
-    return pin.computeGeneralizedGravity(robot.model, data, q)
+    """g(q) (nv; N m, N) at positions q (nq): the torques that hold the robot still against
+    gravity (for a floating root, the root's entries are the wrench that would hold it up)."""
+    try:
+        return pin.computeGeneralizedGravity(robot.model, data, q)
+    except (ValueError, TypeError):
+        _check_sizes(robot, q)
+        raise
 
 
 def bias_torque(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> Vector:
-    """C(q, v) v + g(q) (N m, N): Coriolis, centrifugal and gravity torques."""
-    return pin.nonLinearEffects(robot.model, data, q, v)
+    """C(q, v) v + g(q) (nv; N m, N) at positions q (nq) and velocities v (nv): Coriolis,
+    centrifugal and gravity torques."""
+    try:
+        return pin.nonLinearEffects(robot.model, data, q, v)
+    except (ValueError, TypeError):
+        _check_sizes(robot, q, v=v)
+        raise
 
 
 def kinetic_energy(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> float:
-    """T = v . M(q) v / 2 (J), armature included.
+    """T = v . M(q) v / 2 (J) at positions q (nq) and velocities v (nv), armature included.
 
     Not pin.computeKineticEnergy: in Pinocchio 4.1 it leaves out the armature of
     RevoluteUnaligned joints (such as the youBot's arm_joint_1, axis -z).
@@ -110,6 +121,11 @@ def kinetic_energy(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> float:
 
 
 def potential_energy(robot: Robot, data: pin.Data, q: Vector) -> float:
-    """V(q) = -sum_i m_i gravity . c_i (J), c_i the centre of mass of link i in the root
-    frame; zero with every centre of mass at the root's height (gravity along -z)."""
-    return float(pin.computePotentialEnergy(robot.model, data, q))
+    """V(q) = -sum_i m_i gravity . c_i (J) at positions q (nq), c_i the centre of mass of link
+    i in the world (the root link's frame for a fixed root); zero with every centre of mass at
+    the world origin's height (gravity along -z)."""
+    try:
+        return float(pin.computePotentialEnergy(robot.model, data, q))
+    except (ValueError, TypeError):
+        _check_sizes(robot, q)
+        raise
