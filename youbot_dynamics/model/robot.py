@@ -252,6 +252,8 @@ class Robot:
         or zero velocity. A configuration's root quaternion (x, y, z, w) or (cos, sin) pair is
         normalised; a zero or non-finite one is an error.
         """
+        if of not in ("q", "v"):
+            raise ValueError(f"vector: of must be 'q' or 'v', got {of!r}")
         names = self.q_names if of == "q" else self.v_names
         offset = self.root_nq if of == "q" else self.root_nv
         if isinstance(values, Mapping):
