@@ -6,12 +6,28 @@ moving joints in Pinocchio's order with their limits, damping and friction, and 
 report of what the model ignores or approximates. What the robot is DOING lives elsewhere
 (Pinocchio ``Data`` and the simulation state); nothing here changes after loading.
 
-Joint coordinates: one number per moving joint (angle in rad for revolute and continuous
-joints, displacement in m for prismatic ones), in Pinocchio's joint order, so nq == nv.
+Joint coordinates: one number per moving joint of the URDF (angle in rad for revolute and
+continuous joints, displacement in m for prismatic ones), in Pinocchio's joint order.
 Continuous joints are given to Pinocchio as revolute joints without position limits (the
 angle is not wrapped); the fidelity report says so. A ``<mimic>`` joint is no coordinate of
 its own: it follows q_mimic = multiplier q_primary + offset through Pinocchio's mimic joints,
 and ``Robot.mimic`` holds those relations.
+
+The root joint, chosen at load time, joins the root link to the world (Pinocchio's layout;
+its coordinates come FIRST in q and v, named in :data:`ROOT_COORDINATES`):
+
+- ``fixed`` (default): the root link is welded to the world; q and v hold the joints only,
+  nq == nv == number of moving joints (mimic joints excluded).
+- ``floating``: Pinocchio's free-flyer. q = (x, y, z, qx, qy, qz, qw, joints): position of
+  the root link in the world (m) and its orientation as a unit quaternion (x, y, z, w);
+  v = (vx, vy, vz, wx, wy, wz, joint rates): the root link's twist in its own frame (body
+  twist, linear part first, m/s and rad/s). nq = nv + 1.
+- ``planar``: the root link slides on the world's x-y plane and turns about z (the youBot
+  base on the floor). q = (x, y, cos yaw, sin yaw, joints); v = (vx, vy, wz, joint rates),
+  velocity in the root link's frame. nq = nv + 1.
+
+Where nq != nv a configuration is not moved by q + v dt: use
+:mod:`youbot_dynamics.model.configuration` (``pin.integrate`` on the manifold).
 
 Loading accepts what urdfdom and Pinocchio accept: zero-mass links, point masses (mass > 0,
 inertia 0) and principal moments within INERTIA_RTOL of the largest one (or below
@@ -74,6 +90,17 @@ REQUIRED_ATTRIBUTES = {"mass": ("value",), "inertia": INERTIA_KEYS, "limit": ("e
                        "mimic": ("joint",)}
 _XML_DECLARATION = re.compile(r"^\s*<\?xml\b[^>]*\?>")
 
+#: Names of the root joint's coordinates in q and in v, per root kind (Pinocchio's layout).
+ROOT_COORDINATES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "fixed": ((), ()),
+    "floating": (("root_x", "root_y", "root_z", "root_qx", "root_qy", "root_qz", "root_qw"),
+                 ("root_vx", "root_vy", "root_vz", "root_wx", "root_wy", "root_wz")),
+    "planar": (("root_x", "root_y", "root_cos", "root_sin"), ("root_vx", "root_vy", "root_wz")),
+}
+ROOTS = tuple(ROOT_COORDINATES)
+ROOT_JOINT_NAME = "root_joint"  # the Pinocchio joint of a floating or planar root
+_ROOT_JOINT_MODELS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}
+
 
 @dataclass(frozen=True)
 class TreeJoint:
@@ -121,8 +148,15 @@ class Mimic:
 class Robot:
     """Immutable robot description. Do not mutate ``model``; make Data with ``model.createData()``.
 
+    ``root`` is the root joint (``fixed``, ``floating`` or ``planar``, see the module
+    docstring). The per-joint arrays (``lower``, ``upper``, ``velocity_limit``,
+    ``effort_limit``, ``damping``, ``friction``) and ``joint_names`` cover the URDF's
+    independent moving joints only (no mimic joints): joint i sits at q[root_nq + i] and
+    v[root_nv + i].
+
     ``mass_matrix_defect`` is computed at construction: empty when the joint-space mass matrix
-    is positive definite at a sample configuration, else the reason forward dynamics refuses.
+    (root DoFs included) is positive definite at a sample configuration, else the reason
+    forward dynamics refuses.
     """
 
     name: str
@@ -134,6 +168,7 @@ class Robot:
     fidelity: tuple[str, ...]
     locked: Mapping[str, float] = field(default_factory=dict)
     mimic: Mapping[str, Mimic] = field(default_factory=dict)
+    root: str = "fixed"
     mass_matrix_defect: str = field(init=False, default="")
 
     def __post_init__(self) -> None:
@@ -154,13 +189,39 @@ class Robot:
     # ---- joint-indexed arrays (Pinocchio order) -------------------------------------
     @property
     def joint_names(self) -> tuple[str, ...]:
-        """Moving joints' names in Pinocchio's order (the order of every joint vector)."""
+        """Moving joints' names in Pinocchio's order (the order of every joint array)."""
         return tuple(j.name for j in self.joints)
 
     @property
+    def nq(self) -> int:
+        """Size of a configuration q: root coordinates plus one per moving joint."""
+        return self.model.nq
+
+    @property
     def nv(self) -> int:
-        """Number of moving joints (== model.nq == model.nv)."""
-        return len(self.joints)
+        """Size of a velocity v (and of a, tau): root DoFs plus one per moving joint; equal to
+        the number of moving joints for a fixed root."""
+        return self.model.nv
+
+    @property
+    def root_nq(self) -> int:
+        """Number of root coordinates at the head of q (7 floating, 4 planar, 0 fixed)."""
+        return len(ROOT_COORDINATES[self.root][0])
+
+    @property
+    def root_nv(self) -> int:
+        """Number of root DoFs at the head of v (6 floating, 3 planar, 0 fixed)."""
+        return len(ROOT_COORDINATES[self.root][1])
+
+    @property
+    def q_names(self) -> tuple[str, ...]:
+        """Names of the entries of q: root coordinates, then the moving joints."""
+        return ROOT_COORDINATES[self.root][0] + self.joint_names
+
+    @property
+    def v_names(self) -> tuple[str, ...]:
+        """Names of the entries of v (and a, tau): root DoFs, then the moving joints."""
+        return ROOT_COORDINATES[self.root][1] + self.joint_names
 
     def _array(self, attribute: str) -> np.ndarray:
         values = np.array([getattr(j, attribute) for j in self.joints], dtype=float)
@@ -204,7 +265,7 @@ class Robot:
 
     # ---- look-ups ---------------------------------------------------------------------
     def joint_index(self, name: str) -> int:
-        """Index of a moving joint in the joint-coordinate vector."""
+        """Index of a moving joint in the joint arrays (q[root_nq + i], v[root_nv + i])."""
         try:
             return self.joint_names.index(name)
         except ValueError:
@@ -265,58 +326,109 @@ class Robot:
         return common
 
     def vector(self, values: Mapping[str, float] | Sequence[float] | np.ndarray, *,
-               default: float | None = 0.0, what: str = "joint values") -> np.ndarray:
-        """Joint-coordinate vector from a sequence in model order or a mapping by joint name.
+               default: float | None = 0.0, what: str = "joint values", of: str = "v") -> np.ndarray:
+        """A configuration (``of="q"``, nq values) or a velocity-sized vector (``of="v"``, nv
+        values: v, a, tau) from a sequence in model order (root coordinates first, see
+        ``q_names`` / ``v_names``) or a mapping by coordinate name.
 
-        Joints missing from a mapping take ``default`` (an error when ``default`` is None).
+        Joints missing from a mapping take ``default`` (an error when ``default`` is None);
+        root coordinates missing from it take the neutral pose (origin, identity orientation)
+        or zero velocity. A configuration's root quaternion (x, y, z, w) or (cos, sin) pair is
+        normalised; a zero or non-finite one is an error.
         """
+        if of not in ("q", "v"):
+            raise ValueError(f"vector: of must be 'q' or 'v', got {of!r}")
+        names = self.q_names if of == "q" else self.v_names
+        offset = self.root_nq if of == "q" else self.root_nv
         if isinstance(values, Mapping):
-            out = np.full(self.nv, np.nan if default is None else default)
+            out = np.full(len(names), np.nan if default is None else default)
+            out[:offset] = pin.neutral(self.model)[:offset] if of == "q" else 0.0
             for name, value in values.items():
-                out[self.joint_index(name)] = float(value)
-            missing = [n for n, v in zip(self.joint_names, out) if np.isnan(v)]
+                if name in names[:offset]:
+                    out[names.index(name)] = float(value)
+                else:
+                    out[offset + self.joint_index(name)] = float(value)
+            missing = [n for n, v in zip(names, out) if np.isnan(v)]
             if missing:
                 raise UserInputError(f"{what}: no value for joint(s) {', '.join(missing)}")
-            return out
-        out = np.asarray(values, dtype=float).reshape(-1)
-        if out.size != self.nv:
-            raise UserInputError(
-                f"{what}: expected {self.nv} values in joint order "
-                f"({', '.join(self.joint_names)}), got {out.size}"
-            )
+        else:
+            out = np.asarray(values, dtype=float).reshape(-1)
+            if out.size != len(names):
+                raise UserInputError(
+                    f"{what}: expected {len(names)} values ({'nq' if of == 'q' else 'nv'} of a "
+                    f"{self.root} root) in the order {', '.join(names)}; got {out.size}"
+                )
+        if of == "q" and self.root != "fixed":
+            out = self._normalised_root(out, what)
         return out
+
+    def _normalised_root(self, q: np.ndarray, what: str) -> np.ndarray:
+        """q with its root orientation (quaternion or cos, sin) scaled to unit norm."""
+        rotation = slice(3, 7) if self.root == "floating" else slice(2, 4)
+        norm = float(np.linalg.norm(q[rotation]))
+        if not (math.isfinite(norm) and norm > 0.0):
+            names = ", ".join(self.q_names[rotation])
+            raise UserInputError(f"{what}: the {self.root} root's orientation ({names}) must be "
+                                 f"finite and non-zero; got {q[rotation].tolist()}")
+        q = q.copy()
+        q[rotation] /= norm
+        return q
 
 
 # ---------------------------------------------------------------------------------------
 # Loading
 # ---------------------------------------------------------------------------------------
-def load_robot(source: str | Path, *, strict: bool = False) -> Robot:
+def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False) -> Robot:
     """Build a Robot from a URDF file path or a URDF XML string (any encoding declaration).
+
+    ``root`` joins the URDF's root link to the world: ``fixed`` (welded), ``floating``
+    (Pinocchio free-flyer) or ``planar`` (x, y, yaw on the floor); see the module docstring
+    for the q and v layouts. An unknown root is a UserInputError.
 
     Raises :class:`URDFError` naming the file, the line, the element and the reason for a
     missing file, malformed XML, a ``<robot>`` without a name, a duplicate link or joint name,
     an attribute that is not the numbers urdfdom expects, a missing ``<mass value>``,
     ``<inertia>`` moment or ``<limit>`` effort / velocity, an unknown joint type, a missing
     parent or child link, a lower limit above the upper one, a zero axis on a moving joint, a
-    ``<mimic>`` of no moving joint or a kinematic loop. Physically invalid inertias are
-    warnings in the fidelity report (``Robot.warnings``), errors with ``strict=True``; so is a
-    singular joint-space mass matrix.
+    ``<mimic>`` of no moving joint, a kinematic loop, or (with a floating or planar root) a
+    URDF joint named ROOT_JOINT_NAME. Physically invalid inertias are warnings in the fidelity
+    report (``Robot.warnings``), errors with ``strict=True``; so is a singular joint-space
+    mass matrix.
     """
+    if root not in ROOTS:
+        raise UserInputError(f"root '{root}' is unknown: expected one of {', '.join(ROOTS)}")
     text, label = _read_source(source)
-    root = _parse_xml(text, label)
-    fidelity = _check_urdf(root, label)
-    urdf = yourdfpy.URDF.load(io.BytesIO(etree.tostring(root)), build_scene_graph=False, load_meshes=False)
+    element = _parse_xml(text, label)
+    fidelity = _check_urdf(element, label)
+    joint = element.find(f"joint[@name='{ROOT_JOINT_NAME}']")
+    if root != "fixed" and joint is not None:
+        raise URDFError(f"{_where(label, joint)}: the name is reserved for the {root} root joint; "
+                        "rename the joint or load with root 'fixed'")
+    urdf = yourdfpy.URDF.load(io.BytesIO(etree.tostring(element)), build_scene_graph=False, load_meshes=False)
     tree, root_link = _kinematic_tree(urdf)
-    relations, mimic_warnings = _mimic_relations(root, label)
-    model, mimic, mimic_notes = _pinocchio_model(root, relations)
-    joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(1, model.njoints)
+    relations, mimic_warnings = _mimic_relations(element, label)
+    model, mimic, mimic_notes = _pinocchio_model(element, relations, root)
+    first = 1 if root == "fixed" else 2  # Pinocchio joint 0 is the universe, 1 the root joint
+    joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(first, model.njoints)
                    if model.names[i] not in mimic)
-    robot = Robot(name=root.get("name"), source=label, model=model, joints=joints, tree=tree,
-                  root_link=root_link, fidelity=(*mimic_warnings, *fidelity, *mimic_notes), mimic=mimic)
+    robot = Robot(name=element.get("name"), source=label, model=model, joints=joints, tree=tree,
+                  root_link=root_link,
+                  fidelity=(_root_note(root, root_link), *mimic_warnings, *fidelity, *mimic_notes),
+                  mimic=mimic, root=root)
     if strict and robot.warnings:
         raise URDFError(f"{label}: strict loading refuses {len(robot.warnings)} warning(s): "
                         + "; ".join(w.removeprefix(WARNING) for w in robot.warnings))
     return robot
+
+
+def _root_note(root: str, root_link: str) -> str:
+    """The fidelity report's line on the root joint."""
+    if root == "fixed":
+        return (f"root: fixed: link '{root_link}' is welded to the world "
+                "(load with root 'floating' or 'planar' to free it)")
+    q_names, v_names = ROOT_COORDINATES[root]
+    return (f"root: {root}: joint '{ROOT_JOINT_NAME}' between the world and link '{root_link}' "
+            f"(q starts {', '.join(q_names)}; v starts {', '.join(v_names)}, in the link's frame)")
 
 
 def lock_joints(robot: Robot, positions: Mapping[str, float]) -> Robot:
@@ -328,10 +440,9 @@ def lock_joints(robot: Robot, positions: Mapping[str, float]) -> Robot:
     """
     if not positions:
         return robot
-    indices = [robot.joint_index(name) for name in positions]
-    q_ref = np.zeros(robot.nv)
-    for i, value in zip(indices, positions.values()):
-        q_ref[i] = float(value)
+    for name in positions:
+        robot.joint_index(name)  # only independent moving joints can be locked, never the root
+    q_ref = robot.vector(dict(positions), of="q", what="locked joint positions")
     values = {name: float(value) for name, value in positions.items()}
     values.update({name: m.multiplier * values[m.primary] + m.offset
                    for name, m in robot.mimic.items() if m.primary in values})
@@ -342,7 +453,8 @@ def lock_joints(robot: Robot, positions: Mapping[str, float]) -> Robot:
     return Robot(name=robot.name, source=robot.source, model=model, joints=kept, tree=tree,
                  root_link=robot.root_link, fidelity=robot.fidelity,
                  locked={**robot.locked, **values},
-                 mimic={name: m for name, m in robot.mimic.items() if name not in values})
+                 mimic={name: m for name, m in robot.mimic.items() if name not in values},
+                 root=robot.root)
 
 
 def keep_joints(robot: Robot, moving: Sequence[str], positions: Mapping[str, float] | None = None) -> Robot:
@@ -597,22 +709,31 @@ def _mimic_relations(root: etree._Element, label: str) -> tuple[dict[str, Mimic]
     return relations, warnings
 
 
-def _pinocchio_model(root: etree._Element, mimic: dict[str, Mimic]) -> tuple[pin.Model, dict[str, Mimic], list[str]]:
-    """Pinocchio's model with its mimic joints, the relations it holds and the fidelity notes.
+def _pinocchio_model(element: etree._Element, mimic: dict[str, Mimic],
+                     root: str) -> tuple[pin.Model, dict[str, Mimic], list[str]]:
+    """Pinocchio's model with the chosen root joint (named ROOT_JOINT_NAME) and its mimic
+    joints, the relations it holds and the fidelity notes.
 
     Pinocchio 4.1 adds a mimic joint only after its primary in its depth-first joint order; a
     mimic joint above its primary moves independently (noted).
     """
+    order = _pinocchio_build(_pinocchio_xml(element, {}), root, mimic=False)
     if not mimic:
-        return pin.buildModelFromXML(_pinocchio_xml(root, {})), {}, []
-    order = pin.buildModelFromXML(_pinocchio_xml(root, {}))
+        return order, {}, []
     kept = {name: m for name, m in mimic.items() if order.getJointId(m.primary) < order.getJointId(name)}
     notes = [f"joint '{name}': <mimic> of '{m.primary}' ignored (Pinocchio needs the primary "
              "before it in the tree); the joint moves independently"
              for name, m in mimic.items() if name not in kept]
     notes += [f"joint '{name}': mimics '{m.primary}' (q = {m.multiplier:g} q_{m.primary} + {m.offset:g}); "
               "no coordinate of its own, its <limit> and <dynamics> unused" for name, m in kept.items()]
-    return pin.buildModelFromXML(_pinocchio_xml(root, kept), mimic=True), kept, notes
+    return _pinocchio_build(_pinocchio_xml(element, kept), root, mimic=True), kept, notes
+
+
+def _pinocchio_build(xml: str, root: str, *, mimic: bool) -> pin.Model:
+    """pin.buildModelFromXML of the URDF text with the chosen root joint."""
+    if root == "fixed":
+        return pin.buildModelFromXML(xml, mimic=mimic)
+    return pin.buildModelFromXML(xml, _ROOT_JOINT_MODELS[root](), ROOT_JOINT_NAME, mimic=mimic)
 
 
 def _mass_matrix_defect(model: pin.Model, source: str) -> str:
