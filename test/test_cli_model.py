@@ -14,6 +14,8 @@ from youbot_dynamics.cli import main
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.model.robot import Robot, load_robot
 
+from test_robot_loading import MALFORMED, _line_of, _two_link
+
 Q_ORDER = "-0.3,1.1,-0.9,0.8,2.0,0.004,0.006,0.5,-0.5,1.5,2.5"
 Q_NAMED = "arm_joint_2=1.1,arm_joint_4=0.8"
 
@@ -132,13 +134,19 @@ def test_inverse_and_forward_dynamics(capsys: pytest.CaptureFixture[str], robot:
     assert "a (rad/s^2 or m/s^2), without URDF joint friction" in _text(capsys, ["fd", "--no-friction"])
 
 
-def test_other_urdf(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+def _one_joint(tmp_path: Path) -> Path:
+    """A 1-DoF pendulum: 2 kg at 0.5 m from a hinge about y, 1 m above the root."""
     path = tmp_path / "one.urdf"
     path.write_text('<robot name="one"><link name="a"/><link name="b"><inertial><mass value="2"/>'
                     '<origin xyz="0.5 0 0"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" '
                     'izz="0.1"/></inertial></link><joint name="hinge" type="revolute"><parent link="a"/>'
                     '<child link="b"/><origin xyz="0 0 1"/><axis xyz="0 1 0"/><limit lower="-3" '
                     'upper="3" effort="1" velocity="1"/></joint></robot>')
+    return path
+
+
+def test_other_urdf(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    path = _one_joint(tmp_path)
     record = _json(capsys, ["fk", "--urdf", str(path), "--q", "hinge=0.5"])
     assert record["frame"] == "b"
     np.testing.assert_allclose(record["position"], [0, 0, 1], atol=1e-15)
@@ -167,3 +175,61 @@ def test_bad_arguments(capsys: pytest.CaptureFixture[str], argv: list[str], word
     assert len(lines) == 1 and lines[0].startswith(f"youbot-dynamics {argv[0]}: error: ")
     for word in words:
         assert word in lines[0]
+
+
+@pytest.mark.parametrize("kind", ["space", "body", "world", "local", "local_world_aligned"])
+def test_one_joint_jacobian_is_6_by_1(capsys: pytest.CaptureFixture[str], tmp_path: Path, kind: str) -> None:
+    """Pinocchio hands a 1-DoF robot's frame Jacobian back as a flat array; ours stays 6 x nv."""
+    path = _one_joint(tmp_path)
+    record = _json(capsys, ["jacobian", "--urdf", str(path), "--kind", kind, "--q", "0.5"])
+    matrix = np.array(record["matrix"])
+    assert matrix.shape == (6, 1) and record["columns"] == ["hinge"]
+    # The hinge's axis is y in every convention: omega = (0, 1, 0).
+    omega = matrix[:3, 0] if kind in ("space", "body") else matrix[3:, 0]
+    np.testing.assert_allclose(omega, [0, 1, 0], atol=1e-15)
+    assert "hinge" in _text(capsys, ["jacobian", "--urdf", str(path), "--kind", kind])
+
+
+def _one_error_line(capsys: pytest.CaptureFixture[str], argv: list[str]) -> str:
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert captured.out == "" and len(lines) == 1, captured.err
+    assert lines[0].startswith(f"youbot-dynamics {argv[0]}: error: ")
+    return lines[0]
+
+
+@pytest.mark.parametrize("case", MALFORMED)
+def test_malformed_urdf_is_one_line_with_file_line_and_element(capsys: pytest.CaptureFixture[str],
+                                                                tmp_path: Path, case: str) -> None:
+    old, new, element, marker = MALFORMED[case]
+    text = _two_link().replace(old, new, 1)
+    path = tmp_path / "bad.urdf"
+    path.write_text(text)
+    line = _one_error_line(capsys, ["info", "--urdf", str(path)])
+    assert f"{path}:{_line_of(text, marker)}:" in line and element in line
+
+
+def test_strict_refuses_what_info_reports(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    triangle = '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.5"/>'
+    text = _two_link().replace('<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>', triangle)
+    path = tmp_path / "triangle.urdf"
+    path.write_text(text)
+    record = _json(capsys, ["info", "--urdf", str(path)])
+    assert len(record["warnings"]) == 2 and all("triangle inequality" in w for w in record["warnings"])
+    assert "warning: link 'l1'" in _text(capsys, ["info", "--urdf", str(path)])
+    line = _one_error_line(capsys, ["info", "--urdf", str(path), "--strict"])
+    assert f"{path}: strict loading refuses 2 warning(s)" in line and "link 'base'" in line
+
+
+@pytest.mark.parametrize("json_flag", [[], ["--json"]])
+def test_fd_refuses_a_singular_mass_matrix(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                           json_flag: list[str]) -> None:
+    """A moving joint carrying a massless link: ABA would print a = -inf (and --json crashed
+    on it); fd refuses, naming the joint. id stays defined."""
+    text = _two_link().replace(_two_link().split("\n")[3], '<link name="l1"/>')
+    path = tmp_path / "massless.urdf"
+    path.write_text(text)
+    line = _one_error_line(capsys, ["fd", "--urdf", str(path), *json_flag])
+    assert "no mass moves with joint(s) 'j1'" in line and str(path) in line
+    assert _json(capsys, ["id", "--urdf", str(path), "--no-friction"])["tau"] == {"j1": 0.0}

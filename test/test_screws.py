@@ -11,7 +11,7 @@ import pytest
 from youbot_dynamics import default_urdf
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.lie import exp_se3
-from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
+from youbot_dynamics.model.robot import Robot, keep_joints, load_robot, lock_joints
 from youbot_dynamics.model.screws import (fkin_body, fkin_space, jacobian_body, jacobian_space,
                                           screw_chain)
 
@@ -238,3 +238,64 @@ def test_stretched_youbot_jacobians_rank_four(youbot: Robot) -> None:
         assert max(_max_errors(youbot, link, stretched[None, :]).values()) < TOLERANCE
     generic = np.linalg.svd(jacobian_space(screw_chain(youbot), stretched + 0.3), compute_uv=False)
     assert generic[4] > 1e-3
+
+
+# ---- mimic joints --------------------------------------------------------------------------
+MIMIC = {"q4": ("q2", -2.0, 0.3), "q6": ("q1", 0.5, -0.1), "side_joint": ("q5", 1.5, 0.2)}
+
+
+def mimic_arm_urdf() -> str:
+    """The offset arm with q4 and q6 mimicking joints of their own chain and the side branch's
+    joint mimicking q5, which is not in the side chain."""
+    text = offset_arm_urdf()
+    for joint, (primary, multiplier, offset) in MIMIC.items():
+        start = text.index(f'<joint name="{joint}"')
+        end = text.index("</joint>", start)
+        text = text[:end] + f'<mimic joint="{primary}" multiplier="{multiplier}" offset="{offset}"/>' + text[end:]
+    return text
+
+
+def test_mimic_chains_follow_their_primaries() -> None:
+    robot = load_robot(mimic_arm_urdf())
+    assert robot.joint_names == ("q1", "q2", "q3", "q5")
+    assert {name: (m.primary, m.multiplier, m.offset) for name, m in robot.mimic.items()} == MIMIC
+    tool, side = screw_chain(robot, "tool"), screw_chain(robot, "side")
+    assert tool.joint_names == ("q1", "q2", "q3", "q5") and tool.n == 6
+    assert tool.axis_names == ("q1", "q2", "q3", "q4", "q5", "q6")
+    assert side.joint_names == ("q1", "q2", "q5") and side.axis_names == ("q1", "q2", "side_joint")
+    with pytest.raises(UserInputError, match="'q4' .* mimics 'q2'"):
+        robot.joint_index("q4")
+
+
+@pytest.mark.parametrize("link", ["tool", "a3b", "side"])
+def test_mimic_arm_matches_pinocchio_mimic_joints(link: str) -> None:
+    """PoE with q_mimic = multiplier q_primary + offset equals Pinocchio's mimic joints, and
+    the free offset arm (every joint independent) at the expanded configuration."""
+    robot, free = load_robot(mimic_arm_urdf()), load_robot(offset_arm_urdf())
+    configurations = _random_configurations(robot, 6)
+    errors = _max_errors(robot, link, configurations)
+    assert max(errors.values()) < TOLERANCE, errors
+    expanded = np.zeros((len(configurations), free.nv))
+    for name in free.joint_names:
+        primary, multiplier, offset = MIMIC.get(name, (name, 1.0, 0.0))
+        expanded[:, free.joint_index(name)] = multiplier * configurations[:, robot.joint_index(primary)] + offset
+    # Measured 0 (the same arithmetic on the same angles); bound 1e-12.
+    np.testing.assert_allclose(fkin_space(screw_chain(robot, link), configurations),
+                               fkin_space(screw_chain(free, link), expanded), rtol=0, atol=TOLERANCE)
+
+
+def test_locking_a_primary_locks_its_mimic_joints() -> None:
+    """Pinocchio refuses to remove a primary and keep its mimic joint: q4 is locked with q2,
+    at -2 q2 + 0.3, and the poses stay those of the full robot."""
+    robot = load_robot(mimic_arm_urdf())
+    reduced = lock_joints(robot, {"q2": 0.4})
+    assert reduced.joint_names == ("q1", "q3", "q5") and reduced.model.nv == 3
+    assert reduced.locked == pytest.approx({"q2": 0.4, "q4": -0.5})
+    assert set(reduced.mimic) == {"q6", "side_joint"}
+    q_reduced = _random_configurations(reduced, 7)[:20]
+    q_full = np.insert(q_reduced, 1, 0.4, axis=1)
+    for link in ("tool", "side"):
+        # Measured 5.6e-16 (locked vs full) and 1.5e-15 (vs Pinocchio); bounds 1e-14, 1e-12.
+        np.testing.assert_allclose(fkin_space(screw_chain(reduced, link), q_reduced),
+                                   fkin_space(screw_chain(robot, link), q_full), rtol=0, atol=1e-14)
+        assert max(_max_errors(reduced, link, q_reduced).values()) < TOLERANCE

@@ -1,8 +1,9 @@
 """Helpers shared by the sub-commands: robot loading, joint-value parsing, output.
 
 Joint values on the command line come either in model order (``--q 0.1,0.2,...``, one per
-moving joint, Pinocchio's order as ``info`` lists it) or by name
-(``--q arm_joint_1=0.1,arm_joint_3=-0.5``, unnamed joints 0). Output is a readable table,
+coordinate, Pinocchio's order as ``info`` lists it: with a floating or planar ``--root`` the
+root's coordinates come first and q has nq values, v nv) or by name
+(``--q arm_joint_1=0.1,root_x=2``, unnamed joints 0, an unnamed root at its neutral pose). Output is a readable table,
 or JSON with ``--json``: positions in metres, quaternions as (x, y, z, w), rotation
 matrices row-major (a list of rows), angles in rad, infinite limits as null.
 """
@@ -26,8 +27,11 @@ class CommandError(UserInputError):
 
 
 def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
-    """--urdf and --json, which every model sub-command takes."""
+    """--urdf, --strict and --json, which every model sub-command takes."""
     parser.add_argument("--urdf", help="URDF file (default: the packaged youBot)")
+    parser.add_argument("--strict", action="store_true",
+                        help="refuse a URDF with warnings (physically invalid inertias, a "
+                        "singular mass matrix) instead of listing them in the fidelity report")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
@@ -69,16 +73,19 @@ def tolerances(args: argparse.Namespace, x0) -> tuple[float | None, Any]:
     return (rtol if args.rtol is None else args.rtol), (atol if args.atol is None else args.atol)
 
 
-def robot_from(args: argparse.Namespace) -> Robot:
-    """The robot of --urdf, or the packaged youBot."""
-    return load_robot(args.urdf if args.urdf else default_urdf())
+def robot_from(args: argparse.Namespace, root: str = "fixed") -> Robot:
+    """The robot of --urdf, or the packaged youBot, with the given root joint (--strict:
+    warnings are errors)."""
+    return load_robot(args.urdf if args.urdf else default_urdf(), root=root,
+                      strict=getattr(args, "strict", False))
 
 
-def joint_vector(robot: Robot, text: str, flag: str = "--q") -> np.ndarray:
-    """Parse '0.1,0.2,...' (model order, exactly nv values) or 'name=value,...' (by name)."""
+def joint_vector(robot: Robot, text: str, flag: str = "--q", of: str = "v") -> np.ndarray:
+    """Parse '0.1,0.2,...' (model order, exactly nq values for ``of="q"``, nv for ``of="v"``)
+    or 'name=value,...' (by name); empty text is the neutral configuration or zero."""
     parts = [part.strip() for part in text.split(",") if part.strip()]
     if not parts:
-        return np.zeros(robot.nv)
+        return robot.vector({}, of=of)
     by_name = ["=" in part for part in parts]
     if any(by_name) and not all(by_name):
         raise CommandError(f"{flag}: give either all values in order or all as name=value, "
@@ -86,8 +93,8 @@ def joint_vector(robot: Robot, text: str, flag: str = "--q") -> np.ndarray:
     try:
         if all(by_name):
             pairs = [part.split("=", 1) for part in parts]
-            return robot.vector({name.strip(): _number(value, flag) for name, value in pairs})
-        return robot.vector([_number(part, flag) for part in parts])
+            return robot.vector({name.strip(): _number(value, flag) for name, value in pairs}, of=of)
+        return robot.vector([_number(part, flag) for part in parts], of=of)
     except CommandError:
         raise
     except UserInputError as error:

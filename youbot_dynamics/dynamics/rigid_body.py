@@ -15,6 +15,14 @@ Friction is applied here and only here: Pinocchio 4.1 stores the URDF's
 aba, crba and nonLinearEffects do not use them (test_rigid_body checks that), so nothing is
 counted twice and the Robot's model needs no change.
 
+Root joint (see :mod:`youbot_dynamics.model.robot`): q has ``robot.nq`` entries, v, a and tau
+``robot.nv``, root coordinates first. The root's entries of tau are the generalised force on
+the root link (its body wrench (f, n) for a floating root, (fx, fy, nz) planar); the root
+has no friction: tau_friction acts on the URDF joints, v[robot.root_nv:], only. The root's
+entries of a are the time derivative of its body twist (Pinocchio's convention), so a
+floating robot at rest falls with a = (R^T g, 0, 0, ...), R the root link's orientation.
+A wrong size is a UserInputError naming nq or nv.
+
 ``data`` is a Pinocchio Data of ``robot.model`` (``robot.model.createData()``), the caller's
 scratch space; each call overwrites it. Returned arrays are fresh (not views of ``data``).
 """
@@ -24,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.model.configuration import sized
 from youbot_dynamics.model.robot import Robot
 
 Vector = np.ndarray
@@ -31,21 +40,47 @@ Vector = np.ndarray
 
 def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vector,
                      friction: JointFriction | None = None, z: Vector | None = None) -> Vector:
-    """tau = RNEA(q, v, a) + tau_friction(v, z): joint torques (N m) or forces (N) giving
-    accelerations a (rad/s^2, m/s^2) at positions q and velocities v."""
-    tau = pin.rnea(robot.model, data, q, v, a)
-    if friction is not None:
-        tau += friction.torque(v, z)
+    """tau = RNEA(q, v, a) + tau_friction(v, z) (nv): joint torques (N m) or forces (N)
+    giving accelerations a (nv; rad/s^2, m/s^2) at positions q (nq) and velocities v (nv)."""
+    try:
+        tau = pin.rnea(robot.model, data, q, v, a)
+        if friction is not None:
+            tau[robot.root_nv:] += friction.torque(v[robot.root_nv:], z)
+    except (ValueError, TypeError):
+        _check_sizes(robot, q, v=v, a=a)
+        raise
     return tau
 
 
 def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Vector,
                      friction: JointFriction | None = None, z: Vector | None = None) -> Vector:
-    """a = ABA(q, v, tau - tau_friction(v, z)): joint accelerations (rad/s^2, m/s^2) under
-    applied torques tau (N m, N)."""
-    if friction is not None:
-        tau = tau - friction.torque(v, z)
-    return pin.aba(robot.model, data, q, v, tau)
+    """a = ABA(q, v, tau - tau_friction(v, z)) (nv): accelerations (rad/s^2, m/s^2) at
+    positions q (nq) and velocities v (nv) under applied torques tau (nv; N m, N).
+
+    Raises :class:`~youbot_dynamics.errors.SingularMassMatrixError` (naming the massless
+    joints) when the robot's mass matrix is singular, instead of returning inf or NaN. With
+    mimic joints, a = M(q)^-1 (tau - C(q, v) v - g(q)): Pinocchio 4.1's aba refuses them.
+    """
+    robot.require_regular_mass_matrix()
+    try:
+        if friction is not None:
+            tau = np.array(tau, dtype=float)
+            tau[robot.root_nv:] -= friction.torque(v[robot.root_nv:], z)
+        if robot.mimic:
+            return np.linalg.solve(mass_matrix(robot, data, q), tau - bias_torque(robot, data, q, v))
+        return pin.aba(robot.model, data, q, v, tau)
+    except (ValueError, TypeError):
+        _check_sizes(robot, q, v=v, tau=tau)
+        raise
+
+
+def _check_sizes(robot: Robot, q: Vector, **velocity_sized: Vector) -> None:
+    """After Pinocchio refused its input: a UserInputError naming the vector whose size is
+    not nq (q) or nv (the keyword arguments, by name), if one is; checked only then, so that
+    a call with the right sizes pays nothing."""
+    sized(robot, q, "q", "q")
+    for name, x in velocity_sized.items():
+        sized(robot, x, "v", name)
 
 
 def symmetrised(upper: np.ndarray) -> np.ndarray:
@@ -55,22 +90,37 @@ def symmetrised(upper: np.ndarray) -> np.ndarray:
 
 
 def mass_matrix(robot: Robot, data: pin.Data, q: Vector) -> Vector:
-    """Joint-space mass matrix M(q) (kg m^2, kg), full and symmetric, armature included."""
-    return symmetrised(pin.crba(robot.model, data, q))
+    """Joint-space mass matrix M(q) (nv x nv; kg m^2, kg), full and symmetric, armature
+    included, at positions q (nq)."""
+    try:
+        return symmetrised(pin.crba(robot.model, data, q))
+    except (ValueError, TypeError):
+        _check_sizes(robot, q)
+        raise
 
 
 def gravity_torque(robot: Robot, data: pin.Data, q: Vector) -> Vector:
-    """g(q) (N m, N): the torques that hold the robot still against gravity."""
-    return pin.computeGeneralizedGravity(robot.model, data, q)
+    """g(q) (nv; N m, N) at positions q (nq): the torques that hold the robot still against
+    gravity (for a floating root, the root's entries are the wrench that would hold it up)."""
+    try:
+        return pin.computeGeneralizedGravity(robot.model, data, q)
+    except (ValueError, TypeError):
+        _check_sizes(robot, q)
+        raise
 
 
 def bias_torque(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> Vector:
-    """C(q, v) v + g(q) (N m, N): Coriolis, centrifugal and gravity torques."""
-    return pin.nonLinearEffects(robot.model, data, q, v)
+    """C(q, v) v + g(q) (nv; N m, N) at positions q (nq) and velocities v (nv): Coriolis,
+    centrifugal and gravity torques."""
+    try:
+        return pin.nonLinearEffects(robot.model, data, q, v)
+    except (ValueError, TypeError):
+        _check_sizes(robot, q, v=v)
+        raise
 
 
 def kinetic_energy(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> float:
-    """T = v . M(q) v / 2 (J), armature included.
+    """T = v . M(q) v / 2 (J) at positions q (nq) and velocities v (nv), armature included.
 
     Not pin.computeKineticEnergy: in Pinocchio 4.1 it leaves out the armature of
     RevoluteUnaligned joints (such as the youBot's arm_joint_1, axis -z).
@@ -79,6 +129,15 @@ def kinetic_energy(robot: Robot, data: pin.Data, q: Vector, v: Vector) -> float:
 
 
 def potential_energy(robot: Robot, data: pin.Data, q: Vector) -> float:
-    """V(q) = -sum_i m_i gravity . c_i (J), c_i the centre of mass of link i in the root
-    frame; zero with every centre of mass at the root's height (gravity along -z)."""
-    return float(pin.computePotentialEnergy(robot.model, data, q))
+    """V(q) = -sum_i m_i gravity . c_i (J) at positions q (nq), c_i the centre of mass of link
+    i in the world (the root link's frame for a fixed root); zero with every centre of mass at
+    the world origin's height (gravity along -z). With mimic joints (which Pinocchio 4.1's
+    computePotentialEnergy refuses): -m gravity . c of the whole robot, the same sum."""
+    try:
+        if robot.mimic:
+            com = pin.centerOfMass(robot.model, data, q)  # fills data.mass[0], the total mass (kg)
+            return float(-data.mass[0] * robot.model.gravity.linear @ com)
+        return float(pin.computePotentialEnergy(robot.model, data, q))
+    except (ValueError, TypeError):
+        _check_sizes(robot, q)
+        raise

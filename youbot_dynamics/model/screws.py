@@ -7,9 +7,22 @@ is an independent check.
 Conventions: a screw axis / twist is (omega, v), angular part first; S_i is expressed in
 the root-link ("space") frame {s}, B_i = [Ad_{M^-1}] S_i in the frame {b} of the chain's end
 link at home. M = T_sb(0), positions in metres. Joint values are rad (revolute, continuous)
-or m (prismatic). Functions take the ROBOT's full joint vector q (shape (nv,), or (..., nv)
+or m (prismatic). Functions take the ROBOT's full configuration q (shape (nq,), or (..., nq)
 for a batch) and pick the chain's joints with ``chain.joints``; Jacobians have one column per
-chain joint, in chain order (root first), and map joint rates to twists (omega, v).
+robot joint that moves the chain, in chain order (root first), after the root joint's
+columns for a floating or planar root, and map velocities v (``chain.columns`` of them) to
+twists (omega, v). A mimic joint in the chain (theta = multiplier q_primary + offset) has a
+screw axis of its own but no column: its column, times the multiplier, adds to its
+primary's, as Pinocchio's mimic joints do.
+
+Root joint (see :mod:`youbot_dynamics.model.robot`): with a floating or planar root the
+space frame {s} is the world, T_sb(q) = T_root(q_root) T_chain(q_joints), and the Jacobians
+get the root's DoFs as their first columns, in the order and convention of Pinocchio's v
+(the root link's body twist: (vx, vy, vz, wx, wy, wz) floating, (vx, vy, wz) planar), so
+that J_s equals Pinocchio's WORLD frame Jacobian and J_b its LOCAL one (rows reordered) on
+the columns ``chain.columns``. With the root's body twist V_r = P v_root (P picks the twist
+(omega, v) out of v_root): V_s = [Ad_{T_root}] (V_r + J_s,chain dq) and
+V_b = [Ad_{T_chain^-1}] V_r + J_b,chain dq.
 
 Speed: a call costs a fixed number of numpy calls plus one 4x4 product per joint, which is
 what matters for one configuration (each numpy call costs ~0.3 us, the arithmetic far less).
@@ -29,8 +42,20 @@ from typing import NamedTuple
 import numpy as np
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.model.lie import adjoint, inverse_transform, skew
-from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.model.lie import adjoint, inverse_transform, matrix_from_quaternion, skew
+from youbot_dynamics.model.robot import ROOT_COORDINATES, Robot
+
+
+class MimicCoupling(NamedTuple):
+    """How a chain with mimic joints reads the robot's joint vector: the chain joint i
+    (screw axis S_i, named ``names[i]``) turns by theta_i = multiplier[i] q[index[i]] +
+    offset[i] (rad or m), and d theta / d q[chain.joints] = ``matrix`` (n, columns)."""
+
+    names: tuple[str, ...]
+    index: np.ndarray
+    multiplier: np.ndarray
+    offset: np.ndarray
+    matrix: np.ndarray
 
 
 class ExponentialMap(NamedTuple):
@@ -50,17 +75,22 @@ class ExponentialMap(NamedTuple):
 class ScrewChain:
     """The chain from a robot's root link to ``link``: S (6, n), M (4, 4), B (6, n).
 
-    ``joints`` are the indices of the chain's moving joints in the robot's joint vector (of
-    length ``nv``) and ``joint_names`` their names, root first. Build it once per (robot, link) with
+    ``joints`` are the indices in the robot's configuration q (of length ``nq``) of the
+    joints that move the chain (the Jacobians' columns after the root's) and ``joint_names``
+    their names, root first; without mimic joints they are the chain's moving joints, one
+    per screw axis. ``coupling`` (None without mimic joints) maps q to the n screw axes'
+    angles. ``root`` is the robot's root joint. Build it once per (robot, link) with
     :func:`screw_chain` and keep it: it is immutable.
     """
 
     link: str
     joint_names: tuple[str, ...]
     joints: np.ndarray
-    nv: int
+    nq: int
     S: np.ndarray
     M: np.ndarray
+    coupling: MimicCoupling | None = None
+    root: str = "fixed"
     B: np.ndarray = field(init=False)
     _space_pose: ExponentialMap = field(init=False, repr=False)
     _body_pose: ExponentialMap = field(init=False, repr=False)
@@ -97,8 +127,20 @@ class ScrewChain:
 
     @property
     def n(self) -> int:
-        """Number of moving joints in the chain."""
+        """Number of moving joints (screw axes) in the chain, mimic joints included."""
         return self.S.shape[1]
+
+    @property
+    def axis_names(self) -> tuple[str, ...]:
+        """The joint of each screw axis (column of S and B), root first."""
+        return self.joint_names if self.coupling is None else self.coupling.names
+
+    @property
+    def columns(self) -> np.ndarray:
+        """Indices in v of the Jacobians' columns: the root's DoFs, then the joints that move
+        the chain (equal to ``joints`` for a fixed root)."""
+        root_nq, root_nv = (len(names) for names in ROOT_COORDINATES[self.root])
+        return np.concatenate([np.arange(root_nv), self.joints - root_nq + root_nv])
 
 
 def screw_chain(robot: Robot, link: str | None = None) -> ScrewChain:
@@ -108,6 +150,7 @@ def screw_chain(robot: Robot, link: str | None = None) -> ScrewChain:
     Walking down the chain, T accumulates the joint origins; a revolute (or continuous) joint
     with world axis omega through the point p has S = (omega, -omega x p), a prismatic joint
     along the world direction d has S = (0, d), a fixed joint only moves T. M is T at the end.
+    A mimic joint (``robot.mimic``) is read from its primary's value.
     """
     link = robot.end_effector if link is None else link
     transform = np.eye(4)
@@ -123,9 +166,33 @@ def screw_chain(robot: Robot, link: str | None = None) -> ScrewChain:
             axes.append(np.concatenate([direction, -np.cross(direction, transform[:3, 3])]))
         names.append(joint.name)
     S = np.array(axes, dtype=float).reshape(-1, 6).T
-    indices = np.array([robot.joint_index(name) for name in names], dtype=int)
-    return ScrewChain(link=link, joint_names=tuple(names), joints=indices, nv=robot.nv, S=S,
-                      M=transform)
+    columns, coupling = mimic_coupling(robot, tuple(names))
+    indices = np.array([robot.root_nq + robot.joint_index(name) for name in columns], dtype=int)
+    return ScrewChain(link=link, joint_names=columns, joints=indices, nq=robot.nq, S=S,
+                      M=transform, coupling=coupling, root=robot.root)
+
+
+def mimic_coupling(robot: Robot, names: tuple[str, ...]) -> tuple[tuple[str, ...], MimicCoupling | None]:
+    """The robot joints that drive the chain joints ``names`` (each once, root first: a joint
+    drives itself, a mimic joint is driven by its primary) and their :class:`MimicCoupling`
+    (None when no chain joint mimics another); its ``index`` points into q (after the root's
+    coordinates)."""
+    relations = [robot.mimic.get(name) for name in names]
+    drivers = [name if m is None else m.primary for name, m in zip(names, relations)]
+    columns = tuple(dict.fromkeys(drivers))
+    if not any(relations):
+        return columns, None
+    multiplier = np.array([1.0 if m is None else m.multiplier for m in relations])
+    matrix = np.zeros((len(names), len(columns)))
+    matrix[np.arange(len(names)), [columns.index(d) for d in drivers]] = multiplier
+    coupling = MimicCoupling(names=names,
+                             index=np.array([robot.root_nq + robot.joint_index(d) for d in drivers], dtype=int),
+                             multiplier=multiplier,
+                             offset=np.array([0.0 if m is None else m.offset for m in relations]),
+                             matrix=matrix)
+    for array in coupling[1:]:
+        array.setflags(write=False)
+    return columns, coupling
 
 
 def exponential_terms(axes: np.ndarray) -> np.ndarray:
@@ -180,11 +247,56 @@ def _exponentials(exponential: ExponentialMap, theta: np.ndarray) -> np.ndarray:
 
 
 def _joint_values(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
+    """The screw axes' angles theta (..., n) (rad or m) from the robot's joint vector(s)."""
     q = np.asarray(q, dtype=float)
-    if q.ndim == 0 or q.shape[-1] != chain.nv:
-        raise UserInputError(f"chain to '{chain.link}' needs the robot's joint vector of "
-                             f"{chain.nv} values; got shape {q.shape}")
-    return q.take(chain.joints, axis=-1)
+    if q.ndim == 0 or q.shape[-1] != chain.nq:
+        raise UserInputError(f"chain to '{chain.link}' needs the robot's configuration q of "
+                             f"nq = {chain.nq} values ({chain.root} root); got shape {q.shape}")
+    if chain.coupling is None:
+        return q.take(chain.joints, axis=-1)
+    coupling = chain.coupling
+    return q.take(coupling.index, axis=-1) * coupling.multiplier + coupling.offset
+
+
+def _joint_columns(chain: ScrewChain, columns: np.ndarray) -> np.ndarray:
+    """Jacobian columns per screw axis (..., 6, n) -> per driving joint (..., 6, len(joints)):
+    a mimic joint's column, times its multiplier, adds to its primary's."""
+    return columns if chain.coupling is None else columns @ chain.coupling.matrix
+
+
+#: P of each movable root: its columns are the root link's body twist (omega, v) per unit
+#: of each root DoF of Pinocchio's v ((vx, vy, vz, wx, wy, wz) floating, (vx, vy, wz) planar).
+ROOT_TWISTS = {"floating": np.block([[np.zeros((3, 3)), np.eye(3)], [np.eye(3), np.zeros((3, 3))]]),
+               "planar": np.zeros((6, 3))}
+ROOT_TWISTS["planar"][[3, 4, 2], [0, 1, 2]] = 1.0
+for _twists in ROOT_TWISTS.values():
+    _twists.setflags(write=False)
+
+
+def root_pose(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
+    """T_root(q): pose of the robot's root link in the world (4x4, m), shape (..., 4, 4) for
+    q of shape (..., nq). Floating: translation q[0:3], rotation of the quaternion q[3:7]
+    (x, y, z, w); planar: translation (q[0], q[1], 0), rotation about z with cos q[2] and
+    sin q[3]; fixed: the identity."""
+    q = np.asarray(q, dtype=float)
+    _joint_values(chain, q)  # size check
+    pose = np.broadcast_to(np.eye(4), (*q.shape[:-1], 4, 4)).copy()
+    if chain.root == "floating":
+        pose[..., :3, 3] = q[..., :3]
+        pose[..., :3, :3] = matrix_from_quaternion(q[..., 3:7])
+    elif chain.root == "planar":
+        pose[..., :2, 3] = q[..., :2]
+        c, s = q[..., 2], q[..., 3]
+        pose[..., 0, 0], pose[..., 0, 1], pose[..., 1, 0], pose[..., 1, 1] = c, -s, s, c
+    return pose
+
+
+def _adjoint_apply(rotation: np.ndarray, position: np.ndarray, twists: np.ndarray) -> np.ndarray:
+    """[Ad_T] X for T = (R, p): (R omega, p x R omega + R v) for the columns (omega, v) of X
+    (..., 6, k); R (..., 3, 3), p (..., 3)."""
+    omega = rotation @ twists[..., :3, :]
+    linear = rotation @ twists[..., 3:, :] + np.cross(position[..., None, :], omega.swapaxes(-1, -2)).swapaxes(-1, -2)
+    return np.concatenate((omega, linear), axis=-2)
 
 
 def _running_products(factors: np.ndarray) -> list[np.ndarray]:
@@ -202,21 +314,31 @@ def _home(chain: ScrewChain, theta: np.ndarray) -> np.ndarray:
     return np.broadcast_to(chain.M, (*theta.shape[:-1], 4, 4)).copy()
 
 
-def fkin_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
-    """T_sb(q) = exp([S_1] q_1) ... exp([S_n] q_n) M, the pose of the chain's end link in the
-    root frame (4x4, m) (FKinSpace). q: robot joint vector(s), shape (nv,) or (..., nv)."""
-    theta = _joint_values(chain, q)
+def _with_root(chain: ScrewChain, q: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """T_root(q) pose: the chain's pose carried into the world by a movable root."""
+    return pose if chain.root == "fixed" else np.matmul(root_pose(chain, q), pose)
+
+
+def _chain_pose(chain: ScrewChain, theta: np.ndarray) -> np.ndarray:
+    """exp([S_1] theta_1) ... exp([S_n] theta_n) M: the end link in the root link's frame."""
     if not chain.n:
         return _home(chain, theta)
     return _running_products(_exponentials(chain._space_pose, theta))[-1]
 
 
+def fkin_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
+    """T_sb(q) = T_root(q) exp([S_1] q_1) ... exp([S_n] q_n) M, the pose of the chain's end
+    link in the world (the root link's frame for a fixed root) (4x4, m) (FKinSpace).
+    q: robot configuration(s), shape (nq,) or (..., nq)."""
+    return _with_root(chain, q, _chain_pose(chain, _joint_values(chain, q)))
+
+
 def fkin_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
-    """T_sb(q) = M exp([B_1] q_1) ... exp([B_n] q_n) (4x4, m) (FKinBody)."""
+    """T_sb(q) = T_root(q) M exp([B_1] q_1) ... exp([B_n] q_n) (4x4, m) (FKinBody)."""
     theta = _joint_values(chain, q)
     if not chain.n:
-        return _home(chain, theta)
-    return _running_products(_exponentials(chain._body_pose, theta))[-1]
+        return _with_root(chain, q, _home(chain, theta))
+    return _with_root(chain, q, _running_products(_exponentials(chain._body_pose, theta))[-1])
 
 
 def _adjoint_columns(factors: np.ndarray, axes: np.ndarray) -> np.ndarray:
@@ -236,16 +358,36 @@ def _adjoint_columns(factors: np.ndarray, axes: np.ndarray) -> np.ndarray:
 
 
 def jacobian_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
-    """Space Jacobian J_s(q), shape (6, n) (or (..., 6, n)): rows (omega, v) of the end
-    link's spatial twist in the root frame (JacobianSpace). Column i is
-    [Ad_{exp([S_1] q_1) ... exp([S_{i-1}] q_{i-1})}] S_i."""
+    """Space Jacobian J_s(q), shape (6, k) (or (..., 6, k)), k = len(chain.columns): rows
+    (omega, v) of the end link's spatial twist in the world (root link frame for a fixed
+    root) (JacobianSpace); columns ``chain.columns`` of v. Chain column i is
+    [Ad_{exp([S_1] q_1) ... exp([S_{i-1}] q_{i-1})}] S_i; with a movable root every column
+    is carried by [Ad_{T_root}] and the root's columns P come first."""
     theta = _joint_values(chain, q)
-    return _adjoint_columns(_exponentials(chain._space_factors, theta), chain._space_axes)
+    chain_columns = _joint_columns(chain, _adjoint_columns(_exponentials(chain._space_factors, theta),
+                                                           chain._space_axes))
+    if chain.root == "fixed":
+        return chain_columns
+    root = root_pose(chain, q)
+    twists = np.broadcast_to(ROOT_TWISTS[chain.root], (*theta.shape[:-1], *ROOT_TWISTS[chain.root].shape))
+    return _adjoint_apply(root[..., :3, :3], root[..., :3, 3],
+                          np.concatenate((twists, chain_columns), axis=-1))
 
 
 def jacobian_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
-    """Body Jacobian J_b(q), shape (6, n) (or (..., 6, n)): rows (omega, v) of the end link's
-    body twist (JacobianBody). Column i is [Ad_{exp(-[B_n] q_n) ... exp(-[B_{i+1}] q_{i+1})}] B_i:
-    J_s's formula for the factors exp([-B_j] q_j) from j = n down, columns reversed."""
-    theta = _joint_values(chain, q)[..., ::-1]
-    return _adjoint_columns(_exponentials(chain._body_factors, theta), chain._body_axes)[..., ::-1]
+    """Body Jacobian J_b(q), shape (6, k) (or (..., 6, k)), k = len(chain.columns): rows
+    (omega, v) of the end link's body twist (JacobianBody); columns ``chain.columns`` of v.
+    Chain column i is [Ad_{exp(-[B_n] q_n) ... exp(-[B_{i+1}] q_{i+1})}] B_i: J_s's formula
+    for the factors exp([-B_j] q_j) from j = n down, columns reversed. With a movable root
+    the root's columns [Ad_{T_chain^-1}] P come first (T_chain the end link's pose in the
+    root link's frame)."""
+    theta = _joint_values(chain, q)
+    chain_columns = _joint_columns(chain, _adjoint_columns(_exponentials(chain._body_factors, theta[..., ::-1]),
+                                                           chain._body_axes)[..., ::-1])
+    if chain.root == "fixed":
+        return chain_columns
+    pose = _chain_pose(chain, theta)
+    rotation_t = pose[..., :3, :3].swapaxes(-1, -2)
+    position = -(rotation_t @ pose[..., :3, 3:])[..., 0]
+    twists = np.broadcast_to(ROOT_TWISTS[chain.root], (*theta.shape[:-1], *ROOT_TWISTS[chain.root].shape))
+    return np.concatenate((_adjoint_apply(rotation_t, position, twists), chain_columns), axis=-1)

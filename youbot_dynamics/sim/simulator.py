@@ -43,6 +43,7 @@ from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper, StepperS
 from youbot_dynamics.dynamics.rigid_body import (forward_dynamics, kinetic_energy, mass_matrix,
                                                  potential_energy)
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.configuration import require_fixed_root
 from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.contact_system import ContactEvent, ContactSystem
@@ -153,6 +154,7 @@ class Simulator:
             raise UserInputError(f"{scene.source}: integrator.method: 'auto' must be resolved first "
                                  "(youbot_dynamics.analysis.work_precision.resolve_integrator)")
         self.robot = robot_with_gravity(scene.robot(), scene.gravity)
+        require_fixed_root(self.robot, scene.source)  # the state layout and steppers assume nq == nv
         self.data = self.robot.model.createData()
         self.friction = scene.joint_friction(self.robot)
         lugre = [] if self.friction is None else \
