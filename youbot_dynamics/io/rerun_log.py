@@ -173,7 +173,7 @@ class RerunLogger(ClosesOnExit):
             raise UserInputError(f"Rerun log: free bodies {clash} have the names of robot frames; rename them")
         self._body_rows: list[tuple[int, list[list[float]], list[list[float]]]] = []
         self.batch_size = max(1, int(batch_size))
-        self.flush_span = float(flush_span)
+        self.flush_span_ns = round(float(flush_span) * 1e9)
         self._series_names: tuple[str, ...] | None = None
         self._pending: list[Samples] = []
         self._pending_names: tuple[str, ...] = ()
@@ -251,7 +251,7 @@ class RerunLogger(ClosesOnExit):
             self._flush()
             self._pending_names = names
         self._pending.append(row)
-        if len(self._pending) >= self.batch_size or row.t - self._pending[0].t >= self.flush_span:
+        if len(self._pending) >= self.batch_size or row.t - self._pending[0].t >= self.flush_span_ns:
             self._flush()
 
     def log_body_poses(self, stamp_ns: int, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
@@ -267,7 +267,7 @@ class RerunLogger(ClosesOnExit):
         translations = [finite_floats(poses[name][0], f"Rerun {name} translation", 3) for name in self.bodies]
         quaternions = [finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]
         self._body_rows.append((t, translations, quaternions))
-        if len(self._body_rows) >= self.batch_size or t - self._body_rows[0][0] >= self.flush_span:
+        if len(self._body_rows) >= self.batch_size or t - self._body_rows[0][0] >= self.flush_span_ns:
             self._flush_bodies()
 
     def log_trajectory(
