@@ -10,7 +10,13 @@ PYTEST_ARGS ?= -m "not slow"
 
 .PHONY: run test test-all bench install clean
 
-$(STAMP): requirements.txt requirements-test.txt setup.py package.xml
+# tf2_msgs (no PyPI wheel) built from interfaces/ into the venv once; skipped where a ROS 2
+# Jazzy provides it. Needs cmake and a C/C++ compiler (Debian: apt-get install cmake g++).
+TF2_MSGS := $(VENV)/.tf2_msgs
+$(TF2_MSGS): requirements.txt requirements-build.txt interfaces/build.sh $(wildcard interfaces/tf2_msgs/* interfaces/tf2_msgs/msg/*)
+	PYTHON=$(PYTHON) interfaces/build.sh $(VENV)
+
+$(STAMP): requirements.txt requirements-test.txt setup.py package.xml $(TF2_MSGS)
 	@$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "Python 3.11+ is needed"'
 	@$(PYTHON) -m venv $(VENV) || { echo "python3 -m venv failed: apt-get install python3-venv"; exit 1; }
 	$(PY) -m pip install --quiet --upgrade pip
