@@ -38,6 +38,7 @@ Clock = _T["rosgraph_msgs/msg/Clock"]
 KeyValue = _T["diagnostic_msgs/msg/KeyValue"]
 DiagnosticStatus = _T["diagnostic_msgs/msg/DiagnosticStatus"]
 DiagnosticArray = _T["diagnostic_msgs/msg/DiagnosticArray"]
+String = _T["std_msgs/msg/String"]
 
 NS_PER_S = 1_000_000_000
 UNIT_QUATERNION_TOLERANCE = 1e-6
@@ -187,6 +188,11 @@ def transform_stamped(
 def tf_message(transforms: Iterable[TransformStamped]) -> TFMessage:
     """tf2_msgs/TFMessage holding ``transforms`` (for /tf or /tf_static)."""
     return TFMessage(transforms=list(transforms))
+
+
+def string(text: str) -> String:
+    """std_msgs/String holding ``text`` (for /robot_description: the URDF XML)."""
+    return String(data=str(text))
 
 
 def clock(stamp_ns: int) -> Clock:

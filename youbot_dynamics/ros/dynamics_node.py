@@ -1,5 +1,8 @@
 """The ``dynamics_node``: a thin rclpy adapter around :mod:`youbot_dynamics.ros.session`.
 
+Both modes publish /tf per sample, and /tf_static and /robot_description (the URDF,
+std_msgs/String) once, latched (transient local), as robot_state_publisher does; without
+tf2_msgs (see interfaces/) they skip /tf and /tf_static with one warning.
 simulate mode publishes /clock, /joint_states, /ee_pose, /free_bodies (geometry_msgs/PoseArray,
 when the scene has free bodies; a scene without a robot has no /joint_states and /ee_pose)
 and /diagnostics (with the contact events), subscribes
@@ -45,8 +48,8 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
 from youbot_dynamics.ros.parameters import check_choice, declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
-from youbot_dynamics.ros.qos import RELIABLE_ALL, RELIABLE_DEEP
-from youbot_dynamics.ros.session import TOPIC_TYPES, InverseSession, Outputs, SimulationSession
+from youbot_dynamics.ros.qos import LATCHED, RELIABLE_ALL, RELIABLE_DEEP
+from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
 from youbot_dynamics.sim.commands import InputRejected
 from youbot_dynamics.sim.scene import load_scene
 
@@ -80,8 +83,7 @@ class DynamicsNode(Node):
         else:
             self.session = InverseSession(scene, filter_time_constant=p["acceleration_filter"], **logs)
         self.finished = False
-        self.publishers_ = {topic: self.create_publisher(rclpy_class(TOPIC_TYPES[topic]), topic, RELIABLE_DEEP)
-                            for topic in self.session.topics}
+        self._create_publishers()
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         if p["mode"] == "simulate":
             self.create_subscription(JointState, "/joint_commands", self._on_command, RELIABLE_DEEP)
@@ -101,9 +103,29 @@ class DynamicsNode(Node):
                                f"{', '.join(map(str, self.session.recorder.paths)) or 'none'}")
 
     # ---- output ------------------------------------------------------------------------
+    def _create_publishers(self) -> None:
+        """A publisher per session topic (latched ones transient local), then the latched
+        messages. A topic whose message package is not installed (tf2_msgs without
+        ``make``'s build) is left out, with one warning; it is still logged."""
+        self.publishers_, self._unpublished = {}, set()
+        for topic in (*self.session.topics, *(t for t, _ in self.session.latched)):
+            try:
+                cls = rclpy_class(TOPIC_TYPES[topic])
+            except ImportError:
+                self._unpublished.add(topic)
+                continue
+            self.publishers_[topic] = self.create_publisher(cls, topic, LATCHED if topic in LATCHED_TOPICS
+                                                            else RELIABLE_DEEP)
+        if self._unpublished:
+            self.get_logger().warning(f"not publishing {', '.join(sorted(self._unpublished))}: their message "
+                                      "package is not installed (tf2_msgs: `make` builds it from interfaces/, "
+                                      "or source a ROS 2 Jazzy); the MCAP still logs them")
+        self._publish(self.session.latched)
+
     def _publish(self, outputs: Outputs) -> None:
         for topic, message in outputs:
-            self.publishers_[topic].publish(to_rclpy(message))
+            if topic not in self._unpublished:
+                self.publishers_[topic].publish(to_rclpy(message))
 
     def _restart_pacing(self) -> None:
         self._pace_start, self._pace_k0 = time.monotonic(), self.session.k

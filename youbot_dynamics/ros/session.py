@@ -3,10 +3,13 @@ torques from joint states (inverse mode), build the messages through ``io.messag
 them through ``io`` (MCAP in rosbag2 form, Rerun). The node only moves messages in and out.
 
 Every output is a list of ``(topic, message)`` (rosbags objects) that the caller publishes
-(``session.topics`` names them); everything published is also logged, plus /tf (every
-moving link and every free body, per sample) and /tf_static (every fixed link, once,
-latched). Stamps and log times are simulated time in integer nanoseconds, so two runs of a
-scene log identical payloads.
+(``session.topics`` names them), /tf (every moving link and every free body) among them in
+every sample; everything published is also logged. ``session.latched`` holds what is sent
+once, latched (transient local), and logged at t = 0: /tf_static (every fixed link) and,
+with a robot, /robot_description (std_msgs/String: the URDF of what is simulated, the
+composed URDF for a composed scene), named as robot_state_publisher names them. Stamps and
+log times are simulated time in integer nanoseconds, so two runs of a scene log identical
+payloads.
 
 Free bodies (simulate mode) appear like the robot's links: on /tf as ``<root frame> ->
 <body name>`` and in the Rerun recording as their shapes; on ROS, as one
@@ -57,9 +60,21 @@ TOPIC_TYPES = {
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/tf": "tf2_msgs/msg/TFMessage",
     "/tf_static": "tf2_msgs/msg/TFMessage",
+    "/robot_description": "std_msgs/msg/String",
 }
-"""Every topic the node publishes or logs, with its type (/tf and /tf_static are logged
-only: tf2_msgs has no rclpy wheel)."""
+"""Every topic the node publishes and logs, with its type (tf2_msgs has no PyPI wheel:
+``make`` builds it from interfaces/; without it the node publishes neither /tf nor /tf_static
+but still logs them)."""
+
+LATCHED_TOPICS = ("/tf_static", "/robot_description")
+"""Topics sent once and latched (transient local, depth 1)."""
+
+
+def robot_description(scene: Scene) -> str:
+    """The URDF XML of the scene's robot: its file's text, or the composed robot's text."""
+    if scene.robot_path.lstrip().startswith("<"):
+        return scene.robot_path
+    return Path(scene.robot_path).read_text(encoding="utf-8")
 
 
 def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
@@ -77,16 +92,16 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
 
 
 class Recorder:
-    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` plus /tf and
-    /tf_static, and a Rerun recording (``rrd_path``) of the robot and (simulate mode) the
+    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (those in
+    :data:`LATCHED_TOPICS` offered latched), and a Rerun recording (``rrd_path``) of the robot and (simulate mode) the
     scene's free bodies; either may be None. ``close`` finalises both and may be called more than once."""
 
     def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
                  mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
-            for topic in (*topics, "/tf", "/tf_static"):
-                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic == "/tf_static")
+            for topic in topics:
+                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic in LATCHED_TOPICS)
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
             free_bodies={spec.body.name: spec.shape for spec in scene.free_bodies} if mode == "simulate" else {},
@@ -178,7 +193,8 @@ def reported(value: float | int | str | None) -> float | int | str:
 
 class _Session(ClosesOnExit):
     """What both modes share: the robot's frames, the input counters, the logs (with
-    /tf_static written once at t = 0; ``with`` finalises them) and the /diagnostics status. Subclasses say their
+    ``latched``, the latched outputs, written once at t = 0; ``with`` finalises them) and
+    the /diagnostics status. Subclasses say their
     ``mode`` and ``topics`` (published, in order) and keep ``stamp_ns``, the stamp (ns) of
     their latest output."""
 
@@ -191,8 +207,12 @@ class _Session(ClosesOnExit):
         self.scene, self.robot = scene, robot
         self.counters = InputCounters()
         self.frames = _Frames(robot, frame_id, ee_link, [spec.body.name for spec in scene.free_bodies])
-        self.recorder = Recorder(self.mode, scene, robot, self.topics, mcap_path, rrd_path, self.frames.root_frame)
-        self.recorder.write([("/tf_static", self.frames.tf_static())], 0)
+        self.latched: Outputs = [("/tf_static", self.frames.tf_static())]
+        if self.frames.has_robot:
+            self.latched.append(("/robot_description", messages.string(robot_description(scene))))
+        self.recorder = Recorder(self.mode, scene, robot, (*self.topics, *(t for t, _ in self.latched)),
+                                 mcap_path, rrd_path, self.frames.root_frame)
+        self.recorder.write(self.latched, 0)
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
         """/diagnostics with one status of this session (also logged)."""
@@ -222,9 +242,9 @@ class SimulationSession(_Session):
     @property
     def topics(self) -> tuple[str, ...]:
         """/clock, /joint_states and /ee_pose (if the scene has a robot), /free_bodies (if it
-        has free bodies), /diagnostics."""
+        has free bodies), /tf, /diagnostics."""
         robot = ("/joint_states", "/ee_pose") if self.robot.tree else ()
-        return ("/clock", *robot, *(("/free_bodies",) if self.scene.free_bodies else ()), "/diagnostics")
+        return ("/clock", *robot, *(("/free_bodies",) if self.scene.free_bodies else ()), "/tf", "/diagnostics")
 
     @property
     def sample_topic(self) -> str:
@@ -323,7 +343,8 @@ class SimulationSession(_Session):
                                                                    snapshot.tau)), ("/ee_pose", pose)]
             if bodies:
                 outputs.append(("/free_bodies", self.frames.free_bodies(stamp, bodies)))
-            self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q, bodies))], stamp)
+            outputs.append(("/tf", self.frames.tf(stamp, q, bodies)))
+            self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
@@ -378,7 +399,7 @@ class InverseSession(_Session):
     :mod:`youbot_dynamics.sim.inverse`), tau = RNEA + friction of the scene's robot."""
 
     mode = "inverse"
-    topics = ("/computed_torques", "/ee_pose", "/diagnostics")
+    topics = ("/computed_torques", "/ee_pose", "/tf", "/diagnostics")
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
                  ee_link: str = "", mcap_path: str | Path | None = None,
@@ -417,11 +438,12 @@ class InverseSession(_Session):
         try:
             pose, position_ee = self.frames.ee_pose(stamp, middle.q)
             outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
-                                                                  middle.v, tau)), ("/ee_pose", pose)]
+                                                                  middle.v, tau)), ("/ee_pose", pose),
+                       ("/tf", self.frames.tf(stamp, middle.q))]
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             return []
-        self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, middle.q))], stamp)
+        self.recorder.write(outputs, stamp)
         data = self.dynamics.data
         energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
         self.recorder.sample(middle.t, self.robot.joint_names, middle.q, middle.v, tau, energy, position_ee)
