@@ -31,7 +31,7 @@ done
 
 BUILD=$(mktemp -d)
 trap 'rm -rf "$BUILD"' EXIT
-echo "tf2_msgs: building from $HERE/tf2_msgs into $VENV (about a minute)"
+echo "tf2_msgs: building from $HERE/tf2_msgs into $VENV"
 PREFIX=$(cd "$VENV" && pwd)
 # The ROS wheels' .pth bootstrapper gives the interpreter the libraries' path; cmake and
 # the generators need it too, and AMENT_PREFIX_PATH to find the generators' templates.
