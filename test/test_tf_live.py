@@ -9,13 +9,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+import xml.etree.ElementTree as ElementTree
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from ros_support import WAIT, Collector, ros_context, spinning, stamp_ns, wait_until
 
-pytestmark = [pytest.mark.ros, pytest.mark.timeout(240)]
+pytestmark = pytest.mark.timeout(240)
 
 from rclpy.node import Node  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
@@ -25,6 +27,8 @@ from std_msgs.msg import String  # noqa: E402
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
 from youbot_dynamics.ros import dynamics_node  # noqa: E402
 from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
+from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
+from youbot_dynamics.sim.scene import load_scene  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 URDF = REPO / "urdf" / "youbot.urdf"
@@ -52,6 +56,7 @@ def compose(transforms: list, root: str, link: str) -> np.ndarray:
     return pose
 
 
+@pytest.mark.ros
 def test_live_tf_and_late_latched_description_from_another_process(tmp_path: Path) -> None:
     """A subscriber in another process gets /tf at the sample rate with the arm links, and,
     subscribing only after the node has published for a while, still gets the latched
@@ -110,6 +115,7 @@ def test_live_tf_and_late_latched_description_from_another_process(tmp_path: Pat
     assert logged.data == URDF.read_text(encoding="utf-8")
 
 
+@pytest.mark.ros
 def test_without_tf2_msgs_the_node_says_so_once_and_runs_on(monkeypatch, capfd) -> None:
     """With tf2_msgs not importable, the node warns once, has no /tf or /tf_static
     publisher, and still publishes its samples and the latched /robot_description."""
@@ -135,3 +141,18 @@ def test_without_tf2_msgs_the_node_says_so_once_and_runs_on(monkeypatch, capfd) 
         node.close()
     err = capfd.readouterr().err
     assert err.count("not publishing /tf, /tf_static") == 1, err
+
+
+def test_composed_scene_describes_the_composed_robot() -> None:
+    """gripping composes two youBots: /robot_description is the composed URDF (both robots'
+    links, parsed here with the standard library's XML parser), and every frame that /tf and
+    /tf_static name is one of its links or a free body, so a tf consumer can draw it."""
+    with SimulationSession(load_scene("gripping"), 500.0) as session:
+        latched = dict(session.latched)
+        sample = dict(session.step())
+    links = {link.get("name") for link in ElementTree.fromstring(latched["/robot_description"].data).iter("link")}
+    assert {"yb1_arm_link_5", "yb2_arm_link_5", "yb1_gripper_palm_link", "yb2_base_link"} <= links
+    frames = {name for message in (latched["/tf_static"], sample["/tf"]) for t in message.transforms
+              for name in (t.header.frame_id, t.child_frame_id)}
+    bodies = {spec.body.name for spec in session.scene.free_bodies}
+    assert bodies and frames - bodies <= links and len(frames - bodies) > 20
