@@ -3,6 +3,7 @@
 Both modes publish /tf per sample, and /tf_static and /robot_description (the URDF,
 std_msgs/String) once, latched (transient local), as robot_state_publisher does; without
 tf2_msgs (see interfaces/) they skip /tf and /tf_static with one warning.
+
 simulate mode publishes /clock, /joint_states, /ee_pose, /free_bodies (geometry_msgs/PoseArray,
 when the scene has free bodies; a scene without a robot has no /joint_states and /ee_pose)
 and /diagnostics (with the contact events), subscribes

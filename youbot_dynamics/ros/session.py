@@ -93,8 +93,9 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
 
 class Recorder:
     """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (those in
-    :data:`LATCHED_TOPICS` offered latched), and a Rerun recording (``rrd_path``) of the robot and (simulate mode) the
-    scene's free bodies; either may be None. ``close`` finalises both and may be called more than once."""
+    :data:`LATCHED_TOPICS` offered latched), and a Rerun recording (``rrd_path``) of the
+    robot and (simulate mode) the scene's free bodies; either may be None. ``close``
+    finalises both and may be called more than once."""
 
     def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
                  mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
@@ -194,9 +195,8 @@ def reported(value: float | int | str | None) -> float | int | str:
 class _Session(ClosesOnExit):
     """What both modes share: the robot's frames, the input counters, the logs (with
     ``latched``, the latched outputs, written once at t = 0; ``with`` finalises them) and
-    the /diagnostics status. Subclasses say their
-    ``mode`` and ``topics`` (published, in order) and keep ``stamp_ns``, the stamp (ns) of
-    their latest output."""
+    the /diagnostics status. Subclasses say their ``mode`` and ``topics`` (published, in
+    order) and keep ``stamp_ns``, the stamp (ns) of their latest output."""
 
     mode: str
     stamp_ns: int
