@@ -95,7 +95,9 @@ def test_live_tf_and_late_latched_description_from_another_process(tmp_path: Pat
     assert {"base_link", "arm_link_0", "wheel_link_fl", "gripper_palm_link"} <= {t.child_frame_id for t in static}
     tf = early.messages("/tf")
     assert all({t.child_frame_id for t in m.transforms} == {f"arm_link_{k}" for k in range(1, 6)} for m in tf)
-    by_stamp = {stamp_ns(m.transforms[0]): m.transforms for m in tf}
+    stamps = [stamp_ns(m.transforms[0]) for m in tf]
+    assert set(np.diff(stamps)) == {10_000_000}                 # one /tf per 100 Hz sample, none lost
+    by_stamp = dict(zip(stamps, (m.transforms for m in tf)))
     static = [from_rclpy(t) for t in static]
     compared, worst = 0, 0.0
     for pose in early.messages("/ee_pose"):
