@@ -25,6 +25,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E
 from std_msgs.msg import String  # noqa: E402
 
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
+from youbot_dynamics.io.messages import TYPESTORE  # noqa: E402
 from youbot_dynamics.ros import dynamics_node  # noqa: E402
 from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
 from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
@@ -84,12 +85,15 @@ def test_live_tf_and_late_latched_description_from_another_process(tmp_path: Pat
                                          LATE_QOS)
                 with spinning(context, late):
                     wait_until(lambda: all(received.values()), what="latched /tf_static and /robot_description")
+                    (offered,) = late.get_publishers_info_by_topic("/tf")
             node.send_signal(signal.SIGINT)
             node.wait(timeout=WAIT)
         finally:
             if node.poll() is None:
                 node.kill()
     assert node.returncode == 0, node.stderr.read()
+    # the tf2_msgs built here is ROS 2 Jazzy's type: same hash as the rosbags typestore's (and the MCAP's)
+    assert str(offered.topic_type_hash) == TYPESTORE.hash_rihs01("tf2_msgs/msg/TFMessage")
     assert received["/robot_description"][0].data == URDF.read_text(encoding="utf-8")
     static = received["/tf_static"][0].transforms
     assert {"base_link", "arm_link_0", "wheel_link_fl", "gripper_palm_link"} <= {t.child_frame_id for t in static}
