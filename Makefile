@@ -13,7 +13,8 @@ PYTEST_ARGS ?= -m "not slow"
 # tf2_msgs (no PyPI wheel) built from interfaces/ into the venv once; skipped where a ROS 2
 # Jazzy provides it. Needs cmake and a C/C++ compiler (Debian: apt-get install cmake g++).
 TF2_MSGS := $(VENV)/.tf2_msgs
-$(TF2_MSGS): requirements.txt requirements-build.txt interfaces/build.sh $(wildcard interfaces/tf2_msgs/* interfaces/tf2_msgs/msg/*)
+$(TF2_MSGS): requirements.txt requirements-build.txt interfaces/build.sh \
+		$(wildcard interfaces/tf2_msgs/* interfaces/tf2_msgs/msg/*)
 	PYTHON=$(PYTHON) interfaces/build.sh $(VENV)
 
 $(STAMP): requirements.txt requirements-test.txt setup.py package.xml $(TF2_MSGS)

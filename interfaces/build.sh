@@ -16,7 +16,9 @@ HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 STAMP=$VENV/.tf2_msgs
 PY=$VENV/bin/python
 
-[ -x "$PY" ] || "${PYTHON:-python3}" -m venv "$VENV" || { echo "python3 -m venv failed: apt-get install python3-venv" >&2; exit 1; }
+if [ ! -x "$PY" ]; then
+    "${PYTHON:-python3}" -m venv "$VENV" || { echo "python3 -m venv failed: apt-get install python3-venv" >&2; exit 1; }
+fi
 "$PY" -m pip install --quiet -r "$HERE/../requirements-build.txt"
 SOURCES=$(cd "$HERE/tf2_msgs" && find . -type f | LC_ALL=C sort | xargs sha256sum | sha256sum | cut -c1-64)
 if "$PY" -c 'import tf2_msgs.msg' 2>/dev/null; then
@@ -32,7 +34,8 @@ if [ -f /opt/ros/jazzy/share/tf2_msgs/package.xml ]; then
     exit 0
 fi
 for tool in cmake c++ cc; do
-    command -v $tool >/dev/null || { echo "tf2_msgs: '$tool' not found: apt-get install cmake g++ python3-dev" >&2; exit 1; }
+    command -v $tool >/dev/null ||
+        { echo "tf2_msgs: '$tool' not found: apt-get install cmake g++ python3-dev" >&2; exit 1; }
 done
 
 BUILD=$(mktemp -d)
