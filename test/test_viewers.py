@@ -95,7 +95,7 @@ def test_ee_pose_is_youbot_1s_palm_and_ee_poses_both_palms(gripping) -> None:
     """In the MCAP, every /ee_pose is youBot 1's palm and /ee_poses both palms, in the world
     frame, at the q of /joint_states of the same stamp; the palm moves (not the identity)."""
     assert gripping["topics"] == ("/clock", "/joint_states", "/ee_pose", "/ee_poses", "/free_bodies",
-                                  "/free_bodies_markers", "/scene_markers", "/diagnostics")
+                                  "/free_bodies_markers", "/tf", "/diagnostics")
     logged = gripping["mcap"]
     assert len(logged["/ee_pose"]) == len(logged["/ee_poses"]) == len(logged["/joint_states"]) == N
     for state, ee, both in zip(logged["/joint_states"], logged["/ee_pose"], logged["/ee_poses"]):

@@ -49,6 +49,7 @@ CompressedImage = _T["sensor_msgs/msg/CompressedImage"]
 MeshFile = _T["visualization_msgs/msg/MeshFile"]
 Marker = _T["visualization_msgs/msg/Marker"]
 MarkerArray = _T["visualization_msgs/msg/MarkerArray"]
+String = _T["std_msgs/msg/String"]
 
 NS_PER_S = 1_000_000_000
 UNIT_QUATERNION_TOLERANCE = 1e-6
@@ -210,6 +211,11 @@ def transform_stamped(
 def tf_message(transforms: Iterable[TransformStamped]) -> TFMessage:
     """tf2_msgs/TFMessage holding ``transforms`` (for /tf or /tf_static)."""
     return TFMessage(transforms=list(transforms))
+
+
+def string(text: str) -> String:
+    """std_msgs/String holding ``text`` (for /robot_description: the URDF XML)."""
+    return String(data=str(text))
 
 
 def clock(stamp_ns: int) -> Clock:

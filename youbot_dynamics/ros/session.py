@@ -3,10 +3,13 @@ torques from joint states (inverse mode), build the messages through ``io.messag
 them through ``io`` (MCAP in rosbag2 form, Rerun). The node only moves messages in and out.
 
 Every output is a list of ``(topic, message)`` (rosbags objects) that the caller publishes
-(``session.topics`` names them); everything published is also logged, plus /tf (every
-moving link and every free body, per sample) and /tf_static (every fixed link, once,
-latched). Stamps and log times are simulated time in integer nanoseconds, so two runs of a
-scene log identical payloads.
+(``session.topics`` names them), /tf (every moving link and every free body) among them in
+every sample; everything published is also logged. ``session.latched`` holds what is sent
+once, latched (transient local), and logged at t = 0: /tf_static (every fixed link) and,
+with a robot, /robot_description (std_msgs/String: the URDF of what is simulated, the
+composed URDF for a composed scene), named as robot_state_publisher names them. Stamps and
+log times are simulated time in integer nanoseconds, so two runs of a scene log identical
+payloads.
 
 Shapes for viewers (visualization_msgs/MarkerArray, namespace = the shape's name):
 /free_bodies_markers draws every free body at every sample (in the root frame);
@@ -76,12 +79,21 @@ TOPIC_TYPES = {
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/tf": "tf2_msgs/msg/TFMessage",
     "/tf_static": "tf2_msgs/msg/TFMessage",
+    "/robot_description": "std_msgs/msg/String",
 }
-"""Every topic the node publishes or logs, with its type (/tf and /tf_static are logged
-only: tf2_msgs has no rclpy wheel)."""
+"""Every topic the node publishes and logs, with its type (tf2_msgs has no PyPI wheel:
+``make`` builds it from interfaces/; without it the node publishes neither /tf nor /tf_static
+but still logs them)."""
 
-LATCHED_TOPICS = frozenset({"/tf_static", "/scene_markers"})
-"""Topics published once and offered transient-local (latched), in the MCAP too."""
+LATCHED_TOPICS = frozenset({"/tf_static", "/robot_description", "/scene_markers"})
+"""Topics sent once and latched (transient local, depth 1), in the MCAP too."""
+
+
+def robot_description(scene: Scene) -> str:
+    """The URDF XML of the scene's robot: its file's text, or the composed robot's text."""
+    if scene.robot_path.lstrip().startswith("<"):
+        return scene.robot_path
+    return Path(scene.robot_path).read_text(encoding="utf-8")
 
 FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)
 """Colour (r, g, b, a in 0..1) of the free bodies' markers (light wood)."""
@@ -104,16 +116,16 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
 
 
 class Recorder:
-    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` plus /tf and
-    /tf_static, and a Rerun recording (``rrd_path``) of the robot, the scene's static
-    geometry and (simulate mode) its free bodies; either may be None. ``close`` finalises
-    both and may be called more than once."""
+    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (those in
+    :data:`LATCHED_TOPICS` offered latched), and a Rerun recording (``rrd_path``) of the
+    robot, the scene's static geometry and (simulate mode) its free bodies; either may be
+    None. ``close`` finalises both and may be called more than once."""
 
     def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
                  mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
-            for topic in (*topics, "/tf", "/tf_static"):
+            for topic in topics:
                 self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic in LATCHED_TOPICS)
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
@@ -244,9 +256,9 @@ def reported(value: float | int | str | None) -> float | int | str:
 
 class _Session(ClosesOnExit):
     """What both modes share: the robot's frames, the input counters, the logs (with
-    /tf_static written once at t = 0; ``with`` finalises them) and the /diagnostics status. Subclasses say their
-    ``mode`` and ``topics`` (published, in order) and keep ``stamp_ns``, the stamp (ns) of
-    their latest output."""
+    ``latched``, the latched outputs, written once at t = 0; ``with`` finalises them) and
+    the /diagnostics status. Subclasses say their ``mode`` and ``topics`` (published, in
+    order) and keep ``stamp_ns``, the stamp (ns) of their latest output."""
 
     mode: str
     stamp_ns: int
@@ -258,10 +270,15 @@ class _Session(ClosesOnExit):
         self.counters = InputCounters()
         geometries = [g for g in scene.geometries if self.mode == "simulate" or g.owner != "body"]
         self.frames = _Frames(robot, frame_id, ee_link, geometries)
-        self.latched: Outputs = [("/scene_markers", self.frames.scene_markers())] if "/scene_markers" in self.topics else []
+        self.latched: Outputs = [("/tf_static", self.frames.tf_static())]
         """Messages to publish once, latched (transient local), when the node starts."""
-        self.recorder = Recorder(self.mode, scene, robot, self.topics, mcap_path, rrd_path, self.frames.root_frame)
-        self.recorder.write([("/tf_static", self.frames.tf_static()), *self.latched], 0)
+        if self.frames.has_robot:
+            self.latched.append(("/robot_description", messages.string(robot_description(scene))))
+        if self.frames.static_geometry:
+            self.latched.append(("/scene_markers", self.frames.scene_markers()))
+        self.recorder = Recorder(self.mode, scene, robot, (*self.topics, *(t for t, _ in self.latched)),
+                                 mcap_path, rrd_path, self.frames.root_frame)
+        self.recorder.write(self.latched, 0)
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
         """/diagnostics with one status of this session (also logged); with a robot, its
@@ -296,11 +313,11 @@ class SimulationSession(_Session):
     @property
     def topics(self) -> tuple[str, ...]:
         """/clock, /joint_states and /ee_pose (and /ee_poses for several robots) if the scene
-        has a robot, /free_bodies and /free_bodies_markers if it has free bodies,
-        /scene_markers if it has static geometry, /diagnostics."""
+        has a robot, /free_bodies and /free_bodies_markers if it has free bodies, /tf,
+        /diagnostics (the latched topics are in ``latched``)."""
         robot = ("/joint_states", *self.frames.ee_topics) if self.robot.tree else ()
         bodies = ("/free_bodies", "/free_bodies_markers") if self.frames.body_shapes else ()
-        return ("/clock", *robot, *bodies, *self.frames.scene_topics, "/diagnostics")
+        return ("/clock", *robot, *bodies, "/tf", "/diagnostics")
 
     @property
     def sample_topic(self) -> str:
@@ -400,7 +417,8 @@ class SimulationSession(_Session):
             if bodies:
                 outputs += [("/free_bodies", self.frames.free_bodies(stamp, bodies)),
                             ("/free_bodies_markers", self.frames.free_body_markers(stamp, bodies))]
-            self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q, bodies))], stamp)
+            outputs.append(("/tf", self.frames.tf(stamp, q, bodies)))
+            self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
@@ -458,9 +476,9 @@ class InverseSession(_Session):
 
     @property
     def topics(self) -> tuple[str, ...]:
-        """/computed_torques, /ee_pose (and /ee_poses for several robots), /scene_markers if
-        the scene has static geometry, /diagnostics."""
-        return ("/computed_torques", *self.frames.ee_topics, *self.frames.scene_topics, "/diagnostics")
+        """/computed_torques, /ee_pose (and /ee_poses for several robots), /tf, /diagnostics
+        (the latched topics are in ``latched``)."""
+        return ("/computed_torques", *self.frames.ee_topics, "/tf", "/diagnostics")
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
                  ee_link: str = "", mcap_path: str | Path | None = None,
@@ -499,11 +517,12 @@ class InverseSession(_Session):
         try:
             poses, position_ee = self.frames.ee_outputs(stamp, middle.q)
             outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
-                                                                  middle.v, tau)), *poses]
+                                                                  middle.v, tau)), *poses,
+                       ("/tf", self.frames.tf(stamp, middle.q))]
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             return []
-        self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, middle.q))], stamp)
+        self.recorder.write(outputs, stamp)
         data = self.dynamics.data
         energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
         self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, position_ee)
