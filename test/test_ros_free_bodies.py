@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rerun.chunk import RrdReader
-from rosbags.highlevel import AnyReader
 
+from bag_support import read_mcap
 from ros_support import Collector, diagnostic_values, ros_context, spinning, stamp_ns, wait_until
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(240)]
@@ -34,14 +34,6 @@ TOPICS = {"/free_bodies": "geometry_msgs/msg/PoseArray", "/clock": "rosgraph_msg
           "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
           "/free_bodies_markers": "visualization_msgs/msg/MarkerArray"}
 
-
-def read_mcap(path: Path) -> dict[str, list]:
-    """Messages per topic of an MCAP, decoded by rosbags' AnyReader."""
-    by_topic: dict[str, list] = {}
-    with AnyReader([path]) as reader:
-        for connection, _, raw in reader.messages():
-            by_topic.setdefault(connection.topic, []).append(reader.deserialize(raw, connection.msgtype))
-    return by_topic
 
 
 def rerun_rows(path: Path) -> tuple[dict[str, list[dict]], dict[str, list[dict]]]:

@@ -15,8 +15,8 @@ import pytest
 import yaml
 from mcap.reader import make_reader
 from rerun.chunk import RrdReader
-from rosbags.highlevel import AnyReader
 
+from bag_support import read_mcap
 from youbot_dynamics.ros.session import SimulationSession
 from youbot_dynamics.sim.scene import load_scene
 from youbot_dynamics.sim.simulator import Simulator
@@ -25,14 +25,6 @@ RATE = 100.0
 STEP_NS = 10_000_000
 N = 151                    # samples at t = 0, 0.01, ..., 1.5 s: youBot 1's arm starts turning
 
-
-def read_mcap(path: Path) -> dict[str, list]:
-    """Messages per topic of an MCAP, decoded by rosbags' AnyReader."""
-    by_topic: dict[str, list] = {}
-    with AnyReader([path]) as reader:
-        for connection, _, raw in reader.messages():
-            by_topic.setdefault(connection.topic, []).append(reader.deserialize(raw, connection.msgtype))
-    return by_topic
 
 
 def stamp_ns(message: object) -> int:
