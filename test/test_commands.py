@@ -9,8 +9,9 @@ import pinocchio as pin
 import pytest
 
 from youbot_dynamics.model.lie import matrix_from_quaternion
-from youbot_dynamics.sim.commands import (EffortCommands, InputCounters, InputRejected, follow, joint_sample,
-                                          joint_trajectory)
+from youbot_dynamics.sim.commands import (NS_PER_S as NS, EffortCommands, InputCounters, InputRejected, follow,
+                                          joint_sample, joint_trajectory)
+from youbot_dynamics.ros.session import InverseSession
 from youbot_dynamics.sim.frames import LinkFrames
 from youbot_dynamics.sim.inverse import AccelerationEstimator
 from youbot_dynamics.sim.commands import JointSample
@@ -89,19 +90,41 @@ def test_joint_sample_reorders_ignores_locked_joints_and_rejects_missing(simulat
 def test_trajectory_is_followed_through_its_points(simulator: Simulator) -> None:
     robot, q0 = simulator.robot, simulator.scene.q0
     target = q0 + np.array([0.3, -0.2, 0.1, 0.0, 0.0])
-    points = [(0.5, target[:3], ()), (1.0, target[:3] + 0.1, ())]
-    trajectory = joint_trajectory(robot, robot.joint_names[:3], points, start=2.0, q_now=q0)
+    points = [(500_000_000, target[:3], ()), (1_000_000_000, target[:3] + 0.1, ())]
+    trajectory = joint_trajectory(robot, robot.joint_names[:3], points, start_ns=2 * NS, q_now=q0)
     q, v, a = trajectory.evaluate(2.5)
     assert np.allclose(q, target) and np.all(np.isfinite(a))
     assert np.allclose(trajectory.evaluate(2.0)[0], q0)          # starts where the robot is
     assert np.allclose(trajectory.evaluate(9.0)[0][:3], target[:3] + 0.1) and not trajectory.evaluate(9.0)[1].any()
     with pytest.raises(InputRejected, match="bad_timing"):
-        joint_trajectory(robot, robot.joint_names[:1], [(0.5, [3.0], ()), (0.5, [3.1], ())], 0.0, q0)
+        joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [3.0], ()), (NS // 2, [3.1], ())], 0, q0)
+    with pytest.raises(InputRejected, match="bad_timing"):
+        joint_trajectory(robot, robot.joint_names[:1], [(-1, [3.0], ())], 0, q0)
     with pytest.raises(InputRejected, match="out_of_limits"):
-        joint_trajectory(robot, robot.joint_names[:1], [(0.5, [100.0], ())], 0.0, q0)
+        joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [100.0], ())], 0, q0)
     scene_free = Simulator(load_scene("arm_swing"))
     with pytest.raises(InputRejected, match="no_controller"):
         follow(scene_free.controller, trajectory)
+
+
+@pytest.mark.parametrize("start_ns", [0, 1_700_000_000 * NS, 2**31 * NS + NS - 1])
+def test_trajectory_times_are_relative_integer_nanoseconds(simulator: Simulator, start_ns: int) -> None:
+    """Stamps of any magnitude (up to the largest builtin_interfaces/Time): a one-point
+    trajectory holds its point from the start (before the fix, a wall-clock stamp of 1.7e9 s
+    lost the 1e-9 s padding in float rounding and CubicSpline raised ValueError); points
+    1 ns apart stay distinct; the reference matches the same trajectory started at 0."""
+    robot, q0 = simulator.robot, simulator.scene.q0
+    single = joint_trajectory(robot, robot.joint_names[:1], [(0, [0.5], ())], start_ns, q0)
+    assert single.evaluate(start_ns / NS + 1.0)[0][0] == 0.5
+    points = [(1, [0.4], ()), (2, [0.41], ()), (250_000_000, [0.6], ())]
+    moved = joint_trajectory(robot, robot.joint_names[:1], points, start_ns, q0)
+    reference = joint_trajectory(robot, robot.joint_names[:1], points, 0, q0)
+    assert moved.offsets_ns == reference.offsets_ns == (0, 1, 2, 250_000_000)
+    t = start_ns / NS + 0.125                  # float seconds: ulp 2.4e-7 s near 1.7e9 s, 4.8e-7 near 2.1e9 s
+    relative = (round(t * NS) - start_ns) / NS
+    assert abs(relative - 0.125) <= 1e-6       # measured 6.4e-8 s at 1.7e9 s; bound 1e-6 s
+    for got, want in zip(moved.evaluate(t), reference.evaluate(relative)):
+        np.testing.assert_array_equal(got, want)
 
 
 def test_central_difference_is_the_window_mean_of_the_acceleration() -> None:
@@ -145,3 +168,29 @@ def test_counters_flatten_for_diagnostics() -> None:
     counters.reject(InputRejected("stale", "old"))
     values = counters.as_values()
     assert values["rejected.stale"] == 1 and values["rejected.total"] == 1 and values["accepted"] == 0
+
+
+def test_a_rejected_joint_state_breaks_the_difference_stencil() -> None:
+    """Inverse mode: samples at 10, 20, 30, ... ms with v = 10 t (a = 10 rad/s^2) and a NaN
+    sample at 25 ms. Before the fix the torques at 20 and 30 ms were computed across the
+    rejected sample; now the first torque after it is at 40 ms (three good samples 30, 40,
+    50 ms), and every torque equals RNEA at a = 10 (tolerance 1e-12; the difference quotient
+    of these velocities is exact to ~1e-15)."""
+    scene = load_scene("arm_ptp")
+    session = InverseSession(scene)
+    names, q0 = list(session.robot.joint_names), scene.q0
+    published = []
+    for stamp_ms in (10, 20, 25, 30, 40, 50, 60):
+        position = [math.nan] * 5 if stamp_ms == 25 else list(q0)
+        try:
+            outputs = session.joint_state(names, position, [0.01 * stamp_ms] * 5, stamp_ms * 1_000_000)
+        except InputRejected as error:
+            assert error.kind == "non_finite" and stamp_ms == 25
+            continue
+        published += [message for topic, message in outputs if topic == "/computed_torques"]
+    stamps = [m.header.stamp.sec * NS + m.header.stamp.nanosec for m in published]
+    assert stamps == [40_000_000, 50_000_000]
+    for stamp, message in zip(stamps, published):
+        expected = session.dynamics.torque(q0, np.full(5, 10.0 * stamp / NS), np.full(5, 10.0))
+        np.testing.assert_allclose(message.effort, expected, rtol=1e-12, atol=1e-12)
+    assert session.counters.rejected["non_finite"] == 1 and session.counters.accepted == 6

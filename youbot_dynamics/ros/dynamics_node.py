@@ -174,8 +174,7 @@ class DynamicsNode(Node):
                                       throttle_duration_sec=WARN_THROTTLE)
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
-        points = [(point.time_from_start.sec + point.time_from_start.nanosec * 1e-9, point.positions,
-                   point.velocities) for point in msg.points]
+        points = [(_stamp_ns(point.time_from_start), point.positions, point.velocities) for point in msg.points]
         try:
             self.session.trajectory(list(msg.joint_names), points, _stamp_ns(msg.header.stamp))
         except InputRejected as error:

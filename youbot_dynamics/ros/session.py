@@ -272,12 +272,13 @@ class SimulationSession(_Session):
         """Accept an effort command (raises and counts :class:`InputRejected`)."""
         self.commands.accept(names, efforts, stamp_ns / NS_PER_S, self.t)
 
-    def trajectory(self, names: Sequence[str], points: Sequence[tuple[float, Sequence[float], Sequence[float]]],
+    def trajectory(self, names: Sequence[str], points: Sequence[tuple[int, Sequence[float], Sequence[float]]],
                    stamp_ns: int) -> None:
-        """Follow a joint trajectory from its stamp (or now, if unstamped or past)."""
+        """Follow a joint trajectory from its stamp (or now, if unstamped or past); ``points``
+        are (time_from_start (int ns), positions, velocities)."""
         try:
-            start = max(stamp_ns / NS_PER_S, self.t)
-            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start, self.simulator.q))
+            start_ns = max(int(stamp_ns), self.stamp_ns)
+            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start_ns, self.simulator.q))
         except InputRejected as error:
             self.counters.reject(error)
             raise
@@ -401,12 +402,15 @@ class InverseSession(_Session):
     def joint_state(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
                     stamp_ns: int) -> Outputs:
         """Take one /joint_states sample; returns /computed_torques and /ee_pose of the
-        previous sample once three are known. Raises and counts :class:`InputRejected`."""
+        previous sample once three are known. Raises and counts :class:`InputRejected`; a
+        rejected sample breaks the difference stencil (no torque is computed across it: the
+        next torque needs three good samples after it)."""
         try:
             sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns / NS_PER_S)
             estimate = self.estimator.push(sample)
         except InputRejected as error:
             self.counters.reject(error)
+            self.estimator.clear()
             raise
         self.counters.accepted += 1
         if estimate is None:
