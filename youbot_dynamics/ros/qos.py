@@ -25,3 +25,11 @@ def profile(latched: bool, keep_all: bool = False) -> QoSProfile:
     if latched:
         return LATCHED
     return RELIABLE_ALL if keep_all else RELIABLE_DEEP
+
+BEST_EFFORT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT,
+                         durability=DurabilityPolicy.VOLATILE)
+"""Best effort, keep the last 1000: hears best-effort and reliable publishers alike (a
+reliable subscription matches no best-effort publisher), but may lose samples."""
+
+SUBSCRIPTION_PROFILES = {"best_effort": BEST_EFFORT, "reliable": RELIABLE_DEEP, "keep_all": RELIABLE_ALL}
+"""The choices of a subscription's QoS parameter (inverse mode's ``joint_states_qos``)."""

@@ -240,6 +240,8 @@ class SimulationSession(_Session):
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         self.samples_per_solve = max(1, int(samples_per_solve))
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters)
+        self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
+        self._locked_q = np.array([self.robot.locked[name] for name in self.locked_names])
         self._scene_reference = getattr(self.simulator.controller, "reference", None)
         self.paused = False
         self.failure: str | None = None
@@ -320,8 +322,7 @@ class SimulationSession(_Session):
             outputs = [("/clock", messages.clock(stamp))]
             if self.frames.has_robot:
                 pose, position = self.frames.ee_pose(stamp, q)
-                outputs += [("/joint_states", messages.joint_state(stamp, snapshot.joint_names, q, snapshot.v,
-                                                                   snapshot.tau)), ("/ee_pose", pose)]
+                outputs += [("/joint_states", self._joint_state(stamp, snapshot)), ("/ee_pose", pose)]
             if bodies:
                 outputs.append(("/free_bodies", self.frames.free_bodies(stamp, bodies)))
             self.recorder.write([*outputs, ("/tf", self.frames.tf(stamp, q, bodies))], stamp)
@@ -333,6 +334,15 @@ class SimulationSession(_Session):
         if bodies:
             self.recorder.bodies(self.t, bodies)
         return outputs
+
+    def _joint_state(self, stamp_ns: int, snapshot: Snapshot) -> object:
+        """/joint_states: the moving joints (joint order), then every locked joint (URDF
+        tree order) at its locked value with velocity and effort 0, so that every movable
+        joint of the URDF has a position (robot_state_publisher needs wheels and fingers)."""
+        zeros = np.zeros(len(self.locked_names))
+        return messages.joint_state(stamp_ns, (*snapshot.joint_names, *self.locked_names),
+                                    np.concatenate([snapshot.q, self._locked_q]),
+                                    np.concatenate([snapshot.v, zeros]), np.concatenate([snapshot.tau, zeros]))
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
