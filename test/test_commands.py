@@ -79,12 +79,12 @@ def test_joint_sample_reorders_ignores_locked_joints_and_rejects_missing(simulat
     robot = simulator.robot
     known = [j.name for j in robot.tree]
     names = ["wheel_joint_fl", *robot.joint_names[::-1]]
-    sample = joint_sample(robot, known, names, [9.0, 5, 4, 3, 2, 1], [9.0, 50, 40, 30, 20, 10], t=0.1)
+    sample = joint_sample(robot, known, names, [9.0, 5, 4, 3, 2, 1], [9.0, 50, 40, 30, 20, 10], stamp_ns=NS // 10)
     assert sample.q.tolist() == [1, 2, 3, 4, 5] and sample.v.tolist() == [10, 20, 30, 40, 50]
     with pytest.raises(InputRejected, match="missing_joint"):
-        joint_sample(robot, known, robot.joint_names[:4], [0.0] * 4, [0.0] * 4, t=0.1)
+        joint_sample(robot, known, robot.joint_names[:4], [0.0] * 4, [0.0] * 4, stamp_ns=NS // 10)
     with pytest.raises(InputRejected, match="length_mismatch"):
-        joint_sample(robot, known, robot.joint_names, [0.0] * 5, [0.0] * 4, t=0.1)
+        joint_sample(robot, known, robot.joint_names, [0.0] * 5, [0.0] * 4, stamp_ns=NS // 10)
 
 
 def test_trajectory_is_followed_through_its_points(simulator: Simulator) -> None:
@@ -132,7 +132,7 @@ def test_central_difference_is_the_window_mean_of_the_acceleration() -> None:
     and its error stays below the variation of a over the window (the bound the node uses)."""
     estimator, h = AccelerationEstimator(), 0.01
     for k, t in enumerate(np.arange(0.0, 1.0, h)):
-        result = estimator.push(JointSample(t, np.zeros(1), np.array([math.sin(t)])))
+        result = estimator.push(JointSample(round(t * NS), np.zeros(1), np.array([math.sin(t)])))
         if result is None:
             assert k < 2
             continue
@@ -142,7 +142,7 @@ def test_central_difference_is_the_window_mean_of_the_acceleration() -> None:
         window = np.linspace(middle.t - h, middle.t + h, 41)
         assert abs(a_hat[0] - math.cos(middle.t)) <= np.max(np.abs(np.cos(window) - math.cos(middle.t)))
     with pytest.raises(InputRejected, match="bad_timing"):
-        estimator.push(JointSample(0.5, np.zeros(1), np.zeros(1)))
+        estimator.push(JointSample(NS // 2, np.zeros(1), np.zeros(1)))
 
 
 def test_link_frames_match_pinocchio_forward_kinematics(simulator: Simulator) -> None:
@@ -170,12 +170,14 @@ def test_counters_flatten_for_diagnostics() -> None:
     assert values["rejected.stale"] == 1 and values["rejected.total"] == 1 and values["accepted"] == 0
 
 
-def test_a_rejected_joint_state_breaks_the_difference_stencil() -> None:
-    """Inverse mode: samples at 10, 20, 30, ... ms with v = 10 t (a = 10 rad/s^2) and a NaN
-    sample at 25 ms. Before the fix the torques at 20 and 30 ms were computed across the
-    rejected sample; now the first torque after it is at 40 ms (three good samples 30, 40,
-    50 ms), and every torque equals RNEA at a = 10 (tolerance 1e-12; the difference quotient
-    of these velocities is exact to ~1e-15)."""
+@pytest.mark.parametrize("base_ns", [0, 1_700_000_000 * NS + 123_456_789])
+def test_a_rejected_joint_state_breaks_the_difference_stencil(base_ns: int) -> None:
+    """Inverse mode: samples at base + 10, 20, 30, ... ms with v = 10 (t - base) (a = 10
+    rad/s^2) and a NaN sample at 25 ms. Before the fix the torques at 20 and 30 ms were
+    computed across the rejected sample; now the first torque after it is at 40 ms (three
+    good samples 30, 40, 50 ms). Torques carry their sample's stamp exactly and equal RNEA at
+    a = 10, also at a wall-clock base (1.7e9 s; float seconds there lose 2.4e-7 s, a 1e-5
+    relative error in a): tolerance 1e-12, measured difference 0.0."""
     scene = load_scene("arm_ptp")
     session = InverseSession(scene)
     names, q0 = list(session.robot.joint_names), scene.q0
@@ -183,12 +185,12 @@ def test_a_rejected_joint_state_breaks_the_difference_stencil() -> None:
     for stamp_ms in (10, 20, 25, 30, 40, 50, 60):
         position = [math.nan] * 5 if stamp_ms == 25 else list(q0)
         try:
-            outputs = session.joint_state(names, position, [0.01 * stamp_ms] * 5, stamp_ms * 1_000_000)
+            outputs = session.joint_state(names, position, [0.01 * stamp_ms] * 5, base_ns + stamp_ms * 1_000_000)
         except InputRejected as error:
             assert error.kind == "non_finite" and stamp_ms == 25
             continue
         published += [message for topic, message in outputs if topic == "/computed_torques"]
-    stamps = [m.header.stamp.sec * NS + m.header.stamp.nanosec for m in published]
+    stamps = [m.header.stamp.sec * NS + m.header.stamp.nanosec - base_ns for m in published]
     assert stamps == [40_000_000, 50_000_000]
     for stamp, message in zip(stamps, published):
         expected = session.dynamics.torque(q0, np.full(5, 10.0 * stamp / NS), np.full(5, 10.0))

@@ -416,7 +416,7 @@ class InverseSession(_Session):
         rejected sample breaks the difference stencil (no torque is computed across it: the
         next torque needs three good samples after it)."""
         try:
-            sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns / NS_PER_S)
+            sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
             estimate = self.estimator.push(sample)
         except InputRejected as error:
             self.counters.reject(error)
@@ -426,7 +426,7 @@ class InverseSession(_Session):
         if estimate is None:
             return []
         middle, a = estimate
-        stamp = round(middle.t * NS_PER_S)
+        stamp = middle.stamp_ns
         tau = self.dynamics.torque(middle.q, middle.v, a)
         try:
             pose, position_ee = self.frames.ee_pose(stamp, middle.q)

@@ -25,6 +25,9 @@ REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_
                    "missing_joint", "out_of_limits", "stale", "bad_timing", "no_controller")
 """Kinds of rejected input, as counted in /diagnostics."""
 
+NS_PER_S = 1_000_000_000
+"""Nanoseconds per second: sample stamps and trajectory times are integer nanoseconds."""
+
 TIMEOUT_ACTIONS = ("hold", "zero_torque")
 """What the simulator applies once the last effort command is older than the timeout:
 ``hold`` hands control back to the scene's controller (its set point or trajectory; zero
@@ -159,15 +162,21 @@ class EffortCommands:
 
 @dataclass(frozen=True)
 class JointSample:
-    """One checked joint-state sample: t (s), q (rad, m) and v (rad/s, m/s) in joint order."""
+    """One checked joint-state sample: its stamp (int ns, any magnitude), q (rad, m) and v
+    (rad/s, m/s) in joint order."""
 
-    t: float
+    stamp_ns: int
     q: np.ndarray
     v: np.ndarray
 
+    @property
+    def t(self) -> float:
+        """The stamp in seconds."""
+        return self.stamp_ns / NS_PER_S
+
 
 def joint_sample(robot: Robot, known: Sequence[str], names: Sequence[str], position: Sequence[float],
-                 velocity: Sequence[float], t: float) -> JointSample:
+                 velocity: Sequence[float], stamp_ns: int) -> JointSample:
     """Check a sensor_msgs/JointState: every moving joint named once with a finite position
     and velocity. Names of ``known`` joints that do not move (locked wheels, fingers) are
     ignored; names unknown to the robot are rejected."""
@@ -178,11 +187,7 @@ def joint_sample(robot: Robot, known: Sequence[str], names: Sequence[str], posit
     if missing:
         raise InputRejected("missing_joint", f"no sample for joint(s) {', '.join(missing)}")
     index = [names.index(n) for n in robot.joint_names]
-    return JointSample(float(t), q[index], v[index])
-
-
-NS_PER_S = 1_000_000_000
-"""Nanoseconds per second: trajectory times are integer nanoseconds."""
+    return JointSample(int(stamp_ns), q[index], v[index])
 
 
 class SampledTrajectory:
