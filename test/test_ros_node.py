@@ -315,16 +315,27 @@ def test_inverse_mode_rejects_bad_joint_states_and_publishes_only_finite_torques
         assert np.allclose(torque.effort, expected, rtol=1e-12, atol=1e-12)
 
 
-def test_inverse_mode_hears_a_best_effort_publisher() -> None:
-    """joint_states_qos best_effort: a best-effort /joint_states publisher (as many drivers
-    are) is heard (a reliable subscription, the default keep_all, matches none). Torques equal RNEA at a = 10 rad/s^2 (the central difference of v = 10 t is exact to
-    ~1e-15; tolerance 1e-12)."""
+def test_inverse_mode_hears_a_best_effort_publisher(capfd: pytest.CaptureFixture) -> None:
+    """With the default joint_states_qos (keep_all, reliable) a best-effort /joint_states
+    publisher (as many drivers are) is not matched, and the node says which parameter to
+    set; with joint_states_qos best_effort it is heard. Torques equal RNEA at a = 10 rad/s^2
+    (the central difference of v = 10 t is exact to ~1e-15; tolerance 1e-12)."""
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     with ros_context(9) as (context, _):
-        node = make_node(context, scene="arm_ptp", mode="inverse", joint_states_qos="best_effort")
         collector = Collector(context, {"/computed_torques": "sensor_msgs/msg/JointState"})
         states = collector.create_publisher(JointState, "/joint_states",
                                             QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT))
+        reliable = make_node(context, scene="arm_ptp", mode="inverse")
+        log = []
+
+        def warned() -> bool:
+            log.append(capfd.readouterr().err)
+            return "joint_states_qos:=best_effort" in "".join(log)
+
+        with spinning(context, reliable, single_threaded=True):
+            wait_until(warned, what="the incompatible-QoS warning")
+        assert states.get_subscription_count() == 0
+        node = make_node(context, scene="arm_ptp", mode="inverse", joint_states_qos="best_effort")
         names, q0 = list(node.session.robot.joint_names), load_scene("arm_ptp").q0
         with spinning(context, node, collector, single_threaded=True):
             wait_until(lambda: states.get_subscription_count() > 0, what="the node's best-effort subscription")

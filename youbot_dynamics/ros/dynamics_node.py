@@ -45,6 +45,7 @@ from rclpy.event_handler import QoSRequestedIncompatibleQoSInfo, SubscriptionEve
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import qos_policy_name_from_kind
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
@@ -213,8 +214,8 @@ class DynamicsNode(Node):
     def _on_incompatible_joint_states(self, info: QoSRequestedIncompatibleQoSInfo) -> None:
         self.get_logger().warning(
             f"a /joint_states publisher offers a QoS incompatible with joint_states_qos "
-            f"{self.params['joint_states_qos']} (policy id {info.last_policy_kind}); none of its messages arrive: "
-            "for a best-effort publisher set joint_states_qos:=best_effort")
+            f"{self.params['joint_states_qos']} ({qos_policy_name_from_kind(info.last_policy_kind)}); none of its "
+            "messages arrive: for a best-effort publisher set joint_states_qos:=best_effort")
 
     # ---- input -------------------------------------------------------------------------
     def _on_command(self, msg: JointState) -> None:
