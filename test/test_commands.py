@@ -31,28 +31,30 @@ def commands(simulator: Simulator) -> EffortCommands:
 
 def test_effort_command_by_name_is_put_in_joint_order(commands: EffortCommands, simulator: Simulator) -> None:
     names = list(simulator.joint_names)
-    out = commands.accept(names[::-1], [0.5, 0.4, 0.3, 0.2, 0.1], stamp=0.0, now=1.0)
+    out = commands.accept(names[::-1], [0.5, 0.4, 0.3, 0.2, 0.1], stamp_ns=0, now=1.0)
     assert out.tolist() == [0.1, 0.2, 0.3, 0.4, 0.5]
     # a partial command changes only the named joint
-    out = commands.accept([names[2]], [-0.7], stamp=0.0, now=1.1)
+    out = commands.accept([names[2]], [-0.7], stamp_ns=0, now=1.1)
     assert out.tolist() == [0.1, 0.2, -0.7, 0.4, 0.5]
     assert commands.counters.accepted == 2 and sum(commands.counters.rejected.values()) == 0
 
 
 @pytest.mark.parametrize(("names", "efforts", "stamp", "kind"), [
-    (["arm_joint_1"], [math.nan], 0.0, "non_finite"),
-    (["arm_joint_1"], [math.inf], 0.0, "non_finite"),
-    (["arm_joint_1", "arm_joint_2"], [1.0], 0.0, "length_mismatch"),
-    (["arm_joint_9"], [1.0], 0.0, "unknown_joint"),
-    (["wheel_joint_fl"], [1.0], 0.0, "unknown_joint"),   # in the URDF but locked in the scene
-    (["arm_joint_1", "arm_joint_1"], [1.0, 2.0], 0.0, "duplicate_joint"),
-    (["arm_joint_1"], [1.0], 3.0, "stale"),               # stamped 7 s before now, timeout 0.5 s
+    (["arm_joint_1"], [math.nan], 0, "non_finite"),
+    (["arm_joint_1"], [math.inf], 0, "non_finite"),
+    (["arm_joint_1", "arm_joint_2"], [1.0], 0, "length_mismatch"),
+    (["arm_joint_9"], [1.0], 0, "unknown_joint"),
+    (["wheel_joint_fl"], [1.0], 0, "unknown_joint"),   # in the URDF but locked in the scene
+    (["arm_joint_1", "arm_joint_1"], [1.0, 2.0], 0, "duplicate_joint"),
+    (["arm_joint_1"], [1.0], 3 * NS, "stale"),          # stamped 7 s before now, timeout 0.5 s
+    (["arm_joint_1"], [1.0], -1, "bad_timing"),          # no builtin_interfaces/Time is negative
+    (["arm_joint_1"], [1.0], 2**31 * NS, "bad_timing"),  # sec 2^31 (nanosec >= 1e9 carried over)
 ])
 def test_bad_effort_commands_are_rejected_counted_and_change_nothing(
         commands: EffortCommands, names, efforts, stamp, kind) -> None:
-    commands.accept(["arm_joint_3"], [0.25], stamp=0.0, now=10.0)
+    commands.accept(["arm_joint_3"], [0.25], stamp_ns=0, now=10.0)
     with pytest.raises(InputRejected) as error:
-        commands.accept(names, efforts, stamp=stamp, now=10.0)
+        commands.accept(names, efforts, stamp_ns=stamp, now=10.0)
     assert error.value.kind == kind
     assert commands.counters.rejected[kind] == 1
     assert commands.torque(10.0).tolist() == [0.0, 0.0, 0.25, 0.0, 0.0]
@@ -60,7 +62,7 @@ def test_bad_effort_commands_are_rejected_counted_and_change_nothing(
 
 def test_efforts_beyond_the_urdf_limit_are_clamped_and_counted(commands: EffortCommands, simulator: Simulator) -> None:
     limit = np.asarray(simulator.robot.effort_limit)
-    out = commands.accept(["arm_joint_1", "arm_joint_4"], [1e3, -1e3], stamp=0.0, now=0.0)
+    out = commands.accept(["arm_joint_1", "arm_joint_4"], [1e3, -1e3], stamp_ns=0, now=0.0)
     assert out[0] == limit[0] and out[3] == -limit[3]
     assert commands.counters.clamped == 1
 
@@ -69,7 +71,7 @@ def test_efforts_beyond_the_urdf_limit_are_clamped_and_counted(commands: EffortC
 def test_timeout_action(simulator: Simulator, on_timeout: str, after) -> None:
     commands = EffortCommands(simulator.robot, timeout=0.5, on_timeout=on_timeout)
     assert commands.torque(0.0) is None            # nothing received: the scene's controller
-    commands.accept(["arm_joint_2"], [1.0], stamp=0.0, now=1.0)
+    commands.accept(["arm_joint_2"], [1.0], stamp_ns=0, now=1.0)
     assert commands.torque(1.5).tolist() == [0.0, 1.0, 0.0, 0.0, 0.0]
     result = commands.torque(1.51)
     assert (result is None and after is None) or result.tolist() == after

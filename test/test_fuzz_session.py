@@ -57,11 +57,15 @@ stamps = st.one_of(
     st.sampled_from([1_700_000_000 * 10**9, (2**31 - 1) * 10**9 + 999_999_999, -2**31 * 10**9]))
 
 
+valid_joints = st.permutations(MOVING).flatmap(lambda p: st.integers(1, len(p)).map(lambda k: p[:k]))
+"""A subset of the moving joints, in any order."""
+
+
 @st.composite
 def joint_names(draw, sometimes_valid: bool = True) -> list[str]:
     """Random names, or (half the time) a subset/permutation of the moving joints."""
     if sometimes_valid and draw(st.booleans()):
-        return draw(st.permutations(MOVING).flatmap(lambda p: st.integers(1, len(p)).map(lambda k: p[:k])))
+        return draw(valid_joints)
     return draw(st.lists(names, max_size=7))
 
 
@@ -75,14 +79,32 @@ def values_for(draw, count: int) -> list[float]:
     return draw(st.lists(numbers, min_size=length, max_size=length))
 
 
+recent_stamps = st.one_of(st.just(0), st.integers(1, 5 * 10**8))
+"""Stamps near the fuzzed simulation's time (0 .. 0.5 s): some are stale (timeout 0.02 s)."""
+
+
 @st.composite
 def effort_command(draw) -> tuple:
+    if draw(st.booleans()):      # well-formed but for its stamp, and efforts of any size
+        joints = draw(valid_joints)
+        efforts = draw(st.lists(st.one_of(st.floats(-100.0, 100.0), st.sampled_from([1e300, -1e300, 5e-324])),
+                                min_size=len(joints), max_size=len(joints)))
+        return ("command", joints, efforts, draw(recent_stamps))
     joints = draw(joint_names())
     return ("command", joints, draw(values_for(len(joints))), draw(stamps))
 
 
 @st.composite
 def trajectory(draw) -> tuple:
+    if draw(st.booleans()):      # well-formed: increasing times, positions within the limits
+        joints = draw(valid_joints)
+        index = [MOVING.index(name) for name in joints]
+        times = sorted(draw(st.sets(st.integers(0, 2 * 10**9), min_size=1, max_size=4)))
+        with_velocity = draw(st.booleans())
+        points = [(t, [draw(st.floats(float(ROBOT.lower[i]), float(ROBOT.upper[i]))) for i in index],
+                   draw(st.lists(st.floats(-1e3, 1e3), min_size=len(joints), max_size=len(joints)))
+                   if with_velocity else []) for t in times]
+        return ("trajectory", joints, points, draw(st.one_of(recent_stamps, stamps)))
     joints = draw(joint_names())
     points = []
     for _ in range(draw(st.integers(0, 4))):
@@ -178,7 +200,8 @@ def test_fuzzed_commands_and_trajectories_never_break_the_simulation(simulation:
 def joint_states(draw) -> list[tuple]:
     """A stream of /joint_states samples: mostly well-formed (all moving joints, maybe
     with locked ones, increasing stamps) with fuzzed ones mixed in."""
-    stream, stamp = [], draw(st.one_of(st.just(0), stamps.filter(lambda s: s >= 0)))
+    stream, stamp = [], draw(st.one_of(st.integers(0, 2 * 10**9), st.integers(0, 2**31 * 10**9 - 1),
+                                       st.sampled_from([1_700_000_000 * 10**9, 2**31 * 10**9 - 100])))
     for _ in range(draw(st.integers(1, 12))):
         if draw(st.integers(0, 3)) > 0:
             joints = draw(st.permutations(MOVING + draw(st.lists(st.sampled_from(LOCKED), max_size=2, unique=True))))

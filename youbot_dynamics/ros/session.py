@@ -38,7 +38,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
-                                          InputRejected, follow, joint_sample, joint_trajectory)
+                                          InputRejected, follow, joint_sample, joint_trajectory, stamp_in_range)
 from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
 from youbot_dynamics.sim.integrators import DivergenceError
 from youbot_dynamics.sim.inverse import AccelerationEstimator, InverseDynamics
@@ -272,14 +272,14 @@ class SimulationSession(_Session):
 
     def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int) -> None:
         """Accept an effort command (raises and counts :class:`InputRejected`)."""
-        self.commands.accept(names, efforts, stamp_ns / NS_PER_S, self.t)
+        self.commands.accept(names, efforts, stamp_ns, self.t)
 
     def trajectory(self, names: Sequence[str], points: Sequence[tuple[int, Sequence[float], Sequence[float]]],
                    stamp_ns: int) -> None:
         """Follow a joint trajectory from its stamp (or now, if unstamped or past); ``points``
         are (time_from_start (int ns), positions, velocities)."""
         try:
-            start_ns = max(int(stamp_ns), self.stamp_ns)
+            start_ns = max(stamp_in_range(stamp_ns, "trajectory"), self.stamp_ns)
             follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start_ns, self.simulator.q))
         except InputRejected as error:
             self.counters.reject(error)

@@ -8,7 +8,9 @@ counts each kind, for /diagnostics. Effort commands beyond the URDF effort limit
 rejected but clamped (counted as ``clamped``).
 
 Times are seconds of the node's clock (simulated time when the node drives /clock).
-A message stamp of 0 means "not stamped": the receive time stands in for it.
+A message stamp of 0 means "not stamped": the receive time stands in for it. Stamps are
+integer nanoseconds; one outside what builtin_interfaces/Time holds (0 <= stamp < 2^31 s;
+a negative sec, or a nanosec of 1e9 or more carried over) is rejected as ``bad_timing``.
 """
 from __future__ import annotations
 
@@ -27,6 +29,8 @@ REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_
 
 NS_PER_S = 1_000_000_000
 """Nanoseconds per second: sample stamps and trajectory times are integer nanoseconds."""
+STAMP_LIMIT_NS = 2**31 * NS_PER_S
+"""Stamps (ns) must lie in [0, STAMP_LIMIT_NS): the range of builtin_interfaces/Time."""
 
 TIMEOUT_ACTIONS = ("hold", "zero_torque")
 """What the simulator applies once the last effort command is older than the timeout:
@@ -95,7 +99,16 @@ def _values(values: Sequence[float], label: str, count: int) -> np.ndarray:
     return array
 
 
-def _check_stamp(stamp: float, now: float, timeout: float, what: str) -> None:
+def stamp_in_range(stamp_ns: int, what: str) -> int:
+    """``stamp_ns`` as an int; raises ``bad_timing`` outside [0, ``STAMP_LIMIT_NS``)."""
+    if not 0 <= stamp_ns < STAMP_LIMIT_NS:
+        raise InputRejected("bad_timing", f"{what} stamped {stamp_ns} ns, outside builtin_interfaces/Time's "
+                            "0 .. 2^31 s")
+    return int(stamp_ns)
+
+
+def _check_stamp(stamp_ns: int, now: float, timeout: float, what: str) -> None:
+    stamp = stamp_in_range(stamp_ns, what) / NS_PER_S
     if stamp > 0.0 and stamp < now - timeout:
         raise InputRejected("stale", f"{what} stamped {stamp:.6f} s is older than the "
                             f"{timeout:g} s timeout (now {now:.6f} s)")
@@ -105,7 +118,7 @@ class EffortCommands:
     """Effort commands (N m, N) by joint name, held until ``timeout`` seconds have passed.
 
     ``accept`` checks one command: names unique and moving joints of the robot, one finite
-    effort per name, stamp (s) not older than the timeout; efforts beyond the URDF limit are
+    effort per name, stamp (int ns) not older than the timeout; efforts beyond the URDF limit are
     clamped. Joints a command does not name keep their previous command (0 at first).
     ``torque(now)`` is the command to apply at time ``now``, or None once the command is
     stale and ``on_timeout`` is ``hold`` (the scene's controller takes over).
@@ -127,13 +140,13 @@ class EffortCommands:
         self.command = np.zeros(self.robot.nv)
         self.received_at: float | None = None
 
-    def accept(self, names: Sequence[str], efforts: Sequence[float], stamp: float, now: float) -> np.ndarray:
+    def accept(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int, now: float) -> np.ndarray:
         """Check a command received at ``now`` (s); returns the clamped efforts in joint
         order. Raises (and counts) :class:`InputRejected`; a clamped command is counted."""
         try:
             names = _names(names, self.robot.joint_names, self.robot.joint_names)
             values = _values(efforts, "effort", len(names))
-            _check_stamp(stamp, now, self.timeout, "effort command")
+            _check_stamp(stamp_ns, now, self.timeout, "effort command")
         except InputRejected as error:
             self.counters.reject(error)
             raise
@@ -187,7 +200,7 @@ def joint_sample(robot: Robot, known: Sequence[str], names: Sequence[str], posit
     if missing:
         raise InputRejected("missing_joint", f"no sample for joint(s) {', '.join(missing)}")
     index = [names.index(n) for n in robot.joint_names]
-    return JointSample(int(stamp_ns), q[index], v[index])
+    return JointSample(stamp_in_range(stamp_ns, "joint state"), q[index], v[index])
 
 
 class SampledTrajectory:
