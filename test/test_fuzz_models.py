@@ -123,7 +123,8 @@ def paths(data: object, prefix: tuple = ()) -> list[tuple]:
 def mutated_scene(base: str, mutations: list[tuple]) -> dict:
     """A base scene's YAML tree with mutations (replace a value, drop a key, add a key)."""
     data = copy.deepcopy(BASE_SCENES[base])
-    for kind, pick, value in mutations:
+    for kind, pick, shared in mutations:
+        value = copy.deepcopy(shared)         # a list inserted twice must not become its own element
         candidates = paths(data)
         path = candidates[pick % len(candidates)]
         if not path:

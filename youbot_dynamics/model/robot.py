@@ -217,11 +217,17 @@ def load_robot(source: str | Path) -> Robot:
     """
     text, label = _read_source(source)
     root = _parse_xml(text, label)
-    fidelity = _check_urdf(root, label)
-    urdf = yourdfpy.URDF.load(io.StringIO(text), build_scene_graph=False, load_meshes=False)
-    tree, root_link = _kinematic_tree(urdf)
-    model = pin.buildModelFromXML(_pinocchio_xml(root))
-    joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(1, model.njoints))
+    try:
+        fidelity = _check_urdf(root, label)
+        urdf = yourdfpy.URDF.load(io.StringIO(text), build_scene_graph=False, load_meshes=False)
+        tree, root_link = _kinematic_tree(urdf)
+        model = pin.buildModelFromXML(_pinocchio_xml(root))
+        joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(1, model.njoints))
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as error:  # the parsers' own failures
+        if isinstance(error, URDFError):
+            raise
+        raise URDFError(f"{label}: cannot read the URDF: {type(error).__name__}: {' '.join(str(error).split())} "
+                        "(a malformed attribute or element the checks above do not cover)") from None
     return Robot(name=root.get("name", "robot"), source=label, model=model, joints=joints,
                  tree=tree, root_link=root_link, fidelity=tuple(fidelity))
 
