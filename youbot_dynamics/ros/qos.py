@@ -19,13 +19,6 @@ LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=Relia
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 """Transient local, depth 1 (as /tf_static): late subscribers get the last message."""
 
-
-def profile(latched: bool, keep_all: bool = False) -> QoSProfile:
-    """The profile to offer a topic with (``keep_all``: :data:`RELIABLE_ALL` unless latched)."""
-    if latched:
-        return LATCHED
-    return RELIABLE_ALL if keep_all else RELIABLE_DEEP
-
 BEST_EFFORT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT,
                          durability=DurabilityPolicy.VOLATILE)
 """Best effort, keep the last 1000: hears best-effort and reliable publishers alike (a
@@ -33,3 +26,10 @@ reliable subscription matches no best-effort publisher), but may lose samples.""
 
 SUBSCRIPTION_PROFILES = {"best_effort": BEST_EFFORT, "reliable": RELIABLE_DEEP, "keep_all": RELIABLE_ALL}
 """The choices of a subscription's QoS parameter (inverse mode's ``joint_states_qos``)."""
+
+
+def profile(latched: bool, keep_all: bool = False) -> QoSProfile:
+    """The profile to offer a topic with (``keep_all``: :data:`RELIABLE_ALL` unless latched)."""
+    if latched:
+        return LATCHED
+    return RELIABLE_ALL if keep_all else RELIABLE_DEEP
