@@ -115,7 +115,7 @@ def test_bad_input_is_counted_warned_and_never_published() -> None:
         commands = collector.create_publisher(JointState, "/joint_commands", RELIABLE_DEEP)
         trajectories = collector.create_publisher(JointTrajectory, "/joint_trajectory", RELIABLE_DEEP)
         wait_matched(node)
-        with spinning(context, node, collector):
+        with spinning(context, node, collector, single_threaded=True):
             wait_until(lambda: commands.get_subscription_count() > 0 and trajectories.get_subscription_count() > 0,
                        what="the node's subscriptions")
             bad = [(["arm_joint_1"], [math.nan]), (["arm_joint_1"], [math.inf]),
@@ -191,7 +191,7 @@ def test_pause_and_reset_services() -> None:
         client_node = Collector(context, OUTPUTS)
         pause = client_node.create_client(SetBool, "/dynamics_node/pause")
         reset = client_node.create_client(Trigger, "/dynamics_node/reset")
-        with spinning(context, node, client_node):
+        with spinning(context, node, client_node, single_threaded=True):
             assert pause.wait_for_service(timeout_sec=WAIT) and reset.wait_for_service(timeout_sec=WAIT)
             wait_until(lambda: node.session.t > 0.3, what="simulated time")
             future = pause.call_async(SetBool.Request(data=True))
