@@ -7,7 +7,8 @@ kind of problem (one of ``REJECTION_KINDS``) and what was wrong. :class:`InputCo
 counts each kind, for /diagnostics. Effort commands beyond the URDF effort limit are not
 rejected but clamped (counted as ``clamped``).
 
-Times are seconds of the node's clock (simulated time when the node drives /clock).
+Times are the node's clock (simulated time when the node drives /clock): message stamps
+and trajectory times in integer nanoseconds, the current time ``now`` in seconds.
 A message stamp of 0 means "not stamped": the receive time stands in for it. Stamps are
 integer nanoseconds; one outside what builtin_interfaces/Time holds (0 <= stamp < 2^31 s;
 a negative sec, or a nanosec of 1e9 or more carried over) is rejected as ``bad_timing``.
@@ -175,7 +176,7 @@ class EffortCommands:
 
 @dataclass(frozen=True)
 class JointSample:
-    """One checked joint-state sample: its stamp (int ns, any magnitude), q (rad, m) and v
+    """One checked joint-state sample: its stamp (int ns, 0 .. 2^31 s), q (rad, m) and v
     (rad/s, m/s) in joint order."""
 
     stamp_ns: int
