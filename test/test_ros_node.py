@@ -406,12 +406,19 @@ def test_every_published_message_passes_the_strict_field_check(mode: str, offset
         assert robot.locked and all(by_name[name] == value for name, value in robot.locked.items())
 
 
-def test_joint_states_name_every_movable_joint_of_a_composed_urdf() -> None:
-    """The two-robot gripping scene (URDF composed in memory): /joint_states carries every
-    non-fixed joint of that URDF (moving ones, then the locked wheels at 0)."""
+def test_composed_scene_joint_states_and_field_check() -> None:
+    """The two-robot gripping scene (URDF composed in memory, a free sphere): /joint_states
+    carries every non-fixed joint of that URDF (moving ones, then the locked wheels at 0),
+    and every message of its topics (/free_bodies included) converts to rclpy under
+    ROS_PYTHON_CHECK_FIELDS=1."""
+    from youbot_dynamics.ros.conversions import to_rclpy
     scene = load_scene("gripping")
     session = SimulationSession(scene, 100.0, samples_per_solve=1)
-    message = dict(session.step())["/joint_states"]
+    outputs = [*session.step(), *session.step(), *session.diagnostics(1.0)]
+    assert {topic for topic, _ in outputs} == set(session.topics) >= {"/free_bodies", "/joint_states"}
+    for _, message in outputs:
+        to_rclpy(message)
+    message = dict(outputs)["/joint_states"]
     assert sorted(message.name) == sorted(_urdf_movable_joints(scene.robot_path))
     assert len(message.name) == len(message.position) == len(message.velocity) == len(message.effort) == 22
     assert all(message.position[list(message.name).index(name)] == value for name, value in scene.robot().locked.items())
