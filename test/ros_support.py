@@ -54,7 +54,11 @@ def spinning(context: Context, *nodes: Node, single_threaded: bool = False) -> I
 
     ``single_threaded``: a SingleThreadedExecutor, as the node processes use. (rclpy's
     MultiThreadedExecutor took only about 5 of a subscription's queued messages per second
-    here once the publisher had stopped: use it for many messages in a burst.)"""
+    here once the publisher had stopped: use it for many messages in a burst. It also
+    starves a node's subscriptions while a timer of the same mutually exclusive callback
+    group is always due, as the step timer at time_scale 0 is: a /joint_commands message was
+    not handled within 20 s in 2 of 3 tries, against 31-88 ms single-threaded. Spin a node
+    that must hear input single-threaded.)"""
     executor = (SingleThreadedExecutor if single_threaded else MultiThreadedExecutor)(context=context)
     for node in nodes:
         executor.add_node(node)

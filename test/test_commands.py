@@ -9,8 +9,9 @@ import pinocchio as pin
 import pytest
 
 from youbot_dynamics.model.lie import matrix_from_quaternion
-from youbot_dynamics.sim.commands import (EffortCommands, InputCounters, InputRejected, follow, joint_sample,
-                                          joint_trajectory)
+from youbot_dynamics.sim.commands import (NS_PER_S as NS, EffortCommands, InputCounters, InputRejected, follow,
+                                          joint_sample, joint_trajectory)
+from youbot_dynamics.ros.session import InverseSession
 from youbot_dynamics.sim.frames import LinkFrames
 from youbot_dynamics.sim.inverse import AccelerationEstimator
 from youbot_dynamics.sim.commands import JointSample
@@ -30,28 +31,30 @@ def commands(simulator: Simulator) -> EffortCommands:
 
 def test_effort_command_by_name_is_put_in_joint_order(commands: EffortCommands, simulator: Simulator) -> None:
     names = list(simulator.joint_names)
-    out = commands.accept(names[::-1], [0.5, 0.4, 0.3, 0.2, 0.1], stamp=0.0, now=1.0)
+    out = commands.accept(names[::-1], [0.5, 0.4, 0.3, 0.2, 0.1], stamp_ns=0, now=1.0)
     assert out.tolist() == [0.1, 0.2, 0.3, 0.4, 0.5]
     # a partial command changes only the named joint
-    out = commands.accept([names[2]], [-0.7], stamp=0.0, now=1.1)
+    out = commands.accept([names[2]], [-0.7], stamp_ns=0, now=1.1)
     assert out.tolist() == [0.1, 0.2, -0.7, 0.4, 0.5]
     assert commands.counters.accepted == 2 and sum(commands.counters.rejected.values()) == 0
 
 
 @pytest.mark.parametrize(("names", "efforts", "stamp", "kind"), [
-    (["arm_joint_1"], [math.nan], 0.0, "non_finite"),
-    (["arm_joint_1"], [math.inf], 0.0, "non_finite"),
-    (["arm_joint_1", "arm_joint_2"], [1.0], 0.0, "length_mismatch"),
-    (["arm_joint_9"], [1.0], 0.0, "unknown_joint"),
-    (["wheel_joint_fl"], [1.0], 0.0, "unknown_joint"),   # in the URDF but locked in the scene
-    (["arm_joint_1", "arm_joint_1"], [1.0, 2.0], 0.0, "duplicate_joint"),
-    (["arm_joint_1"], [1.0], 3.0, "stale"),               # stamped 7 s before now, timeout 0.5 s
+    (["arm_joint_1"], [math.nan], 0, "non_finite"),
+    (["arm_joint_1"], [math.inf], 0, "non_finite"),
+    (["arm_joint_1", "arm_joint_2"], [1.0], 0, "length_mismatch"),
+    (["arm_joint_9"], [1.0], 0, "unknown_joint"),
+    (["wheel_joint_fl"], [1.0], 0, "unknown_joint"),   # in the URDF but locked in the scene
+    (["arm_joint_1", "arm_joint_1"], [1.0, 2.0], 0, "duplicate_joint"),
+    (["arm_joint_1"], [1.0], 3 * NS, "stale"),          # stamped 7 s before now, timeout 0.5 s
+    (["arm_joint_1"], [1.0], -1, "bad_timing"),          # no builtin_interfaces/Time is negative
+    (["arm_joint_1"], [1.0], 2**31 * NS, "bad_timing"),  # sec 2^31 (nanosec >= 1e9 carried over)
 ])
 def test_bad_effort_commands_are_rejected_counted_and_change_nothing(
         commands: EffortCommands, names, efforts, stamp, kind) -> None:
-    commands.accept(["arm_joint_3"], [0.25], stamp=0.0, now=10.0)
+    commands.accept(["arm_joint_3"], [0.25], stamp_ns=0, now=10.0)
     with pytest.raises(InputRejected) as error:
-        commands.accept(names, efforts, stamp=stamp, now=10.0)
+        commands.accept(names, efforts, stamp_ns=stamp, now=10.0)
     assert error.value.kind == kind
     assert commands.counters.rejected[kind] == 1
     assert commands.torque(10.0).tolist() == [0.0, 0.0, 0.25, 0.0, 0.0]
@@ -59,7 +62,7 @@ def test_bad_effort_commands_are_rejected_counted_and_change_nothing(
 
 def test_efforts_beyond_the_urdf_limit_are_clamped_and_counted(commands: EffortCommands, simulator: Simulator) -> None:
     limit = np.asarray(simulator.robot.effort_limit)
-    out = commands.accept(["arm_joint_1", "arm_joint_4"], [1e3, -1e3], stamp=0.0, now=0.0)
+    out = commands.accept(["arm_joint_1", "arm_joint_4"], [1e3, -1e3], stamp_ns=0, now=0.0)
     assert out[0] == limit[0] and out[3] == -limit[3]
     assert commands.counters.clamped == 1
 
@@ -68,7 +71,7 @@ def test_efforts_beyond_the_urdf_limit_are_clamped_and_counted(commands: EffortC
 def test_timeout_action(simulator: Simulator, on_timeout: str, after) -> None:
     commands = EffortCommands(simulator.robot, timeout=0.5, on_timeout=on_timeout)
     assert commands.torque(0.0) is None            # nothing received: the scene's controller
-    commands.accept(["arm_joint_2"], [1.0], stamp=0.0, now=1.0)
+    commands.accept(["arm_joint_2"], [1.0], stamp_ns=0, now=1.0)
     assert commands.torque(1.5).tolist() == [0.0, 1.0, 0.0, 0.0, 0.0]
     result = commands.torque(1.51)
     assert (result is None and after is None) or result.tolist() == after
@@ -78,30 +81,52 @@ def test_joint_sample_reorders_ignores_locked_joints_and_rejects_missing(simulat
     robot = simulator.robot
     known = [j.name for j in robot.tree]
     names = ["wheel_joint_fl", *robot.joint_names[::-1]]
-    sample = joint_sample(robot, known, names, [9.0, 5, 4, 3, 2, 1], [9.0, 50, 40, 30, 20, 10], t=0.1)
+    sample = joint_sample(robot, known, names, [9.0, 5, 4, 3, 2, 1], [9.0, 50, 40, 30, 20, 10], stamp_ns=NS // 10)
     assert sample.q.tolist() == [1, 2, 3, 4, 5] and sample.v.tolist() == [10, 20, 30, 40, 50]
     with pytest.raises(InputRejected, match="missing_joint"):
-        joint_sample(robot, known, robot.joint_names[:4], [0.0] * 4, [0.0] * 4, t=0.1)
+        joint_sample(robot, known, robot.joint_names[:4], [0.0] * 4, [0.0] * 4, stamp_ns=NS // 10)
     with pytest.raises(InputRejected, match="length_mismatch"):
-        joint_sample(robot, known, robot.joint_names, [0.0] * 5, [0.0] * 4, t=0.1)
+        joint_sample(robot, known, robot.joint_names, [0.0] * 5, [0.0] * 4, stamp_ns=NS // 10)
 
 
 def test_trajectory_is_followed_through_its_points(simulator: Simulator) -> None:
     robot, q0 = simulator.robot, simulator.scene.q0
     target = q0 + np.array([0.3, -0.2, 0.1, 0.0, 0.0])
-    points = [(0.5, target[:3], ()), (1.0, target[:3] + 0.1, ())]
-    trajectory = joint_trajectory(robot, robot.joint_names[:3], points, start=2.0, q_now=q0)
+    points = [(500_000_000, target[:3], ()), (1_000_000_000, target[:3] + 0.1, ())]
+    trajectory = joint_trajectory(robot, robot.joint_names[:3], points, start_ns=2 * NS, q_now=q0)
     q, v, a = trajectory.evaluate(2.5)
     assert np.allclose(q, target) and np.all(np.isfinite(a))
     assert np.allclose(trajectory.evaluate(2.0)[0], q0)          # starts where the robot is
     assert np.allclose(trajectory.evaluate(9.0)[0][:3], target[:3] + 0.1) and not trajectory.evaluate(9.0)[1].any()
     with pytest.raises(InputRejected, match="bad_timing"):
-        joint_trajectory(robot, robot.joint_names[:1], [(0.5, [3.0], ()), (0.5, [3.1], ())], 0.0, q0)
+        joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [3.0], ()), (NS // 2, [3.1], ())], 0, q0)
+    with pytest.raises(InputRejected, match="bad_timing"):
+        joint_trajectory(robot, robot.joint_names[:1], [(-1, [3.0], ())], 0, q0)
     with pytest.raises(InputRejected, match="out_of_limits"):
-        joint_trajectory(robot, robot.joint_names[:1], [(0.5, [100.0], ())], 0.0, q0)
+        joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [100.0], ())], 0, q0)
     scene_free = Simulator(load_scene("arm_swing"))
     with pytest.raises(InputRejected, match="no_controller"):
         follow(scene_free.controller, trajectory)
+
+
+@pytest.mark.parametrize("start_ns", [0, 1_700_000_000 * NS, 2**31 * NS + NS - 1])
+def test_trajectory_times_are_relative_integer_nanoseconds(simulator: Simulator, start_ns: int) -> None:
+    """Stamps of any magnitude (up to the largest builtin_interfaces/Time): a one-point
+    trajectory holds its point from the start (before the fix, a wall-clock stamp of 1.7e9 s
+    lost the 1e-9 s padding in float rounding and CubicSpline raised ValueError); points
+    1 ns apart stay distinct; the reference matches the same trajectory started at 0."""
+    robot, q0 = simulator.robot, simulator.scene.q0
+    single = joint_trajectory(robot, robot.joint_names[:1], [(0, [0.5], ())], start_ns, q0)
+    assert single.evaluate(start_ns / NS + 1.0)[0][0] == 0.5
+    points = [(1, [0.4], ()), (2, [0.41], ()), (250_000_000, [0.6], ())]
+    moved = joint_trajectory(robot, robot.joint_names[:1], points, start_ns, q0)
+    reference = joint_trajectory(robot, robot.joint_names[:1], points, 0, q0)
+    assert moved.offsets_ns == reference.offsets_ns == (0, 1, 2, 250_000_000)
+    t = start_ns / NS + 0.125                  # float seconds: ulp 2.4e-7 s near 1.7e9 s, 4.8e-7 near 2.1e9 s
+    relative = (round(t * NS) - start_ns) / NS
+    assert abs(relative - 0.125) <= 1e-6       # measured 6.4e-8 s at 1.7e9 s; bound 1e-6 s
+    for got, want in zip(moved.evaluate(t), reference.evaluate(relative)):
+        np.testing.assert_array_equal(got, want)
 
 
 def test_central_difference_is_the_window_mean_of_the_acceleration() -> None:
@@ -109,7 +134,7 @@ def test_central_difference_is_the_window_mean_of_the_acceleration() -> None:
     and its error stays below the variation of a over the window (the bound the node uses)."""
     estimator, h = AccelerationEstimator(), 0.01
     for k, t in enumerate(np.arange(0.0, 1.0, h)):
-        result = estimator.push(JointSample(t, np.zeros(1), np.array([math.sin(t)])))
+        result = estimator.push(JointSample(round(t * NS), np.zeros(1), np.array([math.sin(t)])))
         if result is None:
             assert k < 2
             continue
@@ -119,7 +144,7 @@ def test_central_difference_is_the_window_mean_of_the_acceleration() -> None:
         window = np.linspace(middle.t - h, middle.t + h, 41)
         assert abs(a_hat[0] - math.cos(middle.t)) <= np.max(np.abs(np.cos(window) - math.cos(middle.t)))
     with pytest.raises(InputRejected, match="bad_timing"):
-        estimator.push(JointSample(0.5, np.zeros(1), np.zeros(1)))
+        estimator.push(JointSample(NS // 2, np.zeros(1), np.zeros(1)))
 
 
 def test_link_frames_match_pinocchio_forward_kinematics(simulator: Simulator) -> None:
@@ -145,3 +170,31 @@ def test_counters_flatten_for_diagnostics() -> None:
     counters.reject(InputRejected("stale", "old"))
     values = counters.as_values()
     assert values["rejected.stale"] == 1 and values["rejected.total"] == 1 and values["accepted"] == 0
+
+
+@pytest.mark.parametrize("base_ns", [0, 1_700_000_000 * NS + 123_456_789])
+def test_a_rejected_joint_state_breaks_the_difference_stencil(base_ns: int) -> None:
+    """Inverse mode: samples at base + 10, 20, 30, ... ms with v = 10 (t - base) (a = 10
+    rad/s^2) and a NaN sample at 25 ms. Before the fix the torques at 20 and 30 ms were
+    computed across the rejected sample; now the first torque after it is at 40 ms (three
+    good samples 30, 40, 50 ms). Torques carry their sample's stamp exactly and equal RNEA at
+    a = 10, also at a wall-clock base (1.7e9 s; float seconds there lose 2.4e-7 s, a 1e-5
+    relative error in a): tolerance 1e-12, measured difference 0.0."""
+    scene = load_scene("arm_ptp")
+    session = InverseSession(scene)
+    names, q0 = list(session.robot.joint_names), scene.q0
+    published = []
+    for stamp_ms in (10, 20, 25, 30, 40, 50, 60):
+        position = [math.nan] * 5 if stamp_ms == 25 else list(q0)
+        try:
+            outputs = session.joint_state(names, position, [0.01 * stamp_ms] * 5, base_ns + stamp_ms * 1_000_000)
+        except InputRejected as error:
+            assert error.kind == "non_finite" and stamp_ms == 25
+            continue
+        published += [message for topic, message in outputs if topic == "/computed_torques"]
+    stamps = [m.header.stamp.sec * NS + m.header.stamp.nanosec - base_ns for m in published]
+    assert stamps == [40_000_000, 50_000_000]
+    for stamp, message in zip(stamps, published):
+        expected = session.dynamics.torque(q0, np.full(5, 10.0 * stamp / NS), np.full(5, 10.0))
+        np.testing.assert_allclose(message.effort, expected, rtol=1e-12, atol=1e-12)
+    assert session.counters.rejected["non_finite"] == 1 and session.counters.accepted == 6

@@ -24,7 +24,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
-from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
+from youbot_dynamics.ros.session import TOPIC_TYPES, SimulationSession  # noqa: E402
 from youbot_dynamics.sim.frames import LinkFrames  # noqa: E402
 from youbot_dynamics.sim.scene import load_scene  # noqa: E402
 
@@ -66,7 +66,8 @@ def test_simulate_mode_publishes_the_simulated_motion() -> None:
     assert np.ptp([m.position[0] for m in states]) > 1e-3        # the arm moved
     frames = LinkFrames(reference.robot)
     for pose, state in zip(poses, states):
-        position, quaternion = frames.ee_pose(np.asarray(state.position))
+        q = dict(zip(state.name, state.position))
+        position, quaternion = frames.ee_pose(np.array([q[name] for name in reference.robot.joint_names]))
         p, o = pose.pose.position, pose.pose.orientation
         assert np.allclose([p.x, p.y, p.z], position, atol=1e-12)
         assert np.allclose([o.x, o.y, o.z, o.w], quaternion, atol=1e-12)
@@ -114,7 +115,7 @@ def test_bad_input_is_counted_warned_and_never_published() -> None:
         commands = collector.create_publisher(JointState, "/joint_commands", RELIABLE_DEEP)
         trajectories = collector.create_publisher(JointTrajectory, "/joint_trajectory", RELIABLE_DEEP)
         wait_matched(node)
-        with spinning(context, node, collector):
+        with spinning(context, node, collector, single_threaded=True):
             wait_until(lambda: commands.get_subscription_count() > 0 and trajectories.get_subscription_count() > 0,
                        what="the node's subscriptions")
             bad = [(["arm_joint_1"], [math.nan]), (["arm_joint_1"], [math.inf]),
@@ -154,16 +155,34 @@ def test_bad_input_is_counted_warned_and_never_published() -> None:
 
 
 def test_stale_command_is_rejected() -> None:
+    """A command stamped 1 ns, received after t = 0.5 s with a 0.1 s timeout, is rejected as
+    stale and never accepted.
+
+    Robust against two races that made it fail once under load: (1) spun by a
+    MultiThreadedExecutor, the always-late step timer (time_scale 0) and the subscription
+    share the node's mutually exclusive callback group, and the executor skips the
+    subscription whenever the timer is running: it starved; the node process spins
+    single-threaded, and so does this test now. (2) The publisher may match the node's
+    subscription before the subscription has matched the publisher, and a volatile reader
+    drops what came before its match: the command is republished until one is counted."""
     with ros_context(2) as (context, _):
         node = make_node(context, scene="arm_swing", publish_rate=200.0, time_scale=0.0, command_timeout=0.1)
         sender = Collector(context, {})
         commands = sender.create_publisher(JointState, "/joint_commands", RELIABLE_DEEP)
-        with spinning(context, node, sender):
+        with spinning(context, node, sender, single_threaded=True):
             wait_until(lambda: commands.get_subscription_count() > 0, what="the node's subscription")
             wait_until(lambda: node.session.t > 0.5, what="simulated time")
-            commands.publish(_command(["arm_joint_1"], [1.0], stamp_ns_=1))
-            wait_until(lambda: node.session.counters.rejected["stale"] == 1, what="the stale count")
-        assert node.session.counters.accepted == 0
+
+            def stale_counted() -> bool:
+                if node.session.counters.rejected["stale"] == 0:
+                    commands.publish(_command(["arm_joint_1"], [1.0], stamp_ns_=1))
+                    return False
+                return True
+
+            wait_until(stale_counted, what="the stale count")
+        counters = node.session.counters
+        assert counters.rejected["stale"] >= 1 and sum(counters.rejected.values()) == counters.rejected["stale"]
+        assert counters.accepted == 0
 
 
 def test_pause_and_reset_services() -> None:
@@ -172,7 +191,7 @@ def test_pause_and_reset_services() -> None:
         client_node = Collector(context, OUTPUTS)
         pause = client_node.create_client(SetBool, "/dynamics_node/pause")
         reset = client_node.create_client(Trigger, "/dynamics_node/reset")
-        with spinning(context, node, client_node):
+        with spinning(context, node, client_node, single_threaded=True):
             assert pause.wait_for_service(timeout_sec=WAIT) and reset.wait_for_service(timeout_sec=WAIT)
             wait_until(lambda: node.session.t > 0.3, what="simulated time")
             future = pause.call_async(SetBool.Request(data=True))
@@ -275,13 +294,13 @@ def test_inverse_mode_rejects_bad_joint_states_and_publishes_only_finite_torques
         with spinning(context, node, collector):
             wait_until(lambda: states.get_subscription_count() > 0, what="the node's subscription")
             wait_matched(node, "/computed_torques")
-            for k in range(4):
+            for k in range(6):
                 msg = JointState(name=names, position=list(q0), velocity=[0.1 * k] * 5)
                 msg.header.stamp.nanosec = 10_000_000 * (k + 1)
                 states.publish(msg)
                 if k == 1:
                     broken = JointState(name=names, position=[math.nan] * 5, velocity=[0.0] * 5)
-                    broken.header.stamp.nanosec = 15_000_000
+                    broken.header.stamp.nanosec = 25_000_000
                     states.publish(broken)
                     states.publish(JointState(name=names[:3], position=[0.0] * 3, velocity=[0.0] * 3))
             wait_until(lambda: collector.count("/computed_torques") == 2, what="two torque samples")
@@ -289,7 +308,195 @@ def test_inverse_mode_rejects_bad_joint_states_and_publishes_only_finite_torques
                        diagnostic_values(collector.messages("/diagnostics")[-1])["rejected.total"] == "2",
                        what="the rejection counts")
         torques = collector.messages("/computed_torques")
-    for k, torque in enumerate(torques):
-        assert stamp_ns(torque) == 10_000_000 * (k + 2)
-        expected = node.session.dynamics.torque(q0, np.full(5, 0.1 * (k + 1)), np.full(5, 10.0))
+    # the rejected samples (after 20 ms) break the stencil: the first torque needs 30, 40, 50 ms
+    assert [stamp_ns(torque) for torque in torques] == [40_000_000, 50_000_000]
+    for torque in torques:               # v = 0.1 k at (k + 1) 10 ms
+        v = 0.1 * (stamp_ns(torque) // 10_000_000 - 1)
+        expected = node.session.dynamics.torque(q0, np.full(5, v), np.full(5, 10.0))
         assert np.allclose(torque.effort, expected, rtol=1e-12, atol=1e-12)
+
+
+def test_inverse_mode_hears_a_best_effort_publisher(capfd: pytest.CaptureFixture) -> None:
+    """With the default joint_states_qos (keep_all, reliable) a best-effort /joint_states
+    publisher (as many drivers are) is not matched, and the node says which parameter to
+    set; with joint_states_qos best_effort it is heard. Torques equal RNEA at a = 10 rad/s^2
+    (the central difference of v = 10 t is exact to ~1e-15; tolerance 1e-12)."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    with ros_context(9) as (context, _):
+        collector = Collector(context, {"/computed_torques": "sensor_msgs/msg/JointState"})
+        states = collector.create_publisher(JointState, "/joint_states",
+                                            QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT))
+        reliable = make_node(context, scene="arm_ptp", mode="inverse")
+        log = []
+
+        def warned() -> bool:
+            log.append(capfd.readouterr().err)
+            return "joint_states_qos:=best_effort" in "".join(log)
+
+        with spinning(context, reliable, single_threaded=True):
+            wait_until(warned, what="the incompatible-QoS warning")
+        assert states.get_subscription_count() == 0
+        node = make_node(context, scene="arm_ptp", mode="inverse", joint_states_qos="best_effort")
+        names, q0 = list(node.session.robot.joint_names), load_scene("arm_ptp").q0
+        with spinning(context, node, collector, single_threaded=True):
+            wait_until(lambda: states.get_subscription_count() > 0, what="the node's best-effort subscription")
+            wait_matched(node, "/computed_torques")
+            k = 0
+
+            def torques_arrived() -> bool:       # best effort may drop a sample: keep sending
+                nonlocal k
+                k += 1
+                msg = JointState(name=names, position=list(q0), velocity=[0.1 * k] * 5)
+                msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(10_000_000 * k, 10**9)
+                states.publish(msg)
+                return collector.count("/computed_torques") >= 3
+
+            wait_until(torques_arrived, what="torques from best-effort joint states")
+        torques = collector.messages("/computed_torques")
+    for torque in torques:
+        expected = node.session.dynamics.torque(q0, np.full(5, 10.0 * stamp_ns(torque) * 1e-9), np.full(5, 10.0))
+        assert np.allclose(torque.effort, expected, rtol=1e-12, atol=1e-12)
+
+
+def _urdf_movable_joints(urdf: str) -> list[str]:
+    """Names of the non-fixed joints of a URDF (file path or text), parsed independently."""
+    from lxml import etree
+    root = etree.fromstring(urdf.encode()) if urdf.lstrip().startswith("<") else etree.parse(urdf).getroot()
+    return [j.get("name") for j in root.iter("joint") if j.get("type") != "fixed"]
+
+
+@pytest.mark.parametrize(("mode", "offset"), [("simulate", 10), ("inverse", 11)])
+def test_every_published_message_passes_the_strict_field_check(mode: str, offset: int) -> None:
+    """Under ROS_PYTHON_CHECK_FIELDS=1 (test/conftest.py) the node publishes on every one of
+    its topics and no callback fails (before the fix /diagnostics raised "The 'level' field
+    must be of type 'bytes'" and, unchecked, carried a garbage level). Simulate mode's
+    /joint_states names every movable joint of the scene's URDF, locked ones at their value."""
+    assert os.environ["ROS_PYTHON_CHECK_FIELDS"] == "1"
+    scene = load_scene("arm_ptp")
+    with ros_context(offset) as (context, _):
+        node = make_node(context, scene="arm_ptp", mode=mode, publish_rate=100.0, diagnostics_period=0.05)
+        topics = {topic: TOPIC_TYPES[topic] for topic in node.session.topics}
+        collector = Collector(context, topics)
+        states = collector.create_publisher(JointState, "/joint_states", RELIABLE_DEEP) if mode == "inverse" else None
+        with spinning(context, node, collector, single_threaded=True):
+            for topic in topics:
+                wait_matched(node, topic)
+            k = 0
+
+            def every_topic_heard() -> bool:
+                nonlocal k
+                if states is not None:        # inverse mode: feed joint states until it answers
+                    k += 1
+                    msg = JointState(name=list(scene.robot().joint_names), position=list(scene.q0),
+                                     velocity=[0.01 * k] * 5)
+                    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(10_000_000 * k, 10**9)
+                    states.publish(msg)
+                return all(collector.count(topic) > 0 for topic in topics)
+
+            wait_until(every_topic_heard, what=f"a message on each of {sorted(topics)}")
+        diagnostics = collector.messages("/diagnostics")
+        joint_states = collector.messages("/joint_states") if mode == "simulate" else []
+    assert node.session.counters.failed == {}
+    assert {status.level for array in diagnostics for status in array.status} == {0}
+    assert diagnostic_values(diagnostics[-1])["failed.total"] == "0"
+    if joint_states:
+        movable = _urdf_movable_joints(scene.robot_path)
+        assert sorted(joint_states[0].name) == sorted(movable) and len(movable) == 11
+        robot = scene.robot()
+        by_name = dict(zip(joint_states[-1].name, joint_states[-1].position))
+        assert robot.locked and all(by_name[name] == value for name, value in robot.locked.items())
+
+
+def test_composed_scene_joint_states_and_field_check() -> None:
+    """The two-robot gripping scene (URDF composed in memory, a free sphere): /joint_states
+    carries every non-fixed joint of that URDF (moving ones, then the locked wheels at 0),
+    and every message of its topics (/free_bodies included) converts to rclpy under
+    ROS_PYTHON_CHECK_FIELDS=1."""
+    from youbot_dynamics.ros.conversions import to_rclpy
+    scene = load_scene("gripping")
+    session = SimulationSession(scene, 100.0, samples_per_solve=1)
+    outputs = [*session.step(), *session.step(), *session.diagnostics(1.0)]
+    assert {topic for topic, _ in outputs} == set(session.topics) >= {"/free_bodies", "/joint_states"}
+    for _, message in outputs:
+        to_rclpy(message)
+    message = dict(outputs)["/joint_states"]
+    assert sorted(message.name) == sorted(_urdf_movable_joints(scene.robot_path))
+    assert len(message.name) == len(message.position) == len(message.velocity) == len(message.effort) == 22
+    assert all(message.position[list(message.name).index(name)] == value for name, value in scene.robot().locked.items())
+
+
+def test_no_callback_failure_stops_the_node(capfd: pytest.CaptureFixture) -> None:
+    """Faults injected into a subscription (/joint_commands, twice), the step timer (once)
+    and a service (~/reset): each is counted in /diagnostics under its cause, logged once
+    with the message that caused it, the service answers success false, and the node goes
+    on publishing. A one-point /joint_trajectory stamped with wall-clock time (1.7e9 s),
+    which killed the node before (ValueError from CubicSpline), is accepted."""
+    with ros_context(12) as (context, _):
+        node = make_node(context, scene="arm_ptp", publish_rate=100.0, diagnostics_period=0.05)
+        collector = Collector(context, OUTPUTS)
+        commands = collector.create_publisher(JointState, "/joint_commands", RELIABLE_DEEP)
+        trajectories = collector.create_publisher(JointTrajectory, "/joint_trajectory", RELIABLE_DEEP)
+        reset = collector.create_client(Trigger, "/dynamics_node/reset")
+        session, step = node.session, node.session.step
+        step_faults = [ZeroDivisionError("injected step fault")]
+
+        def broken(*args) -> None:
+            raise RuntimeError("injected fault")
+
+        def step_failing_once():
+            if step_faults:
+                raise step_faults.pop()
+            return step()
+
+        session.effort_command, session.reset, session.step = broken, broken, step_failing_once
+        wall_clock = JointTrajectory(joint_names=["arm_joint_1"], points=[JointTrajectoryPoint(positions=[2.0])])
+        wall_clock.header.stamp.sec = 1_700_000_000
+        with spinning(context, node, collector, single_threaded=True):
+            wait_until(lambda: commands.get_subscription_count() > 0 and trajectories.get_subscription_count() > 0,
+                       what="the node's subscriptions")
+            assert reset.wait_for_service(timeout_sec=WAIT)
+
+            def failed(cause: str, count: int) -> bool:
+                if session.counters.failed.get(cause, 0) < count:
+                    commands.publish(_command(["arm_joint_1"], [0.5]))
+                    return False
+                return True
+
+            wait_until(lambda: failed("/joint_commands: RuntimeError", 2), what="two failed commands")
+
+            def trajectory_accepted() -> bool:
+                if session.counters.accepted == 0:
+                    trajectories.publish(wall_clock)
+                    return False
+                return True
+
+            wait_until(trajectory_accepted, what="the wall-clock stamped trajectory")
+            future = reset.call_async(Trigger.Request())
+            wait_until(future.done, what="the reset answer")
+            samples = collector.count("/joint_states")
+            wait_until(lambda: collector.count("/joint_states") > samples + 10, what="publishing after the faults")
+
+            def reported() -> dict[str, str]:
+                diagnostics = collector.messages("/diagnostics")
+                return diagnostic_values(diagnostics[-1]) if diagnostics else {}
+
+            failures = session.counters.failed      # final: nothing is published any more
+
+            def all_reported() -> bool:
+                values = reported()
+                return values.get("failed.total") == str(sum(failures.values())) and \
+                    values.get("accepted") == str(session.counters.accepted)
+
+            wait_until(all_reported, what="the counts in /diagnostics")
+        values = reported()
+        states = collector.messages("/joint_states")
+    assert not future.result().success and "RuntimeError: injected fault" in future.result().message
+    assert values["failed.step timer: ZeroDivisionError"] == "1" and values["failed.~/reset: RuntimeError"] == "1"
+    assert int(values["failed./joint_commands: RuntimeError"]) >= 2 and set(failures) == {
+        "/joint_commands: RuntimeError", "step timer: ZeroDivisionError", "~/reset: RuntimeError"}
+    assert values["rejected.total"] == "0" and int(values["accepted"]) >= 1     # the trajectory (maybe resent)
+    assert all(np.isfinite(s.position).all() for s in states)
+    assert [stamp_ns(m) for m in states] == [10_000_000 * k for k in range(len(states))]   # none skipped
+    log = capfd.readouterr().err
+    assert log.count("/joint_commands: RuntimeError: injected fault") == 1         # logged once, failed twice
+    assert "message: sensor_msgs.msg.JointState(" in log and "injected step fault" in log

@@ -229,7 +229,7 @@ def _checked_entry(entry: Mapping[str, Any], where: str, velocity_scale: float) 
     if not isinstance(entry, Mapping) or "law" not in entry:
         raise UserInputError(f"{where}: needs a mapping with key 'law' (one of {', '.join(LAW_PARAMETERS)})")
     law = entry["law"]
-    if law not in LAW_PARAMETERS:
+    if not isinstance(law, str) or law not in LAW_PARAMETERS:
         raise UserInputError(f"{where}: unknown friction law '{law}' (key 'law'); "
                              f"valid laws: {', '.join(LAW_PARAMETERS)}")
     keys = LAW_PARAMETERS[law]

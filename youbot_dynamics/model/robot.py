@@ -420,25 +420,31 @@ def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False)
         raise UserInputError(f"root '{root}' is unknown: expected one of {', '.join(ROOTS)}")
     text, label = _read_source(source)
     element = _parse_xml(text, label)
-    fidelity = _check_urdf(element, label)
-    joint = element.find(f"joint[@name='{ROOT_JOINT_NAME}']")
-    if root != "fixed" and joint is not None:
-        raise URDFError(f"{_where(label, joint)}: the name is reserved for the {root} root joint; "
-                        "rename the joint or load with root 'fixed'")
-    urdf = yourdfpy.URDF.load(io.BytesIO(etree.tostring(element)), build_scene_graph=False, load_meshes=False)
-    tree, root_link = _kinematic_tree(urdf)
-    relations, mimic_warnings = _mimic_relations(element, label)
-    model, mimic, mimic_notes = _pinocchio_model(element, relations, root)
-    first = 1 if root == "fixed" else 2  # Pinocchio joint 0 is the universe, 1 the root joint
-    joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(first, model.njoints)
-                   if model.names[i] not in mimic)
-    robot = Robot(name=element.get("name"), source=label, model=model, joints=joints, tree=tree,
-                  root_link=root_link,
-                  fidelity=(_root_note(root, root_link), *mimic_warnings, *fidelity, *mimic_notes),
-                  mimic=mimic, root=root)
-    if strict and robot.warnings:
-        raise URDFError(f"{label}: strict loading refuses {len(robot.warnings)} warning(s): "
-                        + "; ".join(w.removeprefix(WARNING) for w in robot.warnings))
+    try:
+        fidelity = _check_urdf(element, label)
+        joint = element.find(f"joint[@name='{ROOT_JOINT_NAME}']")
+        if root != "fixed" and joint is not None:
+            raise URDFError(f"{_where(label, joint)}: the name is reserved for the {root} root joint; "
+                            "rename the joint or load with root 'fixed'")
+        urdf = yourdfpy.URDF.load(io.BytesIO(etree.tostring(element)), build_scene_graph=False, load_meshes=False)
+        tree, root_link = _kinematic_tree(urdf)
+        relations, mimic_warnings = _mimic_relations(element, label)
+        model, mimic, mimic_notes = _pinocchio_model(element, relations, root)
+        first = 1 if root == "fixed" else 2  # Pinocchio joint 0 is the universe, 1 the root joint
+        joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(first, model.njoints)
+                       if model.names[i] not in mimic)
+        robot = Robot(name=element.get("name"), source=label, model=model, joints=joints, tree=tree,
+                      root_link=root_link,
+                      fidelity=(_root_note(root, root_link), *mimic_warnings, *fidelity, *mimic_notes),
+                      mimic=mimic, root=root)
+        if strict and robot.warnings:
+            raise URDFError(f"{label}: strict loading refuses {len(robot.warnings)} warning(s): "
+                            + "; ".join(w.removeprefix(WARNING) for w in robot.warnings))
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as error:  # the parsers' own failures
+        if isinstance(error, UserInputError):
+            raise
+        raise URDFError(f"{label}: cannot read the URDF: {type(error).__name__}: {' '.join(str(error).split())} "
+                        "(a malformed attribute or element the checks above do not cover)") from None
     return robot
 
 

@@ -5,7 +5,9 @@
 ``from_rclpy`` turns a received rclpy message into the rosbags object of the same type (plain
 dataclasses and numpy arrays), so nothing below ros/ sees rclpy. Both handle nested
 messages, sequences of messages, numeric arrays (numpy on the rosbags side, array.array or
-numpy on the rclpy side) and strings. A conversion plan is built once per type and cached.
+numpy on the rclpy side), ``byte`` fields (int on the rosbags side, length-1 bytes in rclpy)
+and strings. Every rclpy message it builds passes rclpy's field check
+(``ROS_PYTHON_CHECK_FIELDS=1``). A conversion plan is built once per type and cached.
 """
 from __future__ import annotations
 
@@ -40,10 +42,14 @@ def _fields(msgtype: str) -> list[tuple[str, tuple]]:
 
 
 def _element_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any] | None:
-    """Converter of one base or nested element; None when the value passes unchanged."""
+    """Converter of one base or nested element; None when the value passes unchanged. A
+    ``byte`` is an int on the rosbags side and a length-1 ``bytes`` in rclpy (which
+    rejects an int under ROS_PYTHON_CHECK_FIELDS=1 and otherwise stores garbage)."""
     node_type, detail = description
     if node_type.name == "NAME":
         return _plan(detail, to_ros)
+    if detail[0] == "byte":
+        return (lambda value: bytes((int(value),))) if to_ros else (lambda value: value[0])
     return None
 
 
@@ -54,10 +60,13 @@ def _field_converter(description: tuple, to_ros: bool) -> Callable[[Any], Any] |
     if node_type.name in ("BASE", "NAME"):
         return _element_converter(description, to_ros)
     element, _count = detail
+    base = element[1][0] if element[0].name == "BASE" else None
+    if base == "byte":     # rclpy: a list of length-1 bytes; rosbags: uint8 numbers
+        return (lambda values: [bytes((int(value),)) for value in values]) if to_ros else \
+            (lambda values: np.frombuffer(b"".join(values), dtype=np.uint8))
     inner = _element_converter(element, to_ros)
     if inner is not None:
         return lambda values: [inner(value) for value in values]
-    base = element[1][0] if element[0].name == "BASE" else None
     if base not in _TYPECODES:
         return list
     if to_ros and node_type.name == "SEQUENCE":     # rclpy keeps sequences in array.array

@@ -11,9 +11,16 @@ and /ee_pose), /scene_markers (latched) when it has static geometry, and /diagno
 the contact events), subscribes
 /joint_commands (sensor_msgs/JointState efforts by joint name) and /joint_trajectory
 (trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
-(std_srvs/SetBool). inverse mode subscribes /joint_states (reliable, keep-all: a replay as
-fast as possible loses no sample) and publishes /computed_torques,
-/ee_pose and /diagnostics. Parameters: :mod:`youbot_dynamics.ros.parameters`.
+(std_srvs/SetBool). inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
+default keep-all: a replay as fast as possible loses no sample; best_effort for drivers that
+publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics. Parameters:
+:mod:`youbot_dynamics.ros.parameters`.
+
+No input kills the node: every subscription, timer and service callback runs behind
+:meth:`DynamicsNode._guarded`. Rejected input is counted (``rejected.<kind>``) and warned
+about; any other exception is counted in /diagnostics under its cause (``failed.<source>:
+<exception type>``), logged once per cause with the message that caused it, and the node
+keeps its last good state and goes on publishing.
 
 Timing (simulate): a steady-clock timer paces the samples at ``publish_rate x time_scale``
 per wall second; a late tick publishes the samples that are due (up to ``MAX_BURST``, the
@@ -34,13 +41,17 @@ from __future__ import annotations
 
 import sys
 import time
+import traceback
+from collections.abc import Callable
 
 import rclpy
 import rclpy.executors
 from rclpy.clock import Clock, ClockType
+from rclpy.event_handler import QoSRequestedIncompatibleQoSInfo, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import qos_policy_name_from_kind
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
@@ -51,7 +62,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr, to_rclpy
 from youbot_dynamics.ros.parameters import check_choice, declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
-from youbot_dynamics.ros.qos import LATCHED, RELIABLE_ALL, RELIABLE_DEEP
+from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
 from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
 from youbot_dynamics.sim.commands import InputRejected
 from youbot_dynamics.sim.scene import load_scene
@@ -67,6 +78,8 @@ SERIALIZED = frozenset({"/tf", "/tf_static"})
 """Topics published as CDR bytes (:func:`~youbot_dynamics.ros.conversions.to_cdr`): a
 TFMessage's nested rclpy objects cost about five times as much to build (0.5 ms per sample
 of the gripping scene, a quarter of its 500 Hz period)."""
+QUOTED_CHARACTERS = 500
+"""Characters of the message that made a callback fail quoted in the log."""
 
 
 def _stamp_ns(stamp) -> int:
@@ -90,21 +103,28 @@ class DynamicsNode(Node):
         else:
             self.session = InverseSession(scene, filter_time_constant=p["acceleration_filter"], **logs)
         self.finished = False
+        self._failures_logged: set[str] = set()
         self._create_publishers()
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         if p["mode"] == "simulate":
-            self.create_subscription(JointState, "/joint_commands", self._on_command, RELIABLE_DEEP)
-            self.create_subscription(JointTrajectory, "/joint_trajectory", self._on_trajectory, RELIABLE_DEEP)
-            self.create_service(Trigger, "~/reset", self._on_reset)
-            self.create_service(SetBool, "~/pause", self._on_pause)
+            self.create_subscription(JointState, "/joint_commands", self._guarded("/joint_commands", self._on_command),
+                                     RELIABLE_DEEP)
+            self.create_subscription(JointTrajectory, "/joint_trajectory",
+                                     self._guarded("/joint_trajectory", self._on_trajectory), RELIABLE_DEEP)
+            self.create_service(Trigger, "~/reset", self._guarded("~/reset", self._on_reset))
+            self.create_service(SetBool, "~/pause", self._guarded("~/pause", self._on_pause))
             self._wait_deadline = time.monotonic() + p["wait_timeout"]
             self._waiting = p["wait_for_subscribers"] > 0
             self._restart_pacing()
-            self.create_timer(1.0 / p["publish_rate"], self._on_tick, clock=steady)
+            self.create_timer(1.0 / p["publish_rate"], self._guarded("step timer", self._on_tick), clock=steady)
         else:
-            self.create_subscription(JointState, "/joint_states", self._on_joint_state, RELIABLE_ALL)
+            self.create_subscription(
+                JointState, "/joint_states", self._guarded("/joint_states", self._on_joint_state),
+                SUBSCRIPTION_PROFILES[p["joint_states_qos"]],
+                event_callbacks=SubscriptionEventCallbacks(incompatible_qos=self._on_incompatible_joint_states))
         self._diagnostics_mark = (time.monotonic(), self.session.t)
-        self.create_timer(p["diagnostics_period"], self._on_diagnostics, clock=steady)
+        self.create_timer(p["diagnostics_period"], self._guarded("diagnostics timer", self._on_diagnostics),
+                          clock=steady)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.get_logger().info(f"{p['mode']} {scene.name} ({scene.source}); logs: "
                                f"{', '.join(map(str, self.session.recorder.paths)) or 'none'}")
@@ -186,36 +206,61 @@ class DynamicsNode(Node):
         if not self.finished:
             self._publish(self.session.diagnostics(self._real_time_factor()))
 
-    # ---- input -------------------------------------------------------------------------
-    def _rejected(self, topic: str, error: InputRejected) -> None:
-        self.get_logger().warning(f"{topic}: ignored ({error}); keeping the last good state",
-                                  throttle_duration_sec=WARN_THROTTLE)
+    # ---- the node boundary ---------------------------------------------------------------
+    def _guarded(self, source: str, callback: Callable) -> Callable:
+        """``callback`` (of a subscription, timer or service, named ``source``) behind the
+        node boundary. :class:`InputRejected` (counted by the session) gives a throttled
+        warning; any other exception is counted under its cause, logged once per cause with
+        the message that caused it, and a service answers ``success: false``. Either way the
+        node keeps its last good state and its timers go on."""
 
+        def guarded(*args):
+            try:
+                return callback(*args)
+            except InputRejected as error:
+                self.get_logger().warning(f"{source}: ignored ({error}); keeping the last good state",
+                                          throttle_duration_sec=WARN_THROTTLE)
+            except Exception as error:   # noqa: BLE001 -- the boundary: nothing may stop the node
+                self._failed(source, error, args[0] if args else None)
+                if len(args) == 2:       # a service: (request, response)
+                    args[1].success, args[1].message = False, f"{source} failed: {type(error).__name__}: {error}"
+            return args[1] if len(args) == 2 else None
+
+        return guarded
+
+    def _failed(self, source: str, error: Exception, message: object) -> None:
+        """Count a callback's failure under its cause; log the first of each cause with
+        where it was raised and the message (request) that caused it."""
+        cause = self.session.counters.fail(source, error)
+        if cause in self._failures_logged:
+            return
+        self._failures_logged.add(cause)
+        frame = traceback.extract_tb(error.__traceback__)[-1]
+        quoted = "" if message is None else f"; message: {str(message)[:QUOTED_CHARACTERS]}"
+        self.get_logger().error(f"{cause}: {error} (at {frame.filename}:{frame.lineno}){quoted}; counted in "
+                                f"/diagnostics as failed.{cause}, logged once; keeping the last good state")
+
+    def _on_incompatible_joint_states(self, info: QoSRequestedIncompatibleQoSInfo) -> None:
+        self.get_logger().warning(
+            f"a /joint_states publisher offers a QoS incompatible with joint_states_qos "
+            f"{self.params['joint_states_qos']} ({qos_policy_name_from_kind(info.last_policy_kind)}); none of its "
+            "messages arrive: for a best-effort publisher set joint_states_qos:=best_effort")
+
+    # ---- input -------------------------------------------------------------------------
     def _on_command(self, msg: JointState) -> None:
         before = self.session.counters.clamped
-        try:
-            self.session.effort_command(list(msg.name), msg.effort, _stamp_ns(msg.header.stamp))
-        except InputRejected as error:
-            self._rejected("/joint_commands", error)
-            return
+        self.session.effort_command(list(msg.name), msg.effort, _stamp_ns(msg.header.stamp))
         if self.session.counters.clamped > before:
             self.get_logger().warning("/joint_commands: efforts beyond the URDF effort limits were clamped",
                                       throttle_duration_sec=WARN_THROTTLE)
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
-        points = [(point.time_from_start.sec + point.time_from_start.nanosec * 1e-9, point.positions,
-                   point.velocities) for point in msg.points]
-        try:
-            self.session.trajectory(list(msg.joint_names), points, _stamp_ns(msg.header.stamp))
-        except InputRejected as error:
-            self._rejected("/joint_trajectory", error)
+        points = [(_stamp_ns(point.time_from_start), point.positions, point.velocities) for point in msg.points]
+        self.session.trajectory(list(msg.joint_names), points, _stamp_ns(msg.header.stamp))
 
     def _on_joint_state(self, msg: JointState) -> None:
-        try:
-            self._publish(self.session.joint_state(list(msg.name), msg.position, msg.velocity,
-                                                   _stamp_ns(msg.header.stamp)))
-        except InputRejected as error:
-            self._rejected("/joint_states", error)
+        self._publish(self.session.joint_state(list(msg.name), msg.position, msg.velocity,
+                                               _stamp_ns(msg.header.stamp)))
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()

@@ -13,10 +13,11 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.node import Node
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.ros.qos import SUBSCRIPTION_PROFILES
 from youbot_dynamics.sim.commands import TIMEOUT_ACTIONS
 
 MODES = ("simulate", "inverse")
-CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS}
+CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS, "joint_states_qos": tuple(SUBSCRIPTION_PROFILES)}
 
 
 @dataclass(frozen=True)
@@ -51,6 +52,9 @@ PARAMETERS: dict[str, Spec] = {
     "on_timeout": Spec("hold", "after the timeout: hold (scene controller) | zero_torque", read_only=False),
     "acceleration_filter": Spec(0.0, "inverse mode: low-pass time constant (s) on the central-difference "
                                 "acceleration; 0: none", (0.0, 10.0)),
+    "joint_states_qos": Spec("keep_all", "inverse mode: QoS of the /joint_states subscription: best_effort (hears "
+                             "best-effort drivers and reliable publishers; may lose samples) | reliable (keep last "
+                             "1000) | keep_all (reliable, lossless for replay --fast; hears no best-effort publisher)"),
     "wait_for_subscribers": Spec(0, "simulate mode: simulated time starts once /joint_states (/free_bodies "
                                  "without a robot) has this many subscribers (or after wait_timeout); 0: at once", (0, 100)),
     "wait_timeout": Spec(10.0, "wall-clock seconds to wait for those subscribers; then start anyway, "

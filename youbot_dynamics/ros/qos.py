@@ -19,6 +19,14 @@ LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=Relia
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 """Transient local, depth 1 (as /tf_static): late subscribers get the last message."""
 
+BEST_EFFORT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT,
+                         durability=DurabilityPolicy.VOLATILE)
+"""Best effort, keep the last 1000: hears best-effort and reliable publishers alike (a
+reliable subscription matches no best-effort publisher), but may lose samples."""
+
+SUBSCRIPTION_PROFILES = {"best_effort": BEST_EFFORT, "reliable": RELIABLE_DEEP, "keep_all": RELIABLE_ALL}
+"""The choices of a subscription's QoS parameter (inverse mode's ``joint_states_qos``)."""
+
 
 def profile(latched: bool, keep_all: bool = False) -> QoSProfile:
     """The profile to offer a topic with (``keep_all``: :data:`RELIABLE_ALL` unless latched)."""

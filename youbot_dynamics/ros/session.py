@@ -57,7 +57,7 @@ from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
-                                          InputRejected, follow, joint_sample, joint_trajectory)
+                                          InputRejected, follow, joint_sample, joint_trajectory, stamp_in_range)
 from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
 from youbot_dynamics.sim.integrators import DivergenceError
 from youbot_dynamics.sim.inverse import AccelerationEstimator, InverseDynamics
@@ -333,6 +333,8 @@ class SimulationSession(_Session):
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         self.samples_per_solve = max(1, int(samples_per_solve))
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters)
+        self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
+        self._locked_q = np.array([self.robot.locked[name] for name in self.locked_names])
         self._scene_reference = getattr(self.simulator.controller, "reference", None)
         self.paused = False
         self.failure: str | None = None
@@ -363,14 +365,15 @@ class SimulationSession(_Session):
 
     def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int) -> None:
         """Accept an effort command (raises and counts :class:`InputRejected`)."""
-        self.commands.accept(names, efforts, stamp_ns / NS_PER_S, self.t)
+        self.commands.accept(names, efforts, stamp_ns, self.t)
 
-    def trajectory(self, names: Sequence[str], points: Sequence[tuple[float, Sequence[float], Sequence[float]]],
+    def trajectory(self, names: Sequence[str], points: Sequence[tuple[int, Sequence[float], Sequence[float]]],
                    stamp_ns: int) -> None:
-        """Follow a joint trajectory from its stamp (or now, if unstamped or past)."""
+        """Follow a joint trajectory from its stamp (or now, if unstamped or past); ``points``
+        are (time_from_start (int ns), positions, velocities)."""
         try:
-            start = max(stamp_ns / NS_PER_S, self.t)
-            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start, self.simulator.q))
+            start_ns = max(stamp_in_range(stamp_ns, "trajectory"), self.stamp_ns)
+            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start_ns, self.simulator.q))
         except InputRejected as error:
             self.counters.reject(error)
             raise
@@ -412,8 +415,7 @@ class SimulationSession(_Session):
             outputs = [("/clock", messages.clock(stamp))]
             if self.frames.has_robot:
                 poses, position = self.frames.ee_outputs(stamp, q)
-                outputs += [("/joint_states", messages.joint_state(stamp, snapshot.joint_names, q, snapshot.v,
-                                                                   snapshot.tau)), *poses]
+                outputs += [("/joint_states", self._joint_state(stamp, snapshot)), *poses]
             if bodies:
                 outputs += [("/free_bodies", self.frames.free_bodies(stamp, bodies)),
                             ("/free_bodies_markers", self.frames.free_body_markers(stamp, bodies))]
@@ -427,6 +429,15 @@ class SimulationSession(_Session):
         if bodies:
             self.recorder.bodies(stamp, bodies)
         return outputs
+
+    def _joint_state(self, stamp_ns: int, snapshot: Snapshot) -> object:
+        """/joint_states: the moving joints (joint order), then every locked joint (URDF
+        tree order) at its locked value with velocity and effort 0, so that every movable
+        joint of the URDF has a position (robot_state_publisher needs wheels and fingers)."""
+        zeros = np.zeros(len(self.locked_names))
+        return messages.joint_state(stamp_ns, (*snapshot.joint_names, *self.locked_names),
+                                    np.concatenate([snapshot.q, self._locked_q]),
+                                    np.concatenate([snapshot.v, zeros]), np.concatenate([snapshot.tau, zeros]))
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
@@ -501,18 +512,21 @@ class InverseSession(_Session):
     def joint_state(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
                     stamp_ns: int) -> Outputs:
         """Take one /joint_states sample; returns /computed_torques and /ee_pose of the
-        previous sample once three are known. Raises and counts :class:`InputRejected`."""
+        previous sample once three are known. Raises and counts :class:`InputRejected`; a
+        rejected sample breaks the difference stencil (no torque is computed across it: the
+        next torque needs three good samples after it)."""
         try:
-            sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns / NS_PER_S)
+            sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
             estimate = self.estimator.push(sample)
         except InputRejected as error:
             self.counters.reject(error)
+            self.estimator.clear()
             raise
         self.counters.accepted += 1
         if estimate is None:
             return []
         middle, a = estimate
-        stamp = round(middle.t * NS_PER_S)
+        stamp = middle.stamp_ns
         tau = self.dynamics.torque(middle.q, middle.v, a)
         try:
             poses, position_ee = self.frames.ee_outputs(stamp, middle.q)

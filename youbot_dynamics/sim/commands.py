@@ -7,8 +7,11 @@ kind of problem (one of ``REJECTION_KINDS``) and what was wrong. :class:`InputCo
 counts each kind, for /diagnostics. Effort commands beyond the URDF effort limit are not
 rejected but clamped (counted as ``clamped``).
 
-Times are seconds of the node's clock (simulated time when the node drives /clock).
-A message stamp of 0 means "not stamped": the receive time stands in for it.
+Times are the node's clock (simulated time when the node drives /clock): message stamps
+and trajectory times in integer nanoseconds, the current time ``now`` in seconds.
+A message stamp of 0 means "not stamped": the receive time stands in for it. Stamps are
+integer nanoseconds; one outside what builtin_interfaces/Time holds (0 <= stamp < 2^31 s;
+a negative sec, or a nanosec of 1e9 or more carried over) is rejected as ``bad_timing``.
 """
 from __future__ import annotations
 
@@ -24,6 +27,11 @@ from youbot_dynamics.sim.controllers import Reference
 REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_joint",
                    "missing_joint", "out_of_limits", "stale", "bad_timing", "no_controller")
 """Kinds of rejected input, as counted in /diagnostics."""
+
+NS_PER_S = 1_000_000_000
+"""Nanoseconds per second: sample stamps and trajectory times are integer nanoseconds."""
+STAMP_LIMIT_NS = 2**31 * NS_PER_S
+"""Stamps (ns) must lie in [0, STAMP_LIMIT_NS): the range of builtin_interfaces/Time."""
 
 TIMEOUT_ACTIONS = ("hold", "zero_torque")
 """What the simulator applies once the last effort command is older than the timeout:
@@ -41,21 +49,33 @@ class InputRejected(ValueError):
 
 @dataclass
 class InputCounters:
-    """How many inputs were rejected, by kind, and how many effort commands were clamped."""
+    """How many inputs were rejected, by kind, how many effort commands were clamped, and
+    how many callbacks failed with an unexpected exception, by cause (``"<source>:
+    <exception type>"``, e.g. ``"/joint_trajectory: ValueError"``)."""
 
     rejected: dict[str, int] = field(default_factory=lambda: dict.fromkeys(REJECTION_KINDS, 0))
     clamped: int = 0
     accepted: int = 0
+    failed: dict[str, int] = field(default_factory=dict)
 
     def reject(self, error: InputRejected) -> None:
         """Count a rejected input under its kind."""
         self.rejected[error.kind] += 1
 
+    def fail(self, source: str, error: BaseException) -> str:
+        """Count a failure of the callback ``source`` (a topic, ``timer`` or a service) under
+        its cause; returns the cause."""
+        cause = f"{source}: {type(error).__name__}"
+        self.failed[cause] = self.failed.get(cause, 0) + 1
+        return cause
+
     def as_values(self) -> dict[str, int]:
         """Flat key/value pairs for a diagnostic status."""
         return {"accepted": self.accepted, "clamped": self.clamped,
                 **{f"rejected.{kind}": count for kind, count in self.rejected.items()},
-                "rejected.total": sum(self.rejected.values())}
+                "rejected.total": sum(self.rejected.values()),
+                **{f"failed.{cause}": count for cause, count in self.failed.items()},
+                "failed.total": sum(self.failed.values())}
 
 
 def _names(names: Sequence[str], known: Sequence[str], moving: Sequence[str]) -> list[str]:
@@ -80,7 +100,16 @@ def _values(values: Sequence[float], label: str, count: int) -> np.ndarray:
     return array
 
 
-def _check_stamp(stamp: float, now: float, timeout: float, what: str) -> None:
+def stamp_in_range(stamp_ns: int, what: str) -> int:
+    """``stamp_ns`` as an int; raises ``bad_timing`` outside [0, ``STAMP_LIMIT_NS``)."""
+    if not 0 <= stamp_ns < STAMP_LIMIT_NS:
+        raise InputRejected("bad_timing", f"{what} stamped {stamp_ns} ns, outside builtin_interfaces/Time's "
+                            "0 .. 2^31 s")
+    return int(stamp_ns)
+
+
+def _check_stamp(stamp_ns: int, now: float, timeout: float, what: str) -> None:
+    stamp = stamp_in_range(stamp_ns, what) / NS_PER_S
     if stamp > 0.0 and stamp < now - timeout:
         raise InputRejected("stale", f"{what} stamped {stamp:.6f} s is older than the "
                             f"{timeout:g} s timeout (now {now:.6f} s)")
@@ -90,7 +119,7 @@ class EffortCommands:
     """Effort commands (N m, N) by joint name, held until ``timeout`` seconds have passed.
 
     ``accept`` checks one command: names unique and moving joints of the robot, one finite
-    effort per name, stamp (s) not older than the timeout; efforts beyond the URDF limit are
+    effort per name, stamp (int ns) not older than the timeout; efforts beyond the URDF limit are
     clamped. Joints a command does not name keep their previous command (0 at first).
     ``torque(now)`` is the command to apply at time ``now``, or None once the command is
     stale and ``on_timeout`` is ``hold`` (the scene's controller takes over).
@@ -112,13 +141,13 @@ class EffortCommands:
         self.command = np.zeros(self.robot.nv)
         self.received_at: float | None = None
 
-    def accept(self, names: Sequence[str], efforts: Sequence[float], stamp: float, now: float) -> np.ndarray:
+    def accept(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int, now: float) -> np.ndarray:
         """Check a command received at ``now`` (s); returns the clamped efforts in joint
         order. Raises (and counts) :class:`InputRejected`; a clamped command is counted."""
         try:
             names = _names(names, self.robot.joint_names, self.robot.joint_names)
             values = _values(efforts, "effort", len(names))
-            _check_stamp(stamp, now, self.timeout, "effort command")
+            _check_stamp(stamp_ns, now, self.timeout, "effort command")
         except InputRejected as error:
             self.counters.reject(error)
             raise
@@ -147,15 +176,21 @@ class EffortCommands:
 
 @dataclass(frozen=True)
 class JointSample:
-    """One checked joint-state sample: t (s), q (rad, m) and v (rad/s, m/s) in joint order."""
+    """One checked joint-state sample: its stamp (int ns, 0 .. 2^31 s), q (rad, m) and v
+    (rad/s, m/s) in joint order."""
 
-    t: float
+    stamp_ns: int
     q: np.ndarray
     v: np.ndarray
 
+    @property
+    def t(self) -> float:
+        """The stamp in seconds."""
+        return self.stamp_ns / NS_PER_S
+
 
 def joint_sample(robot: Robot, known: Sequence[str], names: Sequence[str], position: Sequence[float],
-                 velocity: Sequence[float], t: float) -> JointSample:
+                 velocity: Sequence[float], stamp_ns: int) -> JointSample:
     """Check a sensor_msgs/JointState: every moving joint named once with a finite position
     and velocity. Names of ``known`` joints that do not move (locked wheels, fingers) are
     ignored; names unknown to the robot are rejected."""
@@ -166,58 +201,70 @@ def joint_sample(robot: Robot, known: Sequence[str], names: Sequence[str], posit
     if missing:
         raise InputRejected("missing_joint", f"no sample for joint(s) {', '.join(missing)}")
     index = [names.index(n) for n in robot.joint_names]
-    return JointSample(float(t), q[index], v[index])
+    return JointSample(stamp_in_range(stamp_ns, "joint state"), q[index], v[index])
 
 
 class SampledTrajectory:
     """A joint trajectory through timed points, as a tracking controller's reference.
 
-    ``times`` (k,) s of simulated time, strictly increasing; ``positions`` (k, n) and, when
-    given, ``velocities`` (k, n) in joint order. Between points: cubic Hermite interpolation
-    through the given velocities, or a cubic spline starting and ending at rest when there
-    are none. Before the first point the first point, after the last the last (at rest).
+    ``start_ns`` (int) is the simulated time (ns) the trajectory starts at, of any
+    magnitude; ``offsets_ns`` (k,) are the points' times relative to it in integer
+    nanoseconds, strictly increasing from 0; ``positions`` (k, n) and, when given,
+    ``velocities`` (k, n) in joint order. The splines run on the relative times in seconds,
+    so a wall-clock stamp (~1.7e9 s) costs no resolution between the points. Between points:
+    cubic Hermite interpolation through the given velocities, or a cubic spline starting and
+    ending at rest when there are none. Before the first point the first point, after the
+    last the last (at rest); a single point is held from the start.
     Duck-types :class:`~youbot_dynamics.sim.trajectory.PointToPointTrajectory` (``evaluate``).
     """
 
-    def __init__(self, times: np.ndarray, positions: np.ndarray, velocities: np.ndarray | None) -> None:
+    def __init__(self, start_ns: int, offsets_ns: Sequence[int], positions: np.ndarray,
+                 velocities: np.ndarray | None) -> None:
         from scipy.interpolate import CubicHermiteSpline, CubicSpline  # only a received trajectory needs it
 
-        self.times = np.asarray(times, dtype=float)
+        self.start_ns = int(start_ns)
+        self.offsets_ns = tuple(int(offset) for offset in offsets_ns)
+        self.times = np.array(self.offsets_ns, dtype=float) / NS_PER_S
         self.positions = np.asarray(positions, dtype=float)
-        if velocities is None:
+        if len(self.times) == 1:
+            self.spline = None
+        elif velocities is None:
             self.spline = CubicSpline(self.times, self.positions, bc_type="clamped")
         else:
             self.spline = CubicHermiteSpline(self.times, self.positions, np.asarray(velocities, dtype=float))
-        self.rate, self.acceleration = self.spline.derivative(1), self.spline.derivative(2)
+        if self.spline is not None:
+            self.rate, self.acceleration = self.spline.derivative(1), self.spline.derivative(2)
 
     def evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Desired position, velocity and acceleration (n,) at time t (s)."""
-        if t <= self.times[0] or t >= self.times[-1]:
-            point = self.positions[0] if t <= self.times[0] else self.positions[-1]
+        """Desired position, velocity and acceleration (n,) at simulated time t (s)."""
+        relative = (round(t * NS_PER_S) - self.start_ns) / NS_PER_S
+        if self.spline is None or relative <= self.times[0] or relative >= self.times[-1]:
+            point = self.positions[0] if relative <= self.times[0] else self.positions[-1]
             return point.copy(), np.zeros(point.size), np.zeros(point.size)
-        return self.spline(t), self.rate(t), self.acceleration(t)
+        return self.spline(relative), self.rate(relative), self.acceleration(relative)
 
 
-def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[float, Sequence[float],
-                     Sequence[float]]], start: float, q_now: np.ndarray) -> SampledTrajectory:
+def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[int, Sequence[float],
+                     Sequence[float]]], start_ns: int, q_now: np.ndarray) -> SampledTrajectory:
     """Check a trajectory_msgs/JointTrajectory and make it a reference in simulated time.
 
-    ``points`` are (time_from_start (s), positions, velocities (may be empty)); ``start`` is
-    the time (s) the trajectory starts at (its stamp, or the receive time). Joints not named
-    hold ``q_now``; the current position ``q_now`` is prepended at ``start`` when the first
-    point comes later, so the reference starts where the robot is. Positions must lie
-    within the joint limits; times must increase strictly.
+    ``points`` are (time_from_start (int ns), positions, velocities (may be empty));
+    ``start_ns`` is the simulated time (int ns) the trajectory starts at (its stamp, or the
+    receive time). Joints not named hold ``q_now``; the current position ``q_now`` is
+    prepended at the start when the first point comes later, so the reference starts where
+    the robot is. Positions must lie within the joint limits; times must increase strictly
+    (and stay distinguishable as float seconds relative to the start).
     """
     names = _names(names, robot.joint_names, robot.joint_names)
     if not points:
         raise InputRejected("length_mismatch", "trajectory has no points")
-    times, rows, rates = [], [], []
+    offsets, rows, rates = [], [], []
     with_velocity = all(len(point[2]) for point in points)
-    for k, (time_from_start, positions, velocities) in enumerate(points):
-        if not math.isfinite(time_from_start) or time_from_start < 0.0:
-            raise InputRejected("bad_timing", f"points[{k}].time_from_start is {time_from_start}")
+    index = [robot.joint_index(n) for n in names]
+    for k, (time_from_start_ns, positions, velocities) in enumerate(points):
+        if not isinstance(time_from_start_ns, (int, np.integer)) or time_from_start_ns < 0:
+            raise InputRejected("bad_timing", f"points[{k}].time_from_start is {time_from_start_ns} ns")
         row, rate = np.array(q_now, dtype=float), np.zeros(robot.nv)
-        index = [robot.joint_index(n) for n in names]
         row[index] = _values(positions, f"points[{k}].positions", len(names))
         if with_velocity:
             rate[index] = _values(velocities, f"points[{k}].velocities", len(names))
@@ -225,16 +272,14 @@ def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[
                    if not robot.lower[robot.joint_index(n)] <= value <= robot.upper[robot.joint_index(n)]]
         if outside:
             raise InputRejected("out_of_limits", f"points[{k}] outside the joint limits of {', '.join(outside)}")
-        times.append(start + time_from_start)
+        offsets.append(int(time_from_start_ns))
         rows.append(row)
         rates.append(rate)
-    if np.any(np.diff(times) <= 0.0):
+    if offsets[0] > 0:
+        offsets, rows, rates = [0, *offsets], [np.asarray(q_now, dtype=float), *rows], [np.zeros(robot.nv), *rates]
+    if np.any(np.diff(np.array(offsets, dtype=float) / NS_PER_S) <= 0.0):
         raise InputRejected("bad_timing", "time_from_start must increase strictly from point to point")
-    if times[0] > start:
-        times, rows, rates = [start, *times], [np.asarray(q_now, dtype=float), *rows], [np.zeros(robot.nv), *rates]
-    if len(times) == 1:
-        times, rows, rates = [times[0], times[0] + 1e-9], rows * 2, rates * 2
-    return SampledTrajectory(np.array(times), np.array(rows), np.array(rates) if with_velocity else None)
+    return SampledTrajectory(start_ns, offsets, np.array(rows), np.array(rates) if with_velocity else None)
 
 
 def follow(controller, trajectory: SampledTrajectory) -> None:

@@ -31,7 +31,7 @@ import numpy as np
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.commands import InputRejected, JointSample
+from youbot_dynamics.sim.commands import NS_PER_S, InputRejected, JointSample
 
 
 class AccelerationEstimator:
@@ -50,17 +50,20 @@ class AccelerationEstimator:
 
     def push(self, sample: JointSample) -> tuple[JointSample, np.ndarray] | None:
         """Add a sample; returns (the middle sample, its acceleration estimate rad/s^2) once
-        three are known. A sample not later than the previous one raises ``bad_timing``."""
-        if self.samples and not sample.t > self.samples[-1].t:
-            raise InputRejected("bad_timing", f"sample at {sample.t:.9f} s is not after the previous one "
-                                f"at {self.samples[-1].t:.9f} s")
+        three are known. A sample not later than the previous one raises ``bad_timing``.
+        Time differences are taken between integer-nanosecond stamps, exact at any
+        magnitude (wall-clock stamps included)."""
+        if self.samples and not sample.stamp_ns > self.samples[-1].stamp_ns:
+            raise InputRejected("bad_timing", f"sample stamped {sample.stamp_ns} ns is not after the previous "
+                                f"one at {self.samples[-1].stamp_ns} ns")
         self.samples = [*self.samples[-2:], sample]
         if len(self.samples) < 3:
             return None
         before, middle, after = self.samples
-        estimate = (after.v - before.v) / (after.t - before.t)
+        estimate = (after.v - before.v) / ((after.stamp_ns - before.stamp_ns) / NS_PER_S)
         if self.time_constant > 0.0 and self.filtered is not None:
-            alpha = (after.t - middle.t) / (self.time_constant + after.t - middle.t)
+            dt = (after.stamp_ns - middle.stamp_ns) / NS_PER_S
+            alpha = dt / (self.time_constant + dt)
             estimate = self.filtered + alpha * (estimate - self.filtered)
         self.filtered = estimate
         return middle, estimate

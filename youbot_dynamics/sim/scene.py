@@ -296,7 +296,10 @@ def load_scene(name_or_path: str | Path) -> Scene:
     integrator = _integrator(reader, data.get("integrator", {"method": "rk45"}), "integrator")
     duration = reader.positive(data.get("duration", 1.0), "duration")
     outputs = reader.mapping(data.get("outputs", {}), "outputs", ("rate", "record"))
-    record = tuple(outputs.get("record", ("q", "v", "energy")))
+    record = outputs.get("record", ("q", "v", "energy"))
+    if not isinstance(record, (list, tuple)):
+        raise SceneError(source, "outputs.record", f"expected a list of {', '.join(RECORDABLE)}", record)
+    record = tuple(record)
     for i, item in enumerate(record):
         if item not in RECORDABLE:
             raise SceneError(source, f"outputs.record[{i}]", f"expected one of {', '.join(RECORDABLE)}", item)
