@@ -12,7 +12,8 @@ LOCK := requirements-lock.txt
 LOCK_VENV ?= .lock-venv
 # Optional: a pip freeze whose versions `make lock` keeps (default: the newest that resolve).
 LOCK_CONSTRAINTS ?=
-# Pytest selection: CI runs the short form; `make test-all` includes the long sweeps.
+# Pytest selection: CI runs the short form; `make test-all` includes the long sweeps and
+# the thorough fuzzing profile.
 PYTEST_ARGS ?= -m "not slow"
 
 .PHONY: run test test-all bench install lock clean
@@ -42,6 +43,7 @@ test: $(STAMP)
 	$(PY) -m pytest -q -n 2 --timeout 900 $(PYTEST_ARGS) test
 
 test-all: PYTEST_ARGS =
+test-all: export HYPOTHESIS_PROFILE = thorough
 test-all: test
 
 bench: $(STAMP)
