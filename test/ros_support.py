@@ -28,12 +28,13 @@ WAIT = 30.0
 def domain_id(test_offset: int) -> int:
     """A domain id for test number ``test_offset`` (0..29) on this xdist worker (ids 110..229).
 
-    ``YBD_TEST_DOMAIN_SLOT`` (0..3) overrides the worker's slot, so that two test runs on one
+    ``YBD_TEST_DOMAIN_SLOT`` (0..6) overrides the worker's slot, so that two test runs on one
     machine (each with one worker) stay apart."""
     worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
     index = int(worker[2:]) if worker[2:].isdigit() else 0
     index = int(os.environ.get("YBD_TEST_DOMAIN_SLOT", index))
-    return 110 + (index % 4) * 30 + test_offset % 30
+    base = 110 + (index % 4) * 30 if index < 4 else 10 + (index - 4) % 3 * 30   # slots 4..6: ids 10..99
+    return base + test_offset % 30
 
 
 @contextmanager
