@@ -6,9 +6,13 @@ import argparse
 import json
 import sys
 
+import numpy as np
+
 from youbot_dynamics.cli.common import add_tolerance_arguments, markdown_table, tolerances
+from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget, progress_bar
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError
+from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, IntegrationError,
+                                             checked_output_spacing)
 from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, SEED_STATE0,
                                                       SEED_T_END, STABLE_BOUND,
                                                       STABLE_ENERGY_ERROR, STATE_NAMES,
@@ -32,6 +36,8 @@ def parse_state0(text: str) -> tuple[float, ...]:
 #: ``--k 1000 --state0 1.1,0,0,0 --t-end 10`` measured 8.6e-11 at tol 1e-12 where
 #: cvode_bdf's was 1.7e-8 (both local-error controlled; the run spans 50 periods).
 DEFAULT_INTEGRATOR, ACCURATE_INTEGRATOR = "cvode_bdf", "dop853"
+#: Output times of `pendulum` (equally spaced over [0, --t-end]).
+OUTPUTS = 201
 #: --rtol/--atol when neither they nor --tol are given.
 DEFAULT_RTOL = DEFAULT_ATOL = 1e-6
 
@@ -51,6 +57,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                           f"(default {DEFAULT_INTEGRATOR}; with --tol {ACCURATE_INTEGRATOR})")
     run.add_argument("--dt", type=float, help="step size for fixed-step integrators, s")
     add_tolerance_arguments(run, DEFAULT_RTOL, f"absolute tolerance (default {DEFAULT_ATOL:g})")
+    add_step_budget_argument(run)
     run.add_argument("--json", action="store_true", help="print JSON")
     run.set_defaults(run=run_pendulum)
     study = subparsers.add_parser("pendulum-study", help="the seed's elastic-pendulum tables",
@@ -69,11 +76,18 @@ def run_pendulum(args: argparse.Namespace) -> int:
                              f"{integrator!r}; use --tol or --rtol/--atol")
     state0 = parse_state0(args.state0)
     rtol, atol = tolerances(args, state0)
+    times = np.linspace(0.0, args.t_end, OUTPUTS) if args.t_end > 0 else np.zeros(0)
+    steps = 0
+    if args.dt is not None and times.size:
+        checked_output_spacing(args.dt, times, f"--dt (outputs every --t-end/{OUTPUTS - 1})")
+        steps = checked_step_budget("pendulum", args.dt, times, args.max_steps)
     try:
-        solution, energy_error = simulate_elastic_pendulum(
-            args.k, state0, args.t_end, integrator, dt=args.dt,
-            rtol=DEFAULT_RTOL if rtol is None else rtol,
-            atol=DEFAULT_ATOL if atol is None else atol)
+        with progress_bar("pendulum", steps, 0.0, args.t_end, not args.json) as progress:
+            solution, energy_error = simulate_elastic_pendulum(
+                args.k, state0, args.t_end, integrator, dt=args.dt,
+                rtol=DEFAULT_RTOL if rtol is None else rtol,
+                atol=DEFAULT_ATOL if atol is None else atol, n_out=OUTPUTS,
+                max_steps=args.max_steps, progress=progress)
     except IntegrationError as error:
         print(f"youbot-dynamics pendulum: {error}", file=sys.stderr)
         return 1

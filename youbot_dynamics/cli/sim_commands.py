@@ -6,12 +6,48 @@ import argparse
 import dataclasses
 import json
 import sys
+from contextlib import contextmanager
+from typing import Callable, Iterator
+
+import numpy as np
+from tqdm import tqdm
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
 from youbot_dynamics.cli.common import CommandError, add_tolerance_arguments, finite_or_none
-from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError
-from youbot_dynamics.sim.scene import Scene, load_scene
+from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
+from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError, fixed_step_count
+from youbot_dynamics.sim.scene import STEPPERS, Scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
+
+
+def add_step_budget_argument(parser: argparse.ArgumentParser) -> None:
+    """--max-steps: the budget of a fixed-step run."""
+    parser.add_argument("--max-steps", type=int, default=MAX_STEPS, metavar="N",
+                        help=f"refuse a fixed-step run of more than N steps (default {MAX_STEPS:g})")
+
+
+def checked_step_budget(command: str, dt: float | None, times: np.ndarray, max_steps: int) -> int:
+    """The steps a fixed-step run over ``times`` takes (0 for adaptive runs); refused in one
+    line when over ``max_steps``."""
+    if dt is None:
+        return 0
+    count = fixed_step_count(dt, times)
+    if count > max_steps:
+        raise CommandError(f"{command}: {count:.4g} steps of dt={dt:g} s over {times[-1] - times[0]:g} s "
+                           f"exceed the step budget of {max_steps} steps: raise --max-steps or dt")
+    return count
+
+
+@contextmanager
+def progress_bar(command: str, steps: int, t_start: float, t_end: float,
+                 enabled: bool) -> Iterator[Callable[[float], None] | None]:
+    """A progress bar on stderr over simulated time, for runs of more than PROGRESS_STEPS
+    steps (None otherwise: no callback, no cost)."""
+    if not enabled or steps <= PROGRESS_STEPS:
+        yield None
+        return
+    with tqdm(total=t_end - t_start, desc=command, unit="s", file=sys.stderr) as bar:
+        yield lambda t: bar.update(t - t_start - bar.n)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -26,6 +62,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_tolerance_arguments(run)
     run.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
     run.add_argument("--output", metavar="FILE.csv", help="write the trajectory as CSV")
+    add_step_budget_argument(run)
     run.add_argument("--json", action="store_true", help="print JSON")
     run.set_defaults(run=run_simulate)
     study = subparsers.add_parser("work-precision", help="speed versus accuracy on a scene",
@@ -61,9 +98,14 @@ def scene_from(args: argparse.Namespace) -> Scene:
 def run_simulate(args: argparse.Namespace) -> int:
     """Run the scene; print final state, statistics and energy error (or JSON)."""
     scene = scene_from(args)
-    simulator = Simulator(scene, resolve_integrator(scene, progress=not args.json))
+    limits = DivergenceLimits(max_steps=args.max_steps)
+    simulator = Simulator(scene, resolve_integrator(scene, progress=not args.json), limits)
+    times = scene.output_times
+    dt = simulator.integrator.dt if simulator.integrator.method in FIXED_STEP + STEPPERS else None
+    steps = checked_step_budget("simulate", dt, times, args.max_steps)
     try:
-        result = simulator.run()
+        with progress_bar("simulate", steps, times[0], times[-1], not args.json) as progress:
+            result = simulator.run(progress=progress)
     except IntegrationError as error:
         print(f"youbot-dynamics simulate: {error}", file=sys.stderr)
         return 1
@@ -76,7 +118,8 @@ def run_simulate(args: argparse.Namespace) -> int:
                           "energy_error": result.energy_error, "conservative": result.conservative,
                           "rhs_cost": cost, "stats": result.stats.as_dict(),
                           "contact_events": [e.as_dict() for e in result.contact_events],
-                          "max_penetration": result.max_penetration}))
+                          "max_penetration": result.max_penetration,
+                          "energy_dissipated": result.energy_dissipated}))
         return 0
     print(f"scene {scene.name}: {result.integrator.describe()}, t = {result.t[-1]:g} s, "
           f"state dimension {cost['state_dim']} (nv {cost['nv']}, friction {cost['friction_laws']}, "
@@ -86,6 +129,9 @@ def run_simulate(args: argparse.Namespace) -> int:
         print(f"  {name:28s} {value: .9g}")
     print("energy error max|E-E0|: " + (f"{result.energy_error:.3e} J" if result.conservative
                                         else "n/a (friction or a controller changes the energy)"))
+    if result.energy_dissipated is not None:
+        print(f"energy dissipated E(0)-E(end): {result.energy_dissipated:.6g} J "
+              "(passive scene: friction, damping and contact losses; checked >= -energy_tolerance)")
     if result.contact_events or result.max_penetration is not None:
         print(f"contact events: {len(result.contact_events)}, max penetration {result.max_penetration or 0.0:.3e} m")
         for event in result.contact_events[:20]:

@@ -85,6 +85,14 @@ def hunt_crossley_force(depth: float, depth_rate: float, stiffness: float, expon
     return max(0.0, stiffness * depth ** exponent * (1.0 + chi * depth_rate))
 
 
+def hunt_crossley_potential(depth: float, stiffness: float, exponent: float) -> float:
+    """Elastic energy (J) stored in the spring part of the law, k delta^(n+1) / (n+1) for
+    delta > 0: the work of k delta^n along the overlap (the damping part only dissipates)."""
+    if depth <= 0.0:
+        return 0.0
+    return stiffness * depth ** (exponent + 1.0) / (exponent + 1.0)
+
+
 def regularised_coulomb(tangential_velocity: np.ndarray, normal_force: float, mu: float,
                         velocity_scale: float) -> np.ndarray:
     """Friction force (N, on body 2): -mu F_n u_t / sqrt(|u_t|^2 + v_s^2)."""

@@ -5,9 +5,14 @@ Counters: ``nfev``, ``njev``, ``nlu`` come from the solver. For the explicit Run
 pairs every attempted step costs ``n_stages`` evaluations, so rejected steps are counted
 exactly from the evaluations spent inside each ``step()`` call. scipy does not report
 rejected steps or Newton iterations for Radau and BDF: those counters are ``None``.
+
+Non-finite values end the run with a DivergenceError: the right-hand side is wrapped by
+:func:`~youbot_dynamics.sim.integration.finite_rhs` (scipy's RK step loops for ever once
+its step size is NaN) and a Jacobian with inf/NaN entries is caught at its factorisation.
 """
 from __future__ import annotations
 
+import math
 from typing import Callable
 
 import numpy as np
@@ -41,7 +46,13 @@ class ScipyStepper:
     def advance(self, t_target: float) -> None:
         solver = self.solver
         evals_before = solver.nfev
-        message = solver.step()
+        try:
+            message = solver.step()
+        except ValueError as error:  # LU of a Jacobian with inf/NaN entries (radau, bdf)
+            if "infs or NaNs" not in str(error):
+                raise
+            raise DivergenceError(solver.t, self.method, solver.step_size or math.nan,
+                                  "non-finite Jacobian") from None
         if solver.status == "failed":
             reason = message or "solver failed"
             if reason == STEP_COLLAPSE:

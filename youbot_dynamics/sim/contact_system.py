@@ -24,7 +24,8 @@ import pinocchio as pin
 from youbot_dynamics.dynamics import free_body as fb
 from youbot_dynamics.dynamics.collision import BroadPhase, ContactPoint, Geometry, PlacedPair
 from youbot_dynamics.dynamics.contact import (HuntCrossley, NewtonImpact, hunt_crossley_force,
-                                              hysteresis_factor, newton_impulse, regularised_coulomb)
+                                              hunt_crossley_potential, hysteresis_factor, newton_impulse,
+                                              regularised_coulomb)
 from youbot_dynamics.model.lie import skew
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.events import Transition
@@ -214,6 +215,25 @@ class ContactSystem:
         positions, rotations, u, w, _ = self._bodies(x)
         return sum(fb.kinetic_energy(b, rotations[k], u[k], w[k]) - b.mass * float(self.gravity @ positions[k])
                    for k, b in enumerate(self.bodies))
+
+    def elastic_energy(self, x: np.ndarray, q: np.ndarray) -> float:
+        """Energy (J) stored in the springs of the compliant pairs at state x: per contact
+        point 1/N of the law's potential at the patch depth, as the force is shared."""
+        positions, rotations, _, _, _ = self._bodies(x)
+        poses = self._poses(q, positions, rotations)
+        stored = 0.0
+        for k in self.compliant:
+            law: HuntCrossley = self.pairs[k].law
+            points = [c for c in self._contacts(k, poses, 0.0) if c.depth > 0.0]
+            stored += sum(hunt_crossley_potential(c.depth, law.stiffness, law.exponent) for c in points) / max(len(points), 1)
+        return stored
+
+    def overlaps(self, x: np.ndarray, q: np.ndarray) -> dict[str, float]:
+        """The deepest overlap (m, >= 0) of every pair at state x, by pair name."""
+        positions, rotations, _, _, _ = self._bodies(x)
+        poses = self._poses(q, positions, rotations)
+        return {pair.name: max([0.0] + [c.depth for c in self._contacts(k, poses, 0.0)])
+                for k, pair in enumerate(self.pairs)}
 
     def poses_of(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """World pose (4x4) of every free body at state x."""

@@ -138,6 +138,34 @@ class DivergenceError(IntegrationError):
                          f"{reason}" + (f": {listed}" if listed else ""))
 
 
+class StepBudgetError(DivergenceError):
+    """A run needed more steps than its budget (``budget``): refused up front for fixed
+    steps, stopped when spent for adaptive ones (a step size collapsing without end)."""
+
+    def __init__(self, time: float, integrator: str, step_size: float, budget: int,
+                 needed: str) -> None:
+        IntegrationError.__init__(self, f"{integrator} stopped at t={time:.6g} s (step "
+                                  f"{step_size:.3g} s): {needed}, over its step budget of "
+                                  f"{budget} steps")
+        self.time, self.integrator, self.step_size = time, integrator, step_size
+        self.reason, self.components, self.budget = f"step budget of {budget} steps spent", {}, budget
+
+
+def finite_rhs(rhs: Callable[[float, np.ndarray], np.ndarray],
+               integrator: str) -> Callable[[float, np.ndarray], np.ndarray]:
+    """rhs that raises DivergenceError when called on, or returning, non-finite values:
+    a solver fed NaN can loop for ever (scipy's RK step size turns NaN and no step is ever
+    accepted or refused)."""
+    def checked(t: float, x: np.ndarray) -> np.ndarray:
+        if not math.isfinite(x.sum()):
+            raise DivergenceError(t, integrator, math.nan, "non-finite state inside a step")
+        dx = rhs(t, x)
+        if not math.isfinite(dx.sum()):
+            raise DivergenceError(t, integrator, math.nan, "non-finite derivative inside a step")
+        return dx
+    return checked
+
+
 def state_names_or_default(state_names: Sequence[str] | None, size: int) -> tuple[str, ...]:
     """The given component names (checked against the state size) or x[0], x[1], ..."""
     if state_names is None:
@@ -192,6 +220,7 @@ class Stepper(Protocol):
     t: float
     x: np.ndarray
     h: float  # the last step's size, s
+    steps: int  # steps taken so far
 
     def advance(self, t_target: float) -> None:
         """Step towards ``t_target`` (never beyond the run's end); updates t and x."""
@@ -250,10 +279,14 @@ def root_on_interpolant(function: Callable[[float, np.ndarray], float], t_a: flo
 
 def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequence[Event],
           check: StateCheck, names: tuple[str, ...],
-          derivative_at: Callable[[float], np.ndarray] | None = None) -> Solution:
+          derivative_at: Callable[[float], np.ndarray] | None = None,
+          max_steps: int | None = None,
+          progress: Callable[[float], None] | None = None) -> Solution:
     """Run ``stepper`` over ``t_eval`` with outputs, events and checks; returns the Solution.
 
     ``derivative_at`` (IDA) gives y' at an output time just after ``interpolate`` there.
+    More than ``max_steps`` steps raise :class:`StepBudgetError`; ``progress(t)`` is called
+    with the time (s) reached after every output.
     The caller sets ``stats.wall_time`` around the whole run (solver set-up included).
     """
     stats = IntegratorStats(integrator)
@@ -278,6 +311,9 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
             stepper.advance(float(t_eval[k]))
             t_b, h = stepper.t, stepper.h
             check.step(t_b, stepper.x, h)
+            if max_steps is not None and stepper.steps > max_steps:
+                raise StepBudgetError(t_b, integrator, h, max_steps,
+                                      f"{stepper.steps} steps did not reach t={t_eval[-1]:.6g} s")
             stop_at = t_b
             if events:
                 if own_roots:
@@ -297,6 +333,8 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
                 x_k = stepper.x.copy() if t_k == t_b else stepper.interpolate(t_k)
                 emit(t_k, x_k, h)
                 k += 1
+            if progress is not None:
+                progress(t_out[-1])
             if terminated_by is not None and t_out[-1] < stop_at:
                 emit(stop_at, records[-1].state.copy(), h)
     stepper.finish(stats)

@@ -12,6 +12,7 @@ silent: see :class:`DivergenceError`.
 """
 from __future__ import annotations
 
+import math
 import time
 from typing import Any, Callable, Mapping, Sequence
 
@@ -22,12 +23,13 @@ from youbot_dynamics.sim.adaptive import SCIPY_SOLVERS, ScipyStepper
 from youbot_dynamics.sim.fixed_step import FIXED_STEP_METHODS, FixedStepStepper
 from youbot_dynamics.sim.integration import (DivergenceError, Event, EventRecord,
                                              IntegrationError, IntegratorStats, Solution,
-                                             StateCheck, drive, state_names_or_default)
+                                             StateCheck, StepBudgetError, drive, finite_rhs,
+                                             state_names_or_default)
 from youbot_dynamics.sim.sundials import CVODE_METHODS, CvodeStepper, IdaStepper
 
 __all__ = ["INTEGRATORS", "FIXED_STEP", "IntegratorStats", "Event", "EventRecord", "Solution",
-           "IntegrationError", "DivergenceError", "integrate", "integrate_dae",
-           "tolerances_from_tol"]
+           "IntegrationError", "DivergenceError", "StepBudgetError", "integrate", "integrate_dae",
+           "tolerances_from_tol", "fixed_step_count", "checked_output_spacing"]
 
 INTEGRATORS: tuple[str, ...] = ("euler", "symplectic_euler", "rk4", "rk45", "dop853", "radau",
                                 "bdf", "cvode_bdf", "cvode_adams", "ida")
@@ -65,6 +67,40 @@ def checked_positive(name: str, value) -> None:
         raise UserInputError(f"{name} must be positive, got {value!r}")
 
 
+def fixed_step_count(dt: float, times: np.ndarray) -> int:
+    """Steps of size dt (s) a fixed-step run over ``times`` takes at least (one more per
+    output interval that dt does not divide); a float for counts beyond 2**63."""
+    span = float(times[-1] - times[0])
+    return math.ceil(span / dt) if span / dt < 2.0 ** 62 else span / dt
+
+
+def checked_fixed_step(integrator: str, dt: float, times: np.ndarray,
+                       max_steps: int | None) -> None:
+    """Refuse, before any step, a dt (s) too small to move the clock (t + dt == t at the
+    run's largest |t|) and a run of more than ``max_steps`` steps."""
+    latest = float(np.max(np.abs(times[[0, -1]])))
+    if latest + dt == latest:
+        raise UserInputError(f"dt={dt:g} s is below the time resolution at t={latest:g} s "
+                             f"(t + dt == t): use dt > {np.spacing(latest):.3g} s")
+    count = fixed_step_count(dt, times)
+    if max_steps is not None and count > max_steps:
+        raise StepBudgetError(float(times[0]), integrator, dt, max_steps,
+                              f"{count:.4g} steps of dt={dt:g} s are needed over "
+                              f"{times[-1] - times[0]:g} s (raise the budget or dt)")
+
+
+def checked_output_spacing(dt: float | None, times: np.ndarray, where: str) -> None:
+    """Refuse a fixed step dt (s) larger than the smallest output spacing: the integrator
+    would shorten its steps to hit the outputs, silently running another method."""
+    if dt is None or times.size < 2:
+        return
+    spacing = float(np.min(np.diff(times)))
+    if dt > spacing * (1.0 + 1e-9):
+        raise UserInputError(f"{where}: fixed step dt={dt:g} s is larger than the output "
+                             f"spacing {spacing:g} s, so steps would be cut to it: lower dt "
+                             f"to at most {spacing:g} s")
+
+
 def checked_state(name: str, value) -> np.ndarray:
     """An initial state as a 1-D float array."""
     state = np.array(value, dtype=float).ravel()
@@ -79,14 +115,19 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
               events: Sequence[Event] = (), state_names: Sequence[str] | None = None,
               n_positions: int | None = None, bounds: np.ndarray | None = None,
               monitor: Callable[[float, np.ndarray], str | None] | None = None,
-              max_step: float = np.inf, min_step: float | None = None) -> Solution:
+              max_step: float = np.inf, min_step: float | None = None,
+              max_steps: int | None = None,
+              progress: Callable[[float], None] | None = None) -> Solution:
     """Solve x' = rhs(t, x) from x0 at t_eval[0], with outputs at t_eval (s).
 
     Fixed-step methods need ``dt`` (s); adaptive ones use ``rtol``/``atol`` (``jac``, the
     Jacobian d rhs / dx, is used by the implicit ones). ``symplectic_euler`` needs
     ``n_positions``: x = [q (n), v (n), extra] with dq/dt = v. ``bounds``: |x_i| <= bounds_i
     or DivergenceError; ``monitor(t, x)`` is called at output times and a returned string
-    is a DivergenceError. Adaptive steps below ``min_step`` (s) are a DivergenceError.
+    is a DivergenceError. Adaptive steps below ``min_step`` (s) are a DivergenceError. A
+    run of more than ``max_steps`` steps is a StepBudgetError (fixed steps: before the
+    first; a dt that cannot move the clock is a UserInputError). ``progress(t)`` is called
+    with the time reached (s) after each output.
     """
     start = time.perf_counter()
     if integrator not in INTEGRATORS or integrator == "ida":
@@ -103,6 +144,7 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
             raise UserInputError(f"integrator {integrator!r} takes fixed steps: give dt (s), "
                                  f"or use an adaptive one: {', '.join(adaptive)}")
         checked_positive("dt", dt)
+        checked_fixed_step(integrator, float(dt), times, max_steps)
         n = 0 if n_positions is None else int(n_positions)
         if integrator == "symplectic_euler" and not 0 < 2 * n <= x.size:
             raise UserInputError("symplectic_euler needs n_positions with 0 < 2*n_positions "
@@ -114,13 +156,14 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
         checked_positive("atol", atol)
         checked_positive("max_step", max_step)
         if integrator in SCIPY_SOLVERS:
-            stepper = ScipyStepper(integrator, rhs, times[0], x, times[-1], rtol, atol, jac,
-                                   max_step, min_step)
+            stepper = ScipyStepper(integrator, finite_rhs(rhs, integrator), times[0], x,
+                                   times[-1], rtol, atol, jac, max_step, min_step)
         else:
             stepper = CvodeStepper(CVODE_METHODS[integrator], integrator, rhs, times[0], x,
                                    times[-1], rtol, atol, jac, max_step, min_step,
                                    tuple(events))
-    solution = drive(stepper, integrator, times, events, check, names)
+    solution = drive(stepper, integrator, times, events, check, names, max_steps=max_steps,
+                     progress=progress)
     solution.stats.wall_time = time.perf_counter() - start
     return solution
 
@@ -132,7 +175,8 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
                   events: Sequence[Event] = (), state_names: Sequence[str] | None = None,
                   jac: Callable | None = None, bounds: np.ndarray | None = None,
                   monitor: Callable[[float, np.ndarray], str | None] | None = None,
-                  ida_options: Mapping[str, Any] | None = None) -> Solution:
+                  ida_options: Mapping[str, Any] | None = None, max_steps: int | None = None,
+                  progress: Callable[[float], None] | None = None) -> Solution:
     """Solve the DAE residual(t, y, y') = 0 with SUNDIALS IDA (integrator ``ida``).
 
     ``algebraic[i]`` marks y_i as algebraic (no y_i' in the equations). y0, yp0 must be
@@ -142,7 +186,8 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
     returns dF/dy + cj dF/dy' (IDA builds it by finite differences without it).
     ``ida_options``: further sksundae.ida.IDA options passed as they are (first_step,
     max_step, max_order, max_nonlin_iters, max_conv_fails, ...; times in s). Events see
-    (t, y). Solution.xp holds y' at the outputs.
+    (t, y). Solution.xp holds y' at the outputs. ``max_steps`` and ``progress`` as for
+    :func:`integrate`.
     """
     start = time.perf_counter()
     times = checked_times(t_eval)
@@ -165,6 +210,7 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
     stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0], rtol, atol, jac,
                          dict(ida_options or {}), tuple(events))
     solution = drive(stepper, "ida", times, events, check, names,
-                     derivative_at=stepper.derivative_at)
+                     derivative_at=stepper.derivative_at, max_steps=max_steps,
+                     progress=progress)
     solution.stats.wall_time = time.perf_counter() - start
     return solution

@@ -23,8 +23,10 @@ Two ways to drive it:
 
 Divergence is a :class:`~youbot_dynamics.sim.integrators.DivergenceError`: a non-finite
 state, a joint velocity beyond ``VELOCITY_LIMIT_FACTOR`` x its limit, a step size that
-collapses, or, in a conservative scene (no friction, no controller), a total energy that
-grows by more than the scene's ``integrator.energy_tolerance`` (J, checked at outputs).
+collapses, or a limit of :mod:`youbot_dynamics.sim.divergence` exceeded: in a passive
+scene (no controller, no commanded effort; friction and contact only dissipate) a stored
+energy that grows by more than the scene's ``integrator.energy_tolerance`` (J, checked at
+outputs), a free body too fast or a pair overlapping too deep, or a step budget spent.
 """
 from __future__ import annotations
 
@@ -48,8 +50,12 @@ from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_ma
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.contact_system import ContactEvent, ContactSystem
 from youbot_dynamics.sim.controllers import Reference, make_controller
+from youbot_dynamics.sim.divergence import (DivergenceLimits, Monitor, all_of, energy_ledger_monitor,
+                                            penetration_limit, penetration_monitor)
 from youbot_dynamics.sim.events import Mode, simulate_hybrid
-from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution, integrate,
+from youbot_dynamics.sim.integration import StateCheck
+from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution,
+                                             checked_fixed_step, checked_output_spacing, integrate,
                                              integrate_dae)
 from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
 from youbot_dynamics.sim.state import StateLayout
@@ -95,7 +101,10 @@ class SimulationResult:
     """A run: states x (k, n) at times t (k,), named by ``layout``; ``series`` holds the
     recorded extras (``tau`` (k, nv), ``energy`` (k,), ``ee_position`` (k, 3)); ``stats``
     the integrator's statistics. ``energy_error`` (J) is max |E(t) - E(0)| in a conservative
-    scene, None otherwise (friction or a controller change the energy). A contact scene adds
+    scene, None otherwise (friction or a controller change the energy). ``energy_dissipated``
+    (J) is the ledger of a passive scene, E(0) - E(end) of the stored energy (kinetic,
+    potential, contact springs): what friction, damping and contact hysteresis took, >= 0
+    up to the tolerance; None when a controller acts. A contact scene adds
     its ``contact_events`` and ``max_penetration`` (m: the deepest overlap at the located
     maximum compressions of the compliant law, or over the constraint stepper's steps)."""
 
@@ -110,6 +119,7 @@ class SimulationResult:
     energy_error: float | None
     contact_events: list[ContactEvent] = dataclasses.field(default_factory=list)
     max_penetration: float | None = None
+    energy_dissipated: float | None = None
 
     @property
     def final_state(self) -> dict[str, float]:
@@ -147,9 +157,11 @@ class SimulationResult:
 class Simulator:
     """A compiled scene: model, friction, controller, state layout, rhs and checks."""
 
-    def __init__(self, scene: Scene, integrator: IntegratorSpec | None = None) -> None:
+    def __init__(self, scene: Scene, integrator: IntegratorSpec | None = None,
+                 limits: DivergenceLimits | None = None) -> None:
         self.scene = scene
         self.integrator = integrator or scene.integrator
+        self.limits = limits or DivergenceLimits()
         if self.integrator.method == "auto":
             raise UserInputError(f"{scene.source}: integrator.method: 'auto' must be resolved first "
                                  "(youbot_dynamics.analysis.work_precision.resolve_integrator)")
@@ -172,9 +184,16 @@ class Simulator:
         self.controller = make_controller(spec.type, self.robot, Reference(scene.q0, trajectory), spec.kp, spec.kd,
                                           self.friction)
         self.conservative = self.friction is None and spec.type == "none" and not scene.contacts
+        self.passive = spec.type == "none"
         self.effort_limit = np.asarray(self.robot.effort_limit)
         self.ee_frame = self.robot.frame_id(self.robot.end_effectors[0])
         self.bounds = self.layout.velocity_bounds(self.robot.velocity_limit, VELOCITY_LIMIT_FACTOR)
+        self.bounds[self.layout.slice("u")] = self.limits.body_speed
+        self.bounds[self.layout.slice("w")] = self.limits.body_spin
+        shapes = {g.name: g.shape for g in scene.geometries}
+        self.penetration_limits = {p.name: penetration_limit(shapes[p.geometry1], shapes[p.geometry2],
+                                                             self.limits.penetration_fraction)
+                                   for p in scene.contacts}
         self._q, self._v, self._z = (self.layout.slice(s) for s in ("q", "v", "z"))
         self._stepper: ConstraintStepper | None = None
         self.reset()
@@ -235,6 +254,22 @@ class Simulator:
         bodies = self.contact.energy(x) if self.contact else 0.0
         return kinetic_energy(self.robot, self.data, q, v) + potential_energy(self.robot, self.data, q) + bodies
 
+    def stored_energy_of(self, x: np.ndarray) -> float:
+        """Kinetic, potential and contact-spring energy (J) of state x: what a passive scene
+        may only lose."""
+        springs = self.contact.elastic_energy(x, x[self._q]) if self.contact else 0.0
+        return self.energy_of(x) + springs
+
+    def monitor_for(self, x0: np.ndarray, tau_command: np.ndarray | None) -> Monitor | None:
+        """The output-time checks of a run from x0: the energy ledger when the scene is
+        passive (no controller, no or a zero command) and the pairs' penetration limits."""
+        passive = self.passive and (tau_command is None or not np.any(tau_command))
+        ledger = energy_ledger_monitor(self.stored_energy_of, self.stored_energy_of(x0),
+                                       self.integrator.energy_tolerance) if passive else None
+        overlap = penetration_monitor(lambda x: self.contact.overlaps(x, x[self._q]),
+                                      self.penetration_limits) if self.contact else None
+        return all_of(ledger, overlap)
+
     def ee_pose_of(self, q: np.ndarray) -> np.ndarray:
         """4x4 pose of the end-effector link in the root frame at joint positions q."""
         pin.framesForwardKinematics(self.robot.model, self.data, q)
@@ -263,35 +298,40 @@ class Simulator:
         return np.clip(tau, -self.effort_limit, self.effort_limit)
 
     # ---- integration ----------------------------------------------------------------------
-    def solve(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None = None) -> Solution:
+    def solve(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None = None, *,
+              max_steps: int | None = None, progress: Callable[[float], None] | None = None) -> Solution:
         """Integrate from x0 at t_eval[0] with outputs at t_eval (s), with the divergence
-        checks; ``tau_command`` (held) replaces the controller."""
+        checks; ``tau_command`` (held) replaces the controller. More than ``max_steps``
+        steps (per segment of a contact scene) are a StepBudgetError; ``progress(t)`` is
+        told the time reached (s) after each output."""
         spec, names = self.integrator, self.layout.names
+        monitor = self.monitor_for(x0, tau_command)
         if spec.method in STEPPERS:
-            return self._step_constraints(x0, t_eval, tau_command)
+            return self._step_constraints(x0, t_eval, tau_command, monitor, max_steps, progress)
         rhs = self.rhs if tau_command is None else (lambda t, x: self.derivative(t, x, tau_command))
-        monitor = self._energy_monitor(self.energy_of(x0)) if self.conservative and tau_command is None else None
         if self.contact:
-            return self._solve_hybrid(rhs, x0, t_eval, monitor)
+            return self._solve_hybrid(rhs, x0, t_eval, monitor, max_steps, progress)
         if spec.method == "ida":
             def residual(t: float, y: np.ndarray, yp: np.ndarray) -> np.ndarray:
                 return yp - rhs(t, y)
 
             return integrate_dae(residual, x0, rhs(t_eval[0], x0), t_eval, algebraic=[False] * x0.size,
                                  rtol=spec.rtol, atol=spec.absolute_tolerance(x0), state_names=names, bounds=self.bounds,
-                                 monitor=monitor)
+                                 monitor=monitor, max_steps=max_steps, progress=progress)
         return integrate(rhs, x0, t_eval, spec.method, dt=spec.dt, rtol=spec.rtol, atol=spec.absolute_tolerance(x0),
-                         state_names=names, n_positions=self.robot.nv, bounds=self.bounds, monitor=monitor)
+                         state_names=names, n_positions=self.robot.nv, bounds=self.bounds, monitor=monitor,
+                         max_steps=max_steps, progress=progress)
 
     def _solve_hybrid(self, rhs: Callable[[float, np.ndarray], np.ndarray], x0: np.ndarray, t_eval: np.ndarray,
-                      monitor: Callable[[float, np.ndarray], str | None] | None) -> Solution:
+                      monitor: Monitor | None, max_steps: int | None,
+                      progress: Callable[[float], None] | None) -> Solution:
         """The contact scene as a hybrid run (impacts, touches, re-centring are guards);
         returns the samples at ``t_eval`` (after any reset at the same time)."""
         spec = self.integrator
         mode = Mode("contact", rhs, self.contact.transitions(
             self._q, self._v, lambda q: mass_matrix(self.robot, self.data, q)))
         options = {"rtol": spec.rtol, "atol": spec.absolute_tolerance(x0), "state_names": self.layout.names,
-                   "bounds": self.bounds, "monitor": monitor}
+                   "bounds": self.bounds, "monitor": monitor, "max_steps": max_steps, "progress": progress}
         if spec.dt is not None:
             options.update(dt=spec.dt, n_positions=self.robot.nv or None)
         elif spec.method != "ida" and self.contact.impulsive:
@@ -310,14 +350,20 @@ class Simulator:
                                               StepperSettings(solver=self.integrator.method))
         return self._stepper
 
-    def _step_constraints(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None) -> Solution:
+    def _step_constraints(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None,
+                          monitor: Monitor | None, max_steps: int | None,
+                          progress: Callable[[float], None] | None) -> Solution:
         """Fixed steps of the constraint stepper from x0 with outputs at t_eval (each output
         interval in equal steps of at most dt); contact events are the steps at which a
-        pair starts carrying an impulse."""
+        pair starts carrying an impulse. ``monitor`` runs at the outputs; the deepest
+        overlap of every step is held to the smallest of the pairs' penetration limits."""
         start = time.perf_counter()
         if self._z.stop > self._z.start:
             raise UserInputError(f"{self.scene.source}: the constraint stepper does not integrate LuGre bristles")
         stepper, h = self.constraint_stepper(), self.integrator.dt
+        check = StateCheck(self.integrator.method, self.layout.names, self.bounds, monitor)
+        checked_fixed_step(self.integrator.method, h, t_eval, max_steps)
+        deepest_allowed = min(self.penetration_limits.values(), default=math.inf)
         nv = self.robot.nv
         q, v = self._pin_state(x0)
         t, outputs = float(t_eval[0]), [x0.copy()]
@@ -348,7 +394,15 @@ class Simulator:
                 self.stepper_touching = touching
                 if not np.all(np.isfinite(v)):
                     raise DivergenceError(t, self.integrator.method, dt, "non-finite velocity")
-            outputs.append(self._ode_state(q, v))
+                if not report.penetration <= deepest_allowed:
+                    raise DivergenceError(t, self.integrator.method, dt, f"overlap {report.penetration:.3g} m "
+                                          f"beyond the penetration limit {deepest_allowed:.3g} m")
+            x = self._ode_state(q, v)
+            check.step(t, x, dt)
+            check.output(t, x, dt)
+            outputs.append(x)
+            if progress is not None:
+                progress(t)
         stats.events = len(self.contact.events) - events_before
         stats.simulated_time = float(t_eval[-1] - t_eval[0])
         stats.wall_time = time.perf_counter() - start
@@ -384,25 +438,18 @@ class Simulator:
             blocks.update(p=np.concatenate(p), r=np.concatenate(r), u=np.concatenate(u), w=np.concatenate(w))
         return self.layout.pack(**blocks)
 
-    def _energy_monitor(self, energy0: float) -> Callable[[float, np.ndarray], str | None]:
-        tolerance = self.integrator.energy_tolerance
-
-        def monitor(t: float, x: np.ndarray) -> str | None:
-            growth = self.energy_of(x) - energy0
-            if growth > tolerance:
-                return (f"energy grew by {growth:.3g} J (tolerance {tolerance:g} J, "
-                        "integrator.energy_tolerance) in a conservative scene")
-            return None
-
-        return monitor
-
-    def run(self, t_eval: np.ndarray | None = None) -> SimulationResult:
+    def run(self, t_eval: np.ndarray | None = None,
+            progress: Callable[[float], None] | None = None) -> SimulationResult:
         """The scene from its initial state over ``t_eval`` (default: the scene's output
-        times); leaves the step-wise state at the end of the run."""
+        times); leaves the step-wise state at the end of the run. A fixed step larger than
+        the output spacing is refused; at most ``limits.max_steps`` steps; ``progress(t)``
+        is told the time reached (s) after each output."""
         times = self.scene.output_times if t_eval is None else np.asarray(t_eval, dtype=float)
+        checked_output_spacing(self.integrator.dt, times, f"{self.scene.source}: integrator.dt "
+                               f"(outputs.rate {self.scene.outputs.rate:g} Hz)")
         x0 = self.initial_state()
         self._clear_contact_record()
-        solution = self.solve(x0, times)
+        solution = self.solve(x0, times, max_steps=self.limits.max_steps, progress=progress)
         series = self._series(solution, set(self.scene.outputs.record) | ({"energy"} if self.conservative else set()))
         energy_error = float(np.max(np.abs(series["energy"] - series["energy"][0]))) if self.conservative else None
         self.t, self.x = float(solution.t[-1]), solution.x[-1].copy()
@@ -411,9 +458,10 @@ class Simulator:
         penetration = None
         if self.contact:
             penetration = self.stepper_penetration if self.integrator.method in STEPPERS else self.contact.deepest
+        dissipated = self.stored_energy_of(x0) - self.stored_energy_of(solution.x[-1]) if self.passive else None
         return SimulationResult(self.scene.name, self.integrator, self.layout, solution.t, solution.x,
                                 series, solution.stats, self.conservative, energy_error,
-                                list(self.contact.events) if self.contact else [], penetration)
+                                list(self.contact.events) if self.contact else [], penetration, dissipated)
 
     def _series(self, solution: Solution, wanted: set[str]) -> dict[str, np.ndarray]:
         series = {}
@@ -464,7 +512,8 @@ class Simulator:
             raise UserInputError(f"advance: times {times.tolist()} s must increase from after the "
                                  f"current time {self.t:.9g} s")
         command = None if tau_command is None else self.clipped(tau_command)
-        solution = self.solve(self.x, np.concatenate([[self.t], times]), command)
+        solution = self.solve(self.x, np.concatenate([[self.t], times]), command,
+                              max_steps=self.limits.max_steps_per_call)
         self.stats += solution.stats
         snapshots = []
         for t, x in zip(solution.t[1:], solution.x[1:]):

@@ -81,12 +81,15 @@ def energy_growth_monitor(k: float, energy0: float) -> Callable[[float, np.ndarr
 def simulate_elastic_pendulum(k: float, state0: Sequence[float], t_end: float,
                               integrator: str, *, dt: float | None = None,
                               rtol: float = 1e-6, atol: float = 1e-6, n_out: int = 201,
-                              bounds: float | None = None) -> tuple[Solution, float]:
+                              bounds: float | None = None, max_steps: int | None = None,
+                              progress: Callable[[float], None] | None = None
+                              ) -> tuple[Solution, float]:
     """Simulate from state0 over [0, t_end] (outputs at n_out equally spaced times).
 
     Returns the solution and the energy error max |E(t) - E(0)| over the outputs. The
     implicit methods get the analytic Jacobian. ``bounds`` bounds |every component|;
     energy growth beyond :func:`energy_growth_monitor`'s limit is a DivergenceError.
+    ``max_steps`` (step budget) and ``progress(t)`` go to :func:`integrate`.
     """
     if not k > 0:
         raise UserInputError(f"spring stiffness k must be positive, got {k!r}")
@@ -103,7 +106,8 @@ def simulate_elastic_pendulum(k: float, state0: Sequence[float], t_end: float,
                          state_names=STATE_NAMES, n_positions=2,
                          bounds=None if bounds is None else np.full(4, bounds),
                          monitor=energy_growth_monitor(
-                             k, float(elastic_pendulum_energy(state0, k))))
+                             k, float(elastic_pendulum_energy(state0, k))),
+                         max_steps=max_steps, progress=progress)
     energy = elastic_pendulum_energy(solution.x, k)
     return solution, float(np.max(np.abs(energy - energy[0])))
 

@@ -1,0 +1,113 @@
+"""What a run may do before it counts as diverged, and the checks that say so.
+
+Limits (:class:`DivergenceLimits`, defaults stated below, overridable per simulator):
+
+- **Energy ledger** of a passive scene (no controller, no commanded effort): the stored
+  energy E = kinetic + gravitational + elastic (compliant contact springs) may only fall;
+  what it lost, D(t) = E(0) - E(t), is the energy dissipated by friction, damping and
+  contact hysteresis, which is non-negative. D(t) < -tolerance (E grew by more than the
+  scene's ``integrator.energy_tolerance``, J) is a :class:`DivergenceError`. Checked at
+  output times. LuGre bristle energy sigma0 z^2 / 2 is not counted: it stays below
+  F_s^2 / (2 sigma0) (2.5e-4 J in arm_friction, a fortieth of the default tolerance).
+- **Free bodies**: every component of a body's velocity within ``body_speed`` (m/s) and of
+  its angular velocity within ``body_spin`` (rad/s), checked after every step; the overlap
+  of a contact pair within ``penetration_fraction`` of the thinner shape's smallest
+  half-extent (a body half-way into the other), checked at output times.
+- **Work**: a fixed-step run may take at most ``max_steps`` steps (refused up front), and
+  one step-wise call (``Simulator.advance_through``) at most ``max_steps_per_call`` steps of
+  any integrator (a :class:`StepBudgetError` once exceeded), so that a node's callback
+  always returns.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from youbot_dynamics.dynamics.collision import Shape
+
+Monitor = Callable[[float, np.ndarray], "str | None"]
+
+#: Default bound on each component of a free body's velocity, m/s (a fall from 500 m).
+BODY_SPEED_LIMIT = 100.0
+#: Default bound on each component of a free body's angular velocity, rad/s (~10^4 rpm).
+BODY_SPIN_LIMIT = 1000.0
+#: Default deepest overlap, as a fraction of the thinner shape's smallest half-extent.
+PENETRATION_FRACTION = 0.5
+#: Default step budget of a whole fixed-step run (``simulate``/``pendulum --max-steps``).
+MAX_STEPS = 10_000_000
+#: Default step budget of one step-wise call (a node callback).
+MAX_STEPS_PER_CALL = 200_000
+#: Fixed-step runs of more steps than this show progress on the command line.
+PROGRESS_STEPS = 1_000_000
+
+
+@dataclass(frozen=True)
+class DivergenceLimits:
+    """The limits above; see the module docstring for units and where each is checked."""
+
+    body_speed: float = BODY_SPEED_LIMIT
+    body_spin: float = BODY_SPIN_LIMIT
+    penetration_fraction: float = PENETRATION_FRACTION
+    max_steps: int = MAX_STEPS
+    max_steps_per_call: int = MAX_STEPS_PER_CALL
+
+
+def smallest_half_extent(shape: Shape) -> float:
+    """Half the thinnest dimension of a shape (m); inf for a half-space."""
+    if shape.kind == "sphere":
+        return shape.radius
+    if shape.kind == "box":
+        return 0.5 * min(shape.size)
+    if shape.kind == "cylinder":
+        return min(shape.radius, 0.5 * shape.length)
+    if shape.kind == "capsule":
+        return shape.radius
+    return math.inf
+
+
+def penetration_limit(shape1: Shape, shape2: Shape, fraction: float) -> float:
+    """The deepest overlap (m) a pair of these shapes may reach before it is divergence."""
+    return fraction * min(smallest_half_extent(shape1), smallest_half_extent(shape2))
+
+
+def energy_ledger_monitor(stored_energy: Callable[[np.ndarray], float], energy0: float,
+                          tolerance: float) -> Monitor:
+    """A monitor that complains when the dissipated energy E(0) - E(t) of a passive scene
+    falls below -tolerance (J): the stored energy grew, which no passive system does."""
+    def monitor(t: float, x: np.ndarray) -> str | None:
+        growth = stored_energy(x) - energy0
+        if not growth <= tolerance:
+            return (f"energy grew by {growth:.3g} J in a passive scene (from {energy0:.6g} J; "
+                    f"dissipated energy must be >= -{tolerance:g} J, integrator.energy_tolerance)")
+        return None
+    return monitor
+
+
+def penetration_monitor(overlaps: Callable[[np.ndarray], dict[str, float]],
+                        limits: dict[str, float]) -> Monitor:
+    """A monitor that complains when a pair's overlap (m) exceeds its limit."""
+    def monitor(t: float, x: np.ndarray) -> str | None:
+        deep = [f"{pair} {depth:.3g} m > {limits[pair]:.3g} m"
+                for pair, depth in overlaps(x).items() if not depth <= limits[pair]]
+        return ("overlap beyond the penetration limit: " + ", ".join(deep)) if deep else None
+    return monitor
+
+
+def all_of(*monitors: Monitor | None) -> Monitor | None:
+    """One monitor running the given ones in order (the first complaint wins)."""
+    active = [m for m in monitors if m is not None]
+    if not active:
+        return None
+    if len(active) == 1:
+        return active[0]
+
+    def monitor(t: float, x: np.ndarray) -> str | None:
+        for m in active:
+            reason = m(t, x)
+            if reason:
+                return reason
+        return None
+    return monitor
