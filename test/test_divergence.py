@@ -171,3 +171,44 @@ def test_gravity_or_velocity_of_1e308_is_divergence_not_a_hang(method, g, v0):
                           capture_output=True, text=True, timeout=120)
     assert done.stdout.startswith("DivergenceError"), done.stderr[-2000:]
     assert "non-finite" in done.stdout
+
+
+def test_one_step_wise_call_is_bounded_by_its_step_budget():
+    # a node's callback calls advance_through: dop853 needs more than 3 steps for 1 s of
+    # arm_swing (measured 149), so a budget of 3 stops it with a typed error
+    simulator = Simulator(load_scene("arm_swing"), limits=DivergenceLimits(max_steps_per_call=3))
+    with pytest.raises(StepBudgetError, match="over its step budget of 3 steps"):
+        simulator.advance(1.0)
+    # a fixed step is refused before the first step: 1 s at 1 ms is 1000 steps
+    fixed = Simulator(load_scene("arm_swing").with_integrator("rk4", dt=1e-3),
+                      limits=DivergenceLimits(max_steps_per_call=999))
+    with pytest.raises(StepBudgetError, match="1000 steps of dt=0.001 s"):
+        fixed.advance(1.0)
+    assert fixed.t == 0.0
+
+
+def test_simulate_refuses_a_run_over_max_steps_in_one_line(capsys):
+    # ball_drop: 2.5 s at 0.5 ms is 5000 steps
+    code = main(["simulate", "--scene", "ball_drop", "--integrator", "rk4", "--dt", "5e-4",
+                 "--max-steps", "4999"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "5000 steps of dt=0.0005 s over 2.5 s exceed the step budget of 4999 steps" in err
+
+
+def test_simulate_reports_the_ball_drop_divergence_with_a_non_zero_exit(capsys):
+    assert main(["simulate", "--scene", "ball_drop", "--integrator", "rk4", "--dt", "5e-4"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "rk4 diverged at t=0.45" in err
+
+
+def test_long_fixed_step_runs_show_progress(capsys):
+    from youbot_dynamics.cli.sim_commands import progress_bar
+    from youbot_dynamics.sim.divergence import PROGRESS_STEPS
+
+    with progress_bar("pendulum", PROGRESS_STEPS, 0.0, 10.0, True) as short:
+        assert short is None                     # short runs: no bar, no callback
+    with progress_bar("pendulum", PROGRESS_STEPS + 1, 0.0, 10.0, True) as long:
+        long(5.0)
+        long(10.0)
+    assert "pendulum: 100%" in capsys.readouterr().err
