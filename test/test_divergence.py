@@ -212,3 +212,19 @@ def test_long_fixed_step_runs_show_progress(capsys):
         long(5.0)
         long(10.0)
     assert "pendulum: 100%" in capsys.readouterr().err
+
+
+def test_the_ledger_spans_the_calls_of_a_passive_stretch():
+    # arm_swing is conservative: dop853 keeps its energy to 1e-6 J over 60 s (measured
+    # 9.8e-7 J; energy_tolerance 1e-3 J). Energy put in between two calls (the velocities
+    # scaled by 1.5) passes a ledger that restarts every call, not one from the reset.
+    simulator = Simulator(load_scene("arm_swing"))
+    simulator.advance(0.05)
+    before = simulator.energy
+    simulator.x[simulator.layout.slice("v")] *= 1.5
+    assert simulator.energy - before > 1e-3
+    with pytest.raises(DivergenceError, match="energy grew"):
+        simulator.advance(0.1)
+    # a command that feeds energy in restarts the ledger at the next passive call
+    simulator.advance(0.1, tau_command=[0.1, 0.0, 0.0, 0.0, 0.0])
+    simulator.advance(0.15)

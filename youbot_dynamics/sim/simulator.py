@@ -260,12 +260,18 @@ class Simulator:
         springs = self.contact.elastic_energy(x, x[self._q]) if self.contact else 0.0
         return self.energy_of(x) + springs
 
-    def monitor_for(self, x0: np.ndarray, tau_command: np.ndarray | None) -> Monitor | None:
-        """The output-time checks of a run from x0: the energy ledger when the scene is
-        passive (no controller, no or a zero command) and the pairs' penetration limits."""
-        passive = self.passive and (tau_command is None or not np.any(tau_command))
-        ledger = energy_ledger_monitor(self.stored_energy_of, self.stored_energy_of(x0),
-                                       self.integrator.energy_tolerance) if passive else None
+    def is_passive(self, tau_command: np.ndarray | None) -> bool:
+        """Whether nothing feeds energy in: no controller, and no or a zero command."""
+        return self.passive and (tau_command is None or not np.any(tau_command))
+
+    def monitor_for(self, x0: np.ndarray, tau_command: np.ndarray | None,
+                    energy0: float | None = None) -> Monitor | None:
+        """The output-time checks of a run from x0: the energy ledger when the run is
+        passive (against ``energy0``, J, default x0's stored energy) and the pairs'
+        penetration limits."""
+        reference = self.stored_energy_of(x0) if energy0 is None else energy0
+        ledger = energy_ledger_monitor(self.stored_energy_of, reference,
+                                       self.integrator.energy_tolerance) if self.is_passive(tau_command) else None
         overlap = penetration_monitor(lambda x: self.contact.overlaps(x, x[self._q]),
                                       self.penetration_limits) if self.contact else None
         return all_of(ledger, overlap)
@@ -299,13 +305,15 @@ class Simulator:
 
     # ---- integration ----------------------------------------------------------------------
     def solve(self, x0: np.ndarray, t_eval: np.ndarray, tau_command: np.ndarray | None = None, *,
-              max_steps: int | None = None, progress: Callable[[float], None] | None = None) -> Solution:
+              max_steps: int | None = None, progress: Callable[[float], None] | None = None,
+              energy0: float | None = None) -> Solution:
         """Integrate from x0 at t_eval[0] with outputs at t_eval (s), with the divergence
         checks; ``tau_command`` (held) replaces the controller. More than ``max_steps``
         steps (per segment of a contact scene) are a StepBudgetError; ``progress(t)`` is
-        told the time reached (s) after each output."""
+        told the time reached (s) after each output; ``energy0`` (J) is the ledger's
+        reference (default: x0's stored energy)."""
         spec, names = self.integrator, self.layout.names
-        monitor = self.monitor_for(x0, tau_command)
+        monitor = self.monitor_for(x0, tau_command, energy0)
         if spec.method in STEPPERS:
             return self._step_constraints(x0, t_eval, tau_command, monitor, max_steps, progress)
         rhs = self.rhs if tau_command is None else (lambda t, x: self.derivative(t, x, tau_command))
@@ -486,6 +494,7 @@ class Simulator:
         self.stats = IntegratorStats(self.integrator.method)
         self._clear_contact_record()
         self._tau = self.controller.torque(0.0, x[self._q], x[self._v]).copy()
+        self._ledger_start: float | None = None
         return self.snapshot()
 
     def _clear_contact_record(self) -> None:
@@ -512,8 +521,14 @@ class Simulator:
             raise UserInputError(f"advance: times {times.tolist()} s must increase from after the "
                                  f"current time {self.t:.9g} s")
         command = None if tau_command is None else self.clipped(tau_command)
+        # the ledger spans the whole passive stretch (since the reset or the last command
+        # that fed energy in), not one call: slow growth adds up over calls
+        if not self.is_passive(command):
+            self._ledger_start = None
+        elif self._ledger_start is None:
+            self._ledger_start = self.stored_energy_of(self.x)
         solution = self.solve(self.x, np.concatenate([[self.t], times]), command,
-                              max_steps=self.limits.max_steps_per_call)
+                              max_steps=self.limits.max_steps_per_call, energy0=self._ledger_start)
         self.stats += solution.stats
         snapshots = []
         for t, x in zip(solution.t[1:], solution.x[1:]):
