@@ -122,11 +122,18 @@ def test_a_step_that_cannot_move_the_clock_is_refused_up_front():
 
 # ---- 4. step budgets and progress --------------------------------------------------------
 def test_pendulum_for_1e18_euler_steps_is_refused_in_one_line(capsys):
-    # before: a hang; now refused before the first step
+    # before: a hang; now refused before the first step: near t = 1e9 s a step of 1e-9 s
+    # does not move the clock (the spacing of doubles there is 1.2e-7 s)
     code = main(["pendulum", "--t-end", "1e9", "--integrator", "euler", "--dt", "1e-9"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1
-    assert "1e+18 steps" in err and "--max-steps" in err
+    assert "dt=1e-09 s is below the time resolution at t=1e+09 s (t + dt == t)" in err
+    # 1e10 steps that do move the clock are over the default budget of 1e7
+    assert main(["pendulum", "--t-end", "1e4", "--integrator", "euler", "--dt", "1e-6"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "euler: 1e+10 steps of dt=1e-06 s over 10000 s exceed the step budget of 10000000 " \
+           "steps: raise --max-steps or dt" in err
 
 
 def test_the_fixed_step_budget_is_a_flag():
@@ -193,7 +200,8 @@ def test_simulate_refuses_a_run_over_max_steps_in_one_line(capsys):
                  "--max-steps", "4999"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1
-    assert "5000 steps of dt=0.0005 s over 2.5 s exceed the step budget of 4999 steps" in err
+    assert err.endswith("simulate: error: rk4: 5000 steps of dt=0.0005 s over 2.5 s exceed the step budget "
+                        "of 4999 steps: raise --max-steps or dt")
 
 
 def test_simulate_reports_the_ball_drop_divergence_with_a_non_zero_exit(capsys):

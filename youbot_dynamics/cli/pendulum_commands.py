@@ -80,7 +80,7 @@ def run_pendulum(args: argparse.Namespace) -> int:
     steps = 0
     if args.dt is not None and times.size:
         checked_output_spacing(args.dt, times, f"--dt (outputs every --t-end/{OUTPUTS - 1})")
-        steps = checked_step_budget("pendulum", args.dt, times, args.max_steps)
+        steps = checked_step_budget(integrator, args.dt, times, args.max_steps)
     try:
         with progress_bar("pendulum", steps, 0.0, args.t_end, not args.json) as progress:
             solution, energy_error = simulate_elastic_pendulum(

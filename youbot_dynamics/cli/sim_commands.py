@@ -15,8 +15,9 @@ from tqdm import tqdm
 from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
 from youbot_dynamics.cli.common import CommandError, add_tolerance_arguments, finite_or_none
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
-from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError, fixed_step_count
-from youbot_dynamics.sim.scene import STEPPERS, Scene, load_scene
+from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, IntegrationError, StepBudgetError,
+                                             checked_fixed_step, fixed_step_count)
+from youbot_dynamics.sim.scene import Scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
 
@@ -26,20 +27,21 @@ def add_step_budget_argument(parser: argparse.ArgumentParser) -> None:
                         help=f"refuse a fixed-step run of more than N steps (default {MAX_STEPS:g})")
 
 
-def checked_step_budget(command: str, dt: float | None, times: np.ndarray, max_steps: int) -> int:
+def checked_step_budget(method: str, dt: float | None, times: np.ndarray,
+                        max_steps: int) -> float:
     """The steps a fixed-step run over ``times`` takes (0 for adaptive runs); refused in one
-    line when over ``max_steps``."""
+    line, before the run, when over ``max_steps`` or when dt cannot move the clock."""
     if dt is None:
-        return 0
-    count = fixed_step_count(dt, times)
-    if count > max_steps:
-        raise CommandError(f"{command}: {count:.4g} steps of dt={dt:g} s over {times[-1] - times[0]:g} s "
-                           f"exceed the step budget of {max_steps} steps: raise --max-steps or dt")
-    return count
+        return 0.0
+    try:
+        checked_fixed_step(method, dt, times, max_steps)
+    except StepBudgetError as error:
+        raise CommandError(f"{error}: raise --max-steps or dt") from None
+    return fixed_step_count(dt, times)
 
 
 @contextmanager
-def progress_bar(command: str, steps: int, t_start: float, t_end: float,
+def progress_bar(command: str, steps: float, t_start: float, t_end: float,
                  enabled: bool) -> Iterator[Callable[[float], None] | None]:
     """A progress bar on stderr over simulated time, for runs of more than PROGRESS_STEPS
     steps (None otherwise: no callback, no cost)."""
@@ -101,8 +103,8 @@ def run_simulate(args: argparse.Namespace) -> int:
     limits = DivergenceLimits(max_steps=args.max_steps)
     simulator = Simulator(scene, resolve_integrator(scene, progress=not args.json), limits)
     times = scene.output_times
-    dt = simulator.integrator.dt if simulator.integrator.method in FIXED_STEP + STEPPERS else None
-    steps = checked_step_budget("simulate", dt, times, args.max_steps)
+    steps = checked_step_budget(simulator.integrator.method, simulator.integrator.dt, times,
+                                args.max_steps)
     try:
         with progress_bar("simulate", steps, times[0], times[-1], not args.json) as progress:
             result = simulator.run(progress=progress)

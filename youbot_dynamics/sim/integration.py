@@ -143,10 +143,8 @@ class StepBudgetError(DivergenceError):
     steps, stopped when spent for adaptive ones (a step size collapsing without end)."""
 
     def __init__(self, time: float, integrator: str, step_size: float, budget: int,
-                 needed: str) -> None:
-        IntegrationError.__init__(self, f"{integrator} stopped at t={time:.6g} s (step "
-                                  f"{step_size:.3g} s): {needed}, over its step budget of "
-                                  f"{budget} steps")
+                 message: str) -> None:
+        IntegrationError.__init__(self, message)
         self.time, self.integrator, self.step_size = time, integrator, step_size
         self.reason, self.components, self.budget = f"step budget of {budget} steps spent", {}, budget
 
@@ -313,7 +311,9 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
             check.step(t_b, stepper.x, h)
             if max_steps is not None and stepper.steps > max_steps:
                 raise StepBudgetError(t_b, integrator, h, max_steps,
-                                      f"{stepper.steps} steps did not reach t={t_eval[-1]:.6g} s")
+                                      f"{integrator} stopped at t={t_b:.6g} s (step {h:.3g} s): "
+                                      f"{stepper.steps} steps did not reach t={t_eval[-1]:.6g} s, "
+                                      f"over its step budget of {max_steps} steps")
             stop_at = t_b
             if events:
                 if own_roots:

@@ -29,7 +29,8 @@ from youbot_dynamics.sim.sundials import CVODE_METHODS, CvodeStepper, IdaStepper
 
 __all__ = ["INTEGRATORS", "FIXED_STEP", "IntegratorStats", "Event", "EventRecord", "Solution",
            "IntegrationError", "DivergenceError", "StepBudgetError", "integrate", "integrate_dae",
-           "tolerances_from_tol", "fixed_step_count", "checked_output_spacing"]
+           "tolerances_from_tol", "fixed_step_count", "checked_fixed_step",
+           "checked_output_spacing"]
 
 INTEGRATORS: tuple[str, ...] = ("euler", "symplectic_euler", "rk4", "rk45", "dop853", "radau",
                                 "bdf", "cvode_bdf", "cvode_adams", "ida")
@@ -67,11 +68,11 @@ def checked_positive(name: str, value) -> None:
         raise UserInputError(f"{name} must be positive, got {value!r}")
 
 
-def fixed_step_count(dt: float, times: np.ndarray) -> int:
+def fixed_step_count(dt: float, times: np.ndarray) -> float:
     """Steps of size dt (s) a fixed-step run over ``times`` takes at least (one more per
-    output interval that dt does not divide); a float for counts beyond 2**63."""
-    span = float(times[-1] - times[0])
-    return math.ceil(span / dt) if span / dt < 2.0 ** 62 else span / dt
+    output interval that dt does not divide), as a float (it can exceed any int64)."""
+    ratio = float(times[-1] - times[0]) / dt
+    return float(math.ceil(ratio)) if ratio < 2.0 ** 52 else ratio
 
 
 def checked_fixed_step(integrator: str, dt: float, times: np.ndarray,
@@ -85,8 +86,9 @@ def checked_fixed_step(integrator: str, dt: float, times: np.ndarray,
     count = fixed_step_count(dt, times)
     if max_steps is not None and count > max_steps:
         raise StepBudgetError(float(times[0]), integrator, dt, max_steps,
-                              f"{count:.4g} steps of dt={dt:g} s are needed over "
-                              f"{times[-1] - times[0]:g} s (raise the budget or dt)")
+                              f"{integrator}: {count:.4g} steps of dt={dt:g} s over "
+                              f"{times[-1] - times[0]:g} s exceed the step budget of "
+                              f"{max_steps} steps")
 
 
 def checked_output_spacing(dt: float | None, times: np.ndarray, where: str) -> None:
