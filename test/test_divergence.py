@@ -118,6 +118,10 @@ def test_a_step_that_cannot_move_the_clock_is_refused_up_front():
     rhs = lambda t, x: -x  # noqa: E731
     with pytest.raises(UserInputError, match=r"t \+ dt == t"):
         integrate(rhs, [1.0], [0.0, 2.5], "euler", dt=1e-18)
+    # a scene's dt of 1e-18 s: before, a run that could never finish
+    scene = load_scene("ball_drop").with_integrator("rk4", dt=1e-18)
+    with pytest.raises(UserInputError, match=r"dt=1e-18 s is below the time resolution at t=2.5 s"):
+        Simulator(scene).run()
 
 
 # ---- 4. step budgets and progress --------------------------------------------------------
