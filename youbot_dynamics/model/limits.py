@@ -33,11 +33,12 @@ class Bound:
     def problem(self, value: float) -> str:
         """'' when ``value`` is within the bound, else the reason (one line)."""
         if not math.isfinite(value):
-            return f"{value} is not a finite {self.quantity}"
+            return f"{self.quantity} {value} is not finite"
         if self.non_negative and value < 0.0:
-            return f"a {self.quantity} must not be negative"
+            return f"{self.quantity} must not be negative, got {value:g}"
         if abs(value) > self.maximum:
-            return f"|{value:g}| {self.unit} is beyond the bound {self.maximum:g} {self.unit} on a {self.quantity} ({self.why})"
+            return (f"|{value:g}| {self.unit} is beyond the {self.quantity} bound {self.maximum:g} "
+                    f"{self.unit} ({self.why})")
         return ""
 
 
@@ -72,8 +73,8 @@ MAX_URDF_BYTES = 50_000_000
 #: 800 MB at most; ``outputs.rate: 1e9`` asked for 15 GiB.
 MAX_OUTPUT_SAMPLES = 1_000_000
 #: Scene files: at most this many bytes, YAML aliases and nodes counted with every alias
-#: expanded (a 1 kB alias bomb expands to 1e9 nodes; the packaged scenes have no alias and
-#: at most a few thousand nodes).
+#: expanded (a 445-byte alias bomb expands to 4.9e8 nodes; the packaged scenes have at most
+#: 12 aliases (gripping) and 658 expanded nodes).
 MAX_SCENE_BYTES = 10_000_000
 MAX_YAML_ALIASES = 100
 MAX_YAML_NODES = 1_000_000
