@@ -25,9 +25,17 @@ COMMAND_MODULES = (
 )
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse's parser whose usage errors are one line (no usage block), exit status 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every sub-command registered."""
-    parser = argparse.ArgumentParser(
+    """The argument parser with every sub-command registered (sub-parsers of the same
+    one-line class)."""
+    parser = OneLineParser(
         prog="youbot-dynamics",
         description="youBot kinematics, dynamics, simulation and classic studies.",
     )

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from youbot_dynamics.cli.common import add_tolerance_arguments, cell, positive, tolerances
+from youbot_dynamics.cli.common import add_tolerance_arguments, cell, output_file, positive, tolerances
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.events import HybridSolution
 from youbot_dynamics.sim.integrators import INTEGRATORS, FIXED_STEP, IntegratorStats
@@ -55,6 +55,8 @@ def run_woodpecker(args: argparse.Namespace) -> int:
                                                     plot_woodpecker)
     if args.integrator in FIXED_STEP and args.dt is None:
         raise UserInputError(f"--integrator {args.integrator} is fixed-step: give --dt")
+    if args.plot:
+        output_file(args.plot, "--plot")
     woodpecker = Woodpecker()
     options = {} if args.dt is None else {"dt": args.dt}
     rtol, atol = tolerances(args, SEED_INITIAL_STATE)
