@@ -16,6 +16,7 @@ up to 116 kg, inertia entries up to 9.2 kg m^2, origins up to 1.57 m, shape dime
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 
 
@@ -53,10 +54,11 @@ DAMPING = Bound("damping", 1e8, "N m s/rad or N s/m", "example robots reach 2e4"
 FRICTION = Bound("friction", 1e8, "N m or N", "example robots reach 12", non_negative=True)
 RATE = Bound("output rate", 1e6, "Hz", "1 MHz, 1 us between samples")
 
-#: Tolerances: rtol (and the accuracy knob ``tol``) at least this, 45 machine epsilons: below
-#: it a step's error estimate is round-off and an adaptive solver cannot meet it (scipy itself
-#: raises rtol below 100 eps to 100 eps). At most MAX_RTOL: 100 % is no accuracy at all.
-MIN_RTOL = 1e-14
+#: Tolerances: rtol (and the accuracy knob ``tol``) at least 100 machine epsilons (2.2e-14),
+#: the floor below which scipy's solvers raise rtol themselves with a warning: there a step's
+#: error estimate is round-off and no step can meet it. At most MAX_RTOL: 100 % is no
+#: accuracy at all.
+MIN_RTOL = 100 * sys.float_info.epsilon
 MAX_RTOL = 1.0
 
 #: Sizes, counted in the URDF's XML before Pinocchio sees it. Pinocchio 4.1's Data takes about
@@ -83,8 +85,8 @@ MAX_YAML_NODES = 1_000_000
 def tolerance_problem(value: float) -> str:
     """'' when ``value`` is a usable relative tolerance, else the reason (one line)."""
     if not (math.isfinite(value) and MIN_RTOL <= value <= MAX_RTOL):
-        return (f"a relative tolerance must be within [{MIN_RTOL:g}, {MAX_RTOL:g}] (below {MIN_RTOL:g}, "
-                f"45 machine epsilons, no step can meet it), got {value:g}")
+        return (f"a relative tolerance must be within [{MIN_RTOL:.3g}, {MAX_RTOL:g}] (below 100 machine "
+                f"epsilons no step can meet it), got {value:g}")
     return ""
 
 
