@@ -43,7 +43,7 @@ class Bound:
         return ""
 
 
-MASS = Bound("mass", 1e6, "kg", "a 1000 t robot or object; the heaviest example robot is 116 kg")
+MASS = Bound("mass", 1e6, "kg", "a 1000 t body; the heaviest example-robot link has 116 kg")
 INERTIA = Bound("moment of inertia", 1e14, "kg m^2", "MASS x LENGTH^2")
 LENGTH = Bound("length or position", 1e4, "m", "10 km; the largest example-robot origin is 1.57 m")
 GRAVITY = Bound("gravity component", 1e3, "m/s^2", "100 g")
