@@ -113,3 +113,8 @@ def test_replay_of_a_file_that_is_no_bag_is_one_line(capsys, tmp_path: Path, nam
     for reader in (bag_topics, read_bag):
         with pytest.raises(UserInputError, match="cannot be read"):
             reader(path)
+
+
+def test_woodpecker_plot_samples_are_bounded_before_the_run(capsys, tmp_path: Path) -> None:
+    # Before: int(1e308 * 2000) raised OverflowError (a traceback).
+    _one_line_error(capsys, ["woodpecker", "--t-end", "1e308", "--plot", str(tmp_path / "w.png")], "output samples")

@@ -121,6 +121,14 @@ def test_scene_magnitudes_beyond_the_bounds_are_refused(tmp_path: Path, scene, m
     assert "\n" not in str(error)
 
 
+def test_huge_quaternion_components_normalise_without_overflow(tmp_path: Path) -> None:
+    # Before: the norm overflowed to inf and the orientation became [0, 0, 0, 0].
+    data = packaged("ball_drop")
+    data["free_bodies"][0]["orientation"] = [1e200, 1e200, 0.0, 0.0]
+    orientation = load_scene(write(tmp_path, data)).free_bodies[0].orientation
+    assert np.allclose(orientation, [2 ** -0.5, 2 ** -0.5, 0.0, 0.0], rtol=0.0, atol=1e-15)  # measured 1.1e-16
+
+
 def test_scene_values_at_the_bounds_load(tmp_path: Path) -> None:
     data = packaged("arm_swing")
     data["integrator"]["rtol"] = limits.MIN_RTOL

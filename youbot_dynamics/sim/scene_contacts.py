@@ -204,8 +204,9 @@ def read_free_bodies(reader: SceneReader, value: Any) -> tuple[FreeBodySpec, ...
         if not isinstance(quaternion, list) or len(quaternion) != 4:
             raise SceneError(reader.source, f"{key}.orientation", "expected a quaternion [x, y, z, w]", quaternion)
         quaternion = np.array([reader.number(x, f"{key}.orientation[{j}]") for j, x in enumerate(quaternion)])
-        if np.linalg.norm(quaternion) == 0:
+        if not np.any(quaternion):
             raise SceneError(reader.source, f"{key}.orientation", "must not be zero", quaternion.tolist())
+        quaternion = quaternion / np.abs(quaternion).max()  # its norm cannot overflow (1e200 components)
         specs.append(FreeBodySpec(
             body, shape, reader.vector3(data.get("position", [0, 0, 0]), f"{key}.position", limits.LENGTH),
             quaternion / np.linalg.norm(quaternion),
