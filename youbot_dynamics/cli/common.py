@@ -136,11 +136,11 @@ def finite_or_none(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def print_json(record: dict[str, Any], indent: int | None = 2) -> None:
+def print_json(record: dict[str, Any]) -> None:
     """Print ``record`` as JSON. JSON has no NaN or infinity: a figure that is one (use
     finite_or_none for those that may be) is a CommandError, never invalid JSON."""
     try:
-        text = json.dumps(record, indent=indent, allow_nan=False)
+        text = json.dumps(record, indent=2, allow_nan=False)
     except ValueError:
         raise CommandError("a result is not finite (NaN or infinite): the inputs are beyond what "
                            "double precision holds; nothing printed") from None
