@@ -397,13 +397,14 @@ class Robot:
     def _normalised_root(self, q: np.ndarray, what: str) -> np.ndarray:
         """q with its root orientation (quaternion or cos, sin) scaled to unit norm."""
         rotation = slice(3, 7) if self.root == "floating" else slice(2, 4)
-        norm = float(np.linalg.norm(q[rotation]))
-        if not (math.isfinite(norm) and norm > 0.0):
+        largest = float(np.abs(q[rotation]).max())
+        if not (math.isfinite(largest) and largest > 0.0):
             names = ", ".join(self.q_names[rotation])
             raise UserInputError(f"{what}: the {self.root} root's orientation ({names}) must be "
                                  f"finite and non-zero; got {q[rotation].tolist()}")
         q = q.copy()
-        q[rotation] /= norm
+        q[rotation] /= largest  # first, so that the norm cannot overflow (1e308 components)
+        q[rotation] /= np.linalg.norm(q[rotation])
         return q
 
 
