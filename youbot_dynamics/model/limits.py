@@ -70,6 +70,9 @@ MAX_RTOL = 1.0
 #: largest example file has 211 kB).
 MAX_LINKS = 1000
 MAX_MOVING_JOINTS = 200
+#: A scene's velocity dimension (robot joints plus 6 per free body, each a free-flyer of the
+#: one Pinocchio model): the moving joints' bound plus one floating root (Data 0.55 GB).
+MAX_DOFS = MAX_MOVING_JOINTS + 6
 MAX_URDF_BYTES = 50_000_000
 #: Output samples of one run (duration x rate): a million samples of a 100-entry state take
 #: 800 MB at most; ``outputs.rate: 1e9`` asked for 15 GiB.

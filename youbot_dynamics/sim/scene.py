@@ -317,6 +317,11 @@ def load_scene(name_or_path: str | Path) -> Scene:
     except UserInputError as error:
         raise SceneError(source, "friction.joints", str(error)) from None
     bodies = read_free_bodies(reader, data.get("free_bodies", []))
+    dofs = robot.nv + 6 * len(bodies)
+    if dofs > limits.MAX_DOFS:
+        raise SceneError(source, "free_bodies", f"{robot.nv} joints and {len(bodies)} free bodies are {dofs} "
+                         f"degrees of freedom, beyond the bound of {limits.MAX_DOFS} (Pinocchio's Data grows "
+                         "as their cube)")
     geometries = read_geometries(reader, data.get("world", []), data.get("geometry", []), robot, bodies)
     contacts = read_contacts(reader, data.get("contacts", []), geometries)
     stepper = [pair.name for pair in contacts if pair.law.law == "constraint"]
