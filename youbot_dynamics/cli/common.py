@@ -12,12 +12,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import tempfile
+from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 import numpy as np
 
 from youbot_dynamics import default_urdf
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model import limits
 from youbot_dynamics.model.lie import quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot, load_robot
 
@@ -51,13 +54,23 @@ def positive(text: str) -> float:
     return value
 
 
+def relative_tolerance(text: str) -> float:
+    """An argparse type: a relative tolerance within [MIN_RTOL, MAX_RTOL]
+    (youbot_dynamics.model.limits)."""
+    value = float(text)
+    problem = limits.tolerance_problem(value)
+    if problem:
+        raise argparse.ArgumentTypeError(problem)
+    return value
+
+
 def add_tolerance_arguments(parser: argparse.ArgumentParser, rtol: float | None = None,
                             atol_help: str = "absolute tolerance") -> None:
     """--tol (the one accuracy knob) and --rtol/--atol (for experts; they override it)."""
-    parser.add_argument("--tol", type=positive,
+    parser.add_argument("--tol", type=relative_tolerance,
                         help="accuracy: rtol = TOL and atol_i = TOL * max(|x0_i|, 1e-3) per "
                              "state component; --rtol/--atol override either")
-    parser.add_argument("--rtol", type=positive,
+    parser.add_argument("--rtol", type=relative_tolerance,
                         help="relative tolerance" + (f" (default {rtol:g})" if rtol else ""))
     parser.add_argument("--atol", type=positive, help=atol_help)
 
@@ -124,8 +137,51 @@ def finite_or_none(value: float) -> float | None:
 
 
 def print_json(record: dict[str, Any]) -> None:
-    """Print ``record`` as indented JSON (NaN or infinity is an error: use finite_or_none)."""
-    print(json.dumps(record, indent=2, allow_nan=False))
+    """Print ``record`` as JSON. JSON has no NaN or infinity: a figure that is one (use
+    finite_or_none for those that may be) is a CommandError, never invalid JSON."""
+    try:
+        text = json.dumps(record, indent=2, allow_nan=False)
+    except ValueError:
+        raise CommandError("a result is not finite (NaN or infinite): the inputs are beyond what "
+                           "double precision holds; nothing printed") from None
+    print(text)
+
+
+def output_file(path: str, flag: str) -> Path:
+    """Check, before any work, that a file can be written at ``path``: its folder exists, it
+    is no folder, and it opens for appending (an existing file is left unchanged, a new one is
+    removed again). CommandError naming the flag and the reason otherwise."""
+    target = Path(path)
+    if target.is_dir():
+        raise CommandError(f"{flag} {path}: is a folder; give a file name")
+    if not target.parent.is_dir():
+        raise CommandError(f"{flag} {path}: the folder {target.parent} does not exist")
+    existed = target.exists()
+    try:
+        with open(target, "a", encoding="utf-8"):
+            pass
+    except OSError as error:
+        raise CommandError(f"{flag} {path}: cannot be written ({error.strerror or error})") from None
+    if not existed:
+        target.unlink()
+    return target
+
+
+def output_folder(path: str, flag: str) -> Path:
+    """Create the folder ``path`` (with its parents) if needed and check, before any work,
+    that files can be written in it. CommandError naming the flag and the reason otherwise
+    (a file in the way, no permission)."""
+    target = Path(path)
+    blocking = next((p for p in (target, *target.parents) if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise CommandError(f"{flag} {path}: {blocking} is a file, not a folder")
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=target):
+            pass
+    except OSError as error:
+        raise CommandError(f"{flag} {path}: cannot create the folder or write in it ({error.strerror or error})") from None
+    return target
 
 
 def number(value: float) -> str:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from youbot_dynamics.cli.common import CommandError
+from youbot_dynamics.cli.common import CommandError, output_file
 from youbot_dynamics.io.mcap_recover import recover_mcap
 from youbot_dynamics.io.rrd_recover import recover_rrd
 
@@ -34,6 +34,8 @@ def run_recover(args: argparse.Namespace) -> int:
     if args.output is not None and Path(args.output).suffix != kind:
         raise CommandError(f"-o {args.output}: the recovered file must keep the suffix {kind or '(none)'} "
                            f"of {args.broken}")
+    if args.output is not None:
+        output_file(args.output, "-o")
     if kind == ".rrd":
         rrd = recover_rrd(args.broken, args.output)
         print(f"log recover: {rrd.chunks} chunks from {rrd.source}; wrote {rrd.target} (with its footer)")

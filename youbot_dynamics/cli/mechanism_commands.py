@@ -8,6 +8,7 @@ import json
 import sys
 from collections.abc import Iterable
 
+from youbot_dynamics.cli.common import output_file
 from youbot_dynamics.dynamics.constraints import FORMULATIONS
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import INTEGRATORS, IntegrationError
@@ -61,6 +62,8 @@ def run_squeezer(args: argparse.Namespace) -> int:
                                                   reference_error, simulate_squeezer)
     if not args.rtol > 0:
         raise UserInputError(f"--rtol must be positive, got {args.rtol!r}")
+    if args.plot:
+        output_file(args.plot, "--plot")
     options = dict(rtol=args.rtol, t_end=args.t_end, n_outputs=args.outputs, dt=args.dt)
     try:
         run = simulate_squeezer(args.formulation, args.integrator,

@@ -11,13 +11,14 @@ lists them), and poses and space Jacobians are in the world frame.
 from __future__ import annotations
 
 import argparse
+import math
 
 import numpy as np
 import pinocchio as pin
 
-from youbot_dynamics.cli.common import (add_joint_argument, add_robot_arguments, finite_or_none,
-                                        joint_vector, matrix_text, number, pose_record, print_json,
-                                        robot_from, table)
+from youbot_dynamics.cli.common import (CommandError, add_joint_argument, add_robot_arguments,
+                                        finite_or_none, joint_vector, matrix_text, number,
+                                        pose_record, print_json, robot_from, table)
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics, inverse_dynamics
 from youbot_dynamics.model.robot import ROOTS, Robot
@@ -229,9 +230,14 @@ def _dynamics_inputs(args: argparse.Namespace, flag: str) -> tuple[Robot, np.nda
 def _print_joint_values(args: argparse.Namespace, robot: Robot, key: str, values: np.ndarray,
                         unit: str, q: np.ndarray, inputs: dict[str, np.ndarray]) -> None:
     """``values`` and ``inputs`` have nv entries (named robot.v_names), q nq (robot.q_names);
-    with a fixed root (nq == nv) q is a column of the one table, else a line of its own."""
+    with a fixed root (nq == nv) q is a column of the one table, else a line of its own.
+    Values that overflowed (NaN or infinite) are a CommandError naming their joints."""
+    overflowed = [name for name, x in zip(robot.v_names, values) if not math.isfinite(x)]
+    if overflowed:
+        raise CommandError(f"{key} overflows to NaN or infinity at {', '.join(overflowed)}: the inputs are "
+                           "beyond what double precision holds")
     if args.json:
-        print_json({key: dict(zip(robot.v_names, map(finite_or_none, values.tolist()))),
+        print_json({key: dict(zip(robot.v_names, values.tolist())),
                     "friction": not args.no_friction, "root": robot.root,
                     "q": dict(zip(robot.q_names, q.tolist())),
                     **{name: dict(zip(robot.v_names, x.tolist())) for name, x in inputs.items()}})
@@ -249,7 +255,8 @@ def _print_joint_values(args: argparse.Namespace, robot: Robot, key: str, values
 def run_inverse_dynamics(args: argparse.Namespace) -> int:
     """tau from --q, --v, --a (RNEA plus URDF friction unless --no-friction)."""
     robot, q, v, a, friction = _dynamics_inputs(args, "--a")
-    tau = inverse_dynamics(robot, robot.model.createData(), q, v, a, friction)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported, see _print_joint_values
+        tau = inverse_dynamics(robot, robot.model.createData(), q, v, a, friction)
     _print_joint_values(args, robot, "tau", tau, "N m or N", q, {"v": v, "a": a})
     return 0
 
@@ -257,6 +264,7 @@ def run_inverse_dynamics(args: argparse.Namespace) -> int:
 def run_forward_dynamics(args: argparse.Namespace) -> int:
     """a from --q, --v, --tau (ABA, URDF friction unless --no-friction)."""
     robot, q, v, tau, friction = _dynamics_inputs(args, "--tau")
-    a = forward_dynamics(robot, robot.model.createData(), q, v, tau, friction)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported, see _print_joint_values
+        a = forward_dynamics(robot, robot.model.createData(), q, v, tau, friction)
     _print_joint_values(args, robot, "a", a, "rad/s^2 or m/s^2", q, {"v": v, "tau": tau})
     return 0

@@ -17,10 +17,11 @@ line works without it.
 from __future__ import annotations
 
 import argparse
+import math
 import time
-from pathlib import Path
 
-from youbot_dynamics.cli.common import CommandError, table
+from youbot_dynamics.cli.common import CommandError, output_folder, table
+from youbot_dynamics.model import limits
 
 DEFAULT_SCENE = "gripping"
 
@@ -52,10 +53,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run_replay(args: argparse.Namespace) -> int:
     """Replay the bag once; print how many messages went out, how fast, on which topics."""
+    from youbot_dynamics.io.bag_reader import bag_topics
+
+    if not args.fast and not (math.isfinite(args.rate) and args.rate > 0):
+        raise CommandError(f"--rate must be positive and finite, got {args.rate}")
+    bag_topics(args.bag)  # a file that is no bag: a one-line error before ROS 2 starts
     from youbot_dynamics.ros.replay_node import replay_once
 
-    if not args.fast and not args.rate > 0:
-        raise CommandError(f"--rate must be positive, got {args.rate}")
     start = time.monotonic()
     count, bag, topics = replay_once([], bag=args.bag, rate=0.0 if args.fast else args.rate,
                                      topics=args.topic, wait_for=args.wait_for)
@@ -82,10 +86,15 @@ def run_main_job(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene)
     duration = scene.duration if args.duration is None else args.duration
-    if not duration > 0:
-        raise CommandError(f"--duration must be positive, got {duration}")
+    if not (math.isfinite(duration) and duration > 0):
+        raise CommandError(f"--duration must be positive and finite, got {duration}")
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise CommandError(f"--rate must be positive and finite, got {args.rate}")
+    problem = limits.samples_problem(duration, args.rate)
+    if problem:
+        raise CommandError(f"--duration and --rate: {problem}")
     name = scene.name
-    out = Path(args.out)
+    out = output_folder(args.out, "--out")  # before the run: a file in the way, no permission
     paths = {"mcap_path": str(out / f"{name}.mcap"), "rrd_path": str(out / f"{name}.rrd")}
     start = time.monotonic()
     status, node = run(args=[], overrides={"scene": args.scene, "mode": "simulate", "duration": duration,

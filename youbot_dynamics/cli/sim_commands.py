@@ -13,7 +13,8 @@ import numpy as np
 from tqdm import tqdm
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
-from youbot_dynamics.cli.common import CommandError, add_tolerance_arguments, finite_or_none
+from youbot_dynamics.cli.common import (CommandError, add_tolerance_arguments, finite_or_none, output_file,
+                                        output_folder)
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
 from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, IntegrationError, StepBudgetError,
                                              checked_fixed_step, fixed_step_count)
@@ -99,6 +100,8 @@ def scene_from(args: argparse.Namespace) -> Scene:
 
 def run_simulate(args: argparse.Namespace) -> int:
     """Run the scene; print final state, statistics and energy error (or JSON)."""
+    if args.output:
+        output_file(args.output, "--output")  # before the run, not after it
     scene = scene_from(args)
     limits = DivergenceLimits(max_steps=args.max_steps)
     simulator = Simulator(scene, resolve_integrator(scene, progress=not args.json), limits)
@@ -146,6 +149,7 @@ def run_simulate(args: argparse.Namespace) -> int:
 
 def run_work_precision(args: argparse.Namespace) -> int:
     """Sweep, write the files, print where they are and the recommendation."""
+    output_folder(args.out, "--out")
     scene = scene_from(args)
     study = work_precision(scene, args.out, target_error=args.target_error, progress=not args.json)
     best = study.best

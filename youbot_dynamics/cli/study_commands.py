@@ -5,13 +5,16 @@ from __future__ import annotations
 import argparse
 import json
 
-from youbot_dynamics.cli.common import add_tolerance_arguments, cell, positive, tolerances
+from youbot_dynamics.cli.common import add_tolerance_arguments, cell, output_file, positive, tolerances
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model import limits
 from youbot_dynamics.sim.events import HybridSolution
 from youbot_dynamics.sim.integrators import INTEGRATORS, FIXED_STEP, IntegratorStats
 
 #: Tolerances without --tol/--rtol: the woodpecker's (atol = rtol/100), lagrange's (atol = rtol).
 WOODPECKER_RTOL, LAGRANGE_RTOL = 1e-6, 1e-12
+#: Output samples per simulated second of the woodpecker's plot, Hz.
+PLOT_RATE = 2000
 #: Columns of the statistics tables, as in the seed's tables 15 and 16.
 STAT_COLUMNS = (("steps", "steps"), ("rhs_evals", "f-evals"), ("jac_evals", "J-evals"),
                 ("events", "state events"), ("wall_time", "CPU time (s)"))
@@ -55,13 +58,18 @@ def run_woodpecker(args: argparse.Namespace) -> int:
                                                     plot_woodpecker)
     if args.integrator in FIXED_STEP and args.dt is None:
         raise UserInputError(f"--integrator {args.integrator} is fixed-step: give --dt")
+    if args.plot:
+        output_file(args.plot, "--plot")
+        problem = limits.samples_problem(args.t_end, PLOT_RATE)
+        if problem:
+            raise UserInputError(f"--t-end with --plot: {problem}")
     woodpecker = Woodpecker()
     options = {} if args.dt is None else {"dt": args.dt}
     rtol, atol = tolerances(args, SEED_INITIAL_STATE)
     rtol = WOODPECKER_RTOL if rtol is None else rtol
     solution = woodpecker.simulate(args.t_end, args.integrator, rtol=rtol,
                                    atol=rtol * 1e-2 if atol is None else atol,
-                                   n_out=int(args.t_end * 2000) if args.plot else 0,
+                                   n_out=int(args.t_end * PLOT_RATE) if args.plot else 0,
                                    **options)
     summary = woodpecker_summary(solution, solution.stats)
     if args.plot:

@@ -52,8 +52,8 @@ def _open(path: str | Path) -> AnyReader:
         raise UserInputError(f"bag {path}: no such file or folder")
     if path.is_dir() and not (path / "metadata.yaml").is_file():
         raise UserInputError(f"bag {path}: a bag folder needs a metadata.yaml")
-    reader = AnyReader([path], default_typestore=TYPESTORE)
     try:
+        reader = AnyReader([path], default_typestore=TYPESTORE)  # a file neither .mcap nor .db3 fails here
         reader.open()
     except _BAG_ERRORS as error:
         raise UserInputError(f"bag {path}: cannot be read ({error})") from error

@@ -52,6 +52,7 @@ import yourdfpy
 from lxml import etree
 
 from youbot_dynamics.errors import SingularMassMatrixError, URDFError, UserInputError
+from youbot_dynamics.model import limits
 from youbot_dynamics.model.lie import exp_se3
 
 MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
@@ -84,6 +85,16 @@ NUMERIC_ATTRIBUTES = {
     "cylinder": {"radius": 1, "length": 1},
     "sphere": {"radius": 1},
     "mesh": {"scale": 3},
+}
+#: Magnitude bounds (youbot_dynamics.model.limits) on numeric attributes, by element.
+ATTRIBUTE_BOUNDS = {
+    "origin": {"xyz": limits.LENGTH},
+    "mass": {"value": limits.MASS},
+    "inertia": dict.fromkeys(INERTIA_KEYS, limits.INERTIA),
+    "dynamics": {"damping": limits.DAMPING, "friction": limits.FRICTION},
+    "box": {"size": limits.LENGTH},
+    "cylinder": {"radius": limits.LENGTH, "length": limits.LENGTH},
+    "sphere": {"radius": limits.LENGTH},
 }
 #: Attributes urdfdom refuses to do without.
 REQUIRED_ATTRIBUTES = {"mass": ("value",), "inertia": INERTIA_KEYS, "limit": ("effort", "velocity"),
@@ -386,13 +397,14 @@ class Robot:
     def _normalised_root(self, q: np.ndarray, what: str) -> np.ndarray:
         """q with its root orientation (quaternion or cos, sin) scaled to unit norm."""
         rotation = slice(3, 7) if self.root == "floating" else slice(2, 4)
-        norm = float(np.linalg.norm(q[rotation]))
-        if not (math.isfinite(norm) and norm > 0.0):
+        largest = float(np.abs(q[rotation]).max())
+        if not (math.isfinite(largest) and largest > 0.0):
             names = ", ".join(self.q_names[rotation])
             raise UserInputError(f"{what}: the {self.root} root's orientation ({names}) must be "
                                  f"finite and non-zero; got {q[rotation].tolist()}")
         q = q.copy()
-        q[rotation] /= norm
+        q[rotation] /= largest  # first, so that the norm cannot overflow (1e308 components)
+        q[rotation] /= np.linalg.norm(q[rotation])
         return q
 
 
@@ -504,6 +516,9 @@ def _read_source(source: str | Path) -> tuple[str | bytes, str]:
     path = Path(source)
     if not path.is_file():
         raise URDFError(f"URDF file not found: {path}")
+    size = path.stat().st_size
+    if size > limits.MAX_URDF_BYTES:
+        raise URDFError(f"{path}: {size} bytes is beyond the bound of {limits.MAX_URDF_BYTES} bytes on a URDF file")
     return path.read_bytes(), str(path)
 
 
@@ -571,11 +586,23 @@ def _check_numbers(owner: etree._Element, element: etree._Element, label: str) -
                 value = math.nan
             if not math.isfinite(value):
                 raise URDFError(f"{where}: {attribute}=\"{text}\": '{part}' is not a finite number")
+            bound = ATTRIBUTE_BOUNDS.get(element.tag, {}).get(attribute)
+            problem = bound.problem(value) if bound is not None else ""
+            if problem:
+                raise URDFError(f"{where}: {attribute}=\"{text}\": {problem}")
 
 
 def _check_urdf(root: etree._Element, label: str) -> list[str]:
     """Validate the URDF; returns the fidelity notes: warnings first, then what the model
     ignores."""
+    sizes = {"<link> elements": (limits.MAX_LINKS, sum(1 for e in root if e.tag == "link")),
+             "<joint> elements": (limits.MAX_LINKS, sum(1 for e in root if e.tag == "joint")),
+             "moving joints": (limits.MAX_MOVING_JOINTS, sum(1 for e in root if e.tag == "joint"
+                                                             and e.get("type") in MOVING_JOINT_TYPES))}
+    for what, (most, count) in sizes.items():
+        if count > most:
+            raise URDFError(f"{label}: {count} {what}, beyond the bound of {most} (see "
+                            "youbot_dynamics.model.limits; the largest example robot has 130 links, 101 moving joints)")
     first_line: dict[tuple[str, str], int] = {}  # (tag, name) -> line
     for element in root:
         if element.tag in ("link", "joint"):

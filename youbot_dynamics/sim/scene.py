@@ -55,16 +55,16 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 import numpy as np
-import yaml
 
 from youbot_dynamics import default_urdf, package_share
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model import limits
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
 from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, tolerances_from_tol
 from youbot_dynamics.sim.scene_contacts import (EMPTY_ROBOT, ContactPairSpec, FreeBodySpec, composed_urdf,
                                                 read_contacts, read_free_bodies, read_geometries)
-from youbot_dynamics.sim.scene_reader import SceneError, SceneReader
+from youbot_dynamics.sim.scene_reader import SceneError, SceneReader, read_yaml
 
 CONTROLLERS = ("none", "pd", "computed_torque")
 RECORDABLE = ("q", "v", "z", "tau", "energy", "ee_position")
@@ -215,7 +215,10 @@ class Scene:
 
     def with_duration(self, duration: float) -> Scene:
         """The same scene over another duration (s)."""
-        return dataclasses.replace(self, duration=SceneReader(self.source).positive(duration, "duration"))
+        reader = SceneReader(self.source)
+        duration = reader.positive(duration, "duration")
+        _check_samples(reader, duration, self.outputs.rate)
+        return dataclasses.replace(self, duration=duration)
 
 
 # ---------------------------------------------------------------------------------------
@@ -245,11 +248,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
     raw = path.read_bytes()
     source = str(path)
     reader = SceneReader(source)
-    try:
-        data = yaml.safe_load(raw.decode("utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as error:
-        raise SceneError(source, "(file)", f"not valid YAML: {error}") from None
-    data = reader.mapping(data if data is not None else {}, "(top level)", TOP_KEYS)
+    data = reader.mapping(read_yaml(raw, source), "(top level)", TOP_KEYS)
     robot_path = _robot_path(reader, path, data.get("robot"))
     try:
         full = load_robot(robot_path)
@@ -270,8 +269,8 @@ def load_scene(name_or_path: str | Path) -> Scene:
     q0 = _moving_vector(reader, robot, initial.get("q", {}), "initial.q", 0.0)
     for name, value in zip(robot.joint_names, q0):
         reader.within_limits(robot, name, value, f"initial.q.{name}")
-    v0 = _moving_vector(reader, robot, initial.get("v", {}), "initial.v", 0.0)
-    gravity = reader.vector3(data.get("gravity", [0.0, 0.0, -9.81]), "gravity")
+    v0 = _moving_vector(reader, robot, initial.get("v", {}), "initial.v", 0.0, limits.JOINT_SPEED)
+    gravity = reader.vector3(data.get("gravity", [0.0, 0.0, -9.81]), "gravity", limits.GRAVITY)
 
     friction = reader.mapping(data.get("friction", {}), "friction", ("default", "joints"))
     friction_default = friction.get("default", "urdf")
@@ -304,18 +303,25 @@ def load_scene(name_or_path: str | Path) -> Scene:
         if item not in RECORDABLE:
             raise SceneError(source, f"outputs.record[{i}]", f"expected one of {', '.join(RECORDABLE)}", item)
 
+    rate = reader.positive(outputs.get("rate", 100.0), "outputs.rate", limits.RATE)
+    _check_samples(reader, duration, rate)
     scene = Scene(
         name=str(data.get("name", path.stem)), description=str(data.get("description", "")),
         source=source, content_hash=hashlib.sha256(raw).hexdigest(), robot_path=str(robot_path),
         moving=robot.joint_names, locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0),
         gravity=_frozen(gravity), friction_default=friction_default,
         friction=MappingProxyType(joint_friction), controller=controller, integrator=integrator,
-        duration=duration, outputs=OutputSpec(reader.positive(outputs.get("rate", 100.0), "outputs.rate"), record))
+        duration=duration, outputs=OutputSpec(rate, record))
     try:
         scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
     except UserInputError as error:
         raise SceneError(source, "friction.joints", str(error)) from None
     bodies = read_free_bodies(reader, data.get("free_bodies", []))
+    dofs = robot.nv + 6 * len(bodies)
+    if dofs > limits.MAX_DOFS:
+        raise SceneError(source, "free_bodies", f"{robot.nv} joints and {len(bodies)} free bodies are {dofs} "
+                         f"degrees of freedom, beyond the bound of {limits.MAX_DOFS} (Pinocchio's Data grows "
+                         "as their cube)")
     geometries = read_geometries(reader, data.get("world", []), data.get("geometry", []), robot, bodies)
     contacts = read_contacts(reader, data.get("contacts", []), geometries)
     stepper = [pair.name for pair in contacts if pair.law.law == "constraint"]
@@ -338,8 +344,16 @@ def _robot_path(reader: SceneReader, scene_path: Path, value: Any) -> Path | str
     return reader.file(value, "robot", scene_path)
 
 
-def _moving_vector(reader: SceneReader, robot: Robot, value: Any, key: str, default: float) -> np.ndarray:
-    values = reader.joint_values(value, key, robot)
+def _check_samples(reader: SceneReader, duration: float, rate: float) -> None:
+    """Refuse a run of more than limits.MAX_OUTPUT_SAMPLES output samples."""
+    problem = limits.samples_problem(duration, rate)
+    if problem:
+        raise SceneError(reader.source, "outputs.rate", problem)
+
+
+def _moving_vector(reader: SceneReader, robot: Robot, value: Any, key: str, default: float,
+                   bound: limits.Bound | None = None) -> np.ndarray:
+    values = reader.joint_values(value, key, robot, bound)
     return np.array([values.get(name, default) for name in robot.joint_names])
 
 
@@ -422,6 +436,8 @@ def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
             raise SceneError(reader.source, f"{key}.{name}", "must not be negative", number)
         if number == 0 and name != "energy_tolerance":
             raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
+        if name in ("tol", "rtol") and limits.tolerance_problem(number):
+            raise SceneError(reader.source, f"{key}.{name}", limits.tolerance_problem(number))
     if method in FIXED_STEP + STEPPERS and "dt" not in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"missing: fixed-step method {method!r} needs dt (s)")
     if method not in FIXED_STEP + STEPPERS and "dt" in numbers:

@@ -45,6 +45,7 @@ from lxml import etree
 from youbot_dynamics.dynamics.collision import SHAPES, Geometry, Shape
 from youbot_dynamics.dynamics.contact import ContactLaw, ContactLawError, contact_law_from_spec
 from youbot_dynamics.dynamics.free_body import FreeBody
+from youbot_dynamics.model import limits
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.scene_reader import SceneError, SceneReader
 
@@ -79,7 +80,7 @@ def pose_matrix(reader: SceneReader, value: Any, key: str) -> np.ndarray:
     """4x4 pose from ``{xyz, rpy}`` (roll-pitch-yaw, URDF convention)."""
     data = reader.mapping(value if value is not None else {}, key, ("xyz", "rpy"))
     pose = np.eye(4)
-    pose[:3, 3] = reader.vector3(data.get("xyz", [0, 0, 0]), f"{key}.xyz")
+    pose[:3, 3] = reader.vector3(data.get("xyz", [0, 0, 0]), f"{key}.xyz", limits.LENGTH)
     pose[:3, :3] = pin.rpy.rpyToMatrix(*reader.vector3(data.get("rpy", [0, 0, 0]), f"{key}.rpy"))
     return pose
 
@@ -100,9 +101,9 @@ def read_shape(reader: SceneReader, value: Any, key: str) -> Shape:
         if name not in data and not (kind == "halfspace" and name == "offset"):
             raise SceneError(reader.source, f"{key}.{name}", f"missing: a {kind} needs {', '.join(allowed)}")
         if name in ("size", "normal"):
-            values[name] = tuple(reader.vector3(data[name], f"{key}.{name}"))
+            values[name] = tuple(reader.vector3(data[name], f"{key}.{name}", limits.LENGTH))
         elif name in data:
-            values[name] = reader.number(data[name], f"{key}.{name}")
+            values[name] = reader.number(data[name], f"{key}.{name}", limits.LENGTH)
     for name, number in values.items():
         if name in ("radius", "length") and number <= 0 or name == "size" and min(number) <= 0:
             raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
@@ -160,9 +161,9 @@ def corrected_inertials(reader: SceneReader, root: etree._Element, value: Any, k
         if inertial is None:
             raise SceneError(reader.source, where, "not a link with an <inertial> in the URDF", name)
         if "mass" in correction:
-            inertial.find("mass").set("value", repr(reader.positive(correction["mass"], f"{where}.mass")))
+            inertial.find("mass").set("value", repr(reader.positive(correction["mass"], f"{where}.mass", limits.MASS)))
         if "inertia" in correction:
-            moments = reader.vector3(correction["inertia"], f"{where}.inertia")
+            moments = reader.vector3(correction["inertia"], f"{where}.inertia", limits.INERTIA)
             if np.any(moments <= 0) or 2 * moments.max() > moments.sum():
                 raise SceneError(reader.source, f"{where}.inertia", "principal moments must be positive and "
                                  "obey the triangle inequality", moments.tolist())
@@ -190,24 +191,28 @@ def read_free_bodies(reader: SceneReader, value: Any) -> tuple[FreeBodySpec, ...
             if "mass" in data or "inertia" in data:
                 raise SceneError(reader.source, f"{key}.density", "give density, or mass and inertia, not both")
             body = FreeBody.from_shape(name, shape, reader.positive(data["density"], f"{key}.density"))
+            reader.bounded(body.mass, f"{key}.density", limits.MASS)
+            reader.bounded(float(np.max(body.inertia)), f"{key}.density", limits.INERTIA)
         elif "mass" in data and "inertia" in data:
-            inertia = reader.vector3(data["inertia"], f"{key}.inertia")
+            inertia = reader.vector3(data["inertia"], f"{key}.inertia", limits.INERTIA)
             if np.any(inertia <= 0):
                 raise SceneError(reader.source, f"{key}.inertia", "principal moments must be positive", inertia.tolist())
-            body = FreeBody(name, reader.positive(data["mass"], f"{key}.mass"), np.diag(inertia))
+            body = FreeBody(name, reader.positive(data["mass"], f"{key}.mass", limits.MASS), np.diag(inertia))
         else:
             raise SceneError(reader.source, f"{key}.density", "missing: give density (kg/m^3) or mass and inertia")
         quaternion = data.get("orientation", [0.0, 0.0, 0.0, 1.0])
         if not isinstance(quaternion, list) or len(quaternion) != 4:
             raise SceneError(reader.source, f"{key}.orientation", "expected a quaternion [x, y, z, w]", quaternion)
         quaternion = np.array([reader.number(x, f"{key}.orientation[{j}]") for j, x in enumerate(quaternion)])
-        if np.linalg.norm(quaternion) == 0:
+        if not np.any(quaternion):
             raise SceneError(reader.source, f"{key}.orientation", "must not be zero", quaternion.tolist())
+        quaternion = quaternion / np.abs(quaternion).max()  # its norm cannot overflow (1e200 components)
         specs.append(FreeBodySpec(
-            body, shape, reader.vector3(data.get("position", [0, 0, 0]), f"{key}.position"),
+            body, shape, reader.vector3(data.get("position", [0, 0, 0]), f"{key}.position", limits.LENGTH),
             quaternion / np.linalg.norm(quaternion),
-            reader.vector3(data.get("velocity", [0, 0, 0]), f"{key}.velocity"),
-            reader.vector3(data.get("angular_velocity", [0, 0, 0]), f"{key}.angular_velocity")))
+            reader.vector3(data.get("velocity", [0, 0, 0]), f"{key}.velocity", limits.SPEED),
+            reader.vector3(data.get("angular_velocity", [0, 0, 0]), f"{key}.angular_velocity",
+                           limits.ANGULAR_SPEED)))
     return tuple(specs)
 
 

@@ -1,4 +1,5 @@
-"""Reading a scene file's parsed YAML: typed access whose every mistake is a
+"""Reading a scene file: :func:`read_yaml` parses it with bounded work, and
+:class:`SceneReader` gives typed access to the parsed YAML whose every mistake is a
 :class:`SceneError` naming the file, the key (dotted path) and the value. Shared by
 :mod:`youbot_dynamics.sim.scene` and :mod:`youbot_dynamics.sim.scene_contacts`.
 """
@@ -9,9 +10,11 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
+import yaml
 
 from youbot_dynamics import package_share
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model import limits
 from youbot_dynamics.model.robot import Robot
 
 
@@ -22,6 +25,73 @@ class SceneError(UserInputError):
         self.source, self.key, self.value = source, key, value
         shown = "" if value is None else f" (got {value!r})"
         super().__init__(f"{source}: {key}: {problem}{shown}")
+
+
+class _YAMLTooLarge(Exception):
+    """A YAML document beyond the bounds of youbot_dynamics.model.limits."""
+
+
+class _BoundedLoader(yaml.SafeLoader):
+    """PyYAML's safe loader that refuses more than MAX_YAML_ALIASES aliases."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self.aliases = 0
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node:
+        if self.check_event(yaml.AliasEvent):
+            self.aliases += 1
+            if self.aliases > limits.MAX_YAML_ALIASES:
+                line = self.peek_event().start_mark.line + 1
+                raise _YAMLTooLarge(f"line {line}: more than {limits.MAX_YAML_ALIASES} aliases (*name)")
+        return super().compose_node(parent, index)
+
+
+def _expanded_nodes(node: yaml.Node, counted: dict[int, int]) -> int:
+    """Nodes of the document under ``node`` with every alias expanded (shared nodes counted
+    once per use, each computed once); a node that contains itself is refused."""
+    key = id(node)
+    if key in counted:
+        if counted[key] < 0:
+            raise _YAMLTooLarge(f"line {node.start_mark.line + 1}: an alias refers to a node that contains it")
+        return counted[key]
+    counted[key] = -1
+    if isinstance(node, yaml.MappingNode):
+        children = [child for pair in node.value for child in pair]
+    elif isinstance(node, yaml.SequenceNode):
+        children = node.value
+    else:
+        children = []
+    counted[key] = 1 + sum(_expanded_nodes(child, counted) for child in children)
+    return counted[key]
+
+
+def read_yaml(raw: bytes, source: str) -> Any:
+    """The parsed YAML of a scene file's bytes, with bounded work: at most MAX_SCENE_BYTES,
+    MAX_YAML_ALIASES aliases and MAX_YAML_NODES nodes with the aliases expanded (a 1 kB alias
+    bomb expands to 1e9); an empty file is ``{}``. Every failure is a one-line SceneError."""
+    if len(raw) > limits.MAX_SCENE_BYTES:
+        raise SceneError(source, "(file)", f"{len(raw)} bytes is beyond the bound of "
+                         f"{limits.MAX_SCENE_BYTES} bytes on a scene file")
+    try:
+        loader = _BoundedLoader(raw.decode("utf-8"))
+        try:
+            node = loader.get_single_node()
+            if node is None:
+                return {}
+            size = _expanded_nodes(node, {})
+            if size > limits.MAX_YAML_NODES:
+                raise _YAMLTooLarge(f"{size} nodes with the aliases expanded, beyond the bound of "
+                                    f"{limits.MAX_YAML_NODES}")
+            return loader.construct_document(node)
+        finally:
+            loader.dispose()
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        raise SceneError(source, "(file)", f"not valid YAML: {' '.join(str(error).split())}") from None
+    except _YAMLTooLarge as error:
+        raise SceneError(source, "(file)", f"YAML refused: {error}") from None
+    except RecursionError:
+        raise SceneError(source, "(file)", "YAML refused: nested too deeply") from None
 
 
 class SceneReader:
@@ -41,7 +111,8 @@ class SceneReader:
                                      + ", ".join(allowed), name)
         return value
 
-    def number(self, value: Any, key: str) -> float:
+    def number(self, value: Any, key: str, bound: limits.Bound | None = None) -> float:
+        """A finite number (a YAML number or a string such as ``1e-6``), within ``bound``."""
         if isinstance(value, bool):
             raise SceneError(self.source, key, "expected a number", value)
         try:
@@ -50,18 +121,26 @@ class SceneReader:
             raise SceneError(self.source, key, "expected a number", value) from None
         if not math.isfinite(number):
             raise SceneError(self.source, key, "expected a finite number", value)
-        return number
+        return self.bounded(number, key, bound)
 
-    def positive(self, value: Any, key: str) -> float:
-        number = self.number(value, key)
+    def positive(self, value: Any, key: str, bound: limits.Bound | None = None) -> float:
+        number = self.number(value, key, bound)
         if number <= 0:
             raise SceneError(self.source, key, "must be positive", value)
         return number
 
-    def vector3(self, value: Any, key: str) -> np.ndarray:
+    def bounded(self, number: float, key: str, bound: limits.Bound | None) -> float:
+        """``number`` if within ``bound`` (youbot_dynamics.model.limits), else a SceneError."""
+        problem = bound.problem(number) if bound is not None else ""
+        if problem:
+            raise SceneError(self.source, key, problem)
+        return number
+
+    def vector3(self, value: Any, key: str, bound: limits.Bound | None = None) -> np.ndarray:
+        """Three numbers, each within ``bound``."""
         if not isinstance(value, (list, tuple)) or len(value) != 3:
             raise SceneError(self.source, key, "expected a list of 3 numbers", value)
-        return np.array([self.number(x, f"{key}[{i}]") for i, x in enumerate(value)])
+        return np.array([self.number(x, f"{key}[{i}]", bound) for i, x in enumerate(value)])
 
     def joint_list(self, value: Any, key: str, robot: Robot) -> tuple[str, ...]:
         if not isinstance(value, list) or not value:
@@ -72,12 +151,13 @@ class SceneReader:
             raise SceneError(self.source, key, "a joint is listed twice", value)
         return tuple(value)
 
-    def joint_values(self, value: Any, key: str, robot: Robot) -> dict[str, float]:
+    def joint_values(self, value: Any, key: str, robot: Robot,
+                     bound: limits.Bound | None = None) -> dict[str, float]:
         values = self.mapping(value, key)
         out = {}
         for name, number in values.items():
             self._joint(robot, name, f"{key}.{name}")
-            out[name] = self.number(number, f"{key}.{name}")
+            out[name] = self.number(number, f"{key}.{name}", bound)
         return out
 
     def within_limits(self, robot: Robot, name: str, value: float, key: str) -> None:
