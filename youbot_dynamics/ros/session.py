@@ -60,7 +60,7 @@ from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
                                           InputRejected, follow, joint_sample, joint_trajectory, stamp_in_range)
 from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
 from youbot_dynamics.sim.integrators import DivergenceError
-from youbot_dynamics.sim.inverse import AccelerationEstimator, InverseDynamics
+from youbot_dynamics.sim.inverse import DEFAULT_MAX_GAP_NS, AccelerationEstimator, InverseDynamics, implausible_joints
 from youbot_dynamics.sim.scene import Scene
 from youbot_dynamics.sim.simulator import Simulator, Snapshot, robot_with_gravity
 
@@ -491,8 +491,8 @@ class InverseSession(_Session):
         (the latched topics are in ``latched``)."""
         return ("/computed_torques", *self.frames.ee_topics, "/tf", "/diagnostics")
 
-    def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
-                 ee_link: str = "", mcap_path: str | Path | None = None,
+    def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS,
+                 frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
                  rrd_path: str | Path | None = None) -> None:
         robot = robot_with_gravity(scene.robot(), scene.gravity)
         if not robot.tree:
@@ -500,7 +500,7 @@ class InverseSession(_Session):
         super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
-        self.estimator = AccelerationEstimator(filter_time_constant)
+        self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
         self.stamp_ns, self.samples = 0, 0
         self.failure: str | None = None
 
@@ -510,24 +510,46 @@ class InverseSession(_Session):
         return self.stamp_ns / NS_PER_S
 
     def joint_state(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
-                    stamp_ns: int) -> Outputs:
+                    stamp_ns: int, received_ns: int | None = None) -> Outputs:
         """Take one /joint_states sample; returns /computed_torques and /ee_pose of the
-        previous sample once three are known. Raises and counts :class:`InputRejected`; a
-        rejected sample breaks the difference stencil (no torque is computed across it: the
-        next torque needs three good samples after it)."""
+        previous sample once three are known. A sample stamped 0 takes the receive time
+        ``received_ns`` (int ns of the node's clock; without it, it is rejected as
+        ``bad_timing``). Raises and counts :class:`InputRejected`; a rejected sample breaks
+        the difference stencil (no torque is computed across it: the next torque needs three
+        good samples after it), and so does a gap or a jump back in the stamps (see
+        :mod:`youbot_dynamics.sim.inverse`). A torque that is implausible (beyond the
+        effort-limit bound) or not finite is not published: the sample counts as accepted,
+        the torque as rejected (``implausible_torque`` or ``non_finite``), and the estimate
+        restarts."""
         try:
+            if stamp_ns == 0:
+                if received_ns is None:
+                    raise InputRejected("bad_timing", "joint state not stamped and no receive time given")
+                stamp_ns = received_ns
             sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
-            estimate = self.estimator.push(sample)
         except InputRejected as error:
             self.counters.reject(error)
             self.estimator.clear()
             raise
         self.counters.accepted += 1
+        try:
+            estimate = self.estimator.push(sample)
+        except InputRejected as error:     # a non-finite estimate: the estimator restarted
+            self.counters.reject(error)
+            return []
         if estimate is None:
             return []
         middle, a = estimate
         stamp = middle.stamp_ns
         tau = self.dynamics.torque(middle.q, middle.v, a)
+        implausible = implausible_joints(self.robot, tau)
+        if implausible:
+            finite = bool(np.isfinite(tau).all())
+            self.counters.reject(InputRejected("implausible_torque" if finite else "non_finite",
+                                               f"torque at {stamp} ns beyond the effort-limit bound or not "
+                                               f"finite on {', '.join(implausible)}"))
+            self.estimator.restart("implausible" if finite else "non_finite")
+            return []
         try:
             poses, position_ee = self.frames.ee_outputs(stamp, middle.q)
             outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
@@ -535,6 +557,7 @@ class InverseSession(_Session):
                        ("/tf", self.frames.tf(stamp, middle.q))]
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
+            self.estimator.restart("non_finite")
             return []
         self.recorder.write(outputs, stamp)
         data = self.dynamics.data
@@ -544,6 +567,8 @@ class InverseSession(_Session):
         return outputs
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
-        """/diagnostics now: samples processed and input counters."""
-        values = {"torques_published": self.samples, **self.counters.as_values()}
+        """/diagnostics now: samples processed, input counters and the estimator's restarts
+        by cause (``estimator.restarts.<cause>``)."""
+        values = {"torques_published": self.samples, **self.counters.as_values(),
+                  **{f"estimator.restarts.{cause}": count for cause, count in self.estimator.restarts.items()}}
         return self._diagnostic_outputs("OK", "running", values)
