@@ -2,7 +2,8 @@
 an overflowing velocity through the low-pass filter, a velocity jump of 1e6 rad/s), or a
 replay that restarts its time base, a pause, or unstamped samples, the acceleration
 estimate restarts and torques come back after at most one stencil (three) of good samples;
-implausible torques (beyond 10 x the URDF effort limit) are never published.
+implausible torques (beyond 10 x the URDF effort limit) are never published, and samples
+with velocities beyond 10 x the URDF velocity limit are rejected.
 
 The stream: q_i(t) = c_i + 0.3 sin(2 t + i) rad, v_i = 0.6 cos(2 t + i) rad/s at 500 Hz.
 Torques published are compared with tau(q, v, a) at the exact acceleration
@@ -16,7 +17,7 @@ import pytest
 
 from youbot_dynamics.ros.session import InverseSession
 from youbot_dynamics.sim.commands import InputRejected
-from youbot_dynamics.sim.inverse import PLAUSIBLE_EFFORT_FACTOR, AccelerationEstimator
+from youbot_dynamics.sim.inverse import PLAUSIBLE_FACTOR, AccelerationEstimator
 from youbot_dynamics.sim.scene import load_scene
 
 SCENE = load_scene("arm_ptp")
@@ -71,7 +72,8 @@ def middles_without(bad: int) -> set[int]:
 
 @pytest.mark.parametrize(("fault", "time_constant"), [
     ("stamp_1e6_s", 0.0), ("stamp_1e6_s", 0.05), ("overflowing_velocity", 0.05), ("overflowing_velocity", 0.0),
-    ("velocity_jump_1e6", 0.0), ("velocity_jump_1e6", 0.05)])
+    ("velocity_jump_1e6", 0.0), ("velocity_jump_1e6", 0.05), ("velocity_step_10", 0.0)])
+# (with the 0.05 s low-pass the 10 rad/s step is smoothed to 190 rad/s^2: within the bound)
 def test_one_bad_sample_costs_only_its_stencils(fault: str, time_constant: float) -> None:
     session = InverseSession(SCENE, filter_time_constant=time_constant)
     samples = stream(REGULAR)
@@ -80,18 +82,21 @@ def test_one_bad_sample_costs_only_its_stencils(fault: str, time_constant: float
         samples[FAULT] = (names, q, v, 10**6 * 10**9)
     elif fault == "overflowing_velocity":
         samples[FAULT] = (names, q, [1e308, *v[1:]], stamp)
-    else:
-        samples[FAULT] = (names, q, [v[0] + 1e6, *v[1:]], stamp)
+    else:   # within the velocity bound (10 x 1.57 rad/s) but a step of 10 rad/s in 2 ms: 5000 rad/s^2
+        jump = 1e6 if fault == "velocity_jump_1e6" else 10.0
+        samples[FAULT] = (names, q, [v[0] + jump, *v[1:]], stamp)
     torques = feed(session, samples)
     # no torque whose stencil holds the bad sample; all others, right after it too
     assert set(torques) == middles_without(FAULT)
     if time_constant == 0.0:
         check_torques(session, torques)
-    assert all(np.isfinite(tau).all() and (np.abs(tau) <= PLAUSIBLE_EFFORT_FACTOR * ROBOT.effort_limit).all()
+    assert all(np.isfinite(tau).all() and (np.abs(tau) <= PLAUSIBLE_FACTOR * ROBOT.effort_limit).all()
                for tau in torques.values())
-    if fault == "velocity_jump_1e6":
-        assert session.counters.rejected["implausible_torque"] >= 1
-        assert session.estimator.restarts["implausible"] >= 1
+    if fault == "velocity_jump_1e6":      # published as 3e11 N m before the fix
+        assert session.counters.rejected["out_of_limits"] == 1
+    if fault == "velocity_step_10":       # the torque of the stencil that ends with it is refused
+        assert session.counters.rejected["implausible_torque"] == 1
+        assert session.estimator.restarts["implausible"] == 1
 
 
 @pytest.mark.parametrize("jump", ["replay_restart", "pause_1_s"])

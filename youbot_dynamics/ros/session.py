@@ -35,7 +35,12 @@ composition order (the link names, in that order, are the ``ee_links`` value of
 /diagnostics), all in the root frame.
 
 Simulate mode advances simulated time by fixed increments: sample k is at exactly
-``k * round(1e9 / publish_rate)`` ns, whatever the wall clock does.
+``k * round(1e9 / publish_rate)`` ns, whatever the wall clock does. ``reset`` restarts the
+scene but not the clock: the samples after a reset continue from the last stamp (the
+scene's t = 0 is then at ``epoch_ns``), so /clock, every header stamp and the log times of
+the MCAP and the Rerun recording stay monotonic in one run and no stamp repeats. The reset
+is recorded as an event: /diagnostics (also logged) carries ``resets`` and
+``last_reset_at`` (node time, s). Time semantics of the inputs: :mod:`youbot_dynamics.sim.commands`.
 """
 from __future__ import annotations
 
@@ -56,11 +61,12 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
-                                          InputRejected, follow, joint_sample, joint_trajectory, stamp_in_range)
+from youbot_dynamics.sim.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
+                                          follow, joint_sample, joint_trajectory, node_time_of_stamp)
 from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
 from youbot_dynamics.sim.integrators import DivergenceError
-from youbot_dynamics.sim.inverse import DEFAULT_MAX_GAP_NS, AccelerationEstimator, InverseDynamics, implausible_joints
+from youbot_dynamics.sim.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
+                                         implausible_joints)
 from youbot_dynamics.sim.scene import Scene
 from youbot_dynamics.sim.simulator import Simulator, Snapshot, robot_with_gravity
 
@@ -327,32 +333,43 @@ class SimulationSession(_Session):
 
     def __init__(self, scene: Scene, publish_rate: float, *, command_timeout: float = 0.5,
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
-                 mcap_path: str | Path | None = None, rrd_path: str | Path | None = None) -> None:
+                 mcap_path: str | Path | None = None, rrd_path: str | Path | None = None,
+                 default_effort_limit: float = DEFAULT_EFFORT_LIMIT) -> None:
         self.simulator = Simulator(scene, resolve_integrator(scene, progress=False))
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path)
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         self.samples_per_solve = max(1, int(samples_per_solve))
-        self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters)
+        self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters, default_effort_limit)
         self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
         self._locked_q = np.array([self.robot.locked[name] for name in self.locked_names])
         self._scene_reference = getattr(self.simulator.controller, "reference", None)
         self.paused = False
         self.failure: str | None = None
+        self.k, self.epoch_ns, self.resets, self.last_reset_ns, self._started = 0, 0, 0, None, False
         self.reset()
 
     @property
     def t(self) -> float:
-        """Simulated time (s)."""
-        return self.k * self.step_ns / NS_PER_S
+        """Node time (s): simulated time since the start, resets included."""
+        return self.stamp_ns / NS_PER_S
 
     @property
     def stamp_ns(self) -> int:
-        """Stamp (ns) of the current sample."""
-        return self.k * self.step_ns
+        """Stamp (ns) of the current sample (node time)."""
+        return self.epoch_ns + self.k * self.step_ns
+
+    @property
+    def scene_time(self) -> float:
+        """Simulated time (s) of the current sample since the scene's last (re)start."""
+        return self.k * self.step_ns / NS_PER_S
 
     def reset(self) -> None:
-        """Back to the scene's initial state at t = 0 (the next ``step`` gives that sample);
-        forgets commands and trajectories."""
+        """Back to the scene's initial state (the next ``step`` gives that sample, one
+        increment after the last one published: node time goes on, see the module
+        docstring); forgets commands and trajectories."""
+        if self._started:
+            self.epoch_ns = self.last_reset_ns = self.stamp_ns + self.step_ns
+            self.resets += 1
         self.simulator.reset()
         self.commands.clear()
         if self._scene_reference is not None:
@@ -363,17 +380,23 @@ class SimulationSession(_Session):
         self._events_start = len(self.simulator.contact.events) if self.simulator.contact else 0
         self._started = False
 
-    def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int) -> None:
-        """Accept an effort command (raises and counts :class:`InputRejected`)."""
-        self.commands.accept(names, efforts, stamp_ns, self.t)
+    def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int,
+                       wall_ns: int | None = None) -> None:
+        """Accept an effort command (raises and counts :class:`InputRejected`); ``wall_ns``:
+        the wall clock (default: the machine's), for wall-clock stamps."""
+        self.commands.accept(names, efforts, stamp_ns, self.t, wall_ns)
 
     def trajectory(self, names: Sequence[str], points: Sequence[tuple[int, Sequence[float], Sequence[float]]],
-                   stamp_ns: int) -> None:
-        """Follow a joint trajectory from its stamp (or now, if unstamped or past); ``points``
-        are (time_from_start (int ns), positions, velocities)."""
+                   stamp_ns: int, wall_ns: int | None = None) -> None:
+        """Follow a joint trajectory from its stamp (node time, see
+        :func:`~youbot_dynamics.sim.commands.node_time_of_stamp`: unstamped or a past stamp
+        within the command timeout: now; a wall-clock stamp: by its age; far future or older:
+        rejected); ``points`` are (time_from_start (int ns), positions, velocities)."""
         try:
-            start_ns = max(stamp_in_range(stamp_ns, "trajectory"), self.stamp_ns)
-            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start_ns, self.simulator.q))
+            start_ns = max(node_time_of_stamp(stamp_ns, self.stamp_ns, round(self.commands.timeout * NS_PER_S),
+                                              "trajectory", wall_ns), self.stamp_ns)
+            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start_ns - self.epoch_ns,
+                                                               self.simulator.q))
         except InputRejected as error:
             self.counters.reject(error)
             raise
@@ -447,7 +470,9 @@ class SimulationSession(_Session):
         stats = {f"integrator.{key}": reported(value) for key, value in self.simulator.stats.as_dict().items()}
         values = {"sim_time": self.t, "real_time_factor": reported(real_time_factor),
                   "energy": self.snapshot.energy, "energy_error": self.energy_error,
-                  "paused": self.paused, "command": self._command_source(), **stats, **self.counters.as_values(),
+                  "paused": self.paused, "command": self._command_source(), "resets": self.resets,
+                  "last_reset_at": "none" if self.last_reset_ns is None else self.last_reset_ns / NS_PER_S,
+                  **stats, **self.counters.as_values(),
                   **self.contact_values()}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
         return self._diagnostic_outputs(level, text, values)
@@ -462,7 +487,7 @@ class SimulationSession(_Session):
         contact = self.simulator.contact
         if contact is None:
             return {}
-        events = [e for e in contact.events[self._events_start:] if e.time <= self.t + 0.5 / NS_PER_S]
+        events = [e for e in contact.events[self._events_start:] if e.time <= self.scene_time + 0.5 / NS_PER_S]
         kinds = sorted({e.kind for e in events})
         last = events[-1] if events else None
         return {"free_bodies": ",".join(spec.body.name for spec in self.scene.free_bodies),
@@ -517,16 +542,21 @@ class InverseSession(_Session):
         ``bad_timing``). Raises and counts :class:`InputRejected`; a rejected sample breaks
         the difference stencil (no torque is computed across it: the next torque needs three
         good samples after it), and so does a gap or a jump back in the stamps (see
-        :mod:`youbot_dynamics.sim.inverse`). A torque that is implausible (beyond the
-        effort-limit bound) or not finite is not published: the sample counts as accepted,
-        the torque as rejected (``implausible_torque`` or ``non_finite``), and the estimate
-        restarts."""
+        :mod:`youbot_dynamics.sim.inverse`). A sample whose velocity is beyond the
+        velocity-limit bound is rejected (``out_of_limits``). A torque that is implausible
+        (beyond the effort-limit bound) or not finite is not published: the sample counts as
+        accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
+        estimate restarts."""
         try:
             if stamp_ns == 0:
                 if received_ns is None:
                     raise InputRejected("bad_timing", "joint state not stamped and no receive time given")
                 stamp_ns = received_ns
             sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
+            too_fast = implausible_joints(self.robot, sample.v, "velocity")
+            if too_fast:
+                raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
+                                    f"limit of {', '.join(too_fast)}")
         except InputRejected as error:
             self.counters.reject(error)
             self.estimator.clear()

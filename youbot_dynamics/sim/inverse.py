@@ -29,11 +29,13 @@ next torque comes after three good samples. So does an estimate that is not fini
 overflowing velocity difference): it is rejected, never filtered. ``restarts`` counts the
 restarts by cause.
 
-Plausibility: a measured robot cannot exert much more than its rated effort, so a torque
-with |tau_i| > ``PLAUSIBLE_EFFORT_FACTOR`` x effort_limit_i on some joint (the URDF's
-limit; ``DEFAULT_EFFORT_LIMIT`` where it has none) comes from bad samples (a velocity jump
-of 1e6 rad/s gives 3e11 N m). :func:`implausible_joints` names them; the session does not
-publish such a torque and restarts the estimate.
+Plausibility (rule: ``PLAUSIBLE_FACTOR`` = 10 times the URDF's rated limits): a measured
+robot neither moves nor pushes much beyond its ratings. A sample with |v_i| >
+10 x velocity_limit_i on some joint (a velocity jump of 1e6 rad/s, which gave 3e11 N m) is
+rejected (``out_of_limits``) before it enters the stencil; a torque with |tau_i| >
+10 x effort_limit_i (``DEFAULT_EFFORT_LIMIT`` where the URDF has none) comes from bad
+samples (a velocity step within the velocity bound, 10 rad/s in 2 ms) and is not
+published; the estimate then restarts. :func:`implausible_joints` names the joints.
 
 Friction: the scene's model at the measured velocity; LuGre bristles are taken at their
 steady state for v (the bristle deflection cannot be measured).
@@ -50,8 +52,8 @@ from youbot_dynamics.sim.commands import DEFAULT_EFFORT_LIMIT, NS_PER_S, InputRe
 DEFAULT_MAX_GAP_NS = 100_000_000
 """Largest spacing (ns) of two samples in one stencil by default (0.1 s: 50 periods of a
 500 Hz stream); a longer gap restarts the estimate."""
-PLAUSIBLE_EFFORT_FACTOR = 10.0
-"""A torque beyond this multiple of a joint's effort limit is implausible."""
+PLAUSIBLE_FACTOR = 10.0
+"""A velocity or torque beyond this multiple of a joint's URDF limit is implausible."""
 RESTART_CAUSES = ("backwards", "gap", "non_finite", "implausible")
 """Why the estimate restarted: a sample not after the previous one, a gap longer than
 ``max_gap_ns``, a non-finite estimate, an implausible torque (counted by the session)."""
@@ -108,17 +110,19 @@ class AccelerationEstimator:
         return middle, estimate
 
 
-def plausible_limit(robot: Robot) -> np.ndarray:
-    """|tau_i| above which a torque is implausible (N m, N): ``PLAUSIBLE_EFFORT_FACTOR``
-    times the URDF effort limit, ``DEFAULT_EFFORT_LIMIT`` where there is none."""
-    limit = np.asarray(robot.effort_limit, dtype=float)
-    return PLAUSIBLE_EFFORT_FACTOR * np.where(np.isfinite(limit), limit, DEFAULT_EFFORT_LIMIT)
+def plausible_limit(robot: Robot, quantity: str = "effort") -> np.ndarray:
+    """|tau_i| (N m, N; ``quantity`` "effort") or |v_i| (rad/s, m/s; "velocity") above which
+    a value is implausible: ``PLAUSIBLE_FACTOR`` times the URDF limit; where the URDF has
+    none, ``DEFAULT_EFFORT_LIMIT`` for efforts and no bound for velocities."""
+    limit = np.asarray(robot.effort_limit if quantity == "effort" else robot.velocity_limit, dtype=float)
+    return PLAUSIBLE_FACTOR * np.where(np.isfinite(limit), limit,
+                                       DEFAULT_EFFORT_LIMIT if quantity == "effort" else np.inf)
 
 
-def implausible_joints(robot: Robot, tau: np.ndarray) -> list[str]:
-    """Names of the joints whose torque ``tau`` (joint order) is not finite or beyond
-    :func:`plausible_limit`."""
-    bad = ~(np.abs(tau) <= plausible_limit(robot))
+def implausible_joints(robot: Robot, values: np.ndarray, quantity: str = "effort") -> list[str]:
+    """Names of the joints whose ``values`` (joint order; torques or velocities, see
+    :func:`plausible_limit`) are not finite or beyond the plausible bound."""
+    bad = ~(np.abs(values) <= plausible_limit(robot, quantity))
     return [name for name, flag in zip(robot.joint_names, bad) if flag]
 
 
