@@ -260,6 +260,40 @@ def reported(value: float | int | str | None) -> float | int | str:
     return value
 
 
+class Watchdog:
+    """Callback budgets: ``record(source, seconds)`` counts a callback (a step tick, a
+    message, a service; named ``source``) that took longer than ``budget`` wall seconds.
+    Measured when the callback returns (the node has one executor thread, so a running
+    callback is not interrupted); ``values`` are /diagnostics values (``overruns``,
+    ``overruns.<source>``, ``worst_callback_s``, ``worst_callback``) and ``fresh`` tells
+    whether an overrun came since the last report."""
+
+    def __init__(self, budget: float) -> None:
+        if not (math.isfinite(budget) and budget > 0.0):
+            raise ValueError(f"callback budget must be positive and finite, got {budget}")
+        self.budget = float(budget)
+        self.overruns: dict[str, int] = {}
+        self.worst: tuple[float, str] = (0.0, "none")
+        self.fresh = False
+
+    def record(self, source: str, seconds: float) -> bool:
+        """Note that ``source`` took ``seconds``; True if that overran the budget."""
+        if seconds > self.worst[0]:
+            self.worst = (seconds, source)
+        if seconds <= self.budget:
+            return False
+        self.overruns[source] = self.overruns.get(source, 0) + 1
+        self.fresh = True
+        return True
+
+    def values(self) -> dict[str, object]:
+        """/diagnostics values; clears ``fresh``."""
+        self.fresh = False
+        return {"callback_budget_s": self.budget, "overruns": sum(self.overruns.values()),
+                **{f"overruns.{source}": count for source, count in self.overruns.items()},
+                "worst_callback_s": self.worst[0], "worst_callback": self.worst[1]}
+
+
 class _Session(ClosesOnExit):
     """What both modes share: the robot's frames, the input counters, the logs (with
     ``latched``, the latched outputs, written once at t = 0; ``with`` finalises them) and
@@ -271,9 +305,10 @@ class _Session(ClosesOnExit):
     topics: tuple[str, ...]
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
-                 mcap_path: str | Path | None, rrd_path: str | Path | None) -> None:
+                 mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float) -> None:
         self.scene, self.robot = scene, robot
         self.counters = InputCounters()
+        self.watchdog = Watchdog(callback_budget)
         geometries = [g for g in scene.geometries if self.mode == "simulate" or g.owner != "body"]
         self.frames = _Frames(robot, frame_id, ee_link, geometries)
         self.latched: Outputs = [("/tf_static", self.frames.tf_static())]
@@ -289,7 +324,11 @@ class _Session(ClosesOnExit):
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
         """/diagnostics with one status of this session (also logged); with a robot, its
         values name the /ee_pose link (``ee_link``) and the /ee_poses links in order
-        (``ee_links``, comma-separated)."""
+        (``ee_links``, comma-separated). The watchdog's values are added; an OK status turns
+        WARN when a callback overran its budget since the last report."""
+        if level == "OK" and self.watchdog.fresh:
+            level, text = "WARN", f"a callback overran its {self.watchdog.budget:g} s budget"
+        values = {**values, **self.watchdog.values()}
         if self.frames.has_robot:
             values = {"ee_link": self.frames.links.ee_link, "ee_links": ",".join(self.frames.links.ee_links),
                       **values}
@@ -334,9 +373,9 @@ class SimulationSession(_Session):
     def __init__(self, scene: Scene, publish_rate: float, *, command_timeout: float = 0.5,
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
                  mcap_path: str | Path | None = None, rrd_path: str | Path | None = None,
-                 default_effort_limit: float = DEFAULT_EFFORT_LIMIT) -> None:
+                 default_effort_limit: float = DEFAULT_EFFORT_LIMIT, callback_budget: float = 0.05) -> None:
         self.simulator = Simulator(scene, resolve_integrator(scene, progress=False))
-        super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path)
+        super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget)
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         self.samples_per_solve = max(1, int(samples_per_solve))
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters, default_effort_limit)
@@ -518,11 +557,11 @@ class InverseSession(_Session):
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS,
                  frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
-                 rrd_path: str | Path | None = None) -> None:
+                 rrd_path: str | Path | None = None, callback_budget: float = 0.05) -> None:
         robot = robot_with_gravity(scene.robot(), scene.gravity)
         if not robot.tree:
             raise UserInputError(f"{scene.source}: inverse mode needs a robot; the scene has none")
-        super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path)
+        super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)

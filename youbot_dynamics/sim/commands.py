@@ -122,6 +122,16 @@ class InputCounters:
                 "failed.total": sum(self.failed.values())}
 
 
+LISTED = 5
+"""Most names an error message lists (then "and N more")."""
+
+
+def _listed(names: Sequence[str]) -> str:
+    """The first ``LISTED`` names, comma-separated, and how many more there are."""
+    more = f" and {len(names) - LISTED} more" if len(names) > LISTED else ""
+    return ", ".join(names[:LISTED]) + more
+
+
 def _names(names: Sequence[str], known: Sequence[str], moving: Sequence[str]) -> list[str]:
     """The names as strings, checked in linear time: at most ``MAX_NAMES``, none twice,
     each one of ``known``."""
@@ -130,11 +140,11 @@ def _names(names: Sequence[str], known: Sequence[str], moving: Sequence[str]) ->
     names = [str(n) for n in names]
     duplicates = sorted(n for n, count in Counter(names).items() if count > 1)
     if duplicates:
-        raise InputRejected("duplicate_joint", f"joint(s) named twice: {', '.join(duplicates)}")
+        raise InputRejected("duplicate_joint", f"joint(s) named twice: {_listed(duplicates)}")
     known = set(known)
     unknown = [n for n in names if n not in known]
     if unknown:
-        raise InputRejected("unknown_joint", f"no joint(s) {', '.join(unknown)} in the robot "
+        raise InputRejected("unknown_joint", f"no joint(s) {_listed(unknown)} in the robot "
                             f"(moving joints: {', '.join(moving)})")
     return names
 
