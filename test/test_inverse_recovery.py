@@ -117,17 +117,29 @@ def test_a_jump_in_the_time_base_restarts_the_stencil_with_the_jumping_sample(ju
 
 
 def test_unstamped_samples_take_the_receive_time() -> None:
-    """Stamp 0 = receive time: every sample accepted, a torque for every middle, stamped
-    with its receive time."""
+    """Stamp 0 = receive time (from the second zero on: the first is taken at 0, where a
+    stream in simulated time starts): every sample accepted, the jump from 0 to the node
+    clock restarts the estimate once, then a torque for every middle, stamped with its
+    receive time. Before the fix: 1 accepted, the rest rejected as bad_timing."""
     session = InverseSession(SCENE)
     samples = [(names, q, v, 0) for names, q, v, _ in stream(REGULAR)]
     torques = feed(session, samples, received=REGULAR)
-    assert set(torques) == {REGULAR[m] for m in range(1, COUNT - 1)}
+    assert set(torques) == {REGULAR[m] for m in range(2, COUNT - 1)}
+    assert session.counters.accepted == COUNT and session.estimator.restarts["gap"] == 1
     check_torques(session, torques)
+
+
+def test_a_stream_stamped_from_zero_loses_nothing() -> None:
+    """Simulated time starts at 0: the first sample stamped 0 is a real stamp."""
+    stamps = [k * PERIOD_NS for k in range(COUNT)]
+    session = InverseSession(SCENE)
+    torques = feed(session, stream(stamps), received=[T0_NS + s for s in stamps])
+    assert set(torques) == {stamps[m] for m in range(1, COUNT - 1)}
 
 
 def test_unstamped_sample_without_a_receive_time_is_rejected() -> None:
     session = InverseSession(SCENE)
+    session.joint_state(NAMES, [0.0] * 5, [0.0] * 5, 0)          # taken at 0
     with pytest.raises(InputRejected, match="bad_timing"):
         session.joint_state(NAMES, [0.0] * 5, [0.0] * 5, 0)
     assert session.counters.rejected["bad_timing"] == 1

@@ -566,6 +566,7 @@ class InverseSession(_Session):
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
         self.stamp_ns, self.samples = 0, 0
+        self._unstamped = False     # the last sample taken was stamped 0
         self.failure: str | None = None
 
     @property
@@ -576,9 +577,12 @@ class InverseSession(_Session):
     def joint_state(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
                     stamp_ns: int, received_ns: int | None = None) -> Outputs:
         """Take one /joint_states sample; returns /computed_torques and /ee_pose of the
-        previous sample once three are known. A sample stamped 0 takes the receive time
-        ``received_ns`` (int ns of the node's clock; without it, it is rejected as
-        ``bad_timing``). Raises and counts :class:`InputRejected`; a rejected sample breaks
+        previous sample once three are known. Stamp 0 is ambiguous (unset, or the first
+        sample of a stream in simulated time, which starts at 0): a sample stamped 0 right
+        after another stamped 0 takes the receive time ``received_ns`` (int ns of the node's
+        clock; without it, it is rejected as ``bad_timing``), any other is taken at 0. So a
+        stream stamped from 0 loses nothing, and an unstamped stream runs on receive times
+        after its first sample (whose jump to the node clock restarts the estimate). Raises and counts :class:`InputRejected`; a rejected sample breaks
         the difference stencil (no torque is computed across it: the next torque needs three
         good samples after it), and so does a gap or a jump back in the stamps (see
         :mod:`youbot_dynamics.sim.inverse`). A sample whose velocity is beyond the
@@ -587,10 +591,12 @@ class InverseSession(_Session):
         accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
         estimate restarts."""
         try:
-            if stamp_ns == 0:
+            unstamped = stamp_ns == 0
+            if unstamped and self._unstamped:
                 if received_ns is None:
                     raise InputRejected("bad_timing", "joint state not stamped and no receive time given")
                 stamp_ns = received_ns
+            self._unstamped = unstamped
             sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
             too_fast = implausible_joints(self.robot, sample.v, "velocity")
             if too_fast:

@@ -23,7 +23,9 @@ Time semantics (the one place they are written down)
 - A stamp must be what builtin_interfaces/Time holds (0 <= stamp < 2^31 s; a negative sec,
   or a nanosec of 1e9 or more carried over, is ``bad_timing``).
 - Stamp 0 means "not stamped": the receive time stands in for it (node time for commands
-  and trajectories; the node clock's receive time for inverse-mode samples).
+  and trajectories). Inverse mode: a 0 after a 0 takes the node clock's receive time; a
+  single 0 is taken as the stamp it is (a stream in simulated time starts at 0, and a
+  replay that restarts its time base restarts there).
 - Wall-clock stamps (within :data:`WALL_CLOCK_WINDOW_NS` of the machine's wall clock while
   node time is not) are carried over by their age: a stamp ``d`` before the wall clock
   means ``now - d`` in node time. So a trajectory stamped with ``get_clock().now()`` of a
