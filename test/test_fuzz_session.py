@@ -245,7 +245,7 @@ def test_fuzzed_joint_states_never_break_inverse_mode(inverse: InverseSession, s
     max_gap, bound = session.estimator.max_gap_ns, plausible_limit(ROBOT)
     accepted_run: list[int] = []        # stamps of the accepted samples since the last rejection
     torque_stamps: list[int] = []
-    previous_zero = session._unstamped
+    previous_zero = session.last_unstamped
     def shifted_tail() -> list[tuple]:
         """The tail after a gap longer than the largest, or from 1 ms if that is out of range."""
         last = session.estimator.samples[-1].stamp_ns if session.estimator.samples else 0

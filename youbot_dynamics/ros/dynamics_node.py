@@ -138,7 +138,8 @@ class DynamicsNode(Node):
         else:
             self._subscribe(JointState, "/joint_states", self._on_joint_state,
                             SUBSCRIPTION_PROFILES[p["joint_states_qos"]],
-                            event_callbacks=SubscriptionEventCallbacks(incompatible_qos=self._on_incompatible_joint_states))
+                            event_callbacks=SubscriptionEventCallbacks(
+                                incompatible_qos=self._on_incompatible_joint_states))
         self._diagnostics_mark = (time.monotonic(), self.session.t)
         self.create_timer(p["diagnostics_period"], self._guarded("diagnostics timer", self._on_diagnostics),
                           clock=steady)

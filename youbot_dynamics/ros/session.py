@@ -566,7 +566,8 @@ class InverseSession(_Session):
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
         self.stamp_ns, self.samples = 0, 0
-        self._unstamped = False     # the last sample taken was stamped 0
+        self.last_unstamped = False
+        """True when the last sample taken was stamped 0."""
         self.failure: str | None = None
 
     @property
@@ -582,9 +583,10 @@ class InverseSession(_Session):
         after another stamped 0 takes the receive time ``received_ns`` (int ns of the node's
         clock; without it, it is rejected as ``bad_timing``), any other is taken at 0. So a
         stream stamped from 0 loses nothing, and an unstamped stream runs on receive times
-        after its first sample (whose jump to the node clock restarts the estimate). Raises and counts :class:`InputRejected`; a rejected sample breaks
-        the difference stencil (no torque is computed across it: the next torque needs three
-        good samples after it), and so does a gap or a jump back in the stamps (see
+        after its first sample (whose jump to the node clock restarts the estimate). Raises
+        and counts :class:`InputRejected`; a rejected sample breaks the difference stencil
+        (no torque is computed across it: the next torque needs three good samples after
+        it), and so does a gap or a jump back in the stamps (see
         :mod:`youbot_dynamics.sim.inverse`). A sample whose velocity is beyond the
         velocity-limit bound is rejected (``out_of_limits``). A torque that is implausible
         (beyond the effort-limit bound) or not finite is not published: the sample counts as
@@ -592,11 +594,11 @@ class InverseSession(_Session):
         estimate restarts."""
         try:
             unstamped = stamp_ns == 0
-            if unstamped and self._unstamped:
+            if unstamped and self.last_unstamped:
                 if received_ns is None:
                     raise InputRejected("bad_timing", "joint state not stamped and no receive time given")
                 stamp_ns = received_ns
-            self._unstamped = unstamped
+            self.last_unstamped = unstamped
             sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
             too_fast = implausible_joints(self.robot, sample.v, "velocity")
             if too_fast:

@@ -196,7 +196,8 @@ class EffortCommands:
     ``accept`` checks one command: at least one name, names unique and moving joints of the
     robot, one finite effort per name, stamp (int ns) neither older than the timeout nor far
     ahead (:func:`node_time_of_stamp`); efforts beyond the URDF limit (``default_limit``
-    where the URDF has none, as for continuous joints) are clamped. Joints a command does not name keep their previous command (0 at first).
+    where the URDF has none, as for continuous joints) are clamped. Joints a command does
+    not name keep their previous command (0 at first).
     ``torque(now)`` is the command to apply at time ``now``, or None once the command is
     stale and ``on_timeout`` is ``hold`` (the scene's controller takes over).
     """
