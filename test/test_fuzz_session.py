@@ -12,9 +12,13 @@ Invariants checked after every operation:
 - every published message is finite in every numeric field and passes rclpy's strict field
   check (``to_rclpy`` under ROS_PYTHON_CHECK_FIELDS=1, when rclpy is installed);
 - simulate mode: the state (q, v) stays finite, the session never fails, /clock advances by
-  exactly one increment per sample (back to 0 after a reset);
-- inverse mode: a torque is published only for the middle of three consecutive accepted
-  samples (no rejection in between), stamped with that sample's stamp.
+  exactly one increment per sample, resets included (node time never goes back);
+- inverse mode (with and without the acceleration low-pass): a torque is published only
+  for the middle of three consecutive accepted samples (no rejection in between) whose
+  stamps increase by at most the estimator's largest gap, stamped with that sample's stamp
+  (a zero after a zero: its receive time), and never beyond the effort-limit bound; and
+  whatever came before (NaN, overflowing velocities, stamps of 1e6 s, jumps back, gaps),
+  three good samples give a torque: the estimate recovers within one stencil.
 
 Examples per test: test/conftest.py's hypothesis profile (``ci``: 40, derandomised;
 ``HYPOTHESIS_PROFILE=thorough``: 2000).
@@ -31,6 +35,7 @@ from hypothesis import strategies as st
 
 from youbot_dynamics.ros.session import InverseSession, SimulationSession
 from youbot_dynamics.sim.commands import InputRejected
+from youbot_dynamics.sim.inverse import plausible_limit
 from youbot_dynamics.sim.scene import load_scene
 
 try:
@@ -44,6 +49,8 @@ MOVING = list(ROBOT.joint_names)
 LOCKED = list(ROBOT.locked)
 STEP_NS = 10_000_000
 """Sample increment of the fuzzed simulation (100 Hz)."""
+WALL_NS = 1_763_900_000 * 10**9
+"""The wall clock the sessions are told (fixed, so that the examples are reproducible)."""
 
 SPECIAL = [math.nan, math.inf, -math.inf, 0.0, -0.0, 5e-324, -5e-324, 1e-300, 1e300, -1e300,
            1.7976931348623157e308, 1e3, -1e3, 2**53 + 1.0]
@@ -54,7 +61,8 @@ stamps = st.one_of(
     st.just(0), st.integers(1, 2 * 10**9),                                        # unstamped, sim-time sized
     st.builds(lambda sec, nanosec: sec * 10**9 + nanosec,                          # any builtin Time
               st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1)),
-    st.sampled_from([1_700_000_000 * 10**9, (2**31 - 1) * 10**9 + 999_999_999, -2**31 * 10**9]))
+    st.sampled_from([1_700_000_000 * 10**9, (2**31 - 1) * 10**9 + 999_999_999, -2**31 * 10**9]),
+    st.integers(WALL_NS - 10**9, WALL_NS + 10**9))                                # wall-clock stamps
 
 
 valid_joints = st.permutations(MOVING).flatmap(lambda p: st.integers(1, len(p)).map(lambda k: p[:k]))
@@ -173,12 +181,11 @@ def test_fuzzed_commands_and_trajectories_never_break_the_simulation(simulation:
     for operation in [*operations, ("pause", False), ("step", 1)]:
         kind = operation[0]
         if kind == "command":
-            counted(session, lambda: session.effort_command(*operation[1:]))
+            counted(session, lambda: session.effort_command(*operation[1:], wall_ns=WALL_NS))
         elif kind == "trajectory":
-            counted(session, lambda: session.trajectory(*operation[1:]))
+            counted(session, lambda: session.trajectory(*operation[1:], wall_ns=WALL_NS))
         elif kind == "reset":
             session.reset()
-            clock = []
         elif kind == "pause":
             session.paused = operation[1]
         else:
@@ -192,7 +199,7 @@ def test_fuzzed_commands_and_trajectories_never_break_the_simulation(simulation:
                     assert session.paused
         assert session.failure is None
         assert np.isfinite(session.snapshot.q).all() and np.isfinite(session.snapshot.v).all()
-        assert clock == [STEP_NS * k for k in range(len(clock))]
+        assert clock == [clock[0] + STEP_NS * k for k in range(len(clock))]
     check_published(session.diagnostics(1.0))
 
 
@@ -215,30 +222,64 @@ def joint_states(draw) -> list[tuple]:
     return stream
 
 
-@pytest.fixture(scope="module")
-def inverse() -> InverseSession:
-    return InverseSession(SCENE)
+@st.composite
+def good_tail(draw) -> list[tuple]:
+    """Three good samples 2 ms apart with a smooth motion (|a| <= 0.5 rad/s^2), stamped
+    from 0 (the test shifts them after a gap or a jump back)."""
+    q = np.array([draw(st.floats(float(ROBOT.lower[i]) + 0.01, float(ROBOT.upper[i]) - 0.01))
+                  for i in range(len(MOVING))])
+    v = np.array(draw(st.lists(st.floats(-1.0, 1.0), min_size=len(MOVING), max_size=len(MOVING))))
+    dv = np.array(draw(st.lists(st.floats(-1e-3, 1e-3), min_size=len(MOVING), max_size=len(MOVING))))
+    return [(MOVING, list(q + 0.002 * k * v), list(v + k * dv), 2_000_000 * k) for k in range(3)]
 
 
-@given(joint_states())
-def test_fuzzed_joint_states_never_break_inverse_mode(inverse: InverseSession, stream: list) -> None:
+@pytest.fixture(scope="module", params=[0.0, 0.05], ids=["no filter", "filter 0.05 s"])
+def inverse(request) -> InverseSession:
+    return InverseSession(SCENE, filter_time_constant=request.param)
+
+
+@given(joint_states(), good_tail())
+def test_fuzzed_joint_states_never_break_inverse_mode(inverse: InverseSession, stream: list, tail: list) -> None:
     session = inverse
     session.estimator.clear()
+    max_gap, bound = session.estimator.max_gap_ns, plausible_limit(ROBOT)
     accepted_run: list[int] = []        # stamps of the accepted samples since the last rejection
-    for names_, position, velocity, stamp in stream:
+    torque_stamps: list[int] = []
+    previous_zero = session.last_unstamped
+    def shifted_tail() -> list[tuple]:
+        """The tail after a gap longer than the largest, or from 1 ms if that is out of range."""
+        last = session.estimator.samples[-1].stamp_ns if session.estimator.samples else 0
+        start = last + max_gap + 1 if last + max_gap + 10**8 < 2**31 * 10**9 else 1_000_000
+        return [(names_, position, velocity, start + stamp) for names_, position, velocity, stamp in tail]
+
+    for k, sample in enumerate([*stream, None, None, None]):
+        if k == len(stream):
+            tail = shifted_tail()
+        names_, position, velocity, stamp = sample if sample is not None else tail[k - len(stream)]
+        received = 10**9 + k * 1_000_000                 # the node clock at receipt (for stamp 0)
         rejected_before = sum(session.counters.rejected.values())
-        outputs = counted(session, lambda: session.joint_state(names_, position, velocity, stamp))
+        outputs = counted(session, lambda: session.joint_state(names_, position, velocity, stamp, received))
+        effective = received if stamp == 0 and previous_zero else stamp     # two zeros in a row: unstamped
+        previous_zero = stamp == 0
         if outputs is None:
             accepted_run = []
             continue
-        accepted_run.append(stamp)
+        if accepted_run and not 0 < effective - accepted_run[-1] <= max_gap:
+            event("estimator restarted")
+            accepted_run = []
+        accepted_run.append(effective)
         check_published(outputs)
         torques = [message for topic, message in outputs if topic == "/computed_torques"]
-        if sum(session.counters.rejected.values()) > rejected_before:   # non-finite torque: refused, counted
+        if sum(session.counters.rejected.values()) > rejected_before:   # non-finite or implausible torque
             assert not outputs
+            accepted_run = []
         if torques:
             event("torque published")
-            assert len(accepted_run) >= 3, "a torque computed across a rejected sample"
+            assert len(accepted_run) >= 3, "a torque computed across a rejected sample, a gap or a jump"
             stamp_ns = torques[0].header.stamp.sec * 10**9 + torques[0].header.stamp.nanosec
             assert stamp_ns == accepted_run[-2]
+            assert (np.abs(torques[0].effort) <= bound).all()
+            torque_stamps.append(stamp_ns)
+    assert torque_stamps and torque_stamps[-1] == accepted_run[-2], "no torque after three good samples"
+    assert len(accepted_run) == 3
     check_published(session.diagnostics(1.0))

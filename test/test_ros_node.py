@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -205,15 +206,20 @@ def test_pause_and_reset_services() -> None:
             assert node.session.t == frozen
             future = reset.call_async(Trigger.Request())
             wait_until(future.done, what="reset")
-            assert future.result().success and node.session.t == 0.0
+            # the scene restarts; node time goes on one increment after the last sample (issue 16)
+            assert future.result().success and node.session.scene_time == 0.0
+            assert node.session.stamp_ns == round(frozen * 1e9) + 10_000_000 == node.session.last_reset_ns
             future = pause.call_async(SetBool.Request(data=False))
             wait_until(future.done, what="resume")
-            wait_until(lambda: 0.0 < node.session.t, what="the simulation to run again")
-
-            def clock_went_back() -> bool:  # /clock after its maximum shows a time before the pause
-                clocks = [m.clock.sec + m.clock.nanosec * 1e-9 for m in client_node.messages("/clock")]
-                return bool(clocks) and min(clocks[clocks.index(max(clocks)):]) < frozen
-            wait_until(clock_went_back, what="/clock to go back after the reset")
+            wait_until(lambda: node.session.scene_time > 0.1, what="the simulation to run again")
+            wait_until(lambda: any(diagnostic_values(m)["resets"] == "1" for m in client_node.messages("/diagnostics")),
+                       what="the reset in /diagnostics")
+        clocks = [m.clock.sec * 10**9 + m.clock.nanosec for m in client_node.messages("/clock")]
+        states = client_node.messages("/joint_states")
+    assert clocks == sorted(set(clocks))                      # /clock never went back, no stamp twice
+    restart = next(m for m in states if stamp_ns(m) == node.session.last_reset_ns)
+    first = SimulationSession(load_scene("arm_swing"), 100.0).step()
+    assert np.array_equal(restart.position, dict(first)["/joint_states"].position)   # the initial state again
 
 
 def test_parameter_ranges_and_choices_are_enforced() -> None:
@@ -429,10 +435,11 @@ def test_no_callback_failure_stops_the_node(capfd: pytest.CaptureFixture) -> Non
     """Faults injected into a subscription (/joint_commands, twice), the step timer (once)
     and a service (~/reset): each is counted in /diagnostics under its cause, logged once
     with the message that caused it, the service answers success false, and the node goes
-    on publishing. A one-point /joint_trajectory stamped with wall-clock time (1.7e9 s),
-    which killed the node before (ValueError from CubicSpline), is accepted."""
+    on publishing. A one-point /joint_trajectory stamped with wall-clock time (now, about
+    1.8e9 s), which killed the node before (ValueError from CubicSpline), is accepted."""
     with ros_context(12) as (context, _):
-        node = make_node(context, scene="arm_ptp", publish_rate=100.0, diagnostics_period=0.05)
+        node = make_node(context, scene="arm_ptp", publish_rate=100.0, diagnostics_period=0.05,
+                         command_timeout=5.0)   # the wall-clock stamp ages while queued behind the commands
         collector = Collector(context, OUTPUTS)
         commands = collector.create_publisher(JointState, "/joint_commands", RELIABLE_DEEP)
         trajectories = collector.create_publisher(JointTrajectory, "/joint_trajectory", RELIABLE_DEEP)
@@ -450,7 +457,7 @@ def test_no_callback_failure_stops_the_node(capfd: pytest.CaptureFixture) -> Non
 
         session.effort_command, session.reset, session.step = broken, broken, step_failing_once
         wall_clock = JointTrajectory(joint_names=["arm_joint_1"], points=[JointTrajectoryPoint(positions=[2.0])])
-        wall_clock.header.stamp.sec = 1_700_000_000
+        wall_clock.header.stamp.sec, wall_clock.header.stamp.nanosec = divmod(time.time_ns(), 10**9)
         with spinning(context, node, collector, single_threaded=True):
             wait_until(lambda: commands.get_subscription_count() > 0 and trajectories.get_subscription_count() > 0,
                        what="the node's subscriptions")
@@ -466,6 +473,7 @@ def test_no_callback_failure_stops_the_node(capfd: pytest.CaptureFixture) -> Non
 
             def trajectory_accepted() -> bool:
                 if session.counters.accepted == 0:
+                    wall_clock.header.stamp.sec, wall_clock.header.stamp.nanosec = divmod(time.time_ns(), 10**9)
                     trajectories.publish(wall_clock)
                     return False
                 return True
@@ -494,9 +502,48 @@ def test_no_callback_failure_stops_the_node(capfd: pytest.CaptureFixture) -> Non
     assert values["failed.step timer: ZeroDivisionError"] == "1" and values["failed.~/reset: RuntimeError"] == "1"
     assert int(values["failed./joint_commands: RuntimeError"]) >= 2 and set(failures) == {
         "/joint_commands: RuntimeError", "step timer: ZeroDivisionError", "~/reset: RuntimeError"}
-    assert values["rejected.total"] == "0" and int(values["accepted"]) >= 1     # the trajectory (maybe resent)
+    assert values["rejected.total"] == "0" and int(values["accepted"]) >= 1, values     # the trajectory (maybe resent)
     assert all(np.isfinite(s.position).all() for s in states)
     assert [stamp_ns(m) for m in states] == [10_000_000 * k for k in range(len(states))]   # none skipped
     log = capfd.readouterr().err
     assert log.count("/joint_commands: RuntimeError: injected fault") == 1         # logged once, failed twice
     assert "message: sensor_msgs.msg.JointState(" in log and "injected step fault" in log
+
+
+def test_oversized_empty_and_slow_input_is_bounded_counted_and_reported() -> None:
+    """Issue 16: a /joint_commands message of 10 000 names (170 kB, over the 64 KiB limit) is
+    rejected before it is deserialised, an empty one is rejected (not zero torque), both
+    counted; a callback slower than ``callback_budget`` (a command handler made to take
+    20 ms against a 5 ms budget) is counted in /diagnostics, level WARN; the node keeps
+    publishing consecutive samples throughout."""
+    with ros_context(13) as (context, _):
+        node = make_node(context, scene="arm_ptp", publish_rate=100.0, diagnostics_period=0.05,
+                         callback_budget=0.005)
+        collector = Collector(context, OUTPUTS)
+        commands = collector.create_publisher(JointState, "/joint_commands", RELIABLE_DEEP)
+        session, accept = node.session, node.session.effort_command
+
+        def slow_command(*args, **kwargs) -> None:
+            if args[0] == ["arm_joint_2"]:
+                time.sleep(0.02)
+            return accept(*args, **kwargs)
+
+        session.effort_command = slow_command
+        huge = _command([f"joint_{k}" for k in range(10_000)], [0.0] * 10_000)
+        with spinning(context, node, collector, single_threaded=True):
+            wait_until(lambda: commands.get_subscription_count() > 0, what="the node's subscription")
+            for message in (huge, _command([], []), _command(["arm_joint_2"], [0.1])):
+                commands.publish(message)
+
+            def reported() -> dict[str, str]:
+                diagnostics = collector.messages("/diagnostics")
+                return diagnostic_values(diagnostics[-1]) if diagnostics else {}
+
+            wait_until(lambda: reported().get("rejected.too_large") == "1" and reported().get("rejected.empty") == "1"
+                       and int(reported().get("overruns./joint_commands", "0")) >= 1, what="the counts")
+            levels = [m.status[0].level for m in collector.messages("/diagnostics")]
+        states = collector.messages("/joint_states")
+    assert session.counters.accepted == 1 and sum(session.counters.rejected.values()) == 2
+    assert b"\x01" in levels or 1 in levels                        # WARN after the overrun
+    assert float(reported()["worst_callback_s"]) >= 0.02
+    assert [stamp_ns(m) for m in states] == [10_000_000 * k for k in range(len(states))]

@@ -16,6 +16,16 @@ default keep-all: a replay as fast as possible loses no sample; best_effort for 
 publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics. Parameters:
 :mod:`youbot_dynamics.ros.parameters`.
 
+Bounded work per message: the subscriptions take the serialized message and refuse (count
+as ``rejected.too_large``, without deserialising) one over :data:`MAX_MESSAGE_BYTES`; the
+session's checks are linear in the message and refuse more than
+:data:`~youbot_dynamics.sim.commands.MAX_NAMES` names or
+:data:`~youbot_dynamics.sim.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
+callback against ``callback_budget`` and reports overruns in /diagnostics (level WARN,
+``overruns.<source>``, ``worst_callback_s``). Time semantics of stamps:
+:mod:`youbot_dynamics.sim.commands`; inverse mode gives unstamped samples the node clock's
+receive time.
+
 No input kills the node: every subscription, timer and service callback runs behind
 :meth:`DynamicsNode._guarded`. Rejected input is counted (``rejected.<kind>``) and warned
 about; any other exception is counted in /diagnostics under its cause (``failed.<source>:
@@ -43,6 +53,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable
+from typing import Any
 
 import rclpy
 import rclpy.executors
@@ -53,6 +64,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_policy_name_from_kind
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.serialization import deserialize_message
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 from std_srvs.srv import SetBool, Trigger
@@ -64,7 +76,7 @@ from youbot_dynamics.ros.parameters import check_choice, declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
 from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
-from youbot_dynamics.sim.commands import InputRejected
+from youbot_dynamics.sim.commands import NS_PER_S, InputRejected
 from youbot_dynamics.sim.scene import load_scene
 
 MAX_BURST = 20
@@ -80,6 +92,11 @@ TFMessage's nested rclpy objects cost about five times as much to build (0.5 ms 
 of the gripping scene, a quarter of its 500 Hz period)."""
 QUOTED_CHARACTERS = 500
 """Characters of the message that made a callback fail quoted in the log."""
+MAX_MESSAGE_BYTES = {"/joint_commands": 64 * 1024, "/joint_states": 64 * 1024, "/joint_trajectory": 1024 * 1024}
+"""Largest serialized message (bytes) each subscription deserialises: 64 KiB holds a
+JointState of MAX_NAMES (256) joints four times over; 1 MiB a trajectory of
+MAX_TRAJECTORY_POINTS (1000) points of 16 joints with positions, velocities,
+accelerations and efforts (0.5 MB)."""
 
 
 def _stamp_ns(stamp) -> int:
@@ -99,18 +116,19 @@ class DynamicsNode(Node):
         if p["mode"] == "simulate":
             self.session = SimulationSession(
                 scene, p["publish_rate"], command_timeout=p["command_timeout"], on_timeout=p["on_timeout"],
-                samples_per_solve=max(1, round(p["solve_horizon"] * p["publish_rate"])), **logs)
+                samples_per_solve=max(1, round(p["solve_horizon"] * p["publish_rate"])),
+                default_effort_limit=p["default_effort_limit"], callback_budget=p["callback_budget"], **logs)
         else:
-            self.session = InverseSession(scene, filter_time_constant=p["acceleration_filter"], **logs)
+            self.session = InverseSession(scene, filter_time_constant=p["acceleration_filter"],
+                                          max_gap_ns=round(p["max_sample_gap"] * NS_PER_S),
+                                          callback_budget=p["callback_budget"], **logs)
         self.finished = False
         self._failures_logged: set[str] = set()
         self._create_publishers()
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         if p["mode"] == "simulate":
-            self.create_subscription(JointState, "/joint_commands", self._guarded("/joint_commands", self._on_command),
-                                     RELIABLE_DEEP)
-            self.create_subscription(JointTrajectory, "/joint_trajectory",
-                                     self._guarded("/joint_trajectory", self._on_trajectory), RELIABLE_DEEP)
+            self._subscribe(JointState, "/joint_commands", self._on_command, RELIABLE_DEEP)
+            self._subscribe(JointTrajectory, "/joint_trajectory", self._on_trajectory, RELIABLE_DEEP)
             self.create_service(Trigger, "~/reset", self._guarded("~/reset", self._on_reset))
             self.create_service(SetBool, "~/pause", self._guarded("~/pause", self._on_pause))
             self._wait_deadline = time.monotonic() + p["wait_timeout"]
@@ -118,10 +136,10 @@ class DynamicsNode(Node):
             self._restart_pacing()
             self.create_timer(1.0 / p["publish_rate"], self._guarded("step timer", self._on_tick), clock=steady)
         else:
-            self.create_subscription(
-                JointState, "/joint_states", self._guarded("/joint_states", self._on_joint_state),
-                SUBSCRIPTION_PROFILES[p["joint_states_qos"]],
-                event_callbacks=SubscriptionEventCallbacks(incompatible_qos=self._on_incompatible_joint_states))
+            self._subscribe(JointState, "/joint_states", self._on_joint_state,
+                            SUBSCRIPTION_PROFILES[p["joint_states_qos"]],
+                            event_callbacks=SubscriptionEventCallbacks(
+                                incompatible_qos=self._on_incompatible_joint_states))
         self._diagnostics_mark = (time.monotonic(), self.session.t)
         self.create_timer(p["diagnostics_period"], self._guarded("diagnostics timer", self._on_diagnostics),
                           clock=steady)
@@ -207,15 +225,34 @@ class DynamicsNode(Node):
             self._publish(self.session.diagnostics(self._real_time_factor()))
 
     # ---- the node boundary ---------------------------------------------------------------
-    def _guarded(self, source: str, callback: Callable) -> Callable:
+    def _subscribe(self, msg_type: type, topic: str, callback: Callable, qos: Any, **options) -> None:
+        """Subscribe ``callback`` to ``topic`` behind the node boundary, taking the
+        serialized message: one over ``MAX_MESSAGE_BYTES[topic]`` is rejected (counted,
+        ``too_large``) before it is deserialised."""
+        limit = MAX_MESSAGE_BYTES[topic]
+
+        def decode(data: bytes) -> object:
+            if len(data) > limit:
+                error = InputRejected("too_large", f"{len(data)} bytes, more than the {limit} byte limit")
+                self.session.counters.reject(error)
+                raise error
+            return deserialize_message(data, msg_type)
+
+        self.create_subscription(msg_type, topic, self._guarded(topic, callback, decode), qos, raw=True, **options)
+
+    def _guarded(self, source: str, callback: Callable, decode: Callable | None = None) -> Callable:
         """``callback`` (of a subscription, timer or service, named ``source``) behind the
         node boundary. :class:`InputRejected` (counted by the session) gives a throttled
         warning; any other exception is counted under its cause, logged once per cause with
         the message that caused it, and a service answers ``success: false``. Either way the
-        node keeps its last good state and its timers go on."""
+        node keeps its last good state and its timers go on. ``decode`` (a subscription's)
+        turns the serialized message into the one ``callback`` takes. The watchdog times it."""
 
         def guarded(*args):
+            start = time.perf_counter()
             try:
+                if decode is not None:
+                    args = (decode(args[0]),)
                 return callback(*args)
             except InputRejected as error:
                 self.get_logger().warning(f"{source}: ignored ({error}); keeping the last good state",
@@ -224,6 +261,12 @@ class DynamicsNode(Node):
                 self._failed(source, error, args[0] if args else None)
                 if len(args) == 2:       # a service: (request, response)
                     args[1].success, args[1].message = False, f"{source} failed: {type(error).__name__}: {error}"
+            finally:
+                elapsed = time.perf_counter() - start
+                if self.session.watchdog.record(source, elapsed):
+                    self.get_logger().warning(f"{source} took {elapsed * 1e3:.1f} ms, over the "
+                                              f"{self.session.watchdog.budget * 1e3:g} ms callback budget",
+                                              throttle_duration_sec=WARN_THROTTLE)
             return args[1] if len(args) == 2 else None
 
         return guarded
@@ -260,12 +303,14 @@ class DynamicsNode(Node):
 
     def _on_joint_state(self, msg: JointState) -> None:
         self._publish(self.session.joint_state(list(msg.name), msg.position, msg.velocity,
-                                               _stamp_ns(msg.header.stamp)))
+                                               _stamp_ns(msg.header.stamp), self.get_clock().now().nanoseconds))
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()
         self._restart_pacing()
-        response.success, response.message = True, f"reset {self.session.scene.name} to t = 0"
+        self._publish(self.session.diagnostics(self._real_time_factor()))     # the reset, as an event
+        response.success, response.message = True, (f"reset {self.session.scene.name}: its t = 0 is node time "
+                                                     f"{self.session.epoch_ns / NS_PER_S:.6f} s")
         return response
 
     def _on_pause(self, request: SetBool.Request, response: SetBool.Response) -> SetBool.Response:

@@ -35,7 +35,12 @@ composition order (the link names, in that order, are the ``ee_links`` value of
 /diagnostics), all in the root frame.
 
 Simulate mode advances simulated time by fixed increments: sample k is at exactly
-``k * round(1e9 / publish_rate)`` ns, whatever the wall clock does.
+``k * round(1e9 / publish_rate)`` ns, whatever the wall clock does. ``reset`` restarts the
+scene but not the clock: the samples after a reset continue from the last stamp (the
+scene's t = 0 is then at ``epoch_ns``), so /clock, every header stamp and the log times of
+the MCAP and the Rerun recording stay monotonic in one run and no stamp repeats. The reset
+is recorded as an event: /diagnostics (also logged) carries ``resets`` and
+``last_reset_at`` (node time, s). Time semantics of the inputs: :mod:`youbot_dynamics.sim.commands`.
 """
 from __future__ import annotations
 
@@ -56,11 +61,12 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.commands import (EffortCommands, InputCounters,
-                                          InputRejected, follow, joint_sample, joint_trajectory, stamp_in_range)
+from youbot_dynamics.sim.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
+                                          follow, joint_sample, joint_trajectory, node_time_of_stamp)
 from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
 from youbot_dynamics.sim.integrators import DivergenceError
-from youbot_dynamics.sim.inverse import AccelerationEstimator, InverseDynamics
+from youbot_dynamics.sim.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
+                                         implausible_joints)
 from youbot_dynamics.sim.scene import Scene
 from youbot_dynamics.sim.simulator import Simulator, Snapshot, robot_with_gravity
 
@@ -254,6 +260,40 @@ def reported(value: float | int | str | None) -> float | int | str:
     return value
 
 
+class Watchdog:
+    """Callback budgets: ``record(source, seconds)`` counts a callback (a step tick, a
+    message, a service; named ``source``) that took longer than ``budget`` wall seconds.
+    Measured when the callback returns (the node has one executor thread, so a running
+    callback is not interrupted); ``values`` are /diagnostics values (``overruns``,
+    ``overruns.<source>``, ``worst_callback_s``, ``worst_callback``) and ``fresh`` tells
+    whether an overrun came since the last report."""
+
+    def __init__(self, budget: float) -> None:
+        if not (math.isfinite(budget) and budget > 0.0):
+            raise ValueError(f"callback budget must be positive and finite, got {budget}")
+        self.budget = float(budget)
+        self.overruns: dict[str, int] = {}
+        self.worst: tuple[float, str] = (0.0, "none")
+        self.fresh = False
+
+    def record(self, source: str, seconds: float) -> bool:
+        """Note that ``source`` took ``seconds``; True if that overran the budget."""
+        if seconds > self.worst[0]:
+            self.worst = (seconds, source)
+        if seconds <= self.budget:
+            return False
+        self.overruns[source] = self.overruns.get(source, 0) + 1
+        self.fresh = True
+        return True
+
+    def values(self) -> dict[str, object]:
+        """/diagnostics values; clears ``fresh``."""
+        self.fresh = False
+        return {"callback_budget_s": self.budget, "overruns": sum(self.overruns.values()),
+                **{f"overruns.{source}": count for source, count in self.overruns.items()},
+                "worst_callback_s": self.worst[0], "worst_callback": self.worst[1]}
+
+
 class _Session(ClosesOnExit):
     """What both modes share: the robot's frames, the input counters, the logs (with
     ``latched``, the latched outputs, written once at t = 0; ``with`` finalises them) and
@@ -265,9 +305,10 @@ class _Session(ClosesOnExit):
     topics: tuple[str, ...]
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
-                 mcap_path: str | Path | None, rrd_path: str | Path | None) -> None:
+                 mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float) -> None:
         self.scene, self.robot = scene, robot
         self.counters = InputCounters()
+        self.watchdog = Watchdog(callback_budget)
         geometries = [g for g in scene.geometries if self.mode == "simulate" or g.owner != "body"]
         self.frames = _Frames(robot, frame_id, ee_link, geometries)
         self.latched: Outputs = [("/tf_static", self.frames.tf_static())]
@@ -283,7 +324,11 @@ class _Session(ClosesOnExit):
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
         """/diagnostics with one status of this session (also logged); with a robot, its
         values name the /ee_pose link (``ee_link``) and the /ee_poses links in order
-        (``ee_links``, comma-separated)."""
+        (``ee_links``, comma-separated). The watchdog's values are added; an OK status turns
+        WARN when a callback overran its budget since the last report."""
+        if level == "OK" and self.watchdog.fresh:
+            level, text = "WARN", f"a callback overran its {self.watchdog.budget:g} s budget"
+        values = {**values, **self.watchdog.values()}
         if self.frames.has_robot:
             values = {"ee_link": self.frames.links.ee_link, "ee_links": ",".join(self.frames.links.ee_links),
                       **values}
@@ -327,32 +372,43 @@ class SimulationSession(_Session):
 
     def __init__(self, scene: Scene, publish_rate: float, *, command_timeout: float = 0.5,
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
-                 mcap_path: str | Path | None = None, rrd_path: str | Path | None = None) -> None:
+                 mcap_path: str | Path | None = None, rrd_path: str | Path | None = None,
+                 default_effort_limit: float = DEFAULT_EFFORT_LIMIT, callback_budget: float = 0.05) -> None:
         self.simulator = Simulator(scene, resolve_integrator(scene, progress=False))
-        super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path)
+        super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget)
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         self.samples_per_solve = max(1, int(samples_per_solve))
-        self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters)
+        self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters, default_effort_limit)
         self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
         self._locked_q = np.array([self.robot.locked[name] for name in self.locked_names])
         self._scene_reference = getattr(self.simulator.controller, "reference", None)
         self.paused = False
         self.failure: str | None = None
+        self.k, self.epoch_ns, self.resets, self.last_reset_ns, self._started = 0, 0, 0, None, False
         self.reset()
 
     @property
     def t(self) -> float:
-        """Simulated time (s)."""
-        return self.k * self.step_ns / NS_PER_S
+        """Node time (s): simulated time since the start, resets included."""
+        return self.stamp_ns / NS_PER_S
 
     @property
     def stamp_ns(self) -> int:
-        """Stamp (ns) of the current sample."""
-        return self.k * self.step_ns
+        """Stamp (ns) of the current sample (node time)."""
+        return self.epoch_ns + self.k * self.step_ns
+
+    @property
+    def scene_time(self) -> float:
+        """Simulated time (s) of the current sample since the scene's last (re)start."""
+        return self.k * self.step_ns / NS_PER_S
 
     def reset(self) -> None:
-        """Back to the scene's initial state at t = 0 (the next ``step`` gives that sample);
-        forgets commands and trajectories."""
+        """Back to the scene's initial state (the next ``step`` gives that sample, one
+        increment after the last one published: node time goes on, see the module
+        docstring); forgets commands and trajectories."""
+        if self._started:
+            self.epoch_ns = self.last_reset_ns = self.stamp_ns + self.step_ns
+            self.resets += 1
         self.simulator.reset()
         self.commands.clear()
         if self._scene_reference is not None:
@@ -363,17 +419,23 @@ class SimulationSession(_Session):
         self._events_start = len(self.simulator.contact.events) if self.simulator.contact else 0
         self._started = False
 
-    def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int) -> None:
-        """Accept an effort command (raises and counts :class:`InputRejected`)."""
-        self.commands.accept(names, efforts, stamp_ns, self.t)
+    def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int,
+                       wall_ns: int | None = None) -> None:
+        """Accept an effort command (raises and counts :class:`InputRejected`); ``wall_ns``:
+        the wall clock (default: the machine's), for wall-clock stamps."""
+        self.commands.accept(names, efforts, stamp_ns, self.t, wall_ns)
 
     def trajectory(self, names: Sequence[str], points: Sequence[tuple[int, Sequence[float], Sequence[float]]],
-                   stamp_ns: int) -> None:
-        """Follow a joint trajectory from its stamp (or now, if unstamped or past); ``points``
-        are (time_from_start (int ns), positions, velocities)."""
+                   stamp_ns: int, wall_ns: int | None = None) -> None:
+        """Follow a joint trajectory from its stamp (node time, see
+        :func:`~youbot_dynamics.sim.commands.node_time_of_stamp`: unstamped or a past stamp
+        within the command timeout: now; a wall-clock stamp: by its age; far future or older:
+        rejected); ``points`` are (time_from_start (int ns), positions, velocities)."""
         try:
-            start_ns = max(stamp_in_range(stamp_ns, "trajectory"), self.stamp_ns)
-            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start_ns, self.simulator.q))
+            start_ns = max(node_time_of_stamp(stamp_ns, self.stamp_ns, round(self.commands.timeout * NS_PER_S),
+                                              "trajectory", wall_ns), self.stamp_ns)
+            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start_ns - self.epoch_ns,
+                                                               self.simulator.q))
         except InputRejected as error:
             self.counters.reject(error)
             raise
@@ -447,7 +509,9 @@ class SimulationSession(_Session):
         stats = {f"integrator.{key}": reported(value) for key, value in self.simulator.stats.as_dict().items()}
         values = {"sim_time": self.t, "real_time_factor": reported(real_time_factor),
                   "energy": self.snapshot.energy, "energy_error": self.energy_error,
-                  "paused": self.paused, "command": self._command_source(), **stats, **self.counters.as_values(),
+                  "paused": self.paused, "command": self._command_source(), "resets": self.resets,
+                  "last_reset_at": "none" if self.last_reset_ns is None else self.last_reset_ns / NS_PER_S,
+                  **stats, **self.counters.as_values(),
                   **self.contact_values()}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
         return self._diagnostic_outputs(level, text, values)
@@ -462,7 +526,7 @@ class SimulationSession(_Session):
         contact = self.simulator.contact
         if contact is None:
             return {}
-        events = [e for e in contact.events[self._events_start:] if e.time <= self.t + 0.5 / NS_PER_S]
+        events = [e for e in contact.events[self._events_start:] if e.time <= self.scene_time + 0.5 / NS_PER_S]
         kinds = sorted({e.kind for e in events})
         last = events[-1] if events else None
         return {"free_bodies": ",".join(spec.body.name for spec in self.scene.free_bodies),
@@ -491,17 +555,19 @@ class InverseSession(_Session):
         (the latched topics are in ``latched``)."""
         return ("/computed_torques", *self.frames.ee_topics, "/tf", "/diagnostics")
 
-    def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, frame_id: str = "",
-                 ee_link: str = "", mcap_path: str | Path | None = None,
-                 rrd_path: str | Path | None = None) -> None:
+    def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS,
+                 frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
+                 rrd_path: str | Path | None = None, callback_budget: float = 0.05) -> None:
         robot = robot_with_gravity(scene.robot(), scene.gravity)
         if not robot.tree:
             raise UserInputError(f"{scene.source}: inverse mode needs a robot; the scene has none")
-        super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path)
+        super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
-        self.estimator = AccelerationEstimator(filter_time_constant)
+        self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
         self.stamp_ns, self.samples = 0, 0
+        self.last_unstamped = False
+        """True when the last sample taken was stamped 0."""
         self.failure: str | None = None
 
     @property
@@ -510,24 +576,57 @@ class InverseSession(_Session):
         return self.stamp_ns / NS_PER_S
 
     def joint_state(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
-                    stamp_ns: int) -> Outputs:
+                    stamp_ns: int, received_ns: int | None = None) -> Outputs:
         """Take one /joint_states sample; returns /computed_torques and /ee_pose of the
-        previous sample once three are known. Raises and counts :class:`InputRejected`; a
-        rejected sample breaks the difference stencil (no torque is computed across it: the
-        next torque needs three good samples after it)."""
+        previous sample once three are known. Stamp 0 is ambiguous (unset, or the first
+        sample of a stream in simulated time, which starts at 0): a sample stamped 0 right
+        after another stamped 0 takes the receive time ``received_ns`` (int ns of the node's
+        clock; without it, it is rejected as ``bad_timing``), any other is taken at 0. So a
+        stream stamped from 0 loses nothing, and an unstamped stream runs on receive times
+        after its first sample (whose jump to the node clock restarts the estimate). Raises
+        and counts :class:`InputRejected`; a rejected sample breaks the difference stencil
+        (no torque is computed across it: the next torque needs three good samples after
+        it), and so does a gap or a jump back in the stamps (see
+        :mod:`youbot_dynamics.sim.inverse`). A sample whose velocity is beyond the
+        velocity-limit bound is rejected (``out_of_limits``). A torque that is implausible
+        (beyond the effort-limit bound) or not finite is not published: the sample counts as
+        accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
+        estimate restarts."""
         try:
+            unstamped = stamp_ns == 0
+            if unstamped and self.last_unstamped:
+                if received_ns is None:
+                    raise InputRejected("bad_timing", "joint state not stamped and no receive time given")
+                stamp_ns = received_ns
+            self.last_unstamped = unstamped
             sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
-            estimate = self.estimator.push(sample)
+            too_fast = implausible_joints(self.robot, sample.v, "velocity")
+            if too_fast:
+                raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
+                                    f"limit of {', '.join(too_fast)}")
         except InputRejected as error:
             self.counters.reject(error)
             self.estimator.clear()
             raise
         self.counters.accepted += 1
+        try:
+            estimate = self.estimator.push(sample)
+        except InputRejected as error:     # a non-finite estimate: the estimator restarted
+            self.counters.reject(error)
+            return []
         if estimate is None:
             return []
         middle, a = estimate
         stamp = middle.stamp_ns
         tau = self.dynamics.torque(middle.q, middle.v, a)
+        implausible = implausible_joints(self.robot, tau)
+        if implausible:
+            finite = bool(np.isfinite(tau).all())
+            self.counters.reject(InputRejected("implausible_torque" if finite else "non_finite",
+                                               f"torque at {stamp} ns beyond the effort-limit bound or not "
+                                               f"finite on {', '.join(implausible)}"))
+            self.estimator.restart("implausible" if finite else "non_finite")
+            return []
         try:
             poses, position_ee = self.frames.ee_outputs(stamp, middle.q)
             outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
@@ -535,6 +634,7 @@ class InverseSession(_Session):
                        ("/tf", self.frames.tf(stamp, middle.q))]
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
+            self.estimator.restart("non_finite")
             return []
         self.recorder.write(outputs, stamp)
         data = self.dynamics.data
@@ -544,6 +644,8 @@ class InverseSession(_Session):
         return outputs
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
-        """/diagnostics now: samples processed and input counters."""
-        values = {"torques_published": self.samples, **self.counters.as_values()}
+        """/diagnostics now: samples processed, input counters and the estimator's restarts
+        by cause (``estimator.restarts.<cause>``)."""
+        values = {"torques_published": self.samples, **self.counters.as_values(),
+                  **{f"estimator.restarts.{cause}": count for cause, count in self.estimator.restarts.items()}}
         return self._diagnostic_outputs("OK", "running", values)

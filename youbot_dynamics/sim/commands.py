@@ -5,17 +5,48 @@ Plain Python (no ROS): the node hands the fields of a message over as sequences 
 back either clean arrays in the robot's joint order or an :class:`InputRejected` naming the
 kind of problem (one of ``REJECTION_KINDS``) and what was wrong. :class:`InputCounters`
 counts each kind, for /diagnostics. Effort commands beyond the URDF effort limit are not
-rejected but clamped (counted as ``clamped``).
+rejected but clamped (counted as ``clamped``); a joint without a finite URDF limit
+(continuous joints) is clamped to the node's ``default_effort_limit``
+(:data:`DEFAULT_EFFORT_LIMIT` unless set).
 
-Times are the node's clock (simulated time when the node drives /clock): message stamps
-and trajectory times in integer nanoseconds, the current time ``now`` in seconds.
-A message stamp of 0 means "not stamped": the receive time stands in for it. Stamps are
-integer nanoseconds; one outside what builtin_interfaces/Time holds (0 <= stamp < 2^31 s;
-a negative sec, or a nanosec of 1e9 or more carried over) is rejected as ``bad_timing``.
+Bounded work: every check is linear in the message size; a message naming more than
+:data:`MAX_NAMES` joints or a trajectory of more than :data:`MAX_TRAJECTORY_POINTS` points
+is rejected (``too_large``) before anything else is looked at; so is an empty effort
+command (``empty``: it would otherwise read as zero torque on every joint).
+
+Time semantics (the one place they are written down)
+----------------------------------------------------
+- Node time ("now") is the session's clock: in simulate mode the simulated time on
+  /clock, which starts at 0 and only ever increases (``~/reset`` restarts the scene, not
+  the clock); in inverse mode the sender's stamps (see below). Stamps and trajectory times
+  are integer nanoseconds; ``now`` in seconds where noted.
+- A stamp must be what builtin_interfaces/Time holds (0 <= stamp < 2^31 s; a negative sec,
+  or a nanosec of 1e9 or more carried over, is ``bad_timing``).
+- Stamp 0 means "not stamped": the receive time stands in for it (node time for commands
+  and trajectories). Inverse mode: a 0 after a 0 takes the node clock's receive time; a
+  single 0 is taken as the stamp it is (a stream in simulated time starts at 0, and a
+  replay that restarts its time base restarts there).
+- Wall-clock stamps (within :data:`WALL_CLOCK_WINDOW_NS` of the machine's wall clock while
+  node time is not) are carried over by their age: a stamp ``d`` before the wall clock
+  means ``now - d`` in node time. So a trajectory stamped with ``get_clock().now()`` of a
+  wall-clock node runs relative to its own first point from the moment it arrives (not
+  1.8e9 s ahead), and a wall-clock stamped command goes stale after the timeout.
+- Far-future stamps (more than :data:`FUTURE_LIMIT_NS` ahead of node time after that
+  mapping) are rejected as ``bad_timing``; past stamps older than the command timeout are
+  rejected as ``stale``. A rejected stamp is counted and never latched: nothing later is
+  measured against it.
+- Inverse mode: samples carry the sender's time base; it is never compared with node
+  time. A sample that is not later than the previous one, or comes more than the
+  estimator's ``max_gap_ns`` after it, restarts the acceleration estimate
+  (:class:`~youbot_dynamics.sim.inverse.AccelerationEstimator`), so a replay that restarts,
+  a one-off stamp of 1e6 s or a pause in the stream costs at most one stencil (three
+  samples) of torques.
 """
 from __future__ import annotations
 
 import math
+import time
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -25,13 +56,28 @@ from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.controllers import Reference
 
 REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_joint",
-                   "missing_joint", "out_of_limits", "stale", "bad_timing", "no_controller")
+                   "missing_joint", "out_of_limits", "stale", "bad_timing", "no_controller", "empty",
+                   "too_large", "implausible_torque")
 """Kinds of rejected input, as counted in /diagnostics."""
 
 NS_PER_S = 1_000_000_000
 """Nanoseconds per second: sample stamps and trajectory times are integer nanoseconds."""
 STAMP_LIMIT_NS = 2**31 * NS_PER_S
 """Stamps (ns) must lie in [0, STAMP_LIMIT_NS): the range of builtin_interfaces/Time."""
+
+MAX_NAMES = 256
+"""Most joint names one message may carry (the youBot has 13 joints; a composed scene a few
+times that)."""
+MAX_TRAJECTORY_POINTS = 1000
+"""Most points one /joint_trajectory may carry: checking and fitting 1000 points of the arm
+took 25 ms, a few samples of the publishing loop."""
+DEFAULT_EFFORT_LIMIT = 100.0
+"""Effort limit (N m or N) for joints whose URDF gives none (continuous joints): a command
+beyond it is clamped, so no command can push the simulation to infinity."""
+WALL_CLOCK_WINDOW_NS = 24 * 3600 * NS_PER_S
+"""A stamp within a day of the wall clock, while node time is not, is a wall-clock stamp."""
+FUTURE_LIMIT_NS = 60 * NS_PER_S
+"""How far ahead of node time a command or trajectory may be stamped (ns)."""
 
 TIMEOUT_ACTIONS = ("hold", "zero_torque")
 """What the simulator applies once the last effort command is older than the timeout:
@@ -78,14 +124,29 @@ class InputCounters:
                 "failed.total": sum(self.failed.values())}
 
 
+LISTED = 5
+"""Most names an error message lists (then "and N more")."""
+
+
+def _listed(names: Sequence[str]) -> str:
+    """The first ``LISTED`` names, comma-separated, and how many more there are."""
+    more = f" and {len(names) - LISTED} more" if len(names) > LISTED else ""
+    return ", ".join(names[:LISTED]) + more
+
+
 def _names(names: Sequence[str], known: Sequence[str], moving: Sequence[str]) -> list[str]:
+    """The names as strings, checked in linear time: at most ``MAX_NAMES``, none twice,
+    each one of ``known``."""
+    if len(names) > MAX_NAMES:
+        raise InputRejected("too_large", f"{len(names)} joint names, more than the limit of {MAX_NAMES}")
     names = [str(n) for n in names]
-    duplicates = sorted({n for n in names if names.count(n) > 1})
+    duplicates = sorted(n for n, count in Counter(names).items() if count > 1)
     if duplicates:
-        raise InputRejected("duplicate_joint", f"joint(s) named twice: {', '.join(duplicates)}")
+        raise InputRejected("duplicate_joint", f"joint(s) named twice: {_listed(duplicates)}")
+    known = set(known)
     unknown = [n for n in names if n not in known]
     if unknown:
-        raise InputRejected("unknown_joint", f"no joint(s) {', '.join(unknown)} in the robot "
+        raise InputRejected("unknown_joint", f"no joint(s) {_listed(unknown)} in the robot "
                             f"(moving joints: {', '.join(moving)})")
     return names
 
@@ -108,32 +169,51 @@ def stamp_in_range(stamp_ns: int, what: str) -> int:
     return int(stamp_ns)
 
 
-def _check_stamp(stamp_ns: int, now: float, timeout: float, what: str) -> None:
-    stamp = stamp_in_range(stamp_ns, what) / NS_PER_S
-    if stamp > 0.0 and stamp < now - timeout:
-        raise InputRejected("stale", f"{what} stamped {stamp:.6f} s is older than the "
-                            f"{timeout:g} s timeout (now {now:.6f} s)")
+def node_time_of_stamp(stamp_ns: int, now_ns: int, timeout_ns: int, what: str, wall_ns: int | None = None) -> int:
+    """The node time (ns) a command or trajectory stamp means (see the module docstring):
+    0 -> ``now_ns``; a wall-clock stamp -> ``now_ns`` minus its age on the wall clock
+    ``wall_ns`` (default: the machine's); otherwise the stamp itself. Raises ``bad_timing``
+    for a stamp outside builtin_interfaces/Time or more than ``FUTURE_LIMIT_NS`` ahead,
+    ``stale`` for one older than ``timeout_ns``."""
+    stamp = stamp_in_range(stamp_ns, what)
+    if stamp == 0:
+        return now_ns
+    wall_ns = time.time_ns() if wall_ns is None else wall_ns
+    if abs(stamp - wall_ns) <= WALL_CLOCK_WINDOW_NS < abs(now_ns - wall_ns):
+        stamp = now_ns + (stamp - wall_ns)
+    if stamp > now_ns + FUTURE_LIMIT_NS:
+        raise InputRejected("bad_timing", f"{what} stamped {stamp / NS_PER_S:.6f} s, more than "
+                            f"{FUTURE_LIMIT_NS / NS_PER_S:g} s after now ({now_ns / NS_PER_S:.6f} s)")
+    if stamp < now_ns - timeout_ns:
+        raise InputRejected("stale", f"{what} stamped {stamp / NS_PER_S:.6f} s is older than the "
+                            f"{timeout_ns / NS_PER_S:g} s timeout (now {now_ns / NS_PER_S:.6f} s)")
+    return stamp
 
 
 class EffortCommands:
     """Effort commands (N m, N) by joint name, held until ``timeout`` seconds have passed.
 
-    ``accept`` checks one command: names unique and moving joints of the robot, one finite
-    effort per name, stamp (int ns) not older than the timeout; efforts beyond the URDF limit are
-    clamped. Joints a command does not name keep their previous command (0 at first).
+    ``accept`` checks one command: at least one name, names unique and moving joints of the
+    robot, one finite effort per name, stamp (int ns) neither older than the timeout nor far
+    ahead (:func:`node_time_of_stamp`); efforts beyond the URDF limit (``default_limit``
+    where the URDF has none, as for continuous joints) are clamped. Joints a command does
+    not name keep their previous command (0 at first).
     ``torque(now)`` is the command to apply at time ``now``, or None once the command is
     stale and ``on_timeout`` is ``hold`` (the scene's controller takes over).
     """
 
     def __init__(self, robot: Robot, timeout: float, on_timeout: str,
-                 counters: InputCounters | None = None) -> None:
+                 counters: InputCounters | None = None, default_limit: float = DEFAULT_EFFORT_LIMIT) -> None:
         if on_timeout not in TIMEOUT_ACTIONS:
             raise ValueError(f"on_timeout must be one of {TIMEOUT_ACTIONS}, got {on_timeout!r}")
         if not (math.isfinite(timeout) and timeout > 0.0):
             raise ValueError(f"command timeout must be positive and finite, got {timeout}")
         self.robot, self.timeout, self.on_timeout = robot, float(timeout), on_timeout
         self.counters = counters if counters is not None else InputCounters()
-        self.limit = np.asarray(robot.effort_limit)
+        if not (math.isfinite(default_limit) and default_limit > 0.0):
+            raise ValueError(f"default effort limit must be positive and finite, got {default_limit}")
+        limit = np.asarray(robot.effort_limit, dtype=float)
+        self.limit = np.where(np.isfinite(limit), limit, float(default_limit))
         self.clear()
 
     def clear(self) -> None:
@@ -141,13 +221,19 @@ class EffortCommands:
         self.command = np.zeros(self.robot.nv)
         self.received_at: float | None = None
 
-    def accept(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int, now: float) -> np.ndarray:
-        """Check a command received at ``now`` (s); returns the clamped efforts in joint
-        order. Raises (and counts) :class:`InputRejected`; a clamped command is counted."""
+    def accept(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int, now: float,
+               wall_ns: int | None = None) -> np.ndarray:
+        """Check a command received at node time ``now`` (s; ``wall_ns``: the wall clock, for
+        wall-clock stamps); returns the clamped efforts in joint order. Raises (and counts)
+        :class:`InputRejected`; a clamped command is counted."""
         try:
             names = _names(names, self.robot.joint_names, self.robot.joint_names)
+            if not names:
+                raise InputRejected("empty", "an effort command names no joint (it would mean zero torque "
+                                    "on every joint); name the joints to command")
             values = _values(efforts, "effort", len(names))
-            _check_stamp(stamp_ns, now, self.timeout, "effort command")
+            node_time_of_stamp(stamp_ns, round(now * NS_PER_S), round(self.timeout * NS_PER_S), "effort command",
+                               wall_ns)
         except InputRejected as error:
             self.counters.reject(error)
             raise
@@ -197,10 +283,11 @@ def joint_sample(robot: Robot, known: Sequence[str], names: Sequence[str], posit
     names = _names(names, known, robot.joint_names)
     q = _values(position, "position", len(names))
     v = _values(velocity, "velocity", len(names))
-    missing = [n for n in robot.joint_names if n not in names]
+    position_of = {name: i for i, name in enumerate(names)}
+    missing = [n for n in robot.joint_names if n not in position_of]
     if missing:
         raise InputRejected("missing_joint", f"no sample for joint(s) {', '.join(missing)}")
-    index = [names.index(n) for n in robot.joint_names]
+    index = [position_of[n] for n in robot.joint_names]
     return JointSample(stamp_in_range(stamp_ns, "joint state"), q[index], v[index])
 
 
@@ -255,6 +342,9 @@ def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[
     the robot is. Positions must lie within the joint limits; times must increase strictly
     (and stay distinguishable as float seconds relative to the start).
     """
+    if len(points) > MAX_TRAJECTORY_POINTS:
+        raise InputRejected("too_large", f"trajectory of {len(points)} points, more than the limit of "
+                            f"{MAX_TRAJECTORY_POINTS}")
     names = _names(names, robot.joint_names, robot.joint_names)
     if not points:
         raise InputRejected("length_mismatch", "trajectory has no points")
@@ -268,10 +358,10 @@ def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[
         row[index] = _values(positions, f"points[{k}].positions", len(names))
         if with_velocity:
             rate[index] = _values(velocities, f"points[{k}].velocities", len(names))
-        outside = [n for n, value in zip(robot.joint_names, row)
-                   if not robot.lower[robot.joint_index(n)] <= value <= robot.upper[robot.joint_index(n)]]
-        if outside:
-            raise InputRejected("out_of_limits", f"points[{k}] outside the joint limits of {', '.join(outside)}")
+        outside = ~((robot.lower <= row) & (row <= robot.upper))
+        if outside.any():
+            joints = ", ".join(np.asarray(robot.joint_names)[outside])
+            raise InputRejected("out_of_limits", f"points[{k}] outside the joint limits of {joints}")
         offsets.append(int(time_from_start_ns))
         rows.append(row)
         rates.append(rate)

@@ -21,6 +21,22 @@ and even spacing h it is a''(t_k) h^2 / 6 + O(h^4). Optionally (``time_constant`
 a first-order low-pass a_f += alpha (a_hat - a_f), alpha = dt / (time_constant + dt), damps
 measurement noise; the bound above then no longer holds (it adds lag).
 
+Restarts: the estimate uses only samples of one unbroken stream. A sample that is not
+later than the previous one (a replay that restarts its time base, a duplicate), or that
+comes more than ``max_gap_ns`` after it (a pause, a one-off stamp of 1e6 s), starts a new
+stencil: the samples before it and the filter state are forgotten (``clear``), and the
+next torque comes after three good samples. So does an estimate that is not finite (an
+overflowing velocity difference): it is rejected, never filtered. ``restarts`` counts the
+restarts by cause.
+
+Plausibility (rule: ``PLAUSIBLE_FACTOR`` = 10 times the URDF's rated limits): a measured
+robot neither moves nor pushes much beyond its ratings. A sample with |v_i| >
+10 x velocity_limit_i on some joint (a velocity jump of 1e6 rad/s, which gave 3e11 N m) is
+rejected (``out_of_limits``) before it enters the stencil; a torque with |tau_i| >
+10 x effort_limit_i (``DEFAULT_EFFORT_LIMIT`` where the URDF has none) comes from bad
+samples (a velocity step within the velocity bound, 10 rad/s in 2 ms) and is not
+published; the estimate then restarts. :func:`implausible_joints` names the joints.
+
 Friction: the scene's model at the measured velocity; LuGre bristles are taken at their
 steady state for v (the bristle deflection cannot be measured).
 """
@@ -31,42 +47,83 @@ import numpy as np
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.commands import NS_PER_S, InputRejected, JointSample
+from youbot_dynamics.sim.commands import DEFAULT_EFFORT_LIMIT, NS_PER_S, InputRejected, JointSample
+
+DEFAULT_MAX_GAP_NS = 100_000_000
+"""Largest spacing (ns) of two samples in one stencil by default (0.1 s: 50 periods of a
+500 Hz stream); a longer gap restarts the estimate."""
+PLAUSIBLE_FACTOR = 10.0
+"""A velocity or torque beyond this multiple of a joint's URDF limit is implausible."""
+RESTART_CAUSES = ("backwards", "gap", "non_finite", "implausible")
+"""Why the estimate restarted: a sample not after the previous one, a gap longer than
+``max_gap_ns``, a non-finite estimate, an implausible torque (counted by the session)."""
 
 
 class AccelerationEstimator:
-    """Central differences of velocity over the last three samples (see the module docstring)."""
+    """Central differences of velocity over the last three samples of one unbroken stream
+    (see the module docstring); ``max_gap_ns`` (int ns > 0) is the longest spacing."""
 
-    def __init__(self, time_constant: float = 0.0) -> None:
+    def __init__(self, time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS) -> None:
         if not time_constant >= 0.0:
             raise ValueError(f"acceleration filter time constant must be >= 0 s, got {time_constant}")
-        self.time_constant = float(time_constant)
+        if not max_gap_ns > 0:
+            raise ValueError(f"largest sample gap must be > 0 ns, got {max_gap_ns}")
+        self.time_constant, self.max_gap_ns = float(time_constant), int(max_gap_ns)
+        self.restarts = dict.fromkeys(RESTART_CAUSES, 0)
         self.clear()
 
     def clear(self) -> None:
-        """Forget the samples (after a jump in time, e.g. a replay that restarts)."""
+        """Forget the samples and the filter state (the next estimate needs three samples)."""
         self.samples: list[JointSample] = []
         self.filtered: np.ndarray | None = None
 
+    def restart(self, cause: str) -> None:
+        """``clear``, counted under ``cause`` (one of ``RESTART_CAUSES``)."""
+        self.restarts[cause] += 1
+        self.clear()
+
     def push(self, sample: JointSample) -> tuple[JointSample, np.ndarray] | None:
         """Add a sample; returns (the middle sample, its acceleration estimate rad/s^2) once
-        three are known. A sample not later than the previous one raises ``bad_timing``.
-        Time differences are taken between integer-nanosecond stamps, exact at any
-        magnitude (wall-clock stamps included)."""
-        if self.samples and not sample.stamp_ns > self.samples[-1].stamp_ns:
-            raise InputRejected("bad_timing", f"sample stamped {sample.stamp_ns} ns is not after the previous "
-                                f"one at {self.samples[-1].stamp_ns} ns")
+        three of one stream are known. A sample not after the previous one, or more than
+        ``max_gap_ns`` after it, restarts the stencil with itself. A non-finite estimate
+        restarts it and raises ``non_finite``. Time differences are taken between
+        integer-nanosecond stamps, exact at any magnitude (wall-clock stamps included)."""
+        if self.samples:
+            step = sample.stamp_ns - self.samples[-1].stamp_ns
+            if step <= 0 or step > self.max_gap_ns:
+                self.restart("backwards" if step <= 0 else "gap")
         self.samples = [*self.samples[-2:], sample]
         if len(self.samples) < 3:
             return None
         before, middle, after = self.samples
-        estimate = (after.v - before.v) / ((after.stamp_ns - before.stamp_ns) / NS_PER_S)
-        if self.time_constant > 0.0 and self.filtered is not None:
-            dt = (after.stamp_ns - middle.stamp_ns) / NS_PER_S
-            alpha = dt / (self.time_constant + dt)
-            estimate = self.filtered + alpha * (estimate - self.filtered)
+        with np.errstate(over="ignore", invalid="ignore"):     # checked just below
+            estimate = (after.v - before.v) / ((after.stamp_ns - before.stamp_ns) / NS_PER_S)
+            if self.time_constant > 0.0 and self.filtered is not None:
+                dt = (after.stamp_ns - middle.stamp_ns) / NS_PER_S
+                alpha = dt / (self.time_constant + dt)
+                estimate = self.filtered + alpha * (estimate - self.filtered)
+        if not np.isfinite(estimate).all():
+            self.restart("non_finite")
+            raise InputRejected("non_finite", f"acceleration estimate at {middle.stamp_ns} ns is not finite "
+                                "(velocities too large to difference)")
         self.filtered = estimate
         return middle, estimate
+
+
+def plausible_limit(robot: Robot, quantity: str = "effort") -> np.ndarray:
+    """|tau_i| (N m, N; ``quantity`` "effort") or |v_i| (rad/s, m/s; "velocity") above which
+    a value is implausible: ``PLAUSIBLE_FACTOR`` times the URDF limit; where the URDF has
+    none, ``DEFAULT_EFFORT_LIMIT`` for efforts and no bound for velocities."""
+    limit = np.asarray(robot.effort_limit if quantity == "effort" else robot.velocity_limit, dtype=float)
+    return PLAUSIBLE_FACTOR * np.where(np.isfinite(limit), limit,
+                                       DEFAULT_EFFORT_LIMIT if quantity == "effort" else np.inf)
+
+
+def implausible_joints(robot: Robot, values: np.ndarray, quantity: str = "effort") -> list[str]:
+    """Names of the joints whose ``values`` (joint order; torques or velocities, see
+    :func:`plausible_limit`) are not finite or beyond the plausible bound."""
+    bad = ~(np.abs(values) <= plausible_limit(robot, quantity))
+    return [name for name, flag in zip(robot.joint_names, bad) if flag]
 
 
 class InverseDynamics:
