@@ -413,9 +413,9 @@ def _trajectory(reader: SceneReader, robot: Robot, value: Any, q0: np.ndarray) -
         previous = point
     v_max = _per_joint(reader, robot, data.get("v_max"), f"{key}.v_max", np.array(robot.velocity_limit))
     a_max = _per_joint(reader, robot, data.get("a_max"), f"{key}.a_max", None)
-    for name, limits in (("v_max", v_max), ("a_max", a_max)):
-        if not np.all((limits > 0) & np.isfinite(limits)):
-            raise SceneError(reader.source, f"{key}.{name}", "limits must be positive and finite", limits.tolist())
+    for name, bound in (("v_max", v_max), ("a_max", a_max)):
+        if not np.all((bound > 0) & np.isfinite(bound)):
+            raise SceneError(reader.source, f"{key}.{name}", "limits must be positive and finite", bound.tolist())
     dwell = reader.number(data.get("dwell", 0.0), f"{key}.dwell")
     if dwell < 0:
         raise SceneError(reader.source, f"{key}.dwell", "must be >= 0 s", dwell)
