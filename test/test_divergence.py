@@ -15,6 +15,7 @@ import yaml
 
 from youbot_dynamics.cli import main
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.ros.session import SimulationSession
 from youbot_dynamics.sim.divergence import DivergenceLimits
 from youbot_dynamics.sim.integrators import (DivergenceError, StepBudgetError, integrate)
 from youbot_dynamics.sim.scene import load_scene, scene_dir
@@ -112,6 +113,15 @@ def test_simulate_refuses_the_large_step_in_one_line(capsys):
     assert main(["simulate", "--scene", "ball_drop", "--integrator", "rk4", "--dt", "0.01"]) == 2
     err = capsys.readouterr().err.strip()
     assert "output spacing" in err and len(err.splitlines()) == 1
+
+
+def test_a_node_session_refuses_a_fixed_step_longer_than_its_publish_period():
+    # gripping steps its constraint solver at 1 ms: published at 2 kHz, every step would be
+    # cut to 0.5 ms without a word
+    with pytest.raises(UserInputError, match=r"integrator.dt \(publish_rate 2000 Hz\): fixed step "
+                                             r"dt=0.001 s is larger than the output spacing 0.0005 s"):
+        SimulationSession(load_scene("gripping"), publish_rate=2000.0)
+    SimulationSession(load_scene("gripping"), publish_rate=1000.0).close()
 
 
 def test_a_step_that_cannot_move_the_clock_is_refused_up_front():

@@ -64,7 +64,7 @@ from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                           follow, joint_sample, joint_trajectory, node_time_of_stamp)
 from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
-from youbot_dynamics.sim.integrators import DivergenceError
+from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
 from youbot_dynamics.sim.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
                                          implausible_joints)
 from youbot_dynamics.sim.scene import Scene
@@ -377,6 +377,8 @@ class SimulationSession(_Session):
         self.simulator = Simulator(scene, resolve_integrator(scene, progress=False))
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget)
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
+        checked_output_spacing(self.simulator.integrator.dt, np.array([0.0, self.step_ns / NS_PER_S]),
+                               f"{scene.source}: integrator.dt (publish_rate {publish_rate:g} Hz)")
         self.samples_per_solve = max(1, int(samples_per_solve))
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters, default_effort_limit)
         self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
