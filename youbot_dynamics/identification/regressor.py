@@ -88,20 +88,24 @@ class RegressorLayout:
         return np.hstack([inertial, self.friction_columns(v)])
 
     def friction_columns(self, v: np.ndarray) -> np.ndarray:
-        """The friction block, nv x (nv terms): joint i's columns are nonzero on row i."""
-        n, k = len(v), len(self.friction_terms)
+        """The friction block at velocities v (..., nv): (..., nv, nv terms), joint i's
+        columns nonzero on row i only."""
+        v = np.asarray(v, float)
+        n, k = v.shape[-1], len(self.friction_terms)
         columns = {"viscous": lambda: friction.viscous(v, 1.0),
                    "coulomb": lambda: friction.coulomb(v, 1.0, self.velocity_scale),
-                   "offset": lambda: np.ones(n)}
-        block = np.zeros((n, n * k))
+                   "offset": lambda: np.ones_like(v)}
+        block = np.zeros((*v.shape, n * k))
         for t, term in enumerate(self.friction_terms):
-            block[np.arange(n), np.arange(n) * k + t] = columns[term]()
+            block[..., np.arange(n), np.arange(n) * k + t] = columns[term]()
         return block
 
     def stacked(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """Y over N samples (rows (N, nv) each), stacked sample by sample: (N nv) x p."""
-        data = self.robot.model.createData()
-        return np.vstack([self.regressor(data, qk, vk, ak) for qk, vk, ak in zip(q, v, a)])
+        model, data = self.robot.model, self.robot.model.createData()
+        inertial = np.stack([pin.computeJointTorqueRegressor(model, data, qk, vk, ak)
+                             for qk, vk, ak in zip(q, v, a)])
+        return np.concatenate([inertial, self.friction_columns(v)], axis=2).reshape(-1, len(self.names))
 
 
 def random_samples(robot: Robot, count: int, rng: np.random.Generator) -> tuple[np.ndarray, ...]:
