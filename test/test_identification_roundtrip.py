@@ -139,8 +139,7 @@ def test_round_trip_recovers_perturbed_base_parameters(excitation, layout, base,
     held_out = tmp_path / "held_out.mcap"
     record(held_out, truth_robot, random_fourier(layout, 8.0, 4, LIMITS, rng), 8.0, rng)
     samples = read_joint_samples(held_out, ARM_JOINTS)
-    motion = preprocess(samples, decimation=1)
-    motion = type(motion)(motion.t, motion.q, motion.v, motion.a, samples.effort[np.isin(samples.t, motion.t)])
+    motion = preprocess(samples)
     identified = prediction_rms(layout, base, result.wls.values, motion)
     urdf = prediction_rms(layout, base, result.nominal, motion)
     print("held-out RMS identified", identified, "nominal URDF", urdf)

@@ -18,7 +18,7 @@ import numpy as np
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.identification.base_parameters import BaseParameters, base_parameters
 from youbot_dynamics.identification.estimation import Estimate, ordinary_least_squares, weighted_least_squares
-from youbot_dynamics.identification.measurements import Motion, preprocess, read_joint_samples
+from youbot_dynamics.identification.measurements import Motion, low_pass, preprocess, read_joint_samples
 from youbot_dynamics.identification.regressor import FRICTION_TERMS, RegressorLayout
 from youbot_dynamics.model.robot import Robot, keep_joints
 
@@ -45,7 +45,7 @@ class Identification:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: joints, samples, both estimates, nominal values."""
-        return {"joints": list(self.layout.robot.joint_names), "samples": int(len(self.motion.t)),
+        return {"joints": list(self.layout.robot.joint_names), "samples": int(len(self.motion.t[self.motion.kept])),
                 "base_parameters": self.base.count, "standard_parameters": len(self.layout.names),
                 "unidentifiable": list(self.base.unidentifiable), "nominal": self.nominal.tolist(),
                 "ols": self.ols.to_dict(self.names), "wls": self.wls.to_dict(self.names)}
@@ -62,10 +62,13 @@ def layout_for(robot: Robot, joints: Sequence[str] = ARM_JOINTS,
 
 
 def identify_motion(layout: RegressorLayout, motion: Motion, base: BaseParameters | None = None) -> Identification:
-    """Estimate the base parameters from a preprocessed motion."""
+    """Estimate the base parameters from a preprocessed motion: the regressor's columns
+    and the efforts filtered alike (parallel filtering), edges dropped, decimated."""
     base = base_parameters(layout) if base is None else base
-    regressor = base.columns(layout.stacked(motion.q, motion.v, motion.a))
-    effort, joints = motion.effort.ravel(), layout.robot.nv
+    joints, count = layout.robot.nv, len(motion.t)
+    full = base.columns(layout.stacked(motion.q, motion.v, motion.a)).reshape(count, -1)
+    regressor = low_pass(full, motion.rate, motion.cutoff)[motion.kept].reshape(-1, base.count)
+    effort = low_pass(motion.effort, motion.rate, motion.cutoff)[motion.kept].ravel()
     rank = np.linalg.matrix_rank(regressor)
     if rank < base.count:
         weak = _unseen(regressor, base)
@@ -98,6 +101,8 @@ def predicted_effort(layout: RegressorLayout, base: BaseParameters, values: np.n
 
 
 def prediction_rms(layout: RegressorLayout, base: BaseParameters, values: np.ndarray, motion: Motion) -> np.ndarray:
-    """RMS (n; N m) per joint of measured minus predicted efforts along ``motion``."""
-    error = motion.effort - predicted_effort(layout, base, values, motion)
+    """RMS (n; N m) per joint of measured (unfiltered) minus predicted efforts along
+    ``motion``, every sample but the filter's edges."""
+    edges = slice(motion.kept.start, motion.kept.stop)
+    error = (motion.effort - predicted_effort(layout, base, values, motion))[edges]
     return np.sqrt(np.mean(error ** 2, axis=0))

@@ -8,12 +8,14 @@ or infinite value, or with a stamp not after the previous one raises a one-line
 UserInputError naming the bag, the topic and the sample (index and stamp).
 
 Preprocessing (:func:`preprocess`): a zero-phase Butterworth low-pass (scipy.signal
-``butter`` + ``filtfilt``, order 4, cut-off in Hz) on positions, velocities and efforts;
-accelerations by central differences of the filtered velocities (``np.gradient``);
-``edge`` samples dropped at each end (filtfilt's start-up transients), then every
-``decimation``-th sample kept. The default decimation brings the rate down to twice the
-cut-off: the decimated samples do not alias, and their filtered noise is close to white (the
-filter's impulse response is about one sample long), as the least-squares covariance
+``butter`` + ``filtfilt``, order 4, cut-off in Hz, :func:`low_pass`) on positions and
+velocities; accelerations by central differences of the filtered velocities
+(``np.gradient``). Efforts stay as measured: the estimator filters them together with the
+regressor's columns (Gautier's parallel filtering: the same filter on both sides of
+tau = Y theta, so a sharp friction reversal is smeared alike in both), then drops ``edge``
+samples at each end (filtfilt's start-up transients) and keeps every ``decimation``-th one.
+The default decimation brings the rate down to twice the cut-off: the decimated samples do
+not alias, and their filtered noise is close to white, as the least-squares covariance
 assumes.
 """
 from __future__ import annotations
@@ -53,14 +55,19 @@ class JointSamples:
 
 @dataclass(frozen=True)
 class Motion:
-    """Preprocessed samples: q, v, a (rad, rad/s, rad/s^2) and effort (N m), (N, n) each,
-    at times ``t`` (s)."""
+    """Samples ready for the regressor: filtered q, v and their derivative a (rad, rad/s,
+    rad/s^2), measured effort (N m), (N, n) each, at times ``t`` (s) sampled at ``rate``
+    (Hz); ``cutoff`` (Hz) of the filter used, ``kept`` the samples the estimator uses (edges
+    dropped, decimated)."""
 
     t: np.ndarray
     q: np.ndarray
     v: np.ndarray
     a: np.ndarray
     effort: np.ndarray
+    rate: float
+    cutoff: float
+    kept: slice
 
 
 def read_joint_samples(path: str | Path, joints: Sequence[str], topic: str = "/joint_states",
@@ -106,21 +113,27 @@ def _sample_row(message, joints: Sequence[str], where: str) -> np.ndarray:
     return row
 
 
+def low_pass(x: np.ndarray, rate: float, cutoff: float) -> np.ndarray:
+    """Zero-phase Butterworth low-pass of x along axis 0 (samples at ``rate`` Hz, cut-off Hz)."""
+    b, a = scipy.signal.butter(FILTER_ORDER, cutoff / (rate / 2))
+    return scipy.signal.filtfilt(b, a, x, axis=0)
+
+
 def preprocess(samples: JointSamples, cutoff: float = 10.0, decimation: int | None = None,
                edge: int | None = None) -> Motion:
-    """Low-pass at ``cutoff`` Hz (zero phase), differentiate, drop ``edge`` samples per end
-    (default one cut-off period), decimate (default: to about twice the cut-off)."""
+    """Low-pass q and v at ``cutoff`` Hz (zero phase) and differentiate v; the estimator
+    will drop ``edge`` samples per end (default one cut-off period) and decimate (default:
+    to about twice the cut-off)."""
     rate = samples.rate
     if not 0.0 < cutoff < rate / 2:
         raise UserInputError(f"cut-off {cutoff} Hz must be positive and below the Nyquist frequency "
                              f"{rate / 2:g} Hz of the {rate:g} Hz samples")
     decimation = max(1, int(rate / (2.0 * cutoff))) if decimation is None else int(decimation)
     edge = int(np.ceil(rate / cutoff)) if edge is None else int(edge)
-    if len(samples.t) - 2 * edge < MIN_SAMPLES * decimation:
-        raise UserInputError(f"{len(samples.t)} samples are too few to drop {edge} per end and decimate "
+    count = len(samples.t)
+    if count - 2 * edge < MIN_SAMPLES * decimation:
+        raise UserInputError(f"{count} samples are too few to drop {edge} per end and decimate "
                              f"by {decimation} (need {MIN_SAMPLES * decimation + 2 * edge})")
-    b, a = scipy.signal.butter(FILTER_ORDER, cutoff / (rate / 2))
-    q, v, effort = (scipy.signal.filtfilt(b, a, x, axis=0) for x in (samples.q, samples.v, samples.effort))
-    acceleration = np.gradient(v, samples.t, axis=0)
-    keep = slice(edge, len(samples.t) - edge, decimation)
-    return Motion(samples.t[keep], q[keep], v[keep], acceleration[keep], effort[keep])
+    q, v = low_pass(samples.q, rate, cutoff), low_pass(samples.v, rate, cutoff)
+    return Motion(samples.t, q, v, np.gradient(v, samples.t, axis=0), samples.effort, rate, cutoff,
+                  slice(edge, count - edge, decimation))
