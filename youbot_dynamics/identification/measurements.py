@@ -128,8 +128,9 @@ def preprocess(samples: JointSamples, cutoff: float = 10.0, decimation: int | No
     if not 0.0 < cutoff < rate / 2:
         raise UserInputError(f"cut-off {cutoff} Hz must be positive and below the Nyquist frequency "
                              f"{rate / 2:g} Hz of the {rate:g} Hz samples")
-    decimation = max(1, int(rate / (2.0 * cutoff))) if decimation is None else int(decimation)
-    edge = int(np.ceil(rate / cutoff)) if edge is None else int(edge)
+    # the 1e-9 keeps a 499.99999 Hz median rate from rounding 25 down to 24
+    decimation = max(1, int(rate / (2.0 * cutoff) * (1 + 1e-9))) if decimation is None else int(decimation)
+    edge = int(round(rate / cutoff)) if edge is None else int(edge)
     count = len(samples.t)
     if count - 2 * edge < MIN_SAMPLES * decimation:
         raise UserInputError(f"{count} samples are too few to drop {edge} per end and decimate "
