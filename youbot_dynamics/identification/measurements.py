@@ -122,7 +122,7 @@ def low_pass(x: np.ndarray, rate: float, cutoff: float) -> np.ndarray:
 def preprocess(samples: JointSamples, cutoff: float = 10.0, decimation: int | None = None,
                edge: int | None = None) -> Motion:
     """Low-pass q and v at ``cutoff`` Hz (zero phase) and differentiate v; the estimator
-    will drop ``edge`` samples per end (default one cut-off period) and decimate (default:
+    will drop ``edge`` samples per end (default three cut-off periods) and decimate (default:
     to about twice the cut-off)."""
     rate = samples.rate
     if not 0.0 < cutoff < rate / 2:
@@ -130,7 +130,7 @@ def preprocess(samples: JointSamples, cutoff: float = 10.0, decimation: int | No
                              f"{rate / 2:g} Hz of the {rate:g} Hz samples")
     # the 1e-9 keeps a 499.99999 Hz median rate from rounding 25 down to 24
     decimation = max(1, int(rate / (2.0 * cutoff) * (1 + 1e-9))) if decimation is None else int(decimation)
-    edge = int(round(rate / cutoff)) if edge is None else int(edge)
+    edge = int(round(3.0 * rate / cutoff)) if edge is None else int(edge)
     count = len(samples.t)
     if count - 2 * edge < MIN_SAMPLES * decimation:
         raise UserInputError(f"{count} samples are too few to drop {edge} per end and decimate "
