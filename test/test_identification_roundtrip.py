@@ -3,7 +3,7 @@ youBot, and the identified base parameters against the perturbed truth.
 
 "Simulation" here is the inverse dynamics of the perturbed robot (Pinocchio's RNEA plus the
 simulator's friction law) along the excitation's exact q, qd, qdd, with Gaussian noise of
-NOISE N m added to every effort: the torques a perfectly tracking controller would apply.
+NOISE N m added to every effort (see identification.synthetic).
 """
 from __future__ import annotations
 
@@ -11,21 +11,17 @@ import json
 
 import numpy as np
 import pytest
-from lxml import etree
 
 from youbot_dynamics import default_urdf
 from youbot_dynamics.cli import main
-from youbot_dynamics.dynamics.friction import JointFriction
-from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
+from youbot_dynamics.identification import synthetic
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.identification.base_parameters import base_parameters
 from youbot_dynamics.identification.excitation import (ExcitationLimits, FourierTrajectory, condition_number,
                                                        optimise_excitation, random_fourier)
 from youbot_dynamics.identification.identify import (ARM_JOINTS, identify_bag, layout_for, prediction_rms)
 from youbot_dynamics.identification.measurements import preprocess, read_joint_samples
-from youbot_dynamics.io import messages
-from youbot_dynamics.io.mcap_log import McapLogger
-from youbot_dynamics.model.robot import keep_joints, load_robot
+from youbot_dynamics.model.robot import load_robot
 
 NOISE = 0.05          # N m, standard deviation of the effort noise (youBot current-based torques: ~0.1)
 RATE = 500.0          # Hz, /joint_states
@@ -54,43 +50,15 @@ def excitation(layout, base):
 
 
 def perturbed_urdf(rng: np.random.Generator) -> str:
-    """The youBot URDF with every inertial perturbed (mass x U(0.8, 1.2), COM moved 1 cm in
-    a random direction, inertia x U(0.7, 1.3)) and the arm joints' friction changed."""
-    tree = etree.parse(str(default_urdf()))
-    for inertial in tree.iter("inertial"):
-        mass = inertial.find("mass")
-        mass.set("value", str(float(mass.get("value")) * rng.uniform(0.8, 1.2)))
-        origin = inertial.find("origin")
-        shift = rng.standard_normal(3)
-        xyz = np.array(origin.get("xyz").split(), float) + 0.01 * shift / np.linalg.norm(shift)
-        origin.set("xyz", " ".join(str(float(x)) for x in xyz))
-        inertia, scale = inertial.find("inertia"), rng.uniform(0.7, 1.3)
-        for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
-            inertia.set(key, str(float(inertia.get(key)) * scale))
-    for joint in tree.iter("joint"):
-        if joint.get("name") in ARM_JOINTS:
-            joint.find("dynamics").set("damping", str(rng.uniform(0.2, 0.8)))
-            joint.find("dynamics").set("friction", str(rng.uniform(0.2, 0.8)))
-    return etree.tostring(tree, encoding="unicode")
+    """The youBot with masses +-20 %, COMs moved 1 cm, inertias x U(0.7, 1.3), the arm's
+    damping and Coulomb friction from U(0.2, 0.8) (the URDF: 1 and 0.5)."""
+    return synthetic.perturbed_urdf(default_urdf(), ARM_JOINTS, rng)
 
 
-def record(path, robot, trajectory: FourierTrajectory, duration: float, rng: np.random.Generator,
-           noise: float = NOISE) -> None:
-    """A bag of /joint_states at RATE: the arm's exact motion, the efforts of ``robot`` along
-    it plus noise; the gripper fingers ride along at 0 (messages list joints in a shuffled
-    order, so the reader must match by name)."""
-    arm = keep_joints(robot, list(ARM_JOINTS))
-    friction, data = JointFriction.from_urdf(arm), arm.model.createData()
-    t_ns = np.rint(np.arange(int(duration * RATE)) * 1e9 / RATE).astype(np.int64)
-    q, v, a = trajectory.evaluate(t_ns * 1e-9)
-    names = ["gripper_finger_joint_l", *reversed(ARM_JOINTS)]
-    with McapLogger(path) as log:
-        log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
-        for k, stamp in enumerate(t_ns):
-            tau = inverse_dynamics(arm, data, q[k], v[k], a[k], friction) + rng.normal(0.0, noise, 5)
-            log.write("/joint_states", messages.joint_state(int(stamp), names, [0.0, *q[k][::-1]],
-                                                            [0.0, *v[k][::-1]], [0.0, *tau[::-1]]),
-                      log_time_ns=int(stamp))
+def record(path, robot, trajectory: FourierTrajectory, duration: float, rng: np.random.Generator) -> None:
+    """/joint_states at RATE with effort noise NOISE; a gripper finger rides along at 0."""
+    synthetic.record_joint_states(path, robot, trajectory, duration, RATE, NOISE, rng,
+                                  passengers=("gripper_finger_joint_l",))
 
 
 # --------------------------------------------------------------------------------------
@@ -164,8 +132,8 @@ def test_cli_identify_prints_json_and_plots(excitation_bag, tmp_path, capsys):
     report = json.loads(capsys.readouterr().out)
     assert report["base_parameters"] == 44 and len(report["wls"]["parameters"]) == 44
     assert report["joints"] == list(ARM_JOINTS)
-    # 20 s at 500 Hz, 50 samples per edge dropped, decimated by 25 to 20 Hz: 9900 / 25 = 396 samples
-    assert report["samples"] == 396
+    # 20 s at 500 Hz, 150 samples per edge dropped, decimated by 25 to 20 Hz: 9700 / 25 = 388 samples
+    assert report["samples"] == 388
     assert max(report["wls"]["residual_rms"]) < 0.015   # measured 0.0097 (filtered noise 0.05 sqrt(20/500) = 0.01)
     assert set(report["pseudo_inertia_min_eigenvalue"]) == set(ARM_JOINTS)
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
