@@ -135,3 +135,35 @@ def test_youbot_arm_has_29_inertial_and_15_friction_base_parameters(arm):
     # measured: smallest kept pivot 2.3e-2 of the first, largest dropped 2.7e-16 (RANK_RTOL 1e-8)
     assert kept[43] / kept[0] > 1e-4 and kept[44] / kept[0] < 1e-12
     assert "arm_joint_1.m" in base.unidentifiable
+
+
+# --------------------------------------------------------------------------------------
+# Physical consistency
+# --------------------------------------------------------------------------------------
+def test_pseudo_inertia_is_positive_definite_exactly_for_physical_bodies():
+    """Independent reference: a body is physical when m > 0 and its central inertia has
+    positive principal moments obeying the triangle inequality (Wensing et al. 2017)."""
+    from youbot_dynamics.identification.consistency import pseudo_inertia
+    import pinocchio as pin
+    box = pin.Inertia.FromBox(2.0, 0.1, 0.2, 0.3)           # physical
+    box.lever = np.array([0.05, -0.02, 0.1])
+    assert np.linalg.eigvalsh(pseudo_inertia(box.toDynamicParameters()))[0] > 0
+    rod = pin.Inertia(1.0, np.zeros(3), np.diag([0.1, 0.1, 0.25]))   # 0.25 > 0.1 + 0.1: no body has it
+    assert np.linalg.eigvalsh(pseudo_inertia(rod.toDynamicParameters()))[0] < 0
+    negative_mass = box.toDynamicParameters() * np.r_[-1, np.ones(9)]
+    assert np.linalg.eigvalsh(pseudo_inertia(negative_mass))[0] < 0
+
+
+def test_standard_from_base_reproduces_the_base_values(arm):
+    from youbot_dynamics.identification.consistency import standard_from_base
+    layout = RegressorLayout(arm)
+    base = base_parameters(layout)
+    reference = layout.standard_parameters()
+    target = base.of(reference) * 1.1
+    theta = standard_from_base(base, target, reference)
+    # measured 1.0e-16; bound 1e-12
+    np.testing.assert_allclose(base.of(theta), target, atol=1e-12)
+    # the change lies in K's row space (no component the torques cannot see)
+    change = theta - reference
+    projected = np.linalg.pinv(base.matrix) @ base.matrix @ change   # measured 6.3e-17 off; bound 1e-12
+    np.testing.assert_allclose(projected, change, atol=1e-12)
