@@ -6,22 +6,30 @@
   of random Fourier trajectories of the same length.
 - ``identify BAG``: base parameters from /joint_states of a bag (MCAP file or rosbag2
   folder): OLS and WLS estimates, standard deviations, relative deviations (flagged above
-  10 %), condition number, residual RMS per joint, pseudo-inertia check; ``--plot`` a PNG.
+  10 %), condition number, residual RMS per joint, pseudo-inertia check; ``--plot`` a PNG;
+  ``--write-urdf OUT`` the URDF with the identified parameters, projected onto physically
+  consistent inertias, with a header comment recording the bag, the date and the fit.
 """
 from __future__ import annotations
 
 import argparse
+from datetime import date
+from pathlib import Path
 
 import numpy as np
 
+from youbot_dynamics import default_urdf
 from youbot_dynamics.cli.common import CommandError, positive, print_json, robot_from, table
 from youbot_dynamics.identification.base_parameters import base_parameters
-from youbot_dynamics.identification.consistency import pseudo_inertia_eigenvalues, standard_from_base
+from youbot_dynamics.identification.consistency import (nearest_consistent, pseudo_inertia_eigenvalues,
+                                                        standard_from_base)
 from youbot_dynamics.identification.estimation import FLAG_PERCENT
 from youbot_dynamics.identification.excitation import (ExcitationLimits, condition_number, optimise_excitation,
                                                        random_fourier)
 from youbot_dynamics.identification.identify import ARM_JOINTS, identify_bag, layout_for
 from youbot_dynamics.identification.regressor import FRICTION_TERMS
+from youbot_dynamics.identification.urdf_output import identified_urdf
+from youbot_dynamics.model.robot import load_robot
 
 
 def _names(text: str, flag: str, allowed: tuple[str, ...] | None = None) -> tuple[str, ...]:
@@ -63,6 +71,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     identify.add_argument("--cutoff", type=positive, default=10.0, help="low-pass cut-off, Hz (default 10)")
     identify.add_argument("--decimation", type=int, help="keep every N-th sample (default: down to 2 x cut-off)")
     identify.add_argument("--plot", help="save measured vs predicted effort and residuals as this PNG")
+    identify.add_argument("--write-urdf", metavar="OUT", help="write the URDF with the identified inertials "
+                          "(projected onto physically consistent ones) and friction")
     identify.set_defaults(run=run_identify)
 
 
@@ -126,4 +136,33 @@ def run_identify(args: argparse.Namespace) -> int:
           + ("positive definite for every body" if not bad else f"NOT positive definite for {', '.join(bad)}"))
     if args.plot:
         print(f"wrote {args.plot}")
+    if args.write_urdf:
+        _write_urdf(args, result)
     return 0
+
+
+def _write_urdf(args: argparse.Namespace, result) -> None:
+    """Project onto consistent inertias, write the URDF, say how far it moved and what
+    the reloaded file warns about."""
+    projection = nearest_consistent(result.layout, result.base, result.wls.values,
+                                    result.layout.standard_parameters())
+    if not projection.success:
+        raise CommandError(f"--write-urdf: no physically consistent inertias reproduce the identified base "
+                           f"parameters ({projection.message}; base error {projection.base_error:.3g})")
+    offsets = {n: v for n, v in zip(result.layout.names, projection.theta) if n.endswith(".offset")}
+    moved = ", ".join(f"{body} {value:.3g}" for body, value in projection.moved.items())
+    header = (f"Inertials and friction of {', '.join(result.layout.robot.joint_names)} identified by "
+              f"youbot-dynamics identify from {args.bag} on {date.today().isoformat()}: "
+              f"{result.base.count} base parameters (WLS), cond(W) {result.wls.condition:.4g}, "
+              f"{result.to_dict()['samples']} samples, residual RMS per joint (N m) "
+              f"{', '.join(f'{x:.3g}' for x in result.wls.residual_rms)}. Projected onto physically consistent "
+              f"inertias (pseudo-inertia eigenvalue >= 1e-6), moved per body: {moved}. "
+              + (f"Torque offsets (N m; no URDF field): "
+                 f"{', '.join(f'{n} {v:.4g}' for n, v in offsets.items())}." if offsets else ""))
+    source = args.urdf if args.urdf else default_urdf()
+    text = identified_urdf(source, result.layout, projection.theta, header)
+    Path(args.write_urdf).write_text(text)
+    print(f"wrote {args.write_urdf}: projection moved the standard parameters per body by {moved} "
+          f"(base parameters kept to {projection.base_error:.2g})")
+    for warning in load_robot(text).warnings:
+        print(f"  the written URDF: {warning}")
