@@ -175,3 +175,21 @@ def test_cli_write_urdf_keeps_the_base_parameters_with_consistent_bodies(excitat
     from youbot_dynamics.identification.consistency import pseudo_inertia_eigenvalues
     # the projection's margin is 1e-6 kg m^2; measured 1.0e-6 after the round trip through text
     assert min(pseudo_inertia_eigenvalues(reloaded, theta).values()) > 0.9e-6
+
+
+def test_cli_excite_writes_a_trajectory_file(tmp_path, capsys):
+    out = tmp_path / "excite.yaml"
+    assert main(["excite", "-o", str(out), "--harmonics", "2", "--iterations", "3", "--period", "4",
+                 "--rate", "50", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["base_parameters"] == 44
+    assert report["condition_optimised"] <= report["condition_initial"]
+    import yaml
+    document = yaml.safe_load(out.read_text())
+    assert document["joint_names"] == list(ARM_JOINTS) and len(document["points"]) == 4 * 50 + 1
+    assert document["points"][-1]["time_from_start"] == {"sec": 4, "nanosec": 0}
+    trajectory = FourierTrajectory.read(out)
+    np.testing.assert_allclose(trajectory.evaluate(np.array([0.5]))[0][0], document["points"][25]["positions"],
+                               rtol=0, atol=1e-12)   # the sampled points are the series (measured 0)
+    assert main(["excite", "--joints", "arm_joint_9"]) == 2
+    assert "arm_joint_9" in capsys.readouterr().err
