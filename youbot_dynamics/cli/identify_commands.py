@@ -164,5 +164,9 @@ def _write_urdf(args: argparse.Namespace, result) -> None:
     Path(args.write_urdf).write_text(text)
     print(f"wrote {args.write_urdf}: projection moved the standard parameters per body by {moved} "
           f"(base parameters kept to {projection.base_error:.2g})")
-    for warning in load_robot(text).warnings:
+    warnings = load_robot(text).warnings
+    for warning in warnings:
         print(f"  the written URDF: {warning}")
+    if warnings:
+        print("  (each identified body is consistent; a link that is not carries the body's identified inertia "
+              "minus the URDF inertials of the links welded or locked to it, which the data contradict)")
