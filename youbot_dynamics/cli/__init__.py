@@ -22,6 +22,7 @@ COMMAND_MODULES = (
     "youbot_dynamics.cli.study_commands",
     "youbot_dynamics.cli.ros_commands",
     "youbot_dynamics.cli.log_commands",
+    "youbot_dynamics.cli.identify_commands",
 )
 
 

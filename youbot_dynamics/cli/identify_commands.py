@@ -1,0 +1,172 @@
+"""Sub-commands of parameter identification (see :mod:`youbot_dynamics.identification`).
+
+- ``excite [-o excite.yaml]``: an excitation trajectory (Fourier series, Swevers) optimised
+  for cond(Y_base) within the URDF's limits; written as /joint_trajectory fields (YAML)
+  with its Fourier coefficients. Prints the condition number before and after, and that
+  of random Fourier trajectories of the same length.
+- ``identify BAG``: base parameters from /joint_states of a bag (MCAP file or rosbag2
+  folder): OLS and WLS estimates, standard deviations, relative deviations (flagged above
+  10 %), condition number, residual RMS per joint, pseudo-inertia check; ``--plot`` a PNG;
+  ``--write-urdf OUT`` the URDF with the identified parameters, projected onto physically
+  consistent inertias, with a header comment recording the bag, the date and the fit.
+"""
+from __future__ import annotations
+
+import argparse
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+from youbot_dynamics import default_urdf
+from youbot_dynamics.cli.common import CommandError, positive, print_json, robot_from, table
+from youbot_dynamics.identification.base_parameters import base_parameters
+from youbot_dynamics.identification.consistency import (nearest_consistent, pseudo_inertia_eigenvalues,
+                                                        standard_from_base)
+from youbot_dynamics.identification.estimation import FLAG_PERCENT
+from youbot_dynamics.identification.excitation import (ExcitationLimits, condition_number, optimise_excitation,
+                                                       random_fourier)
+from youbot_dynamics.identification.identify import ARM_JOINTS, identify_bag, layout_for
+from youbot_dynamics.identification.regressor import FRICTION_TERMS
+from youbot_dynamics.identification.urdf_output import identified_urdf
+from youbot_dynamics.model.robot import load_robot
+
+
+def _names(text: str, flag: str, allowed: tuple[str, ...] | None = None) -> tuple[str, ...]:
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    unknown = [n for n in names if allowed is not None and n not in allowed]
+    if unknown:
+        raise CommandError(f"{flag}: unknown {', '.join(unknown)}; choose from {', '.join(allowed)}")
+    return names
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--urdf", help="URDF file (default: the packaged youBot)")
+    parser.add_argument("--joints", default=",".join(ARM_JOINTS),
+                        help="comma-separated joints to identify (the others locked at 0; default the arm)")
+    parser.add_argument("--friction", default=",".join(FRICTION_TERMS),
+                        help=f"friction terms per joint, comma-separated from {', '.join(FRICTION_TERMS)} "
+                             "(default all; empty for none)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add `excite` and `identify`."""
+    excite = subparsers.add_parser("excite", help="optimise an excitation trajectory for identification")
+    _common(excite)
+    excite.add_argument("-o", "--output", default="excite.yaml", help="trajectory file (YAML; default excite.yaml)")
+    excite.add_argument("--period", type=positive, default=10.0, help="period of the Fourier series, s")
+    excite.add_argument("--harmonics", type=int, default=5, help="harmonics per joint (default 5)")
+    excite.add_argument("--iterations", type=int, default=60, help="SLSQP iterations (default 60)")
+    excite.add_argument("--acceleration", type=positive, default=ExcitationLimits.acceleration,
+                        help="acceleration limit, rad/s^2 (the URDF has none)")
+    excite.add_argument("--rate", type=positive, default=100.0, help="sample rate of the written points, Hz")
+    excite.add_argument("--seed", type=int, default=0, help="seed of the random starting series")
+    excite.set_defaults(run=run_excite)
+
+    identify = subparsers.add_parser("identify", help="identify base parameters from a bag's /joint_states")
+    identify.add_argument("bag", help="a .mcap file or a rosbag2 folder")
+    _common(identify)
+    identify.add_argument("--topic", default="/joint_states", help="JointState topic (default /joint_states)")
+    identify.add_argument("--cutoff", type=positive, default=10.0, help="low-pass cut-off, Hz (default 10)")
+    identify.add_argument("--decimation", type=int, help="keep every N-th sample (default: down to 2 x cut-off)")
+    identify.add_argument("--plot", help="save measured vs predicted effort and residuals as this PNG")
+    identify.add_argument("--write-urdf", metavar="OUT", help="write the URDF with the identified inertials "
+                          "(projected onto physically consistent ones) and friction")
+    identify.set_defaults(run=run_identify)
+
+
+def _layout(args: argparse.Namespace):
+    return layout_for(robot_from(args), _names(args.joints, "--joints"),
+                      _names(args.friction, "--friction", FRICTION_TERMS))
+
+
+def run_excite(args: argparse.Namespace) -> int:
+    """Optimise, write the trajectory, print the condition numbers."""
+    if args.harmonics < 1 or args.iterations < 0:
+        raise CommandError("--harmonics must be >= 1 and --iterations >= 0")
+    layout = _layout(args)
+    base = base_parameters(layout)
+    limits = ExcitationLimits(acceleration=args.acceleration)
+    result = optimise_excitation(layout, base, period=args.period, harmonics=args.harmonics, limits=limits,
+                                 iterations=args.iterations, seed=args.seed)
+    randoms = [condition_number(layout, base, random_fourier(layout, args.period, args.harmonics, limits,
+                                                             np.random.default_rng(args.seed + s)))
+               for s in range(1, 6)]
+    result.trajectory.write(args.output, rate=args.rate)
+    record = {"output": args.output, "base_parameters": base.count, "condition_initial": result.initial_condition,
+              "condition_optimised": result.condition, "condition_random_median": float(np.median(randoms)),
+              "iterations": result.iterations, "message": result.message}
+    if args.json:
+        print_json(record)
+        return 0
+    print(f"excite: {base.count} base parameters; cond(Y_base) {result.initial_condition:.4g} (random start) -> "
+          f"{result.condition:.4g} after {result.iterations} SLSQP iterations ({result.message}); "
+          f"random Fourier trajectories of the same length: median {np.median(randoms):.4g}")
+    print(f"wrote {args.output} ({args.period:g} s period, {args.harmonics} harmonics, points at {args.rate:g} Hz)")
+    return 0
+
+
+def run_identify(args: argparse.Namespace) -> int:
+    """Identify, print the estimates and the fit figures."""
+    robot = robot_from(args)
+    result = identify_bag(args.bag, robot, _names(args.joints, "--joints"),
+                          _names(args.friction, "--friction", FRICTION_TERMS), topic=args.topic,
+                          cutoff=args.cutoff, decimation=args.decimation, progress=not args.json)
+    theta = standard_from_base(result.base, result.wls.values, result.layout.standard_parameters())
+    eigenvalues = pseudo_inertia_eigenvalues(result.layout, theta)
+    if args.plot:
+        from youbot_dynamics.identification.plots import plot_identification
+        plot_identification(result, args.plot)
+    if args.json:
+        print_json({**result.to_dict(), "pseudo_inertia_min_eigenvalue": eigenvalues})
+        return 0
+    wls = result.wls
+    rows = [(name, nominal, value, std, f"{rel:.3g}", "" if rel <= FLAG_PERCENT else "not identified")
+            for name, nominal, value, std, rel in zip(result.names, result.nominal, wls.values, wls.std,
+                                                      wls.relative_std)]
+    print(table(("base parameter", "URDF", "estimate (WLS)", "std", "rel. std %", "flag"), rows))
+    print(f"{result.base.count} base parameters of {len(result.layout.names)} standard; "
+          f"{len(wls.flagged)} above {FLAG_PERCENT:g} % relative std; cond(W) {wls.condition:.4g}; "
+          f"{result.to_dict()['samples']} samples; WLS converged in {wls.iterations} iterations")
+    print(table(("joint", "residual RMS OLS (N m)", "residual RMS WLS (N m)"),
+                zip(result.layout.robot.joint_names, result.ols.residual_rms, wls.residual_rms)))
+    bad = [body for body, value in eigenvalues.items() if value <= 0.0]
+    print("pseudo-inertia (standard parameters nearest the URDF's with these base values): "
+          + ("positive definite for every body" if not bad else f"NOT positive definite for {', '.join(bad)}"))
+    if args.plot:
+        print(f"wrote {args.plot}")
+    if args.write_urdf:
+        _write_urdf(args, result)
+    return 0
+
+
+def _write_urdf(args: argparse.Namespace, result) -> None:
+    """Project onto consistent inertias, write the URDF, say how far it moved and what
+    the reloaded file warns about."""
+    projection = nearest_consistent(result.layout, result.base, result.wls.values,
+                                    result.layout.standard_parameters())
+    if not projection.success:
+        raise CommandError(f"--write-urdf: no physically consistent inertias reproduce the identified base "
+                           f"parameters ({projection.message}; base error {projection.base_error:.3g})")
+    offsets = {n: v for n, v in zip(result.layout.names, projection.theta) if n.endswith(".offset")}
+    moved = ", ".join(f"{body} {value:.3g}" for body, value in projection.moved.items())
+    header = (f"Inertials and friction of {', '.join(result.layout.robot.joint_names)} identified by "
+              f"youbot-dynamics identify from {args.bag} on {date.today().isoformat()}: "
+              f"{result.base.count} base parameters (WLS), cond(W) {result.wls.condition:.4g}, "
+              f"{result.to_dict()['samples']} samples, residual RMS per joint (N m) "
+              f"{', '.join(f'{x:.3g}' for x in result.wls.residual_rms)}. Projected onto physically consistent "
+              f"inertias (pseudo-inertia eigenvalue >= 1e-6), moved per body: {moved}. "
+              + (f"Torque offsets (N m; no URDF field): "
+                 f"{', '.join(f'{n} {v:.4g}' for n, v in offsets.items())}." if offsets else ""))
+    source = args.urdf if args.urdf else default_urdf()
+    text = identified_urdf(source, result.layout, projection.theta, header)
+    Path(args.write_urdf).write_text(text)
+    print(f"wrote {args.write_urdf}: projection moved the standard parameters per body by {moved} "
+          f"(base parameters kept to {projection.base_error:.2g})")
+    warnings = load_robot(text).warnings
+    for warning in warnings:
+        print(f"  the written URDF: {warning}")
+    if warnings:
+        print("  (each identified body is consistent; a link that is not carries the body's identified inertia "
+              "minus the URDF inertials of the links welded or locked to it, which the data contradict)")
