@@ -85,16 +85,25 @@ def assert_one_line_user_error(error: Exception) -> None:
     assert str(error) and "\n" not in str(error).strip(), repr(str(error))
 
 
-@given(st.lists(urdf_mutation, min_size=1, max_size=3))
-def test_mutated_urdfs_load_or_raise_a_one_line_urdf_error(mutations: list[tuple]) -> None:
-    text = mutated_urdf(mutations)
+def loaded_or_one_line_user_error(load, *args):
+    """``load(*args)``, or None when it raised a one-line UserInputError (any other exception,
+    or a message over several lines, fails the test); records the outcome as an event."""
     try:
-        robot = load_robot(text)
+        result = load(*args)
     except Exception as error:  # noqa: BLE001 -- the invariant: only UserInputError
         assert_one_line_user_error(error)
         event(f"rejected: {type(error).__name__}")
-        return
+        return None
     event("loaded")
+    return result
+
+
+@given(st.lists(urdf_mutation, min_size=1, max_size=3))
+def test_mutated_urdfs_load_or_raise_a_one_line_urdf_error(mutations: list[tuple]) -> None:
+    text = mutated_urdf(mutations)
+    robot = loaded_or_one_line_user_error(load_robot, text)
+    if robot is None:
+        return
     for inertia in robot.model.inertias[1:]:
         assert math.isfinite(inertia.mass) and inertia.mass >= 0.0
         assert np.isfinite(inertia.inertia).all() and np.isfinite(inertia.lever).all()
@@ -153,13 +162,9 @@ scene_mutation = st.tuples(st.sampled_from(["replace", "drop", "add"]), st.integ
 def test_mutated_scenes_load_or_raise_a_one_line_scene_error(tmp_path: Path, base: str, mutations: list[tuple]) -> None:
     path = tmp_path / f"{base}_mutated.yaml"
     path.write_text(yaml.safe_dump(mutated_scene(base, mutations), allow_unicode=True), encoding="utf-8")
-    try:
-        scene = load_scene(path)
-    except Exception as error:  # noqa: BLE001 -- the invariant: only UserInputError
-        assert_one_line_user_error(error)
-        event(f"rejected: {type(error).__name__}")
+    scene = loaded_or_one_line_user_error(load_scene, path)
+    if scene is None:
         return
-    event("loaded")
     for vector in (scene.q0, scene.v0, scene.gravity):
         assert np.isfinite(vector).all()
     robot = scene.robot()

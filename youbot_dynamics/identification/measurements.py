@@ -30,6 +30,7 @@ from tqdm import tqdm
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag
+from youbot_dynamics.sim.commands import stamp_ns_of
 
 #: Fewer samples than this cannot carry an identification (and filtfilt needs 3 x 15).
 MIN_SAMPLES = 50
@@ -83,7 +84,7 @@ def read_joint_samples(path: str | Path, joints: Sequence[str], topic: str = "/j
     for k, record in enumerate(tqdm(messages, total=counts[topic], desc=f"reading {topic}", unit="msg",
                                     disable=not progress)):
         message = record.message
-        stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        stamp = stamp_ns_of(message.header.stamp)
         rows.append(_sample_row(message, joints, f"{where} sample {k} (stamp {stamp} ns)"))
         if stamps and stamp <= stamps[-1]:
             raise UserInputError(f"{where} sample {k}: stamp {stamp} ns is not after the previous "

@@ -21,6 +21,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from youbot_dynamics.dynamics.collision import Shape
 from youbot_dynamics.model.lie import quaternion_from_matrix
+from youbot_dynamics.sim.commands import NS_PER_S
 from youbot_dynamics.sim.frames import drawn_shape
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
@@ -51,7 +52,6 @@ Marker = _T["visualization_msgs/msg/Marker"]
 MarkerArray = _T["visualization_msgs/msg/MarkerArray"]
 String = _T["std_msgs/msg/String"]
 
-NS_PER_S = 1_000_000_000
 UNIT_QUATERNION_TOLERANCE = 1e-6
 """Largest accepted | |q| - 1 | for a quaternion in a message."""
 

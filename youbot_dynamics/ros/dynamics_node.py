@@ -76,7 +76,7 @@ from youbot_dynamics.ros.parameters import check_choice, declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
 from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
-from youbot_dynamics.sim.commands import NS_PER_S, InputRejected
+from youbot_dynamics.sim.commands import NS_PER_S, InputRejected, stamp_ns_of
 from youbot_dynamics.sim.scene import load_scene
 
 MAX_BURST = 20
@@ -97,10 +97,6 @@ MAX_MESSAGE_BYTES = {"/joint_commands": 64 * 1024, "/joint_states": 64 * 1024, "
 JointState of MAX_NAMES (256) joints four times over; 1 MiB a trajectory of
 MAX_TRAJECTORY_POINTS (1000) points of 16 joints with positions, velocities,
 accelerations and efforts (0.5 MB)."""
-
-
-def _stamp_ns(stamp) -> int:
-    return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 class DynamicsNode(Node):
@@ -292,18 +288,18 @@ class DynamicsNode(Node):
     # ---- input -------------------------------------------------------------------------
     def _on_command(self, msg: JointState) -> None:
         before = self.session.counters.clamped
-        self.session.effort_command(list(msg.name), msg.effort, _stamp_ns(msg.header.stamp))
+        self.session.effort_command(list(msg.name), msg.effort, stamp_ns_of(msg.header.stamp))
         if self.session.counters.clamped > before:
             self.get_logger().warning("/joint_commands: efforts beyond the URDF effort limits were clamped",
                                       throttle_duration_sec=WARN_THROTTLE)
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
-        points = [(_stamp_ns(point.time_from_start), point.positions, point.velocities) for point in msg.points]
-        self.session.trajectory(list(msg.joint_names), points, _stamp_ns(msg.header.stamp))
+        points = [(stamp_ns_of(point.time_from_start), point.positions, point.velocities) for point in msg.points]
+        self.session.trajectory(list(msg.joint_names), points, stamp_ns_of(msg.header.stamp))
 
     def _on_joint_state(self, msg: JointState) -> None:
         self._publish(self.session.joint_state(list(msg.name), msg.position, msg.velocity,
-                                               _stamp_ns(msg.header.stamp), self.get_clock().now().nanoseconds))
+                                               stamp_ns_of(msg.header.stamp), self.get_clock().now().nanoseconds))
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()

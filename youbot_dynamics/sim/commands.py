@@ -161,6 +161,11 @@ def _values(values: Sequence[float], label: str, count: int) -> np.ndarray:
     return array
 
 
+def stamp_ns_of(stamp: object) -> int:
+    """A builtin_interfaces Time or Duration (``sec``, ``nanosec``) as integer nanoseconds."""
+    return stamp.sec * NS_PER_S + stamp.nanosec
+
+
 def stamp_in_range(stamp_ns: int, what: str) -> int:
     """``stamp_ns`` as an int; raises ``bad_timing`` outside [0, ``STAMP_LIMIT_NS``)."""
     if not 0 <= stamp_ns < STAMP_LIMIT_NS:

@@ -44,11 +44,12 @@ class Transition:
     def event(self, consumed_at: float | None = None) -> Event:
         """The guard as a terminal :class:`Event`. With ``consumed_at`` (s) it reads 0 at
         that time, so the crossing just handled there is not found again on restart."""
-        function = self.function
-        if consumed_at is not None:
-            def function(t: float, x: np.ndarray, f=self.function) -> float:
-                return 0.0 if t == consumed_at else f(t, x)
-        return Event(self.name, function, self.direction, terminal=True)
+        if consumed_at is None:
+            return Event(self.name, self.function, self.direction, terminal=True)
+
+        def consumed(t: float, x: np.ndarray, f=self.function) -> float:
+            return 0.0 if t == consumed_at else f(t, x)
+        return Event(self.name, consumed, self.direction, terminal=True)
 
 
 @dataclass(frozen=True)
