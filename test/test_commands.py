@@ -106,7 +106,7 @@ def test_trajectory_is_followed_through_its_points(simulator: Simulator) -> None
         joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [100.0], ())], 0, q0)
     scene_free = Simulator(load_scene("arm_swing"))
     with pytest.raises(InputRejected, match="no_controller"):
-        follow(scene_free.controller, trajectory)
+        follow(scene_free, trajectory)
 
 
 @pytest.mark.parametrize("start_ns", [0, 1_700_000_000 * NS, 2**31 * NS + NS - 1])

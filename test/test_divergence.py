@@ -77,16 +77,17 @@ def test_friction_scene_loses_energy_and_passes_the_ledger():
 
 # ---- 2. free-body bounds ----------------------------------------------------------------
 def test_a_free_body_faster_than_its_speed_limit_is_divergence():
-    # the ball falls freely: |u_z| = g t reaches 3 m/s at t = 3 / 9.81 = 0.306 s
+    # the ball falls freely without turning (body frame = world frame): |v_z| = g t reaches
+    # 3 m/s at t = 3 / 9.81 = 0.306 s
     limits = DivergenceLimits(body_speed=3.0)
-    with pytest.raises(DivergenceError, match=r"outside its bounds: u\[ball.z\]") as caught:
+    with pytest.raises(DivergenceError, match=r"outside its bounds: twist\[ball.vz\]") as caught:
         Simulator(load_scene("ball_drop"), limits=limits).run()
     # the check runs after each step; rk45 integrates free fall exactly and takes 0.12 s
     # steps there (error estimate 0), so it stops at the first step end past 0.306 s with the
     # exact velocity there (measured relative error 1e-15; bound 1e-9)
     error = caught.value
     assert 3.0 / 9.81 <= error.time < 3.0 / 9.81 + error.step_size
-    assert error.components["u[ball.z]"] == pytest.approx(-9.81 * error.time, rel=1e-9)
+    assert error.components["twist[ball.vz]"] == pytest.approx(-9.81 * error.time, rel=1e-9)
 
 
 def test_a_ball_sinking_deeper_than_half_its_radius_is_divergence(tmp_path):

@@ -61,7 +61,7 @@ def test_wall_clock_stamped_trajectory_runs_from_its_arrival() -> None:
         target = np.array(SCENE.q0) + 0.05
         session.trajectory(NAMES, [(250_000_000, list(target - 0.025), []), (500_000_000, list(target), [])],
                            stamp_ns, wall_ns=WALL_NS)
-        trajectory = session.simulator.controller.reference.trajectory
+        trajectory = session.simulator.state.reference.trajectory
         return trajectory.evaluate(session.scene_time + 0.5)[0], trajectory.start_ns
     unstamped, start = final_reference(0)
     wall, wall_start = final_reference(WALL_NS - 20_000_000)       # sent 20 ms ago by the wall clock
@@ -81,14 +81,14 @@ def test_far_future_and_past_stamps_are_rejected_and_never_latched(stamp_ns: int
     session = SimulationSession(SCENE, 100.0, samples_per_solve=2)
     for _ in range(11):
         session.step()
-    reference = session.simulator.controller.reference
+    reference = session.simulator.state.reference
     with pytest.raises(InputRejected) as error:
         if what == "trajectory":
             session.trajectory(NAMES, [(100_000_000, list(SCENE.q0), [])], stamp_ns, wall_ns=WALL_NS)
         else:
             session.effort_command(NAMES, [0.1] * 5, stamp_ns, wall_ns=WALL_NS)
     assert error.value.kind == kind and session.counters.rejected[kind] == 1
-    assert session.simulator.controller.reference is reference and session.commands.received_at is None
+    assert session.simulator.state.reference is reference and session.commands.received_at is None
     # a good message right after is accepted: nothing was latched
     session.effort_command(NAMES, [0.1] * 5, 0, wall_ns=WALL_NS)
     assert session.commands.active(session.t)

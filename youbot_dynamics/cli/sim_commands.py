@@ -13,6 +13,7 @@ import numpy as np
 from tqdm import tqdm
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
+from youbot_dynamics.io.csv_table import write_csv
 from youbot_dynamics.cli.common import (CommandError, add_tolerance_arguments, finite_or_none, output_file,
                                         output_folder)
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
@@ -115,7 +116,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         print(f"youbot-dynamics simulate: {error}", file=sys.stderr)
         return 1
     if args.output:
-        result.write_csv(args.output, scene.outputs.record)
+        write_csv(args.output, *result.columns(scene.outputs.record))
     cost = simulator.rhs_cost()
     if args.json:
         print(json.dumps({"scene": scene.name, "integrator": result.integrator.describe(),

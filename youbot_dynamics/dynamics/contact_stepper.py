@@ -1,8 +1,10 @@
 """Constraint-based time stepping with Pinocchio's contact solvers (no home-made LCP).
 
-One Pinocchio model holds the robot's joints followed by one free-flyer joint per free body
-(configuration (p, quaternion x y z w), velocity the body-frame twist), so the step stays on
-the manifold through ``pin.integrate``. A step of size h (semi-implicit Euler, velocity
+It steps the scene's one Pinocchio model (the robot's joints followed by one free-flyer
+joint per free body: configuration (p, quaternion x y z w), velocity the body-frame twist)
+and reads the contact geometry from the scene's
+:class:`~youbot_dynamics.dynamics.contact_model.ContactModel`, as the compliant and impulsive
+laws do; the step stays on the manifold through ``pin.integrate``. A step of size h (semi-implicit Euler, velocity
 level, Moreau-Jean style):
 
 1. free velocity v_f = v + h ABA(q, v, tau);
@@ -24,9 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from youbot_dynamics.dynamics.collision import BroadPhase, Geometry, PlacedPair
-from youbot_dynamics.dynamics.contact import ConstraintContact
-from youbot_dynamics.dynamics.free_body import FreeBody, add_free_flyer
+from youbot_dynamics.dynamics.collision import BroadPhase
+from youbot_dynamics.dynamics.contact_model import ContactModel
 from youbot_dynamics.dynamics.rigid_body import symmetrised
 
 SOLVERS = ("pgs", "admm")
@@ -64,60 +65,33 @@ def _contact_rotation(normal: np.ndarray) -> np.ndarray:
 
 
 class ConstraintStepper:
-    """The combined model, the pairs and one :meth:`step`."""
+    """One :meth:`step` of the constraint-based law on ``contact``'s model."""
 
-    def __init__(self, robot_model: pin.Model, bodies: list[FreeBody], geometries: tuple[Geometry, ...],
-                 pairs: list[tuple[str, int, int, ConstraintContact]], settings: StepperSettings) -> None:
+    def __init__(self, contact: ContactModel, settings: StepperSettings) -> None:
         if settings.solver not in SOLVERS:
             raise ValueError(f"unknown constraint solver {settings.solver!r}; known: {', '.join(SOLVERS)}")
-        self.model = pin.Model(robot_model)
-        self.body_joints = [add_free_flyer(self.model, body) for body in bodies]
-        self.data = self.model.createData()
-        self.geometries = geometries
-        self.pairs = pairs
-        self.narrow = [PlacedPair(geometries[a].shape, geometries[b].shape) for _, a, b, _ in pairs]
-        self.broad = BroadPhase([g.shape for g in geometries], [(a, b) for _, a, b, _ in pairs], settings.margin)
-        self.settings = settings
-        self.body_index = {body.name: k for k, body in enumerate(bodies)}
-        self.frames = {g.owner_name: self.model.getFrameId(g.owner_name) for g in geometries if g.owner == "link"}
+        self.contact, self.model, self.settings = contact, contact.model, settings
+        self.broad = BroadPhase([g.shape for g in contact.geometries],
+                                [(p.first, p.second) for p in contact.pairs], settings.margin)
 
-    def _owner(self, geometry: Geometry) -> tuple[int, pin.SE3]:
-        """Joint id and the joint's world placement of a geometry's owner."""
-        if geometry.owner == "world":
-            return 0, pin.SE3.Identity()
-        if geometry.owner == "body":
-            joint = self.body_joints[self.body_index[geometry.owner_name]]
-        else:
-            joint = self.model.frames[self.frames[geometry.owner_name]].parentJoint
-        return joint, self.data.oMi[joint]
-
-    def poses(self, q: np.ndarray) -> list[np.ndarray]:
-        """World poses (4x4) of the geometries at configuration q."""
-        pin.framesForwardKinematics(self.model, self.data, q)
-        poses = []
-        for g in self.geometries:
-            if g.owner == "world":
-                poses.append(g.placement)
-            elif g.owner == "body":
-                poses.append(self.data.oMi[self.body_joints[self.body_index[g.owner_name]]].homogeneous @ g.placement)
-            else:
-                poses.append(self.data.oMf[self.frames[g.owner_name]].homogeneous @ g.placement)
-        return poses
-
-    def step(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, StepReport]:
-        """(q+, v+, report) after one step of h seconds under joint torques tau (nv,)."""
-        model, data, settings = self.model, self.data, self.settings
+    def step(self, data: pin.Data, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+             h: float) -> tuple[np.ndarray, np.ndarray, StepReport]:
+        """(q+, v+, report) after one step of h seconds under generalised forces tau (nv,);
+        ``data`` is a Data of the model (scratch)."""
+        model, settings, contact = self.model, self.settings, self.contact
         report = StepReport()
         v_free = v + h * pin.aba(model, data, q, v, tau)
-        poses = self.poses(q)
+        pin.framesForwardKinematics(model, data, q)
+        poses = contact.poses(data)
         constraints = pin.StdVec_ConstraintModel()
         rows: list[tuple[int, float, str, float]] = []
         for k in self.broad.close_pairs(poses):
-            name, a, b, law = self.pairs[k]
-            points = self.narrow[k].contact_points(poses[a], poses[b], settings.margin)
+            pair = contact.pairs[k]
+            name, law = pair.name, pair.law
+            points = contact.points(k, poses, settings.margin)
             if points:
-                joint1, world1 = self._owner(self.geometries[a])
-                joint2, world2 = self._owner(self.geometries[b])
+                joint1, joint2 = contact.owner_joint(pair.first), contact.owner_joint(pair.second)
+                world1, world2 = data.oMi[joint1], data.oMi[joint2]
             for c in points:
                 rotation = _contact_rotation(c.normal)
                 point = pin.PointContactConstraintModel(

@@ -68,7 +68,8 @@ from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spac
 from youbot_dynamics.sim.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
                                          implausible_joints)
 from youbot_dynamics.sim.scene import Scene
-from youbot_dynamics.sim.simulator import Simulator, Snapshot, robot_with_gravity
+from youbot_dynamics.sim.model import robot_with_gravity
+from youbot_dynamics.sim.simulator import Simulator, Snapshot
 
 NS_PER_S = messages.NS_PER_S
 Outputs = list[tuple[str, object]]
@@ -383,7 +384,6 @@ class SimulationSession(_Session):
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters, default_effort_limit)
         self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
         self._locked_q = np.array([self.robot.locked[name] for name in self.locked_names])
-        self._scene_reference = getattr(self.simulator.controller, "reference", None)
         self.paused = False
         self.failure: str | None = None
         self.k, self.epoch_ns, self.resets, self.last_reset_ns, self._started = 0, 0, 0, None, False
@@ -413,12 +413,9 @@ class SimulationSession(_Session):
             self.resets += 1
         self.simulator.reset()
         self.commands.clear()
-        if self._scene_reference is not None:
-            self.simulator.controller.reference = self._scene_reference
         self.k, self.failure, self.wall_time, self._pending = 0, None, 0.0, []
         self.snapshot = self.simulator.snapshot()
         self.energy0, self.energy_error = self.snapshot.energy, 0.0
-        self._events_start = len(self.simulator.contact.events) if self.simulator.contact else 0
         self._started = False
 
     def effort_command(self, names: Sequence[str], efforts: Sequence[float], stamp_ns: int,
@@ -436,7 +433,7 @@ class SimulationSession(_Session):
         try:
             start_ns = max(node_time_of_stamp(stamp_ns, self.stamp_ns, round(self.commands.timeout * NS_PER_S),
                                               "trajectory", wall_ns), self.stamp_ns)
-            follow(self.simulator.controller, joint_trajectory(self.robot, names, points, start_ns - self.epoch_ns,
+            follow(self.simulator, joint_trajectory(self.robot, names, points, start_ns - self.epoch_ns,
                                                                self.simulator.q))
         except InputRejected as error:
             self.counters.reject(error)
@@ -523,12 +520,11 @@ class SimulationSession(_Session):
         events since the last reset up to the current sample (the simulator may have run
         ahead within its solve horizon): ``contact.events``, ``contact.events.<kind>`` per
         kind seen (touch, compression, separation, impact, contact: see
-        :class:`~youbot_dynamics.sim.contact_system.ContactEvent`) and ``contact.last_event``.
+        :class:`~youbot_dynamics.sim.state.ContactEvent`) and ``contact.last_event``.
         Nothing for a scene without contact."""
-        contact = self.simulator.contact
-        if contact is None:
+        if self.simulator.model.contact is None:
             return {}
-        events = [e for e in contact.events[self._events_start:] if e.time <= self.scene_time + 0.5 / NS_PER_S]
+        events = [e for e in self.simulator.events if e.time <= self.scene_time + 0.5 / NS_PER_S]
         kinds = sorted({e.kind for e in events})
         last = events[-1] if events else None
         return {"free_bodies": ",".join(spec.body.name for spec in self.scene.free_bodies),

@@ -377,11 +377,12 @@ def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[
     return SampledTrajectory(start_ns, offsets, np.array(rows), np.array(rates) if with_velocity else None)
 
 
-def follow(controller, trajectory: SampledTrajectory) -> None:
-    """Make a simulator's tracking controller (pd or computed_torque) follow ``trajectory``.
+def follow(simulator, trajectory: SampledTrajectory) -> None:
+    """Make a simulator's tracking controller (pd or computed_torque) follow ``trajectory``:
+    the trajectory becomes its state's reference (a reset restores the scene's).
 
     Raises :class:`InputRejected` (``no_controller``) for a scene without one.
     """
-    if controller.kind == "none":
+    if simulator.controller.kind == "none":
         raise InputRejected("no_controller", "the scene has no tracking controller (controller.type: none)")
-    controller.reference = Reference(trajectory.positions[-1].copy(), trajectory)
+    simulator.state.reference = Reference(trajectory.positions[-1].copy(), trajectory)

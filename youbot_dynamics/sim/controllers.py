@@ -1,10 +1,12 @@
 """Joint-torque controllers for the simulator: none, gravity-compensated PD, computed torque.
 
-Every controller maps (t, q, v) to a joint torque (N m, or N for prismatic joints) in the
-reduced Robot's joint order, clipped to the URDF effort limits. A controller tracks the
-desired (q_d, v_d, a_d) of a :class:`PointToPointTrajectory`, or holds its set point when
-it has none. Controllers are memoryless (no integral state), so they add no continuous
-state. The PD controller knows gravity only; computed torque knows the rigid-body model and feeds
+Every controller maps (t, q, v) and a :class:`Reference` to a joint torque (N m, or N for
+prismatic joints) in the reduced Robot's joint order, clipped to the URDF effort limits
+(the :class:`Controller` protocol). It tracks the desired (q_d, v_d, a_d) of the reference's
+trajectory, or holds its set point when it has none. The reference is part of the
+simulation's state (:class:`~youbot_dynamics.sim.state.SimState`), not of the controller:
+a controller holds only its gains and scratch space. Controllers are memoryless (no integral
+state), so they add no continuous state. The PD controller knows gravity only; computed torque knows the rigid-body model and feeds
 the friction model forward along the desired motion (it cannot see the bristle states).
 
 - ``NoController``: tau = 0 (a free fall).
@@ -18,6 +20,7 @@ the friction model forward along the desired motion (it cannot see the bristle s
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -42,6 +45,16 @@ class Reference:
         return self.trajectory.evaluate(t)
 
 
+class Controller(Protocol):
+    """What the simulator needs of a controller: its ``kind`` and the torque law."""
+
+    kind: str
+
+    def torque(self, t: float, q: np.ndarray, v: np.ndarray, reference: Reference) -> np.ndarray:
+        """Joint torques (N m, N) at time t (s), positions q and velocities v, tracking
+        ``reference``."""
+
+
 class NoController:
     """Zero torque."""
 
@@ -50,7 +63,7 @@ class NoController:
     def __init__(self, robot: Robot) -> None:
         self.zero = np.zeros(robot.nv)
 
-    def torque(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    def torque(self, t: float, q: np.ndarray, v: np.ndarray, reference: Reference) -> np.ndarray:
         return self.zero
 
 
@@ -59,13 +72,13 @@ class GravityCompensatedPD:
 
     kind = "pd"
 
-    def __init__(self, robot: Robot, reference: Reference, kp: np.ndarray, kd: np.ndarray) -> None:
+    def __init__(self, robot: Robot, kp: np.ndarray, kd: np.ndarray) -> None:
         self.robot, self.data = robot, robot.model.createData()
-        self.reference, self.kp, self.kd = reference, np.asarray(kp), np.asarray(kd)
+        self.kp, self.kd = np.asarray(kp), np.asarray(kd)
         self.limit = np.asarray(robot.effort_limit)
 
-    def torque(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        q_d, v_d, _ = self.reference.at(t)
+    def torque(self, t: float, q: np.ndarray, v: np.ndarray, reference: Reference) -> np.ndarray:
+        q_d, v_d, _ = reference.at(t)
         gravity = gravity_torque(self.robot, self.data, q)
         return np.clip(gravity + self.kp * (q_d - q) + self.kd * (v_d - v), -self.limit, self.limit)
 
@@ -75,15 +88,14 @@ class ComputedTorque:
 
     kind = "computed_torque"
 
-    def __init__(self, robot: Robot, reference: Reference, kp: np.ndarray, kd: np.ndarray,
-                 friction: JointFriction | None) -> None:
+    def __init__(self, robot: Robot, kp: np.ndarray, kd: np.ndarray, friction: JointFriction | None) -> None:
         self.robot, self.data = robot, robot.model.createData()
-        self.reference, self.kp, self.kd = reference, np.asarray(kp), np.asarray(kd)
+        self.kp, self.kd = np.asarray(kp), np.asarray(kd)
         self.friction = friction
         self.limit = np.asarray(robot.effort_limit)
 
-    def torque(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        q_d, v_d, a_d = self.reference.at(t)
+    def torque(self, t: float, q: np.ndarray, v: np.ndarray, reference: Reference) -> np.ndarray:
+        q_d, v_d, a_d = reference.at(t)
         a_command = a_d + self.kp * (q_d - q) + self.kd * (v_d - v)
         tau = inverse_dynamics(self.robot, self.data, q, v, a_command)
         if self.friction is not None:
@@ -91,15 +103,12 @@ class ComputedTorque:
         return np.clip(tau, -self.limit, self.limit)
 
 
-Controller = NoController | GravityCompensatedPD | ComputedTorque
-
-
-def make_controller(kind: str, robot: Robot, reference: Reference, kp: np.ndarray,
-                    kd: np.ndarray, friction: JointFriction | None) -> Controller:
+def make_controller(kind: str, robot: Robot, kp: np.ndarray, kd: np.ndarray,
+                    friction: JointFriction | None) -> Controller:
     """The controller of the given kind (``none``, ``pd``, ``computed_torque``); ``friction``
     is the plant's friction model (used by computed torque)."""
     if kind == "none":
         return NoController(robot)
     if kind == "pd":
-        return GravityCompensatedPD(robot, reference, kp, kd)
-    return ComputedTorque(robot, reference, kp, kd, friction)
+        return GravityCompensatedPD(robot, kp, kd)
+    return ComputedTorque(robot, kp, kd, friction)

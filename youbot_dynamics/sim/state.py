@@ -1,21 +1,30 @@
-"""The layout of a simulation's continuous state: which block of x holds what.
+"""The simulation's state: the layout of its continuous part x and the :class:`SimState`.
 
 x = [q (n), v (n), extra blocks...]. q are the moving joints' coordinates (rad or m), v
 their rates (rad/s or m/s), both in the reduced Robot's joint order; the extra blocks are
-the further continuous states a scene needs, each named per component (today: the LuGre
-bristle deflections ``z``, one per LuGre joint, rad or m; later free-body orientations and
-contact states). Every component has a name such as ``q[arm_joint_2]`` or
-``z[arm_joint_3]``, used by divergence errors, CSV columns and JSON output.
+the further continuous states a scene needs, each named per component (the free bodies'
+twists, poses and charts, the LuGre bristle deflections ``z``, the compliant pairs' approach
+speeds and flags: :mod:`youbot_dynamics.sim.model` lists them). Every component has a name
+such as ``q[arm_joint_2]`` or ``z[arm_joint_3]``, used by divergence errors, CSV columns and
+JSON output.
 
-The layout is immutable (part of the model side); x itself lives with the integrator.
-:meth:`StateLayout.split` returns views into x, :meth:`StateLayout.pack` builds a new x.
+The layout is immutable (part of the model side). :meth:`StateLayout.split` returns views
+into x, :meth:`StateLayout.pack` builds a new x. A :class:`SimState` holds everything that
+changes as the simulation runs (MuJoCo's mjData idea): time, x, the controller's reference,
+the contact record, the statistics and Pinocchio's Data as scratch space; ``copy()`` saves
+it and a saved copy can be run on again.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
+import pinocchio as pin
+
+from youbot_dynamics.sim.controllers import Reference
+from youbot_dynamics.sim.integration import IntegratorStats
 
 
 @dataclass(frozen=True)
@@ -97,3 +106,47 @@ class StateLayout:
         bounds = np.full(self.size, np.inf)
         bounds[self.slice("v")] = factor * np.asarray(velocity_limit, dtype=float)
         return bounds
+
+
+@dataclass
+class ContactEvent:
+    """A contact event: time (s), pair, kind and value: ``impact`` (impulsive law): the
+    normal impulse, N s; ``touch`` (compliant law): the approach speed, m/s;
+    ``compression`` (compliant, maximum compression): the normal force there, N;
+    ``separation`` (compliant): the separation speed, m/s; ``contact`` (constraint
+    stepper, first step of a contact): the normal impulse, N s."""
+
+    time: float
+    pair: str
+    kind: str
+    value: float
+
+    def as_dict(self) -> dict:
+        """The event as plain data (time in s, value in the unit of its kind)."""
+        return {"time": self.time, "pair": self.pair, "kind": self.kind, "value": self.value}
+
+
+@dataclass
+class SimState:
+    """What a simulation is doing at time ``t`` (s): the continuous state ``x`` (see
+    :class:`StateLayout`), the controller's ``reference``, the last applied joint torque
+    ``tau`` (N m, N), the contact record (``events`` since the last reset, the ``deepest``
+    overlap in m, the pairs the constraint stepper found ``touching`` at its last step), the
+    summed integrator ``stats``, the energy ledger's start (J; None outside a passive stretch)
+    and ``data``, Pinocchio's scratch space for the plant (its content carries no state)."""
+
+    t: float
+    x: np.ndarray
+    reference: Reference
+    tau: np.ndarray
+    data: pin.Data
+    stats: IntegratorStats
+    events: list[ContactEvent] = field(default_factory=list)
+    deepest: float = 0.0
+    touching: frozenset[str] = frozenset()
+    ledger_start: float | None = None
+
+    def copy(self) -> SimState:
+        """An independent copy (MuJoCo's get_state): running one does not change the other."""
+        return dataclasses.replace(self, x=self.x.copy(), tau=self.tau.copy(), data=self.data.copy(),
+                                   stats=dataclasses.replace(self.stats), events=list(self.events))

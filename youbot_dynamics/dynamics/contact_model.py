@@ -1,0 +1,162 @@
+"""The contact geometry of a scene on its one Pinocchio model, read by every contact law.
+
+Each geometry hangs on a frame of the model: a robot link's frame, a free body's frame
+(the free-flyer joint added by :func:`~youbot_dynamics.dynamics.free_body.add_free_flyer`)
+or none (world geometry). After ``pin.framesForwardKinematics`` (or
+``computeJointJacobians`` + ``updateFramePlacements``) on a Data of that model,
+:meth:`ContactModel.poses` gives the world pose of every geometry from ``data.oMf``, and
+:meth:`ContactModel.relative_jacobian` the 3 x nv map from the generalised velocity (robot
+joints and body twists alike) to a contact point's relative velocity, from Pinocchio's frame
+Jacobians. The compliant law (:meth:`ContactModel.compliant_force`, a generalised force for
+ABA), the impulsive law (:meth:`ContactModel.impact_impulse`, with the inverse mass matrix of
+``computeMinverse``) and the constraint stepper
+(:mod:`youbot_dynamics.dynamics.contact_stepper`) all read this one object.
+
+Conventions (:mod:`youbot_dynamics.dynamics.contact`): pair k's normal points from its first
+geometry to its second, relative velocity u = v2 - v1 at the contact point (world frame,
+m/s), forces on geometry 2 (N). Where a pair's overlap is a patch of N points (a face on a
+face), each point carries 1/N of the compliant law's force at the patch depth.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from youbot_dynamics.dynamics.collision import BroadPhase, ContactPoint, Geometry, PlacedPair
+from youbot_dynamics.dynamics.contact import (ContactLaw, HuntCrossley, hunt_crossley_force,
+                                              hunt_crossley_potential, hysteresis_factor, newton_impulse,
+                                              regularised_coulomb)
+from youbot_dynamics.model.lie import skew
+
+#: Pairs farther apart than this (m) skip the narrow phase of the compliant law.
+BROAD_PHASE_MARGIN = 1e-3
+
+
+@dataclass(frozen=True)
+class Pair:
+    """A declared contact pair: name, indices of its two geometries, its law."""
+
+    name: str
+    first: int
+    second: int
+    law: ContactLaw
+
+
+class ContactModel:
+    """Geometries on the frames of ``model`` (``frames[i]`` is geometry i's frame id, None
+    for world geometry) and the declared pairs; immutable after construction (the coal
+    requests it holds are scratch space)."""
+
+    def __init__(self, model: pin.Model, geometries: Sequence[Geometry], frames: Sequence[int | None],
+                 pairs: Sequence[Pair], margin: float = BROAD_PHASE_MARGIN) -> None:
+        self.model = model
+        self.geometries = tuple(geometries)
+        self.frames = tuple(frames)
+        self.pairs = tuple(pairs)
+        self.narrow = [PlacedPair(self.geometries[p.first].shape, self.geometries[p.second].shape)
+                       for p in self.pairs]
+        self.broad = BroadPhase([g.shape for g in self.geometries], [(p.first, p.second) for p in self.pairs],
+                                margin)
+
+    # ---- geometry ---------------------------------------------------------------------------
+    def poses(self, data: pin.Data) -> list[np.ndarray]:
+        """World poses (4x4, m) of the geometries from ``data.oMf`` (frames placed first)."""
+        return [g.placement if frame is None else data.oMf[frame].homogeneous @ g.placement
+                for g, frame in zip(self.geometries, self.frames)]
+
+    def points(self, k: int, poses: Sequence[np.ndarray], margin: float) -> list[ContactPoint]:
+        """Contact points of pair k at these poses, gaps up to ``margin`` (m) included."""
+        pair = self.pairs[k]
+        return self.narrow[k].contact_points(poses[pair.first], poses[pair.second], margin)
+
+    def gap(self, k: int, poses: Sequence[np.ndarray]) -> float:
+        """Signed distance (m, < 0 overlapping) of pair k."""
+        pair = self.pairs[k]
+        return self.narrow[k].signed_distance(poses[pair.first], poses[pair.second])
+
+    def overlaps(self, poses: Sequence[np.ndarray]) -> dict[str, float]:
+        """The deepest overlap (m, >= 0) of every pair, by pair name."""
+        return {pair.name: max([0.0] + [c.depth for c in self.points(k, poses, 0.0)])
+                for k, pair in enumerate(self.pairs)}
+
+    def owner_joint(self, geometry: int) -> int:
+        """The joint that carries geometry i (0, the universe, for world geometry)."""
+        frame = self.frames[geometry]
+        return 0 if frame is None else self.model.frames[frame].parentJoint
+
+    # ---- velocities (after computeJointJacobians + updateFramePlacements) ------------------
+    def point_jacobian(self, data: pin.Data, geometry: int, point: np.ndarray) -> np.ndarray:
+        """3 x nv: world-frame velocity (m/s) of the material point at ``point`` (world, m)
+        moving with geometry i's frame."""
+        frame = self.frames[geometry]
+        if frame is None:
+            return np.zeros((3, self.model.nv))
+        jacobian = pin.getFrameJacobian(self.model, data, frame, pin.LOCAL_WORLD_ALIGNED)
+        return jacobian[:3] - skew(point - data.oMf[frame].translation) @ jacobian[3:]
+
+    def relative_jacobian(self, data: pin.Data, k: int, point: np.ndarray) -> np.ndarray:
+        """3 x nv: velocity at ``point`` (world, m) of pair k's second geometry relative to its
+        first (generalised velocity -> m/s, world frame)."""
+        pair = self.pairs[k]
+        return self.point_jacobian(data, pair.second, point) - self.point_jacobian(data, pair.first, point)
+
+    def approach(self, data: pin.Data, k: int, poses: Sequence[np.ndarray],
+                 v: np.ndarray) -> tuple[ContactPoint, np.ndarray, np.ndarray]:
+        """Pair k's nearest contact point, its relative Jacobian (3 x nv) and relative
+        velocity (m/s) at generalised velocity v."""
+        c = self.points(k, poses, np.inf)[0]
+        relative = self.relative_jacobian(data, k, 0.5 * (c.point1 + c.point2))
+        return c, relative, relative @ v
+
+    # ---- laws ----------------------------------------------------------------------------------
+    def compliant_force(self, data: pin.Data, q: np.ndarray, v: np.ndarray, poses: Sequence[np.ndarray],
+                        compliant: Sequence[int], approach_speeds: np.ndarray) -> np.ndarray:
+        """Generalised force (nv; N m, N) of the Hunt-Crossley pairs ``compliant`` (indices
+        into ``pairs``; pair ``compliant[j]`` last touched at ``approach_speeds[j]``, m/s):
+        sum of J^T f over the overlapping points. ``poses`` are those at q."""
+        generalised = np.zeros(self.model.nv)
+        close = set(self.broad.close_pairs(poses))
+        jacobians_ready = False
+        for j, k in enumerate(compliant):
+            if k not in close:
+                continue
+            points = [c for c in self.points(k, poses, 0.0) if c.depth > 0.0]
+            if not points:
+                continue
+            if not jacobians_ready:
+                pin.computeJointJacobians(self.model, data, q)
+                pin.updateFramePlacements(self.model, data)
+                jacobians_ready = True
+            law: HuntCrossley = self.pairs[k].law
+            chi = hysteresis_factor(law.restitution, approach_speeds[j], law.damping_model)
+            for c in points:
+                relative = self.relative_jacobian(data, k, 0.5 * (c.point1 + c.point2))
+                u = relative @ v
+                un = float(u @ c.normal)
+                fn = hunt_crossley_force(c.depth, -un, law.stiffness, law.exponent, chi) / len(points)
+                force = fn * c.normal + regularised_coulomb(u - un * c.normal, fn, law.friction, law.velocity_scale)
+                generalised += relative.T @ force
+        return generalised
+
+    def elastic_energy(self, poses: Sequence[np.ndarray], compliant: Sequence[int]) -> float:
+        """Energy (J) in the springs of the compliant pairs: per contact point 1/N of the
+        law's potential at the patch depth, as the force is shared."""
+        stored = 0.0
+        for k in compliant:
+            law: HuntCrossley = self.pairs[k].law
+            points = [c for c in self.points(k, poses, 0.0) if c.depth > 0.0]
+            stored += sum(hunt_crossley_potential(c.depth, law.stiffness, law.exponent)
+                          for c in points) / max(len(points), 1)
+        return stored
+
+    def impact_impulse(self, inverse_mass: np.ndarray, relative: np.ndarray, u: np.ndarray,
+                       normal: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Newton's impact of pair k: the impulse on geometry 2 (N s, world) and the change of
+        the generalised velocity M^-1 J^T Lambda, for the relative Jacobian J at the point,
+        the relative velocity u (m/s) and the normal."""
+        law = self.pairs[k].law
+        impulse, _ = newton_impulse(relative @ inverse_mass @ relative.T, u, normal, law.restitution, law.friction)
+        return impulse, inverse_mass @ relative.T @ impulse

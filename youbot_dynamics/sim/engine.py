@@ -1,0 +1,462 @@
+"""The one engine: free functions that run a compiled scene (:class:`~youbot_dynamics.sim
+.model.SimModel`) from a :class:`~youbot_dynamics.sim.state.SimState`.
+
+- :func:`initial_state` -> the scene's state at t = 0 (or at given q, v).
+- :func:`advance` (model, state, times, command) moves the state on, in place (as
+  ``mj_step`` moves mjData), and returns a :class:`Snapshot` at each time; ``command`` (N m,
+  held) replaces the controller.
+- :func:`run` (model, state0, t_eval) -> :class:`SimulationResult`: a whole run with outputs,
+  statistics and the energy balance; ``state0`` is left as it was.
+
+The equations: the plant's accelerations come from ABA with joint friction and the compliant
+contact forces (:meth:`SimModel.accelerations`); dq/dt = v for the robot joints, the free
+bodies' charts follow their twists. Every integrator of the registry runs through
+``drive()`` (sim/integration.py) with the same divergence checks: the ODE integrators
+(through ``integrate`` or, with contact guards, ``simulate_hybrid``), IDA, and the constraint
+stepper (:class:`ConstraintStepping`, a Stepper whose steps are Pinocchio contact solves).
+
+Divergence is a :class:`~youbot_dynamics.sim.integrators.DivergenceError`: a non-finite
+state, a velocity beyond its bound (``VELOCITY_LIMIT_FACTOR`` x a joint's URDF limit, the
+free bodies' speed and spin limits), a step size that collapses, or a limit of
+:mod:`youbot_dynamics.sim.divergence` exceeded: in a passive scene (no controller, no
+commanded effort) a stored energy that grows by more than ``integrator.energy_tolerance``
+(J, checked at outputs), a pair overlapping too deep, or a step budget spent.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.lie import matrix_from_quaternion
+from youbot_dynamics.sim.contact_events import MODE, ContactGuards
+from youbot_dynamics.sim.divergence import Monitor, all_of, energy_ledger_monitor, penetration_monitor
+from youbot_dynamics.sim.events import Mode, simulate_hybrid
+from youbot_dynamics.sim.integration import StateCheck, drive
+from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution, checked_fixed_step,
+                                             checked_output_spacing, integrate, integrate_dae)
+from youbot_dynamics.sim.model import MIN_APPROACH_SPEED, SimModel
+from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec
+from youbot_dynamics.sim.state import ContactEvent, SimState, StateLayout
+
+Progress = Callable[[float], None]
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The simulation at one instant: t (s), q (rad, m), v (rad/s, m/s), z (LuGre bristle
+    deflections), tau (applied joint torque, N m or N), energy (kinetic + potential, J) and
+    ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m;
+    the first robot's for composed robots, ``Robot.end_effectors``);
+    bodies: the world pose (4x4, m) of each free body by name, in the scene's order."""
+
+    t: float
+    joint_names: tuple[str, ...]
+    q: np.ndarray
+    v: np.ndarray
+    z: np.ndarray
+    tau: np.ndarray
+    energy: float
+    ee_pose: np.ndarray
+    bodies: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+
+
+@dataclass
+class SimulationResult:
+    """A run: states x (k, n) at times t (k,), named by ``layout``; ``series`` holds the
+    recorded extras (``tau`` (k, nv), ``energy`` (k,), ``ee_position`` (k, 3)); ``stats``
+    the integrator's statistics. ``energy_error`` (J) is max |E(t) - E(0)| in a conservative
+    scene, None otherwise (friction or a controller change the energy). ``energy_dissipated``
+    (J) is the ledger of a passive scene, E(0) - E(end) of the stored energy (kinetic,
+    potential, contact springs): what friction, damping and contact hysteresis took, >= 0
+    up to the tolerance; None when a controller acts. A contact scene adds its
+    ``contact_events`` and ``max_penetration`` (m: the deepest overlap at the located
+    maximum compressions of the compliant law, or over the constraint stepper's steps)."""
+
+    scene: str
+    integrator: IntegratorSpec
+    layout: StateLayout
+    t: np.ndarray
+    x: np.ndarray
+    series: dict[str, np.ndarray]
+    stats: IntegratorStats
+    conservative: bool
+    energy_error: float | None
+    contact_events: list[ContactEvent] = dataclasses.field(default_factory=list)
+    max_penetration: float | None = None
+    energy_dissipated: float | None = None
+
+    @property
+    def final_state(self) -> dict[str, float]:
+        """The last state by component name (``q[arm_joint_1]`` ...)."""
+        return dict(zip(self.layout.names, map(float, self.x[-1])))
+
+    def columns(self, record: Sequence[str]) -> tuple[list[str], np.ndarray]:
+        """Column names and the (k, m) table of t and the recorded quantities."""
+        names, blocks = ["t"], [self.t[:, None]]
+        for item in record:
+            if item in ("q", "v", "z"):
+                part = self.layout.slice(item)
+                names += list(self.layout.names[part])
+                blocks.append(self.x[:, part])
+            elif item == "tau":
+                names += [f"tau[{n}]" for n in self.layout.joint_names]
+                blocks.append(self.series["tau"])
+            elif item == "energy":
+                names.append("energy")
+                blocks.append(self.series["energy"][:, None])
+            elif item == "ee_position":
+                names += ["ee_x", "ee_y", "ee_z"]
+                blocks.append(self.series["ee_position"])
+        return names, np.hstack(blocks)
+
+
+# ---- state ------------------------------------------------------------------------------------
+def initial_state(model: SimModel, q: np.ndarray | None = None, v: np.ndarray | None = None) -> SimState:
+    """The scene's state at t = 0: q0, v0 (or the given q, v in joint order), LuGre bristles
+    at their steady state for v, the free bodies' initial poses and twists (world-frame
+    velocities in the scene turned into body-frame twists), compliant pairs unarmed."""
+    scene, robot = model.scene, model.robot
+    q = scene.q0 if q is None else robot.vector(q, what="reset q")
+    v = scene.v0 if v is None else robot.vector(v, what="reset v")
+    blocks = {"q": q, "v": v}
+    if model.friction is not None and model.layout.slice("z").stop > model.layout.slice("z").start:
+        blocks["z"] = model.friction.steady_state_bristles(v)
+    if model.body_names:
+        twist, pose = [], []
+        for spec in scene.free_bodies:
+            rotation = matrix_from_quaternion(spec.orientation)
+            twist += [rotation.T @ spec.velocity, rotation.T @ spec.angular_velocity]
+            pose += [spec.position, np.asarray(spec.orientation) / np.linalg.norm(spec.orientation)]
+        blocks.update(twist=np.concatenate(twist), pose=np.concatenate(pose))
+    if model.compliant:
+        blocks["s"] = np.full(len(model.compliant), MIN_APPROACH_SPEED)
+    x = model.layout.pack(**blocks)
+    state = SimState(0.0, x, model.reference, np.zeros(robot.nv), model.plant.model.createData(),
+                     IntegratorStats(model.integrator.method))
+    state.tau = robot_torque(model, state.reference, 0.0, x, None)
+    return state
+
+
+def robot_torque(model: SimModel, reference, t: float, x: np.ndarray, command: np.ndarray | None) -> np.ndarray:
+    """The robot's applied joint torque (N m) at (t, x): the command if given, else the
+    scene's controller tracking ``reference``."""
+    if command is not None:
+        return command
+    return model.controller.torque(t, x[model.block("q")], x[model.block("v")], reference)
+
+
+def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """dx/dt at state x under robot joint torques tau (N m, N)."""
+    dx = np.zeros_like(x)
+    dx[model.block("q")] = x[model.block("v")]
+    if model.plant.nv:
+        dx[model.velocity_block] = model.accelerations(data, x, tau)
+    z = model.block("z")
+    if z.stop > z.start:
+        dx[z] = model.friction.state_derivative(x[model.block("v")], x[z])
+    if model.body_names:
+        dx[model.block("chart")] = model.chart_rate(x)
+    return dx
+
+
+# ---- the controller callback ---------------------------------------------------------------
+class HeldTorque:
+    """A Python controller's torque, recomputed at each control tick (t = k period) and held
+    in between (zero-order hold, clipped to the effort limits)."""
+
+    def __init__(self, model: SimModel, t: float, x: np.ndarray) -> None:
+        self.model, self.period = model, model.control_period
+        self.value = self._ask(t, x)
+        self.next = (math.floor(t / self.period + 1e-9) + 1) * self.period
+
+    def _ask(self, t: float, x: np.ndarray) -> np.ndarray:
+        tau = self.model.callback(t, x[self.model.block("q")].copy(), x[self.model.block("v")].copy())
+        return self.model.clipped(tau)
+
+    def ticks(self, t0: float, t1: float) -> np.ndarray:
+        """The control ticks strictly between t0 and t1 (s)."""
+        return np.arange(self.next, t1 - 1e-9 * self.period, self.period)
+
+    def at_output(self, t: float, x: np.ndarray) -> None:
+        """At an output time: a new torque if a tick has come."""
+        if t >= self.next - 1e-9 * self.period:
+            self.value = self._ask(t, x)
+            self.next = (math.floor(t / self.period + 1e-9) + 1) * self.period
+
+
+# ---- the constraint stepper as a Stepper -------------------------------------------------------
+class ConstraintStepping:
+    """The constraint stepper behind ``drive()``: equal steps of at most ``dt`` that end on
+    each output time (a sliver of a step left over by round-off would turn the overlap
+    correction, depth / dt, into a huge impulse); joint friction applied explicitly. After
+    every step: a non-finite velocity or an overlap beyond ``deepest_allowed`` (m) is
+    divergence; a pair that starts carrying an impulse is a ``contact`` event."""
+
+    def __init__(self, model: SimModel, state: SimState, torque: Callable[[float, np.ndarray], np.ndarray],
+                 deepest_allowed: float) -> None:
+        self.model, self.data, self.torque = model, state.data, torque
+        self.t, self.x = state.t, state.x.copy()
+        self.q, self.v = model.configuration(self.x), model.velocity(self.x).copy()
+        self.h, self.steps, self.iterations = 0.0, 0, 0
+        self.touching = state.touching
+        self.events: list[ContactEvent] = []
+        self.deepest, self.deepest_allowed = 0.0, deepest_allowed
+        self.t_previous, self.x_previous = self.t, self.x
+
+    def _pack(self) -> np.ndarray:
+        model, x = self.model, self.x.copy()
+        nq = model.robot.nq
+        x[model.block("q")] = self.q[:nq]
+        x[model.velocity_block] = self.v
+        if model.body_names:
+            x[model.block("pose")] = self.q[nq:]
+            x[model.block("chart")] = 0.0
+        return x
+
+    def advance(self, t_target: float) -> None:
+        model, dt = self.model, model_dt(self.model)
+        count = max(1, math.ceil((t_target - self.t) / dt - 1e-9))
+        start, h = self.t, (t_target - self.t) / count
+        self.t_previous, self.x_previous = self.t, self.x
+        for i in range(1, count + 1):
+            tau = np.zeros(model.plant.nv)
+            if model.nv:
+                x = self._pack()
+                tau[:model.nv] = self.torque(self.t, x)
+                if model.friction is not None:
+                    tau[:model.nv] -= model.friction.torque(self.v[:model.nv])
+            self.q, self.v, report = model.stepper.step(self.data, self.q, self.v, tau, h)
+            self.t = t_target if i == count else start + i * h
+            self.steps += 1
+            self.iterations += report.iterations
+            self.deepest = max(self.deepest, report.penetration)
+            touching = frozenset(name for name, impulse in report.normal_impulse.items() if impulse > 0)
+            self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
+                            for name in sorted(touching - self.touching)]
+            self.touching = touching
+            if not np.all(np.isfinite(self.v)):
+                raise DivergenceError(self.t, model.integrator.method, h, "non-finite velocity")
+            if not report.penetration <= self.deepest_allowed:
+                raise DivergenceError(self.t, model.integrator.method, h, f"overlap {report.penetration:.3g} m "
+                                      f"beyond the penetration limit {self.deepest_allowed:.3g} m")
+        self.h = h
+        self.x = self._pack()
+
+    def interpolate(self, t: float) -> np.ndarray:
+        share = (t - self.t_previous) / (self.t - self.t_previous)
+        return self.x_previous + share * (self.x - self.x_previous)
+
+    def finish(self, stats: IntegratorStats) -> None:
+        # one dynamics pass (Delassus operator and solve) per step; no Jacobian counter applies
+        stats.steps = stats.rhs_evals = self.steps
+        stats.nonlinear_iterations = self.iterations
+        stats.jac_evals = stats.nonlinear_convergence_failures = None
+        stats.rejected_steps = 0
+
+
+def model_dt(model: SimModel) -> float:
+    """The fixed step (s) of the model's integrator."""
+    return model.integrator.dt
+
+
+# ---- solving ---------------------------------------------------------------------------------
+def _monitor(model: SimModel, state: SimState, command: np.ndarray | None, energy0: float | None) -> Monitor | None:
+    """The output-time checks: the energy ledger when the run is passive (against
+    ``energy0``, J, default the state's stored energy) and the pairs' penetration limits (the
+    constraint stepper holds every step to the smallest of them itself)."""
+    data = state.data
+    ledger = None
+    if model.is_passive(command):
+        reference = model.stored_energy(data, state.x) if energy0 is None else energy0
+        ledger = energy_ledger_monitor(lambda x: model.stored_energy(data, x), reference,
+                                       model.integrator.energy_tolerance)
+    overlap = None
+    if model.contact and model.stepper is None:
+        overlap = penetration_monitor(
+            lambda x: model.contact.overlaps(model.geometry_poses(data, model.configuration(x))),
+            model.penetration_limits)
+    return all_of(ledger, overlap)
+
+
+@dataclass
+class _Outcome:
+    solution: Solution
+    events: list[ContactEvent]
+    deepest: float
+    touching: frozenset[str]
+
+
+def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.ndarray | None,
+           max_steps: int | None, progress: Progress | None, energy0: float | None) -> _Outcome:
+    """Integrate from the state over t_eval (its first time is the state's) with the checks."""
+    spec, data = model.integrator, state.data
+    x0 = model.recentred(state.x)
+    monitor = _monitor(model, state, command, energy0)
+    held = HeldTorque(model, state.t, x0) if model.callback is not None and command is None else None
+    grid = t_eval
+    if held is not None:
+        grid = np.union1d(t_eval, held.ticks(t_eval[0], t_eval[-1]))
+        chained = monitor
+
+        def monitor(t: float, x: np.ndarray) -> str | None:
+            held.at_output(t, x)
+            return chained(t, x) if chained is not None else None
+
+    reference = state.reference
+
+    def torque(t: float, x: np.ndarray) -> np.ndarray:
+        if held is not None:
+            return held.value
+        return robot_torque(model, reference, t, x, command)
+
+    def rhs(t: float, x: np.ndarray) -> np.ndarray:
+        return derivative(model, data, x, torque(t, x))
+
+    outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress)
+    if grid is not t_eval:
+        keep = np.searchsorted(outcome.solution.t, t_eval)
+        s = outcome.solution
+        outcome.solution = Solution(s.t[keep], s.x[keep], s.stats, s.state_names)
+    return outcome
+
+
+def _integrate(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndarray, rhs, torque,
+               monitor: Monitor | None, max_steps: int | None, progress: Progress | None) -> _Outcome:
+    spec, names = model.integrator, model.layout.names
+    if model.stepper is not None:
+        return _step_constraints(model, state, x0, t_eval, torque, monitor, max_steps, progress)
+    options = {"rtol": spec.rtol, "atol": spec.absolute_tolerance(x0), "state_names": names,
+               "bounds": model.bounds, "monitor": monitor, "max_steps": max_steps, "progress": progress}
+    if model.contact:
+        guards = ContactGuards(model, state.data)
+        if spec.dt is not None:
+            options.update(dt=spec.dt, n_positions=model.nv or None)
+        elif spec.method != "ida" and model.impulsive:
+            options["max_step"] = _shortest_flight(model)
+        hybrid = simulate_hybrid([Mode(MODE, rhs, guards.transitions())], MODE, x0, t_eval, spec.method, **options)
+        keep = np.searchsorted(hybrid.t, t_eval, side="right") - 1  # the last sample at each t
+        events, deepest = guards.contact_events(hybrid.switches)
+        return _Outcome(Solution(hybrid.t[keep], hybrid.x[keep], hybrid.stats, hybrid.state_names), events,
+                        deepest, state.touching)
+    if spec.method == "ida":
+        def residual(t: float, y: np.ndarray, yp: np.ndarray) -> np.ndarray:
+            return yp - rhs(t, y)
+
+        solution = integrate_dae(residual, x0, rhs(t_eval[0], x0), t_eval, algebraic=[False] * x0.size, **options)
+    else:
+        solution = integrate(rhs, x0, t_eval, spec.method, dt=spec.dt, n_positions=model.nv, **options)
+    return _Outcome(solution, [], 0.0, state.touching)
+
+
+def _shortest_flight(model: SimModel) -> float:
+    """Duration (s) of the shortest ballistic hop an impulsive pair accepts, 2 e v_rest / g
+    (e at least 0.05): the step-size cap of adaptive integrators, so that a step never spans
+    a whole hop (its impact would go unseen)."""
+    gravity = max(float(np.linalg.norm(model.scene.gravity)), 1e-9)
+    laws = [model.contact.pairs[k].law for k in model.impulsive]
+    return min(2.0 * max(law.restitution, 0.05) * law.rest_speed / gravity for law in laws)
+
+
+def _step_constraints(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndarray, torque,
+                      monitor: Monitor | None, max_steps: int | None, progress: Progress | None) -> _Outcome:
+    start = time.perf_counter()
+    z = model.block("z")
+    if z.stop > z.start:
+        raise UserInputError(f"{model.scene.source}: the constraint stepper does not integrate LuGre bristles")
+    checked_fixed_step(model.integrator.method, model.integrator.dt, t_eval, max_steps)
+    stepping = ConstraintStepping(model, dataclasses.replace(state, x=x0), torque,
+                                  min(model.penetration_limits.values(), default=math.inf))
+    check = StateCheck(model.integrator.method, model.layout.names, model.bounds, monitor)
+    solution = drive(stepping, model.integrator.method, t_eval, [], check, model.layout.names,
+                     max_steps=max_steps, progress=progress)
+    solution.stats.events = len(stepping.events)
+    solution.stats.wall_time = time.perf_counter() - start
+    return _Outcome(solution, stepping.events, stepping.deepest, stepping.touching)
+
+
+# ---- public entry points ---------------------------------------------------------------------
+def advance(model: SimModel, state: SimState, times: Sequence[float] | np.ndarray,
+            command=None) -> list[Snapshot]:
+    """Move ``state`` on (in place) to each of ``times`` (s, increasing, after state.t) in
+    ONE integrator run, returning a Snapshot at each; ``command`` (sequence in joint order or
+    mapping by joint name, N m; clipped to the effort limits) replaces the controller over
+    all of them (zero-order hold). The energy ledger of a passive scene spans the whole
+    passive stretch (since the reset or the last command that fed energy in), not one call."""
+    times = np.asarray(times, dtype=float).reshape(-1)
+    if not times.size or not times[0] > state.t or np.any(np.diff(times) <= 0.0):
+        raise UserInputError(f"advance: times {times.tolist()} s must increase from after the "
+                             f"current time {state.t:.9g} s")
+    command = None if command is None else model.clipped(command)
+    if not model.is_passive(command):
+        state.ledger_start = None
+    elif state.ledger_start is None:
+        state.ledger_start = model.stored_energy(state.data, state.x)
+    outcome = _solve(model, state, np.concatenate([[state.t], times]), command,
+                     model.limits.max_steps_per_call, None, state.ledger_start)
+    _record(state, outcome)
+    snapshots = []
+    for t, x in zip(outcome.solution.t[1:], outcome.solution.x[1:]):
+        state.t, state.x = float(t), x.copy()
+        state.tau = np.array(robot_torque(model, state.reference, state.t, x, command), dtype=float)
+        snapshots.append(snapshot(model, state))
+    return snapshots
+
+
+def _record(state: SimState, outcome: _Outcome) -> None:
+    state.stats += outcome.solution.stats
+    state.events += outcome.events
+    state.deepest = max(state.deepest, outcome.deepest)
+    state.touching = outcome.touching
+
+
+def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | None = None,
+        progress: Progress | None = None) -> SimulationResult:
+    """The scene from ``state0`` (default: its initial state; not changed) over ``t_eval``
+    (default: the scene's output times from state0's time). A fixed step larger than the
+    output spacing is refused; at most ``limits.max_steps`` steps; ``progress(t)`` is told
+    the time reached (s) after each output."""
+    scene = model.scene
+    state = (initial_state(model) if state0 is None else state0).copy()
+    state.events, state.deepest, state.touching = [], 0.0, frozenset()
+    times = scene.output_times + state.t if t_eval is None else np.asarray(t_eval, dtype=float)
+    checked_output_spacing(model.integrator.dt, times, f"{scene.source}: integrator.dt "
+                           f"(outputs.rate {scene.outputs.rate:g} Hz)")
+    x0 = state.x.copy()
+    outcome = _solve(model, state, times, None, model.limits.max_steps, progress, None)
+    solution = outcome.solution
+    wanted = set(scene.outputs.record) | ({"energy"} if model.conservative else set())
+    series = _series(model, state, solution, wanted)
+    energy_error = float(np.max(np.abs(series["energy"] - series["energy"][0]))) if model.conservative else None
+    dissipated = None
+    if model.passive and model.callback is None:
+        dissipated = model.stored_energy(state.data, x0) - model.stored_energy(state.data, solution.x[-1])
+    return SimulationResult(scene.name, model.integrator, model.layout, solution.t, solution.x, series,
+                            solution.stats, model.conservative, energy_error, outcome.events,
+                            outcome.deepest if model.contact else None, dissipated)
+
+
+def _series(model: SimModel, state: SimState, solution: Solution, wanted: set[str]) -> dict[str, np.ndarray]:
+    series, data = {}, state.data
+    if "tau" in wanted:
+        series["tau"] = np.array([robot_torque(model, state.reference, t, x, None)
+                                  for t, x in zip(solution.t, solution.x)])
+    if "energy" in wanted:
+        series["energy"] = np.array([model.energy(data, x) for x in solution.x])
+    if "ee_position" in wanted:
+        series["ee_position"] = np.array([model.ee_pose(data, x)[:3, 3] for x in solution.x])
+    return series
+
+
+def snapshot(model: SimModel, state: SimState) -> Snapshot:
+    """The state's instant as a Snapshot (one kinematics pass gives the end effector and the
+    bodies)."""
+    x, data = state.x, state.data
+    return Snapshot(state.t, model.joint_names, x[model.block("q")].copy(), x[model.block("v")].copy(),
+                    x[model.block("z")].copy(), np.array(state.tau), model.energy(data, x), model.ee_pose(data, x),
+                    model.body_poses(data, x))

@@ -1,0 +1,310 @@
+"""The compiled scene: :func:`compile` turns a Scene into a frozen :class:`SimModel`.
+
+One Pinocchio model (the plant) holds the scene's robot (locked joints removed, the scene's
+gravity) followed by one free-flyer joint per free body, as Drake's MultibodyPlant holds
+every body of a scene. ABA, the mass matrix, the energies and ``pin.integrate`` so treat
+robot joints and free bodies alike, and one :class:`~youbot_dynamics.dynamics.contact_model
+.ContactModel` on that plant serves the compliant, impulsive and constraint-based laws. The
+model also holds the joint friction, the controller and its gains, the default reference,
+the state layout and the divergence bounds; it never changes after compilation. What the
+simulation is doing lives in a :class:`~youbot_dynamics.sim.state.SimState`.
+
+The continuous state x (see :mod:`youbot_dynamics.sim.state`) is
+
+    x = [q (robot joints), v (robot joints), twist (6 per body), z (LuGre bristles),
+         pose (7 per body), chart (6 per body), s (compliant pairs), armed (compliant pairs)]
+
+with a free body's configuration ``pin.integrate(pose, chart)``: ``pose`` (position, m, and
+quaternion x, y, z, w) is a reference held constant (zero derivative), ``chart`` (6, the
+tangent coordinates of Pinocchio's SE(3) exponential) moves with d chart/dt = Jlog6(exp6(
+chart)) twist, and a guard folds the chart into the pose when its rotation reaches
+``RECENTRE_ANGLE``, so any ODE integrator keeps the body on SE(3) exactly. ``twist`` is the
+body-frame (linear, angular) velocity, Pinocchio's free-flyer velocity, so the plant's
+generalised velocity is the contiguous block [v, twist]. ``s`` is each compliant pair's
+approach speed at its last touch (m/s, held; the Hunt-Crossley hysteresis factor comes from
+it) and ``armed`` (0 or 1, held) whether its maximum-compression guard is armed.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import pinocchio as pin
+
+from youbot_dynamics.dynamics.contact import HuntCrossley, NewtonImpact
+from youbot_dynamics.dynamics.contact_model import ContactModel, Pair
+from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper, StepperSettings
+from youbot_dynamics.dynamics.free_body import add_free_flyer
+from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy, potential_energy, symmetrised
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.configuration import require_fixed_root
+from youbot_dynamics.model.lie import matrix_from_quaternion
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.sim.controllers import Controller, Reference, make_controller
+from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
+from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
+from youbot_dynamics.sim.state import StateLayout
+from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+
+#: A joint velocity beyond this multiple of its URDF limit is divergence.
+VELOCITY_LIMIT_FACTOR = 100.0
+#: Rotation (rad) of a free body's chart at which it is folded into the reference pose.
+RECENTRE_ANGLE = 1.0
+#: Floor (m/s) of the approach speed the hysteresis factor is derived from; pairs in
+#: contact at t = 0 start with it.
+MIN_APPROACH_SPEED = 1e-2
+#: A Python controller: (t s, q rad, v rad/s) of the robot's moving joints -> joint torques (N m).
+ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+
+_POSE = ("x", "y", "z", "qx", "qy", "qz", "qw")
+_TWIST = ("vx", "vy", "vz", "wx", "wy", "wz")
+
+
+@dataclass(frozen=True, eq=False)
+class SimModel:
+    """A compiled scene (immutable). ``plant`` is the one Pinocchio model; ``robot`` the
+    scene's reduced Robot (its model is the plant's leading joints); ``contact`` is None in a
+    scene without contact pairs and free bodies."""
+
+    scene: Scene
+    integrator: IntegratorSpec
+    limits: DivergenceLimits
+    robot: Robot
+    plant: Robot
+    body_names: tuple[str, ...]
+    friction: JointFriction | None
+    controller: Controller
+    reference: Reference
+    callback: ControllerCallback | None
+    control_period: float | None
+    contact: ContactModel | None
+    compliant: tuple[int, ...]
+    impulsive: tuple[int, ...]
+    stepper: ConstraintStepper | None
+    layout: StateLayout
+    bounds: np.ndarray
+    penetration_limits: dict[str, float]
+    conservative: bool
+    passive: bool
+    ee_frame: int
+
+    # ---- sizes and slices ----------------------------------------------------------------
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The robot's moving joints, in the order of q, v and tau."""
+        return self.robot.joint_names
+
+    @property
+    def nv(self) -> int:
+        """The robot's degrees of freedom (the head of the plant's)."""
+        return self.robot.nv
+
+    def block(self, symbol: str) -> slice:
+        """Where block ``symbol`` sits in x."""
+        return self.layout.slice(symbol)
+
+    @property
+    def velocity_block(self) -> slice:
+        """The plant's generalised velocity [v, twist] in x."""
+        v = self.block("v")
+        return slice(v.start, v.stop + 6 * len(self.body_names))
+
+    # ---- state -> plant ---------------------------------------------------------------------
+    def configuration(self, x: np.ndarray) -> np.ndarray:
+        """The plant's configuration (nq) at state x: robot q, then per body its pose
+        integrated by its chart (position m, quaternion x, y, z, w)."""
+        q = x[self.block("q")]
+        if not self.body_names:
+            return q
+        model = self.plant.model
+        reference = np.concatenate([q, x[self.block("pose")]])
+        tangent = np.concatenate([np.zeros(self.nv), x[self.block("chart")]])
+        return pin.integrate(model, reference, tangent)
+
+    def velocity(self, x: np.ndarray) -> np.ndarray:
+        """The plant's generalised velocity (nv): robot v, then each body's twist."""
+        return x[self.velocity_block]
+
+    def chart_rate(self, x: np.ndarray) -> np.ndarray:
+        """d chart/dt = Jlog6(exp6(chart)) twist per body (the chart's kinematics)."""
+        chart = x[self.block("chart")].reshape(-1, 6)
+        twist = x[self.block("twist")].reshape(-1, 6)
+        return np.concatenate([pin.Jlog6(pin.exp6(c)) @ w for c, w in zip(chart, twist)])
+
+    def recentred(self, x: np.ndarray) -> np.ndarray:
+        """The same state with every body's chart folded into its reference pose (chart 0)."""
+        if not self.body_names:
+            return x
+        x = x.copy()
+        x[self.block("pose")] = self.configuration(x)[self.robot.nq:]
+        x[self.block("chart")] = 0.0
+        return x
+
+    # ---- dynamics ------------------------------------------------------------------------------
+    def accelerations(self, data: pin.Data, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """The plant's accelerations (nv) at state x under robot joint torques tau (N m):
+        ABA with joint friction and the compliant contact forces (Pinocchio's convention for
+        the bodies: the time derivative of the body twist)."""
+        q, v = self.configuration(x), self.velocity(x)
+        generalised = np.zeros(self.plant.nv)
+        nv = self.nv
+        generalised[:nv] = tau
+        if self.friction is not None:
+            z = x[self.block("z")]
+            generalised[:nv] -= self.friction.torque(v[:nv], z if z.size else None)
+        if self.compliant:
+            pin.framesForwardKinematics(self.plant.model, data, q)
+            generalised += self.contact.compliant_force(data, q, v, self.contact.poses(data), self.compliant,
+                                                        x[self.block("s")])
+        return forward_dynamics(self.plant, data, q, v, generalised)
+
+    def inverse_mass(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
+        """M(q)^-1 of the plant (nv x nv), symmetric."""
+        if self.plant.mimic:
+            return np.linalg.inv(symmetrised(pin.crba(self.plant.model, data, q)))
+        return symmetrised(pin.computeMinverse(self.plant.model, data, q))
+
+    def geometry_poses(self, data: pin.Data, q: np.ndarray) -> list[np.ndarray]:
+        """World poses (4x4) of the contact geometries at plant configuration q."""
+        pin.framesForwardKinematics(self.plant.model, data, q)
+        return self.contact.poses(data)
+
+    def energy(self, data: pin.Data, x: np.ndarray) -> float:
+        """Kinetic plus potential energy (J) of robot and bodies at state x."""
+        q, v = self.configuration(x), self.velocity(x)
+        return kinetic_energy(self.plant, data, q, v) + potential_energy(self.plant, data, q)
+
+    def stored_energy(self, data: pin.Data, x: np.ndarray) -> float:
+        """Kinetic, potential and contact-spring energy (J): what a passive scene may only lose."""
+        springs = 0.0
+        if self.compliant:
+            springs = self.contact.elastic_energy(self.geometry_poses(data, self.configuration(x)), self.compliant)
+        return self.energy(data, x) + springs
+
+    def body_poses(self, data: pin.Data, x: np.ndarray) -> dict[str, np.ndarray]:
+        """World pose (4x4, m) of every free body at state x, by name."""
+        if not self.body_names:
+            return {}
+        q = self.configuration(x)
+        nq = self.robot.nq
+        return {name: pin.XYZQUATToSE3(q[nq + 7 * k:nq + 7 * k + 7]).homogeneous
+                for k, name in enumerate(self.body_names)}
+
+    def body_motion(self, xs: np.ndarray) -> dict[str, np.ndarray]:
+        """The free bodies along states xs (k, n): ``position`` (k, nb, 3; centre of mass, m),
+        ``rotation`` (k, nb, 3, 3; body axes in the world), ``velocity`` and ``angular_velocity``
+        (k, nb, 3; world frame, m/s and rad/s)."""
+        xs = np.atleast_2d(xs)
+        nb, nq = len(self.body_names), self.robot.nq
+        q = np.array([self.configuration(x)[nq:] for x in xs]).reshape(len(xs), nb, 7)
+        rotation = matrix_from_quaternion(q[:, :, 3:])
+        twist = xs[:, self.block("twist")].reshape(len(xs), nb, 6)
+        return {"position": q[:, :, :3], "rotation": rotation,
+                "velocity": np.einsum("kbij,kbj->kbi", rotation, twist[:, :, :3]),
+                "angular_velocity": np.einsum("kbij,kbj->kbi", rotation, twist[:, :, 3:])}
+
+    def ee_pose(self, data: pin.Data, x: np.ndarray) -> np.ndarray:
+        """4x4 pose (m) of the end-effector link in the root frame at state x."""
+        pin.framesForwardKinematics(self.plant.model, data, self.configuration(x))
+        return data.oMf[self.ee_frame].homogeneous.copy()
+
+    def clipped(self, tau) -> np.ndarray:
+        """A torque command (sequence in joint order or mapping by joint name) clipped to the
+        effort limits (N m, N)."""
+        limit = np.asarray(self.robot.effort_limit)
+        return np.clip(self.robot.vector(tau, what="tau_command"), -limit, limit)
+
+    def is_passive(self, command: np.ndarray | None) -> bool:
+        """Whether nothing feeds energy in: no controller, and no or a zero command."""
+        return self.passive and self.callback is None and (command is None or not np.any(command))
+
+
+def robot_with_gravity(robot: Robot, gravity: np.ndarray) -> Robot:
+    """The same Robot with another gravity vector (m/s^2, root frame) on a model copy."""
+    gravity = np.asarray(gravity, dtype=float)
+    if np.array_equal(robot.model.gravity.linear, gravity):
+        return robot
+    model = pin.Model(robot.model)
+    model.gravity = pin.Motion(gravity, np.zeros(3))
+    return dataclasses.replace(robot, model=model)
+
+
+def _plant(robot: Robot, scene: Scene) -> tuple[Robot, list[int | None]]:
+    """The plant (the robot's model with a free-flyer per body appended) and the frame id of
+    each of the scene's geometries (None: world)."""
+    bodies = [spec.body for spec in scene.free_bodies]
+    if not bodies:
+        plant = robot
+        body_frames = {}
+    else:
+        model = pin.Model(robot.model)
+        body_frames = {body.name: add_free_flyer(model, body)[1] for body in bodies}
+        plant = dataclasses.replace(robot, model=model)
+    frames = [None if g.owner == "world" else body_frames[g.owner_name] if g.owner == "body"
+              else robot.frame_id(g.owner_name) for g in scene.geometries]
+    return plant, frames
+
+
+def _layout(robot: Robot, scene: Scene, friction: JointFriction | None, compliant: list[str]) -> StateLayout:
+    names = [spec.body.name for spec in scene.free_bodies]
+    lugre = [] if friction is None else [n for n, law in zip(friction.joint_names, friction.laws) if law == "lugre"]
+    return StateLayout.for_joints(robot.joint_names, {
+        "twist": [f"{n}.{a}" for n in names for a in _TWIST],
+        "z": lugre,
+        "pose": [f"{n}.{a}" for n in names for a in _POSE],
+        "chart": [f"{n}.d{a}" for n in names for a in _TWIST],
+        "s": compliant,
+        "armed": compliant})
+
+
+def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: DivergenceLimits | None = None,
+            controller: ControllerCallback | None = None, control_rate: float | None = None) -> SimModel:
+    """The SimModel of ``scene`` (with another ``integrator`` or divergence ``limits`` if
+    given). ``controller`` replaces the scene's controller by a Python callback
+    (t, q, v) -> tau run at ``control_rate`` (Hz, default the output rate), its torque held
+    in between (the integrator is not restarted at the control ticks)."""
+    integrator = integrator or scene.integrator
+    limits = limits or DivergenceLimits()
+    if integrator.method == "auto":
+        raise UserInputError(f"{scene.source}: integrator.method: 'auto' must be resolved first "
+                             "(youbot-dynamics work-precision --write-back)")
+    robot = robot_with_gravity(scene.robot(), scene.gravity)
+    require_fixed_root(robot, scene.source)
+    friction = scene.joint_friction(robot)
+    plant, frames = _plant(robot, scene)
+    pairs = [Pair(p.name, *(next(i for i, g in enumerate(scene.geometries) if g.name == name)
+                            for name in (p.geometry1, p.geometry2)), p.law) for p in scene.contacts]
+    contact = ContactModel(plant.model, scene.geometries, frames, pairs) if scene.has_contact else None
+    compliant = tuple(k for k, p in enumerate(pairs) if isinstance(p.law, HuntCrossley))
+    impulsive = tuple(k for k, p in enumerate(pairs) if isinstance(p.law, NewtonImpact))
+    layout = _layout(robot, scene, friction, [pairs[k].name for k in compliant])
+    spec = scene.controller
+    trajectory = None if spec.trajectory is None else PointToPointTrajectory.through(
+        np.vstack([scene.q0, spec.trajectory.waypoints]), spec.trajectory.v_max,
+        spec.trajectory.a_max, spec.trajectory.dwell)
+    bounds = layout.velocity_bounds(robot.velocity_limit, VELOCITY_LIMIT_FACTOR)
+    twist = layout.slice("twist")
+    bounds[twist] = np.tile(np.repeat([limits.body_speed, limits.body_spin], 3), len(scene.free_bodies))
+    shapes = {g.name: g.shape for g in scene.geometries}
+    period = None
+    if controller is not None:
+        period = 1.0 / (control_rate or scene.outputs.rate)
+        if not math.isfinite(period) or period <= 0.0:
+            raise UserInputError(f"{scene.source}: control_rate {control_rate!r} Hz must be positive")
+    stepper = ConstraintStepper(contact, StepperSettings(solver=integrator.method)) \
+        if integrator.method in STEPPERS else None
+    return SimModel(
+        scene=scene, integrator=integrator, limits=limits, robot=robot, plant=plant,
+        body_names=tuple(s.body.name for s in scene.free_bodies), friction=friction,
+        controller=make_controller(spec.type, robot, spec.kp, spec.kd, friction),
+        reference=Reference(scene.q0, trajectory), callback=controller, control_period=period,
+        contact=contact, compliant=compliant, impulsive=impulsive, stepper=stepper, layout=layout,
+        bounds=bounds,
+        penetration_limits={p.name: penetration_limit(shapes[p.geometry1], shapes[p.geometry2],
+                                                      limits.penetration_fraction) for p in scene.contacts},
+        conservative=friction is None and spec.type == "none" and not scene.contacts and controller is None,
+        passive=spec.type == "none", ee_frame=robot.frame_id(robot.end_effectors[0]))
