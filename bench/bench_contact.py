@@ -75,8 +75,8 @@ def rising_apex(z: np.ndarray, vz: np.ndarray) -> float:
 
 
 def first_apex(simulator: Simulator, result) -> float:
-    return rising_apex(result.x[:, simulator.layout.slice("p")][:, 2] - RADIUS,
-                       result.x[:, simulator.layout.slice("u")][:, 2])
+    motion = simulator.model.body_motion(result.x)
+    return rising_apex(motion["position"][:, 0, 2] - RADIUS, motion["velocity"][:, 0, 2])
 
 
 def ours() -> list[tuple[str, float, float]]:
@@ -159,7 +159,7 @@ def gripping() -> None:
         walls.append(time.perf_counter() - start)
     wall = min(walls)
     stats = result.stats
-    final = result.x[-1, simulator.layout.slice("p")]
+    final = simulator.model.body_motion(result.x[-1])["position"][0, 0]
     on_plate = simulator.body_in_link(result, "sphere", "yb2_plate_link")[-1]
     print(f"sphere at the end: ({final[0]:.4f}, {final[1]:.4f}, {final[2]:.4f}) m; in yb2_plate_link "
           f"({on_plate[0]:+.4f}, {on_plate[1]:+.4f}, {on_plate[2]:+.4f}) m (plate 0.2 x 0.3, top at +0.005)")

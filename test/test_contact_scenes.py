@@ -32,8 +32,8 @@ def bounce_heights(simulator: Simulator, result, radius: float) -> np.ndarray:
     """Apex heights of the bottom of the ball over the floor, one per flight, from the
     ballistic energy z - r + vz^2 / 2g at the output sample in the middle of each flight."""
     times = [e.time for e in result.contact_events if e.kind in ("impact", "separation")]
-    z = result.x[:, simulator.layout.slice("p")][:, 2]
-    vz = result.x[:, simulator.layout.slice("u")][:, 2]
+    motion = simulator.model.body_motion(result.x)
+    z, vz = motion["position"][:, 0, 2], motion["velocity"][:, 0, 2]
     heights = []
     for start, end in zip(times[:-1], times[1:]):
         i = int(np.argmin(np.abs(result.t - 0.5 * (start + end))))
@@ -63,7 +63,7 @@ def test_ball_drop_impulsive_bounce_ratio_is_e_squared(tmp_path):
     result = simulator.run()
     impacts = [ev for ev in result.contact_events if ev.kind == "impact"]
     assert len(impacts) == 4
-    assert impacts[0].value == pytest.approx(simulator.contact.bodies[0].mass * 1.8 * np.sqrt(2 * G), rel=1e-6)
+    assert impacts[0].value == pytest.approx(simulator.scene.free_bodies[0].body.mass * 1.8 * np.sqrt(2 * G), rel=1e-6)
     heights = bounce_heights(simulator, result, 0.025)
     assert heights / np.concatenate([[1.0], heights[:-1]]) == pytest.approx(0.64, rel=1e-6)
 
@@ -88,7 +88,7 @@ def incline(angle: float, law: dict, method: dict, duration: float = 1.0) -> dic
 
 
 def slope_motion(simulator: Simulator, result, angle: float) -> np.ndarray:
-    p = result.x[:, simulator.layout.slice("p")]
+    p = simulator.model.body_motion(result.x)["position"][:, 0]
     return (p - p[0]) @ np.array([np.cos(angle), 0.0, -np.sin(angle)])
 
 
@@ -136,9 +136,9 @@ def two_balls(law: dict, gravity=(0.0, 0.0, 0.0)) -> dict:
 def test_collision_of_two_bodies_conserves_momentum(tmp_path, law):
     simulator = Simulator(load_scene(write(tmp_path, two_balls(law))))
     result = simulator.run()
-    bodies, layout = simulator.contact.bodies, simulator.layout
-    u, w = result.x[:, layout.slice("u")].reshape(-1, 2, 3), result.x[:, layout.slice("w")].reshape(-1, 2, 3)
-    p = result.x[:, layout.slice("p")].reshape(-1, 2, 3)
+    bodies = [spec.body for spec in simulator.scene.free_bodies]
+    motion = simulator.model.body_motion(result.x)
+    u, w, p = motion["velocity"], motion["angular_velocity"], motion["position"]
     masses = np.array([b.mass for b in bodies])
     linear = np.einsum("k,tki->ti", masses, u)
     assert np.abs(linear - linear[0]).max() < 1e-8 * masses.sum()
@@ -211,7 +211,7 @@ def test_simulate_json_reports_contact_events(capsys):
     first = report["contact_events"][0]
     assert first["time"] == pytest.approx(np.sqrt(2 / G), rel=1e-6)
     assert first["value"] == pytest.approx(np.sqrt(2 * G), rel=1e-6)
-    assert report["final_state"]["p[ball.z]"] > 0.025 and report["max_penetration"] > 0
+    assert report["final_state"]["pose[ball.z]"] > 0.025 and report["max_penetration"] > 0
 
 
 def test_grasp_at_the_friction_cone_limit_creeps_or_slips_as_coulomb_predicts(capsys):

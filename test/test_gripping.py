@@ -110,7 +110,7 @@ def test_sphere_ends_at_rest_on_youbot_2s_plate(run):
     on_plate = simulator.body_in_link(result, "sphere", "yb2_plate_link")[-1]
     assert abs(on_plate[0]) < 0.1 - RADIUS / 2 and abs(on_plate[1]) < 0.15 - RADIUS / 2
     assert on_plate[2] == pytest.approx(PLATE_TOP + RADIUS, abs=1e-3)
-    speed = np.linalg.norm(result.x[-1, simulator.layout.slice("u")])
+    speed = np.linalg.norm(simulator.model.body_motion(result.x[-1])["velocity"])
     assert speed < 5e-3
 
 
@@ -158,7 +158,7 @@ def test_resting_contact_over_step_wise_calls_is_one_event():
     simulator.advance_through([0.02, 0.04])
     for t in (0.06, 0.08, 0.10):
         simulator.advance(t)
-    assert [(e.pair, e.time) for e in simulator.contact.events] == [("yb1_plate/sphere", pytest.approx(0.001))]
-    assert simulator.stepper_penetration > 0.0
+    assert [(e.pair, e.time) for e in simulator.events] == [("yb1_plate/sphere", pytest.approx(0.001))]
+    assert simulator.state.deepest > 0.0
     simulator.reset()
-    assert not simulator.contact.events and simulator.stepper_penetration == 0.0
+    assert not simulator.events and simulator.state.deepest == 0.0

@@ -66,8 +66,8 @@ def first_bounce(simulator: Simulator, result: SimulationResult, restitution: fl
     (the ball's radius and g are the scene's)."""
     radius = simulator.scene.free_bodies[0].shape.radius
     g = float(np.linalg.norm(simulator.scene.gravity))
-    z = result.x[:, simulator.layout.slice("p")][:, 2] - radius
-    vz = result.x[:, simulator.layout.slice("u")][:, 2]
+    motion = simulator.model.body_motion(result.x)
+    z, vz = motion["position"][:, 0, 2] - radius, motion["velocity"][:, 0, 2]
     ballistic = z + vz ** 2 / (2 * g)
     low = int(np.argmin(z))
     after = float(np.max(ballistic[low:][z[low:] > 0.05])) if np.any(z[low:] > 0.05) else math.nan
@@ -125,7 +125,7 @@ def light_on_heavy() -> list[dict[str, Any]]:
         simulator, result, status, wall = run_case(data)
         row = {"case": "1 g on 10 kg", "integrator": label, "status": status, "wall_s": wall}
         if result is not None:
-            z = result.x[:, simulator.layout.slice("p")].reshape(len(result.t), 2, 3)[:, :, 2]
+            z = simulator.model.body_motion(result.x)["position"][:, :, 2]
             row.update(light_drift_m=float(np.max(np.abs(z[:, 1] - z[0, 1]))),
                        heavy_drift_m=float(np.max(np.abs(z[:, 0] - z[0, 0]))),
                        max_penetration_m=result.max_penetration)
@@ -159,7 +159,7 @@ def tunnelling() -> list[dict[str, Any]]:
         simulator, result, status, wall = run_case(data)
         row = {"case": "2 mm at 50 m/s vs 1 cm plate", "integrator": label, "status": status, "wall_s": wall}
         if result is not None:
-            x_end = float(result.x[-1, simulator.layout.slice("p")][0])
+            x_end = float(simulator.model.body_motion(result.x[-1])["position"][0, 0, 0])
             row.update(final_x_m=x_end, tunnelled=bool(x_end > 0.06), max_penetration_m=result.max_penetration)
         rows.append(row)
     return rows
@@ -194,7 +194,7 @@ def grasp_at_cone_limit(margins=(0.9, 0.99, 1.01, 1.1)) -> list[dict[str, Any]]:
         row = {"case": f"m g / (2 mu N) = {s:g}", "integrator": "hunt_crossley cvode_bdf", "status": status,
                "wall_s": wall}
         if result is not None:
-            vz = result.x[:, simulator.layout.slice("u")][:, 2]
+            vz = simulator.model.body_motion(result.x)["velocity"][:, 0, 2]
             late = result.t >= 0.05
             measured_accel = float(np.polyfit(result.t[late], vz[late], 1)[0])
             row.update(sink_speed_m_s=float(-vz[-1]), held=bool(-vz[-1] < 10 * v_s),

@@ -319,10 +319,11 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
         return derivative(model, data, x, torque(t, x))
 
     outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress)
-    if grid is not t_eval:
-        keep = np.searchsorted(outcome.solution.t, t_eval)
-        s = outcome.solution
-        outcome.solution = Solution(s.t[keep], s.x[keep], s.stats, s.state_names)
+    s = outcome.solution
+    keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
+    # outputs with every chart folded into its pose: the pose block is the body's pose
+    outcome.solution = Solution(s.t[keep], np.array([model.recentred(x) for x in s.x[keep]]), s.stats,
+                                s.state_names)
     return outcome
 
 

@@ -18,7 +18,8 @@ with a free body's configuration ``pin.integrate(pose, chart)``: ``pose`` (posit
 quaternion x, y, z, w) is a reference held constant (zero derivative), ``chart`` (6, the
 tangent coordinates of Pinocchio's SE(3) exponential) moves with d chart/dt = Jlog6(exp6(
 chart)) twist, and a guard folds the chart into the pose when its rotation reaches
-``RECENTRE_ANGLE``, so any ODE integrator keeps the body on SE(3) exactly. ``twist`` is the
+``RECENTRE_ANGLE``, so any ODE integrator keeps the body on SE(3) exactly. Outputs come with
+every chart folded (chart 0), so there ``pose`` is the body's pose. ``twist`` is the
 body-frame (linear, angular) velocity, Pinocchio's free-flyer velocity, so the plant's
 generalised velocity is the contiguous block [v, twist]. ``s`` is each compliant pair's
 approach speed at its last touch (m/s, held; the Hunt-Crossley hysteresis factor comes from
