@@ -139,7 +139,8 @@ def initial_state(model: SimModel, q: np.ndarray | None = None, v: np.ndarray | 
     x = model.layout.pack(**blocks)
     state = SimState(0.0, x, model.reference, np.zeros(robot.nv), model.plant.model.createData(),
                      IntegratorStats(model.integrator.method))
-    state.tau = robot_torque(model, state.reference, 0.0, x, None)
+    if model.callback is None:  # a Python controller is first asked when the run starts
+        state.tau = robot_torque(model, state.reference, 0.0, x, None)
     return state
 
 
@@ -290,6 +291,7 @@ class _Outcome:
     events: list[ContactEvent]
     deepest: float
     touching: frozenset[str]
+    held: HeldTorque | None = None
 
 
 def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.ndarray | None,
@@ -319,6 +321,7 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
         return derivative(model, data, x, torque(t, x))
 
     outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress)
+    outcome.held = held
     s = outcome.solution
     keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
     # outputs with every chart folded into its pose: the pose block is the body's pose
@@ -404,7 +407,8 @@ def advance(model: SimModel, state: SimState, times: Sequence[float] | np.ndarra
     snapshots = []
     for t, x in zip(outcome.solution.t[1:], outcome.solution.x[1:]):
         state.t, state.x = float(t), x.copy()
-        state.tau = np.array(robot_torque(model, state.reference, state.t, x, command), dtype=float)
+        state.tau = np.array(outcome.held.value if outcome.held is not None else
+                             robot_torque(model, state.reference, state.t, x, command), dtype=float)
         snapshots.append(snapshot(model, state))
     return snapshots
 
