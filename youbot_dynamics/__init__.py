@@ -2,10 +2,45 @@
 
 Layers (imports point down): ros/ -> io/ -> analysis/ -> sim/ -> dynamics/ -> model/;
 systems/ holds classic test systems written as equations. Nothing below ros/ imports rclpy.
+
+The public API, importable from here (each loaded on first use, so that importing the
+package stays cheap)::
+
+    from youbot_dynamics import load_scene, compile, initial_state, advance, run
+
+- models: ``load_robot``, ``Robot``; dynamics: ``inverse_dynamics``, ``forward_dynamics``,
+  ``mass_matrix``, ``JointFriction``;
+- scenes: ``load_scene``, ``Scene`` (``Scene.from_dict``);
+- the engine: ``compile`` -> SimModel, ``initial_state`` -> SimState, ``advance``, ``run``,
+  and the ``Simulator`` wrapper.
 """
+from importlib import import_module
 from pathlib import Path
 
 __version__ = "0.1.0"
+
+#: Public name -> the module that defines it.
+_PUBLIC = {
+    "load_robot": "youbot_dynamics.model.robot", "Robot": "youbot_dynamics.model.robot",
+    "inverse_dynamics": "youbot_dynamics.dynamics.rigid_body",
+    "forward_dynamics": "youbot_dynamics.dynamics.rigid_body",
+    "mass_matrix": "youbot_dynamics.dynamics.rigid_body", "JointFriction": "youbot_dynamics.dynamics.friction",
+    "load_scene": "youbot_dynamics.sim.scene", "Scene": "youbot_dynamics.sim.scene",
+    "compile": "youbot_dynamics.sim.model", "SimModel": "youbot_dynamics.sim.model",
+    "SimState": "youbot_dynamics.sim.state", "initial_state": "youbot_dynamics.sim.engine",
+    "advance": "youbot_dynamics.sim.engine", "run": "youbot_dynamics.sim.engine",
+    "Simulator": "youbot_dynamics.sim.simulator",
+}
+__all__ = sorted(_PUBLIC) + ["package_share", "default_urdf"]
+
+
+def __getattr__(name: str):
+    """The public API, imported on first use (PEP 562)."""
+    if name not in _PUBLIC:
+        raise AttributeError(f"module 'youbot_dynamics' has no attribute {name!r}")
+    value = getattr(import_module(_PUBLIC[name]), name)
+    globals()[name] = value
+    return value
 
 
 def package_share() -> Path:
