@@ -99,11 +99,6 @@ class MecanumBase:
         object.__setattr__(self, "jacobian", jacobian)
         object.__setattr__(self, "pseudo_inverse", pseudo)
 
-    def roller_normals(self) -> np.ndarray:
-        """n_i = z x e_i (n, 2): the floor-plane direction across each contact roller, along
-        which the wheel grips."""
-        return np.column_stack([-self.roller_axes[:, 1], self.roller_axes[:, 0]])
-
     def hub_velocities(self, twist: np.ndarray) -> np.ndarray:
         """(n, 2) velocities (m/s, base frame) of the wheel hubs for the base twist
         (vx, vy, wz): v_i = (vx - wz y_i, vy + wz x_i)."""
@@ -111,11 +106,18 @@ class MecanumBase:
         return np.column_stack([vx - wz * self.positions[:, 1], vy + wz * self.positions[:, 0]])
 
 
+def roller_normals(roller_axes: np.ndarray) -> np.ndarray:
+    """n = z x e for roller axes e ((2,) or (n, 2), base frame): the floor-plane direction
+    across each contact roller, along which the wheel grips."""
+    axes = np.asarray(roller_axes, dtype=float)
+    return np.stack([-axes[..., 1], axes[..., 0]], axis=-1)
+
+
 def mecanum_jacobian(positions: np.ndarray, drive_directions: np.ndarray, roller_axes: np.ndarray,
                      radius: float) -> np.ndarray:
     """H (n x 3): row i = n_i^T [[1, 0, -y_i], [0, 1, x_i]] / (r n_i . d_i), the no-slip
     condition across roller i (module docstring); n_i = z x e_i for the roller axis e_i."""
-    normals = np.column_stack([-roller_axes[:, 1], roller_axes[:, 0]])
+    normals = roller_normals(roller_axes)
     grip = np.einsum("ij,ij->i", normals, drive_directions)
     if np.any(np.abs(grip) < 1e-9):
         raise UserInputError("mecanum base: a roller axis runs along its wheel's drive direction, so the "

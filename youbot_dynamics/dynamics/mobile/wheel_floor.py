@@ -36,7 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from youbot_dynamics.dynamics.contact import regularised_coulomb
-from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase
+from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase, roller_normals
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
 
@@ -113,8 +113,8 @@ def roller_friction(slip: np.ndarray, roller_axis: np.ndarray, normal_force: flo
                     velocity_scale: float) -> np.ndarray:
     """Planar floor force (N, base frame) on a wheel at its contact point: free along the
     roller axis e, regularised Coulomb (mu, v_s m/s) on the slip across it."""
-    axis = np.asarray(roller_axis, dtype=float)
-    across = np.array([-axis[1], axis[0]]) / math.hypot(axis[0], axis[1])
+    across = roller_normals(roller_axis)
+    across = across / math.hypot(*across)
     return regularised_coulomb(float(np.asarray(slip) @ across) * across, normal_force, mu, velocity_scale)
 
 
