@@ -102,8 +102,16 @@ class MecanumBase:
     def hub_velocities(self, twist: np.ndarray) -> np.ndarray:
         """(n, 2) velocities (m/s, base frame) of the wheel hubs for the base twist
         (vx, vy, wz): v_i = (vx - wz y_i, vy + wz x_i)."""
-        vx, vy, wz = _twist(twist)
-        return np.column_stack([vx - wz * self.positions[:, 1], vy + wz * self.positions[:, 0]])
+        return hub_velocity_maps(self.positions) @ _twist(twist)
+
+
+def hub_velocity_maps(positions: np.ndarray) -> np.ndarray:
+    """(n, 2, 3): for each hub at (x_i, y_i) (m) the map [[1, 0, -y_i], [0, 1, x_i]] of the base
+    twist (vx, vy, wz) to the hub's velocity (m/s, base frame)."""
+    maps = np.zeros((len(positions), 2, 3))
+    maps[:, 0, 0] = maps[:, 1, 1] = 1.0
+    maps[:, 0, 2], maps[:, 1, 2] = -positions[:, 1], positions[:, 0]
+    return maps
 
 
 def roller_normals(roller_axes: np.ndarray) -> np.ndarray:
@@ -116,15 +124,14 @@ def roller_normals(roller_axes: np.ndarray) -> np.ndarray:
 def mecanum_jacobian(positions: np.ndarray, drive_directions: np.ndarray, roller_axes: np.ndarray,
                      radius: float) -> np.ndarray:
     """H (n x 3): row i = n_i^T [[1, 0, -y_i], [0, 1, x_i]] / (r n_i . d_i), the no-slip
-    condition across roller i (module docstring); n_i = z x e_i for the roller axis e_i."""
+    condition across roller i (module docstring); n_i = z x e_i for the roller axis e_i, and
+    the matrix is the hub's velocity map (:func:`hub_velocity_maps`)."""
     normals = roller_normals(roller_axes)
     grip = np.einsum("ij,ij->i", normals, drive_directions)
     if np.any(np.abs(grip) < 1e-9):
         raise UserInputError("mecanum base: a roller axis runs along its wheel's drive direction, so the "
                              "wheel cannot push the base (n . d = 0); check the roller axes")
-    rows = np.column_stack([normals[:, 0], normals[:, 1],
-                            positions[:, 0] * normals[:, 1] - positions[:, 1] * normals[:, 0]])
-    return rows / (radius * grip)[:, None]
+    return np.einsum("ij,ijk->ik", normals, hub_velocity_maps(positions)) / (radius * grip)[:, None]
 
 
 def wheel_speeds(base: MecanumBase, twist: np.ndarray) -> np.ndarray:
