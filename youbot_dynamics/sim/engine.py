@@ -41,7 +41,7 @@ from youbot_dynamics.sim.integration import StateCheck, drive
 from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution, checked_fixed_step,
                                              checked_output_spacing, integrate, integrate_dae)
 from youbot_dynamics.sim.model import MIN_APPROACH_SPEED, SimModel
-from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec
+from youbot_dynamics.sim.scene import IntegratorSpec
 from youbot_dynamics.sim.state import ContactEvent, SimState, StateLayout
 
 Progress = Callable[[float], None]
@@ -221,7 +221,7 @@ class ConstraintStepping:
         return x
 
     def advance(self, t_target: float) -> None:
-        model, dt = self.model, model_dt(self.model)
+        model, dt = self.model, self.model.integrator.dt
         count = max(1, math.ceil((t_target - self.t) / dt - 1e-9))
         start, h = self.t, (t_target - self.t) / count
         self.t_previous, self.x_previous = self.t, self.x
@@ -261,11 +261,6 @@ class ConstraintStepping:
         stats.rejected_steps = 0
 
 
-def model_dt(model: SimModel) -> float:
-    """The fixed step (s) of the model's integrator."""
-    return model.integrator.dt
-
-
 # ---- solving ---------------------------------------------------------------------------------
 def _monitor(model: SimModel, state: SimState, command: np.ndarray | None, energy0: float | None) -> Monitor | None:
     """The output-time checks: the energy ledger when the run is passive (against
@@ -297,7 +292,7 @@ class _Outcome:
 def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.ndarray | None,
            max_steps: int | None, progress: Progress | None, energy0: float | None) -> _Outcome:
     """Integrate from the state over t_eval (its first time is the state's) with the checks."""
-    spec, data = model.integrator, state.data
+    data = state.data
     x0 = model.recentred(state.x)
     monitor = _monitor(model, state, command, energy0)
     held = HeldTorque(model, state.t, x0) if model.callback is not None and command is None else None
