@@ -136,7 +136,9 @@ def initial_state(model: SimModel, q: np.ndarray | None = None, v: np.ndarray | 
         blocks.update(twist=np.concatenate(twist), pose=np.concatenate(pose))
     if model.compliant:
         blocks["s"] = np.full(len(model.compliant), MIN_APPROACH_SPEED)
-    x = model.layout.pack(**blocks)
+    if model.base is not None:
+        blocks.update(base=model.base.pose0, base_v=model.base.twist0)
+    x = model.imposed(0.0, model.layout.pack(**blocks))
     state = SimState(0.0, x, model.reference, np.zeros(robot.nv), model.plant.model.createData(),
                      IntegratorStats(model.integrator.method))
     if model.callback is None:  # a Python controller is first asked when the run starts
@@ -149,20 +151,33 @@ def robot_torque(model: SimModel, reference, t: float, x: np.ndarray, command: n
     scene's controller tracking ``reference``."""
     if command is not None:
         return command
-    return model.controller.torque(t, x[model.block("q")], x[model.block("v")], reference)
+    tau = model.controller.torque(t, x[model.block("q")], x[model.block("v")], reference)
+    if model.base is None:
+        return tau
+    base = model.base
+    tau = np.array(tau, dtype=float)
+    tau[base.wheels] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[model.block("wheel_i")])[0]
+    return tau
 
 
-def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """dx/dt at state x under robot joint torques tau (N m, N)."""
+def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float = 0.0) -> np.ndarray:
+    """dx/dt at state x and time t (s) under robot joint torques tau (N m, N)."""
+    x = model.imposed(t, x)
     dx = np.zeros_like(x)
     dx[model.block("q")] = x[model.block("v")]
     if model.plant.nv:
-        dx[model.velocity_block] = model.accelerations(data, x, tau)
+        dx[model.velocity_block] = model.accelerations(data, x, tau, t)
     z = model.block("z")
     if z.stop > z.start:
         dx[z] = model.friction.state_derivative(x[model.block("v")], x[z])
     if model.body_names:
         dx[model.block("chart")] = model.chart_rate(x)
+    if model.base is not None:
+        base = model.base
+        dx[model.block("base")] = base.pose_rate(x[model.block("base")], x[model.block("base_v")])
+        integral = model.block("wheel_i")
+        if integral.stop > integral.start:
+            dx[integral] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[integral])[1]
     return dx
 
 
@@ -212,11 +227,13 @@ class ConstraintStepping:
 
     def _pack(self) -> np.ndarray:
         model, x = self.model, self.x.copy()
-        nq = model.robot.nq
-        x[model.block("q")] = self.q[:nq]
+        root = model.plant.root_nq
+        x[model.block("q")] = self.q[root:root + model.robot.nq]
+        if model.base is not None:
+            x[model.block("base")] = model.base.unwrapped_pose(self.q[:root], x[model.block("base")][2])
         x[model.velocity_block] = self.v
         if model.body_names:
-            x[model.block("pose")] = self.q[nq:]
+            x[model.block("pose")] = self.q[model.body_offset:]
             x[model.block("chart")] = 0.0
         return x
 
@@ -224,14 +241,22 @@ class ConstraintStepping:
         model, dt = self.model, self.model.integrator.dt
         count = max(1, math.ceil((t_target - self.t) / dt - 1e-9))
         start, h = self.t, (t_target - self.t) / count
-        self.t_previous, self.x_previous = self.t, self.x
+        self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
         for i in range(1, count + 1):
             tau = np.zeros(model.plant.nv)
             if model.nv:
                 x = self._pack()
-                tau[:model.nv] = self.torque(self.t, x)
+                joints = model.joint_velocities
+                tau[joints] = self.torque(self.t, x)
                 if model.friction is not None:
-                    tau[:model.nv] -= model.friction.torque(self.v[:model.nv])
+                    tau[joints] -= model.friction.torque(self.v[joints])
+            if model.base is not None:  # dynamic (a kinematic base refuses the stepper)
+                tau += model.base.floor_force(model.plant.model, self.data, self.q, self.v)
+                integral = model.block("wheel_i")
+                if integral.stop > integral.start:  # the PI's integral terms, explicit Euler
+                    base = model.base
+                    self.x[integral] += h * base.wheel_torques(self.t, self.v[model.joint_velocities][base.wheels],
+                                                               self.x[integral])[1]
             self.q, self.v, report = model.stepper.step(self.data, self.q, self.v, tau, h)
             self.t = t_target if i == count else start + i * h
             self.steps += 1
@@ -313,14 +338,15 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
         return robot_torque(model, reference, t, x, command)
 
     def rhs(t: float, x: np.ndarray) -> np.ndarray:
-        return derivative(model, data, x, torque(t, x))
+        return derivative(model, data, x, torque(t, x), t)
 
     outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress)
     outcome.held = held
     s = outcome.solution
     keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
     # outputs with every chart folded into its pose: the pose block is the body's pose
-    outcome.solution = Solution(s.t[keep], np.array([model.recentred(x) for x in s.x[keep]]), s.stats,
+    outcome.solution = Solution(s.t[keep], np.array([model.imposed(t, model.recentred(x))
+                                                     for t, x in zip(s.t[keep], s.x[keep])]), s.stats,
                                 s.state_names)
     return outcome
 

@@ -45,6 +45,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import require_fixed_root
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.sim.base import POSE_LABELS, TWIST_LABELS, BaseModel, planar_robot
 from youbot_dynamics.sim.controllers import Controller, Reference, make_controller
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
 from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
@@ -92,6 +93,8 @@ class SimModel:
     conservative: bool
     passive: bool
     ee_frame: int
+    velocity_index: slice | np.ndarray | None = None
+    base: BaseModel | None = None
 
     # ---- sizes and slices ----------------------------------------------------------------
     @property
@@ -109,21 +112,35 @@ class SimModel:
         return self.layout.slice(symbol)
 
     @property
-    def velocity_block(self) -> slice:
-        """The plant's generalised velocity [v, twist] in x."""
-        v = self.block("v")
-        return slice(v.start, v.stop + 6 * len(self.body_names))
+    def velocity_block(self) -> slice | np.ndarray:
+        """Where the plant's generalised velocity [base twist, v, body twists] sits in x (a
+        slice, or an index array with a moving base)."""
+        return self.velocity_index
+
+    @property
+    def joint_velocities(self) -> slice:
+        """Where the robot's joint rates sit in the plant's velocity (after the root's)."""
+        root = self.plant.root_nv
+        return slice(root, root + self.nv)
+
+    @property
+    def body_offset(self) -> int:
+        """Where the free bodies' coordinates start in the plant's configuration."""
+        return self.plant.root_nq + self.robot.nq
 
     # ---- state -> plant ---------------------------------------------------------------------
     def configuration(self, x: np.ndarray) -> np.ndarray:
-        """The plant's configuration (nq) at state x: robot q, then per body its pose
-        integrated by its chart (position m, quaternion x, y, z, w)."""
+        """The plant's configuration (nq) at state x: the planar root (x, y, cos, sin) of a
+        moving base, robot q, then per body its pose integrated by its chart (position m,
+        quaternion x, y, z, w)."""
         q = x[self.block("q")]
+        if self.base is not None:
+            q = np.concatenate([self.base.root_configuration(x[self.block("base")]), q])
         if not self.body_names:
             return q
         model = self.plant.model
         reference = np.concatenate([q, x[self.block("pose")]])
-        tangent = np.concatenate([np.zeros(self.nv), x[self.block("chart")]])
+        tangent = np.concatenate([np.zeros(self.plant.root_nv + self.nv), x[self.block("chart")]])
         return pin.integrate(model, reference, tangent)
 
     def velocity(self, x: np.ndarray) -> np.ndarray:
@@ -141,27 +158,45 @@ class SimModel:
         if not self.body_names:
             return x
         x = x.copy()
-        x[self.block("pose")] = self.configuration(x)[self.robot.nq:]
+        x[self.block("pose")] = self.configuration(x)[self.body_offset:]
         x[self.block("chart")] = 0.0
         return x
 
+    def imposed(self, t: float, x: np.ndarray) -> np.ndarray:
+        """x with a kinematic base's motion at t (s) imposed (pose, twist, wheel speeds from
+        the commanded path); x itself otherwise."""
+        if self.base is None or self.base.dynamic:
+            return x
+        x = x.copy()
+        pose, twist, _ = self.base.command(t)
+        x[self.block("base")], x[self.block("base_v")] = pose, twist
+        x[self.block("v").start + self.base.wheels] = self.base.imposed_speeds(t)[0]
+        return x
+
     # ---- dynamics ------------------------------------------------------------------------------
-    def accelerations(self, data: pin.Data, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """The plant's accelerations (nv) at state x under robot joint torques tau (N m):
-        ABA with joint friction and the compliant contact forces (Pinocchio's convention for
-        the bodies: the time derivative of the body twist)."""
+    def accelerations(self, data: pin.Data, x: np.ndarray, tau: np.ndarray, t: float = 0.0) -> np.ndarray:
+        """The plant's accelerations (nv) at state x and time t (s) under robot joint torques
+        tau (N m): ABA with joint friction, the compliant contact forces and a dynamic base's
+        floor forces (Pinocchio's convention for the root and the bodies: the time derivative
+        of the body twist); a kinematic base's root and wheels follow its path."""
         q, v = self.configuration(x), self.velocity(x)
         generalised = np.zeros(self.plant.nv)
-        nv = self.nv
-        generalised[:nv] = tau
+        joints = self.joint_velocities
+        generalised[joints] = tau
         if self.friction is not None:
             z = x[self.block("z")]
-            generalised[:nv] -= self.friction.torque(v[:nv], z if z.size else None)
+            generalised[joints] -= self.friction.torque(v[joints], z if z.size else None)
         if self.compliant:
             pin.framesForwardKinematics(self.plant.model, data, q)
             generalised += self.contact.compliant_force(data, q, v, self.contact.poses(data), self.compliant,
                                                         x[self.block("s")])
-        return forward_dynamics(self.plant, data, q, v, generalised)
+        if self.base is None:
+            return forward_dynamics(self.plant, data, q, v, generalised)
+        if self.base.dynamic:
+            generalised += self.base.floor_force(self.plant.model, data, q, v)
+            return forward_dynamics(self.plant, data, q, v, generalised)
+        imposed = np.concatenate([self.base.command(t)[2], self.base.imposed_speeds(t)[1]])
+        return self.base.prescribed_accelerations(self.plant.model, data, q, v, generalised, imposed)
 
     def inverse_mass(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
         """M(q)^-1 of the plant (nv x nv), symmetric."""
@@ -191,7 +226,7 @@ class SimModel:
         if not self.body_names:
             return {}
         q = self.configuration(x)
-        nq = self.robot.nq
+        nq = self.body_offset
         return {name: pin.XYZQUATToSE3(q[nq + 7 * k:nq + 7 * k + 7]).homogeneous
                 for k, name in enumerate(self.body_names)}
 
@@ -200,7 +235,7 @@ class SimModel:
         ``rotation`` (k, nb, 3, 3; body axes in the world), ``velocity`` and ``angular_velocity``
         (k, nb, 3; world frame, m/s and rad/s)."""
         xs = np.atleast_2d(xs)
-        nb, nq = len(self.body_names), self.robot.nq
+        nb, nq = len(self.body_names), self.body_offset
         q = np.array([self.configuration(x)[nq:] for x in xs]).reshape(len(xs), nb, 7)
         rotation = matrix_from_quaternion(q[:, :, 3:])
         twist = xs[:, self.block("twist")].reshape(len(xs), nb, 6)
@@ -209,7 +244,8 @@ class SimModel:
                 "angular_velocity": np.einsum("kbij,kbj->kbi", rotation, twist[:, :, 3:])}
 
     def ee_pose(self, data: pin.Data, x: np.ndarray) -> np.ndarray:
-        """4x4 pose (m) of the end-effector link in the root frame at state x."""
+        """4x4 pose (m) of the end-effector link at state x: in the root frame, or in the
+        world (odom) frame with a moving base."""
         pin.framesForwardKinematics(self.plant.model, data, self.configuration(x))
         return data.oMf[self.ee_frame].homogeneous.copy()
 
@@ -250,10 +286,15 @@ def _plant(robot: Robot, scene: Scene) -> tuple[Robot, list[int | None]]:
     return plant, frames
 
 
-def _layout(robot: Robot, scene: Scene, friction: JointFriction | None, compliant: list[str]) -> StateLayout:
+def _layout(robot: Robot, scene: Scene, friction: JointFriction | None, compliant: list[str],
+            base: BaseModel | None) -> StateLayout:
     names = [spec.body.name for spec in scene.free_bodies]
     lugre = [] if friction is None else [n for n, law in zip(friction.joint_names, friction.laws) if law == "lugre"]
+    moving = base is not None
     return StateLayout.for_joints(robot.joint_names, {
+        "base": POSE_LABELS if moving else (),
+        "base_v": TWIST_LABELS if moving else (),
+        "wheel_i": [f"{n}.integral" for n in base.mecanum.names] if moving and base.pi else (),
         "twist": [f"{n}.{a}" for n in names for a in _TWIST],
         "z": lugre,
         "pose": [f"{n}.{a}" for n in names for a in _POSE],
@@ -276,13 +317,22 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
     robot = robot_with_gravity(scene.robot(), scene.gravity)
     require_fixed_root(robot, scene.source)
     friction = scene.joint_friction(robot)
-    plant, frames = _plant(robot, scene)
+    base = None
+    if scene.base.mode == "fixed":
+        plant, frames = _plant(robot, scene)
+    else:
+        plant, frames = _plant(robot_with_gravity(planar_robot(scene.robot_path, scene.moving, scene.locked),
+                                                  scene.gravity), scene)
+        base = BaseModel.compile(scene.base, robot, plant.nv, scene.gravity)
+        if plant.mimic or (base.mode == "kinematic" and integrator.method in STEPPERS):
+            raise UserInputError(f"{scene.source}: base: a {base.mode} base takes neither mimic joints nor, "
+                                 "when kinematic, the constraint stepper")
     pairs = [Pair(p.name, *(next(i for i, g in enumerate(scene.geometries) if g.name == name)
                             for name in (p.geometry1, p.geometry2)), p.law) for p in scene.contacts]
     contact = ContactModel(plant.model, scene.geometries, frames, pairs) if scene.has_contact else None
     compliant = tuple(k for k, p in enumerate(pairs) if isinstance(p.law, HuntCrossley))
     impulsive = tuple(k for k, p in enumerate(pairs) if isinstance(p.law, NewtonImpact))
-    layout = _layout(robot, scene, friction, [pairs[k].name for k in compliant])
+    layout = _layout(robot, scene, friction, [pairs[k].name for k in compliant], base)
     spec = scene.controller
     trajectory = None if spec.trajectory is None else PointToPointTrajectory.through(
         np.vstack([scene.q0, spec.trajectory.waypoints]), spec.trajectory.v_max,
@@ -298,6 +348,11 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
             raise UserInputError(f"{scene.source}: control_rate {control_rate!r} Hz must be positive")
     stepper = ConstraintStepper(contact, StepperSettings(solver=integrator.method)) \
         if integrator.method in STEPPERS else None
+    velocity = layout.slice("v")
+    velocity_index = slice(velocity.start, velocity.stop + 6 * len(scene.free_bodies))
+    if base is not None:
+        velocity_index = np.r_[layout.slice("base_v"), velocity_index]
+    passive = spec.type == "none" and (base is None or (base.dynamic and base.pi is None))
     return SimModel(
         scene=scene, integrator=integrator, limits=limits, robot=robot, plant=plant,
         body_names=tuple(s.body.name for s in scene.free_bodies), friction=friction,
@@ -307,5 +362,6 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
         bounds=bounds,
         penetration_limits={p.name: penetration_limit(shapes[p.geometry1], shapes[p.geometry2],
                                                       limits.penetration_fraction) for p in scene.contacts},
-        conservative=friction is None and spec.type == "none" and not scene.contacts and controller is None,
-        passive=spec.type == "none", ee_frame=robot.frame_id(robot.end_effectors[0]))
+        conservative=(passive and friction is None and not scene.contacts and controller is None
+                      and (base is None or base.mu == 0.0)),
+        passive=passive, ee_frame=plant.frame_id(robot.end_effectors[0]), velocity_index=velocity_index, base=base)

@@ -64,6 +64,7 @@ from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
 from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, tolerances_from_tol
 from youbot_dynamics.sim.scene_contacts import (EMPTY_ROBOT, ContactPairSpec, FreeBodySpec, composed_urdf,
                                                 read_contacts, read_free_bodies, read_geometries)
+from youbot_dynamics.sim.scene_base import BaseSpec, read_base
 from youbot_dynamics.sim.scene_reader import SceneError, SceneReader, read_yaml
 
 CONTROLLERS = ("none", "pd", "computed_torque")
@@ -71,7 +72,7 @@ RECORDABLE = ("q", "v", "z", "tau", "energy", "ee_position")
 FRICTION_DEFAULTS = ("urdf", "none")
 CONTACT_SECTIONS = ("free_bodies", "world", "geometry", "contacts")
 TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "gravity", "friction",
-            "controller", "integrator", "duration", "outputs", *CONTACT_SECTIONS)
+            "controller", "integrator", "duration", "outputs", "base", *CONTACT_SECTIONS)
 #: Integrators of the constraint stepper (dynamics/contact_stepper.py), fixed step dt.
 STEPPERS = ("pgs", "admm")
 
@@ -167,6 +168,7 @@ class Scene:
     free_bodies: tuple[FreeBodySpec, ...] = ()
     geometries: tuple = ()
     contacts: tuple[ContactPairSpec, ...] = ()
+    base: BaseSpec = BaseSpec()
 
     @property
     def has_contact(self) -> bool:
@@ -311,7 +313,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         moving=robot.joint_names, locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0),
         gravity=_frozen(gravity), friction_default=friction_default,
         friction=MappingProxyType(joint_friction), controller=controller, integrator=integrator,
-        duration=duration, outputs=OutputSpec(rate, record))
+        duration=duration, outputs=OutputSpec(rate, record), base=read_base(reader, data.get("base"), robot))
     try:
         scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
     except UserInputError as error:
