@@ -48,6 +48,19 @@ POSE_LABELS = ("base.x", "base.y", "base.yaw")
 TWIST_LABELS = ("base.vx", "base.vy", "base.wz")
 
 
+@dataclass(frozen=True)
+class BaseMotion:
+    """A kinematic base's motion at one instant: pose (x, y, yaw; world, m and rad), body
+    twist (vx, vy, wz) and its rate, wheel speeds (rad/s) and accelerations (rad/s^2), the
+    wheels in ``mecanum.names`` order."""
+
+    pose: np.ndarray
+    twist: np.ndarray
+    acceleration: np.ndarray
+    wheel_speeds: np.ndarray
+    wheel_accelerations: np.ndarray
+
+
 @dataclass(frozen=True, eq=False)
 class BaseModel:
     """A scene's moving base, compiled (immutable). ``wheels``: indices of the wheel joints
@@ -105,11 +118,12 @@ class BaseModel:
         ax, ay = c * acceleration[0] + s * acceleration[1], -s * acceleration[0] + c * acceleration[1]
         return pose, np.array([vx, vy, rate[2]]), np.array([ax + rate[2] * vy, ay - rate[2] * vx, acceleration[2]])
 
-    def imposed_speeds(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Wheel speeds (rad/s) and accelerations (rad/s^2) of rolling without slip along the
-        commanded motion at t (s): H V and H dV/dt."""
-        _, twist, acceleration = self.command(t)
-        return wheel_speeds(self.mecanum, twist), wheel_speeds(self.mecanum, acceleration)
+    def motion(self, t: float) -> BaseMotion:
+        """The commanded motion at t (s) with the wheels rolling without slip along it:
+        speeds H V and accelerations H dV/dt."""
+        pose, twist, acceleration = self.command(t)
+        return BaseMotion(pose, twist, acceleration, wheel_speeds(self.mecanum, twist),
+                          wheel_speeds(self.mecanum, acceleration))
 
     # ---- the planar root ------------------------------------------------------------------------
     @staticmethod

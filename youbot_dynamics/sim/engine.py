@@ -138,7 +138,7 @@ def initial_state(model: SimModel, q: np.ndarray | None = None, v: np.ndarray | 
         blocks["s"] = np.full(len(model.compliant), MIN_APPROACH_SPEED)
     if model.base is not None:
         blocks.update(base=model.base.pose0, base_v=model.base.twist0)
-    x = model.imposed(0.0, model.layout.pack(**blocks))
+    x = model.imposed(model.layout.pack(**blocks), model.base_motion(0.0))
     state = SimState(0.0, x, model.reference, np.zeros(robot.nv), model.plant.model.createData(),
                      IntegratorStats(model.integrator.method))
     if model.callback is None:  # a Python controller is first asked when the run starts
@@ -162,11 +162,12 @@ def robot_torque(model: SimModel, reference, t: float, x: np.ndarray, command: n
 
 def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float = 0.0) -> np.ndarray:
     """dx/dt at state x and time t (s) under robot joint torques tau (N m, N)."""
-    x = model.imposed(t, x)
+    motion = model.base_motion(t)
+    x = model.imposed(x, motion)
     dx = np.zeros_like(x)
     dx[model.block("q")] = x[model.block("v")]
     if model.plant.nv:
-        dx[model.velocity_block] = model.accelerations(data, x, tau, t)
+        dx[model.velocity_block] = model.accelerations(data, x, tau, motion)
     z = model.block("z")
     if z.stop > z.start:
         dx[z] = model.friction.state_derivative(x[model.block("v")], x[z])
@@ -345,7 +346,7 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
     s = outcome.solution
     keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
     # outputs with every chart folded into its pose: the pose block is the body's pose
-    outcome.solution = Solution(s.t[keep], np.array([model.imposed(t, model.recentred(x))
+    outcome.solution = Solution(s.t[keep], np.array([model.imposed(model.recentred(x), model.base_motion(t))
                                                      for t, x in zip(s.t[keep], s.x[keep])]), s.stats,
                                 s.state_names)
     return outcome

@@ -30,7 +30,8 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Callable
+from types import MappingProxyType
+from typing import Callable, Mapping
 
 import numpy as np
 import pinocchio as pin
@@ -45,7 +46,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import require_fixed_root
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.base import POSE_LABELS, TWIST_LABELS, BaseModel, planar_robot
+from youbot_dynamics.sim.base import POSE_LABELS, TWIST_LABELS, BaseModel, BaseMotion, planar_robot
 from youbot_dynamics.sim.controllers import Controller, Reference, make_controller
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
 from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
@@ -62,6 +63,8 @@ MIN_APPROACH_SPEED = 1e-2
 #: A Python controller: (t s, q rad, v rad/s) of the robot's moving joints -> joint torques (N m).
 ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
+#: Every block a state may hold (see the module docstring), in state order.
+BLOCKS = ("q", "v", "base", "base_v", "wheel_i", "twist", "z", "pose", "chart", "s", "armed")
 _POSE = ("x", "y", "z", "qx", "qy", "qz", "qw")
 _TWIST = ("vx", "vy", "vz", "wx", "wy", "wz")
 
@@ -94,6 +97,7 @@ class SimModel:
     passive: bool
     ee_frame: int
     velocity_index: slice | np.ndarray | None = None
+    slices: Mapping[str, slice] = dataclasses.field(default_factory=dict)
     base: BaseModel | None = None
 
     # ---- sizes and slices ----------------------------------------------------------------
@@ -108,8 +112,8 @@ class SimModel:
         return self.robot.nv
 
     def block(self, symbol: str) -> slice:
-        """Where block ``symbol`` sits in x."""
-        return self.layout.slice(symbol)
+        """Where block ``symbol`` sits in x (looked up once, at compilation)."""
+        return self.slices[symbol]
 
     @property
     def velocity_block(self) -> slice | np.ndarray:
@@ -162,23 +166,27 @@ class SimModel:
         x[self.block("chart")] = 0.0
         return x
 
-    def imposed(self, t: float, x: np.ndarray) -> np.ndarray:
-        """x with a kinematic base's motion at t (s) imposed (pose, twist, wheel speeds from
-        the commanded path); x itself otherwise."""
-        if self.base is None or self.base.dynamic:
+    def base_motion(self, t: float) -> BaseMotion | None:
+        """A kinematic base's commanded motion at t (s); None for a fixed or dynamic base."""
+        return None if self.base is None or self.base.dynamic else self.base.motion(t)
+
+    def imposed(self, x: np.ndarray, motion: BaseMotion | None) -> np.ndarray:
+        """x with a kinematic base's ``motion`` imposed (pose, twist, wheel speeds); x
+        itself when ``motion`` is None."""
+        if motion is None:
             return x
         x = x.copy()
-        pose, twist, _ = self.base.command(t)
-        x[self.block("base")], x[self.block("base_v")] = pose, twist
-        x[self.block("v").start + self.base.wheels] = self.base.imposed_speeds(t)[0]
+        x[self.block("base")], x[self.block("base_v")] = motion.pose, motion.twist
+        x[self.block("v").start + self.base.wheels] = motion.wheel_speeds
         return x
 
     # ---- dynamics ------------------------------------------------------------------------------
-    def accelerations(self, data: pin.Data, x: np.ndarray, tau: np.ndarray, t: float = 0.0) -> np.ndarray:
-        """The plant's accelerations (nv) at state x and time t (s) under robot joint torques
-        tau (N m): ABA with joint friction, the compliant contact forces and a dynamic base's
-        floor forces (Pinocchio's convention for the root and the bodies: the time derivative
-        of the body twist); a kinematic base's root and wheels follow its path."""
+    def accelerations(self, data: pin.Data, x: np.ndarray, tau: np.ndarray,
+                      motion: BaseMotion | None = None) -> np.ndarray:
+        """The plant's accelerations (nv) at state x under robot joint torques tau (N m): ABA
+        with joint friction, the compliant contact forces and a dynamic base's floor forces
+        (Pinocchio's convention for the root and the bodies: the time derivative of the body
+        twist); a kinematic base's root and wheels follow its ``motion``."""
         q, v = self.configuration(x), self.velocity(x)
         generalised = np.zeros(self.plant.nv)
         joints = self.joint_velocities
@@ -195,7 +203,7 @@ class SimModel:
         if self.base.dynamic:
             generalised += self.base.floor_force(self.plant.model, data, q, v)
             return forward_dynamics(self.plant, data, q, v, generalised)
-        imposed = np.concatenate([self.base.command(t)[2], self.base.imposed_speeds(t)[1]])
+        imposed = np.concatenate([motion.acceleration, motion.wheel_accelerations])
         return self.base.prescribed_accelerations(self.plant.model, data, q, v, generalised, imposed)
 
     def inverse_mass(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
@@ -364,4 +372,5 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
                                                       limits.penetration_fraction) for p in scene.contacts},
         conservative=(passive and friction is None and not scene.contacts and controller is None
                       and (base is None or base.mu == 0.0)),
-        passive=passive, ee_frame=plant.frame_id(robot.end_effectors[0]), velocity_index=velocity_index, base=base)
+        passive=passive, ee_frame=plant.frame_id(robot.end_effectors[0]), velocity_index=velocity_index, base=base,
+        slices=MappingProxyType({symbol: layout.slice(symbol) for symbol in BLOCKS}))
