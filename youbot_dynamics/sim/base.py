@@ -147,7 +147,7 @@ class BaseModel:
     def wheel_loads(self, plant: pin.Model, data: pin.Data, q: np.ndarray) -> np.ndarray:
         """Normal force (N) on each wheel: the static weight distribution of the robot's
         centre of mass (the root joint's subtree: free bodies left out) at configuration q."""
-        pin.centerOfMass(plant, data, q, False)
+        pin.centerOfMass(plant, data, q, True)
         centre = data.oMi[1].actInv(data.com[1])
         return wheel_normal_forces(self.mecanum, float(data.mass[1]), centre, gravity=self.gravity)
 

@@ -1,0 +1,187 @@
+"""The moving base in the engine (issue 11): a planar root under the arm.
+
+- dynamic base, wheels free, no friction across the rollers, arm swinging: the whole robot's
+  planar linear momentum and angular momentum about z (Pinocchio's centroidal momentum, not
+  the ABA the engine integrates) hold to 1e-8;
+- with the rollers' friction and braked wheels the centre of mass moves no more than
+  mu (sum of the normal forces) t^2 / (2 m) (the floor's force is at most mu sum N), and the
+  base far less than on a frictionless floor;
+- kinematic base: the root and the wheels follow the path exactly, the arm's accelerations
+  satisfy Pinocchio's inverse dynamics with the prescribed ones given, and the arm deflects
+  only because the base accelerates.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+
+from youbot_dynamics.sim.engine import initial_state, robot_torque, run
+from youbot_dynamics.sim.model import compile
+from youbot_dynamics.sim.scene import SceneError, load_scene, scene_dir
+from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+
+ARM = ["arm_joint_1", "arm_joint_2", "arm_joint_3", "arm_joint_4", "arm_joint_5"]
+WHEELS = ["wheel_joint_fl", "wheel_joint_fr", "wheel_joint_bl", "wheel_joint_br"]
+#: arm_swing's start: the arm tipped 0.4 rad from the candle pose.
+TIPPED = {"arm_joint_1": 2.9496, "arm_joint_2": 1.5345, "arm_joint_3": -2.2482, "arm_joint_4": 1.7890,
+          "arm_joint_5": 2.9234}
+
+
+def swing_scene(tmp_path: Path, base: dict, v0: dict | None = None, duration: float = 2.0):
+    """The arm falling from the tipped pose on a moving base."""
+    data = {"name": "base_swing", "moving": ARM + WHEELS, "initial": {"q": TIPPED, "v": v0 or {}},
+            "friction": {"default": "none"}, "controller": {"type": "none"}, "base": base,
+            "integrator": {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}, "duration": duration,
+            "outputs": {"rate": 50, "record": ["q", "v", "energy"]}}
+    path = tmp_path / "swing.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return load_scene(path)
+
+
+def planar_momentum(model, data, x) -> np.ndarray:
+    """(p_x, p_y, L_z about the world origin) of the whole plant (kg m/s, kg m^2/s)."""
+    h = pin.computeCentroidalMomentum(model.plant.model, data, model.configuration(x), model.velocity(x))
+    c, p = data.com[0], h.linear
+    return np.array([p[0], p[1], h.angular[2] + c[0] * p[1] - c[1] * p[0]])
+
+
+def centre_of_mass(model, data, x) -> np.ndarray:
+    return pin.centerOfMass(model.plant.model, data, model.configuration(x)).copy()
+
+
+def test_free_base_conserves_planar_momentum(tmp_path):
+    model = compile(swing_scene(tmp_path, {"mode": "dynamic", "floor": {"mu": 0.0}}, {"arm_joint_1": 0.5}))
+    assert model.conservative and model.plant.root == "planar"
+    result = run(model)
+    data = model.plant.model.createData()
+    momentum = np.array([planar_momentum(model, data, x) for x in result.x])
+    drift = np.abs(momentum - momentum[0]).max(axis=0)
+    # measured 2.3e-10, 6.1e-10, 1.1e-10 (dop853, rtol 1e-10) against momenta of 0.01-0.3
+    assert np.all(drift < 1e-8), drift
+    assert np.abs(momentum).max() > 0.1  # there is momentum to conserve
+    base = result.x[:, model.block("base")]
+    assert np.abs(base[-1] - base[0]).max() > 5e-3  # the base reacts to the swinging arm
+    assert result.energy_error < 1e-6  # measured 9e-10 J
+
+
+def test_roller_friction_bounds_the_base(tmp_path):
+    braked = {"mode": "dynamic", "floor": {"mu": 0.3, "velocity_scale": 0.01},
+              "controller": {"kp": 0.5, "ki": 5.0, "torque_limit": 20.0}}
+    model = compile(swing_scene(tmp_path, braked, duration=1.0))
+    free = compile(swing_scene(tmp_path, {"mode": "dynamic"}, duration=1.0))
+    result, frictionless = run(model), run(free)
+    data = model.plant.model.createData()
+    x0 = result.x[0]
+    loads = model.base.wheel_loads(model.plant.model, data, model.configuration(x0))
+    mass = float(data.mass[1])
+    assert loads.sum() == pytest.approx(mass * 9.81, rel=1e-12)
+    # the floor pushes with at most mu sum N: from rest the centre of mass moves at most
+    # mu sum N t^2 / (2 m) (the arm starts at rest, so the momentum starts at zero)
+    bound = 0.3 * loads.sum() * result.t ** 2 / (2.0 * mass)
+    moved = np.array([np.linalg.norm((centre_of_mass(model, data, x) - centre_of_mass(model, data, x0))[:2])
+                      for x in result.x])
+    assert np.all(moved <= bound + 1e-12)
+    assert moved.max() > 5e-3  # the floor does push (without it the centre of mass stays put)
+    base = model.block("base")
+    shift = np.abs(result.x[:, base][:, :2] - result.x[0, base][:2]).max()
+    shift_free = np.abs(frictionless.x[:, base][:, :2] - frictionless.x[0, base][:2]).max()
+    # measured 9.6 mm braked on the rollers (the regularised law creeps at about v_s F / (mu N)
+    # with v_s = 0.01 m/s) against 29.5 mm on a frictionless floor
+    assert shift < 0.5 * shift_free, (shift, shift_free)
+
+
+def test_kinematic_base_follows_the_path_exactly():
+    scene = load_scene(scene_dir() / "base_square.yaml")
+    model = compile(scene.with_duration(3.0))
+    result = run(model)
+    base = model.base
+    for t, x in zip(result.t, result.x):
+        pose, twist, _ = base.command(t)
+        assert np.array_equal(x[model.block("base")], pose)
+        assert np.array_equal(x[model.block("base_v")], twist)
+        assert np.array_equal(x[model.block("v").start + base.wheels], base.motion(t).wheel_speeds)
+    arm = slice(0, len(ARM))
+    deflection = np.abs(result.x[:, model.block("q")][:, arm] - scene.q0[arm]).max()
+    assert deflection > 1e-2  # the arm feels the base's acceleration
+
+
+def test_fixed_base_holds_the_arm_where_the_kinematic_base_moves_it(tmp_path):
+    data = yaml.safe_load((scene_dir() / "base_square.yaml").read_text())
+    data["base"] = {"mode": "fixed"}
+    data["duration"] = 1.0
+    path = tmp_path / "fixed.yaml"
+    path.write_text(yaml.safe_dump(data))
+    scene = load_scene(path)
+    result = run(compile(scene))
+    # gravity-compensated PD at its set point: an equilibrium (measured 0 rad)
+    assert np.abs(result.x[:, :len(scene.q0)] - scene.q0).max() < 1e-9
+
+
+def test_prescribed_accelerations_satisfy_inverse_dynamics():
+    model = compile(load_scene(scene_dir() / "base_square.yaml"))
+    state = initial_state(model)
+    rng = np.random.default_rng(11)
+    for t in (0.25, 1.7, 2.6):
+        x = state.x.copy()
+        x[model.block("q")] += rng.uniform(-0.3, 0.3, model.nv)
+        x[model.block("v")] = rng.uniform(-1.0, 1.0, model.nv)
+        motion = model.base_motion(t)
+        x = model.imposed(x, motion)
+        tau = robot_torque(model, state.reference, t, x, None)
+        a = model.accelerations(state.data, x, tau, motion)
+        np.testing.assert_array_equal(a[model.base.prescribed],
+                                      np.concatenate([motion.acceleration, motion.wheel_accelerations]))
+        data = model.plant.model.createData()
+        generalised = pin.rnea(model.plant.model, data, model.configuration(x), model.velocity(x), a)
+        free = model.base.free
+        np.testing.assert_allclose(generalised[free], tau[free - 3], atol=1e-10)
+
+
+@pytest.mark.parametrize("base, key", [
+    ({"mode": "rolling"}, "base.mode"),
+    ({"mode": "dynamic", "wheels": ["arm_joint_9"]}, "base.wheels[0]"),
+    ({"mode": "kinematic", "floor": {"mu": 0.5}}, "base.floor"),
+    ({"mode": "dynamic", "controller": {"kp": 1.0}}, "base.controller.ki"),
+    ({"mode": "fixed", "path": {}}, "base.path"),
+    ({"mode": "dynamic", "path": {"waypoints": [[1, 0, 0]], "v_max": 1.0}}, "base.path.a_max"),
+])
+def test_bad_base_sections_name_the_key(tmp_path, base, key):
+    with pytest.raises(SceneError) as error:
+        swing_scene(tmp_path, base)
+    assert error.value.key == key
+
+
+def test_wheels_must_move(tmp_path):
+    data = yaml.safe_load((scene_dir() / "base_square.yaml").read_text())
+    data["moving"] = ARM
+    for name in list(data["controller"]["kp"]):
+        if name.startswith("wheel"):
+            del data["controller"]["kp"][name], data["controller"]["kd"][name]
+    path = tmp_path / "nowheels.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(SceneError, match="base.wheels"):
+        load_scene(path)
+
+
+def test_yaw_rate_of_a_turning_path_is_body_frame():
+    """A path that turns while it moves: the body twist is R(yaw)^T times the world rate and
+    its derivative carries the -yaw' S V term (checked by central differences)."""
+    scene = load_scene(scene_dir() / "base_square.yaml")
+    model = compile(scene)
+    path = PointToPointTrajectory.through([[0, 0, 0], [1.0, 0.5, 1.2]], [0.5, 0.5, 0.6], [1.0, 1.0, 1.0])
+    base = dataclasses.replace(model.base, path=path)
+    for t in (0.3, 1.1, 2.3):
+        pose, twist, rate = base.command(t)
+        _, world, _ = path.evaluate(t)
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        np.testing.assert_allclose(twist, [c * world[0] + s * world[1], -s * world[0] + c * world[1], world[2]],
+                                   atol=1e-15)
+        h = 1e-6
+        numeric = (base.command(t + h)[1] - base.command(t - h)[1]) / (2 * h)
+        np.testing.assert_allclose(rate, numeric, atol=1e-7)
