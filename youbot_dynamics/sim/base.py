@@ -147,9 +147,8 @@ class BaseModel:
     def wheel_loads(self, plant: pin.Model, data: pin.Data, q: np.ndarray) -> np.ndarray:
         """Normal force (N) on each wheel: the static weight distribution of the robot's
         centre of mass (the root joint's subtree: free bodies left out) at configuration q."""
-        pin.centerOfMass(plant, data, q, True)
-        centre = data.oMi[1].actInv(data.com[1])
-        return wheel_normal_forces(self.mecanum, float(data.mass[1]), centre, gravity=self.gravity)
+        pin.centerOfMass(plant, data, q, True)  # subtree centres of mass, each in its joint's frame
+        return wheel_normal_forces(self.mecanum, float(data.mass[1]), data.com[1], gravity=self.gravity)
 
     def floor_force(self, plant: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Generalised force (plant nv; N, N m) of the roller friction at the four contacts
