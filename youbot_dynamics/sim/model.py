@@ -11,8 +11,16 @@ simulation is doing lives in a :class:`~youbot_dynamics.sim.state.SimState`.
 
 The continuous state x (see :mod:`youbot_dynamics.sim.state`) is
 
-    x = [q (robot joints), v (robot joints), twist (6 per body), z (LuGre bristles),
+    x = [q (robot joints), v (robot joints), base (x, y, yaw), base_v (vx, vy, wz),
+         wheel_i (PI integrals, 1 per wheel), twist (6 per body), z (LuGre bristles),
          pose (7 per body), chart (6 per body), s (compliant pairs), armed (compliant pairs)]
+
+``base`` and ``base_v`` exist with a moving base only (scene ``base: kinematic | dynamic``;
+:mod:`youbot_dynamics.sim.base`): the plant then starts with a planar root joint, its
+configuration (x, y, cos yaw, sin yaw) built from ``base`` (a global chart of SE(2): no
+guard, no folding), its velocity the body-frame twist ``base_v``, so that the plant's
+generalised velocity is [base_v, v, twist] (an index array into x). ``wheel_i`` holds the
+wheel-speed PI's integral terms of a dynamic base with a controller.
 
 with a free body's configuration ``pin.integrate(pose, chart)``: ``pose`` (position, m, and
 quaternion x, y, z, w) is a reference held constant (zero derivative), ``chart`` (6, the
