@@ -23,6 +23,7 @@ COMMAND_MODULES = (
     "youbot_dynamics.cli.ros_commands",
     "youbot_dynamics.cli.log_commands",
     "youbot_dynamics.cli.identify_commands",
+    "youbot_dynamics.cli.mobile_commands",
 )
 
 
