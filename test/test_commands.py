@@ -9,12 +9,12 @@ import pinocchio as pin
 import pytest
 
 from youbot_dynamics.model.lie import matrix_from_quaternion
-from youbot_dynamics.sim.commands import (NS_PER_S as NS, EffortCommands, InputCounters, InputRejected, follow,
+from youbot_dynamics.io.stamps import NS_PER_S as NS
+from youbot_dynamics.ros.commands import (EffortCommands, InputCounters, InputRejected, JointSample, follow,
                                           joint_sample, joint_trajectory)
+from youbot_dynamics.ros.frames import LinkFrames
+from youbot_dynamics.ros.inverse import AccelerationEstimator
 from youbot_dynamics.ros.session import InverseSession
-from youbot_dynamics.sim.frames import LinkFrames
-from youbot_dynamics.sim.inverse import AccelerationEstimator
-from youbot_dynamics.sim.commands import JointSample
 from youbot_dynamics.sim.scene import load_scene
 from youbot_dynamics.sim.simulator import Simulator
 

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from youbot_dynamics.ros.session import InverseSession
-from youbot_dynamics.sim.commands import InputRejected
-from youbot_dynamics.sim.inverse import PLAUSIBLE_FACTOR, AccelerationEstimator
+from youbot_dynamics.ros.commands import InputRejected
+from youbot_dynamics.ros.inverse import PLAUSIBLE_FACTOR, AccelerationEstimator
 from youbot_dynamics.sim.scene import load_scene
 
 SCENE = load_scene("arm_ptp")
@@ -148,7 +148,7 @@ def test_unstamped_sample_without_a_receive_time_is_rejected() -> None:
 def test_estimator_clears_on_restart() -> None:
     """A restart forgets the samples and the filter state (``clear``)."""
     estimator = AccelerationEstimator(0.05, max_gap_ns=10)
-    from youbot_dynamics.sim.commands import JointSample
+    from youbot_dynamics.ros.commands import JointSample
     for stamp in (1, 2, 3):
         estimator.push(JointSample(stamp, np.zeros(2), np.full(2, float(stamp))))
     assert estimator.filtered is not None and len(estimator.samples) == 3

@@ -26,7 +26,7 @@ from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
 from youbot_dynamics.ros.session import TOPIC_TYPES, SimulationSession  # noqa: E402
-from youbot_dynamics.sim.frames import LinkFrames  # noqa: E402
+from youbot_dynamics.ros.frames import LinkFrames  # noqa: E402
 from youbot_dynamics.sim.scene import load_scene  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent

@@ -19,11 +19,11 @@ publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics.
 Bounded work per message: the subscriptions take the serialized message and refuse (count
 as ``rejected.too_large``, without deserialising) one over :data:`MAX_MESSAGE_BYTES`; the
 session's checks are linear in the message and refuse more than
-:data:`~youbot_dynamics.sim.commands.MAX_NAMES` names or
-:data:`~youbot_dynamics.sim.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
+:data:`~youbot_dynamics.ros.commands.MAX_NAMES` names or
+:data:`~youbot_dynamics.ros.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
 callback against ``callback_budget`` and reports overruns in /diagnostics (level WARN,
 ``overruns.<source>``, ``worst_callback_s``). Time semantics of stamps:
-:mod:`youbot_dynamics.sim.commands`; inverse mode gives unstamped samples the node clock's
+:mod:`youbot_dynamics.ros.commands`; inverse mode gives unstamped samples the node clock's
 receive time.
 
 No input kills the node: every subscription, timer and service callback runs behind
@@ -76,7 +76,8 @@ from youbot_dynamics.ros.parameters import check_choice, declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
 from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
-from youbot_dynamics.sim.commands import NS_PER_S, InputRejected, stamp_ns_of
+from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
+from youbot_dynamics.ros.commands import InputRejected
 from youbot_dynamics.sim.scene import load_scene
 
 MAX_BURST = 20

@@ -14,7 +14,7 @@ from rclpy.node import Node
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.ros.qos import SUBSCRIPTION_PROFILES
-from youbot_dynamics.sim.commands import TIMEOUT_ACTIONS
+from youbot_dynamics.ros.commands import TIMEOUT_ACTIONS
 
 MODES = ("simulate", "inverse")
 CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS, "joint_states_qos": tuple(SUBSCRIPTION_PROFILES)}

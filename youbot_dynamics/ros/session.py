@@ -15,7 +15,7 @@ Shapes for viewers (visualization_msgs/MarkerArray, namespace = the shape's name
 /free_bodies_markers draws every free body at every sample (in the root frame);
 /scene_markers, latched (transient local, published once at start and logged at t = 0),
 draws the static world geometry (root frame) and the geometry on links (in the link's
-frame, frame-locked). A halfspace is drawn as a plate (``sim.frames.drawn_shape``).
+frame, frame-locked). A halfspace is drawn as a plate (``io.drawn_shapes.drawn_shape``).
 
 Free bodies (simulate mode) appear like the robot's links: on /tf as ``<root frame> ->
 <body name>`` and in the Rerun recording as their shapes; on ROS, as one
@@ -40,7 +40,7 @@ scene but not the clock: the samples after a reset continue from the last stamp 
 scene's t = 0 is then at ``epoch_ns``), so /clock, every header stamp and the log times of
 the MCAP and the Rerun recording stay monotonic in one run and no stamp repeats. The reset
 is recorded as an event: /diagnostics (also logged) carries ``resets`` and
-``last_reset_at`` (node time, s). Time semantics of the inputs: :mod:`youbot_dynamics.sim.commands`.
+``last_reset_at`` (node time, s). Time semantics of the inputs: :mod:`youbot_dynamics.ros.commands`.
 """
 from __future__ import annotations
 
@@ -59,18 +59,18 @@ from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
+from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
+from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                           follow, joint_sample, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
-from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
-from youbot_dynamics.sim.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
+from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, body_transforms
+from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
                                          implausible_joints)
+from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
 from youbot_dynamics.sim.scene import Scene
 from youbot_dynamics.sim.simulator import Simulator, Snapshot, robot_with_gravity
 
-NS_PER_S = messages.NS_PER_S
 Outputs = list[tuple[str, object]]
 
 TOPIC_TYPES = {
@@ -430,7 +430,7 @@ class SimulationSession(_Session):
     def trajectory(self, names: Sequence[str], points: Sequence[tuple[int, Sequence[float], Sequence[float]]],
                    stamp_ns: int, wall_ns: int | None = None) -> None:
         """Follow a joint trajectory from its stamp (node time, see
-        :func:`~youbot_dynamics.sim.commands.node_time_of_stamp`: unstamped or a past stamp
+        :func:`~youbot_dynamics.ros.commands.node_time_of_stamp`: unstamped or a past stamp
         within the command timeout: now; a wall-clock stamp: by its age; far future or older:
         rejected); ``points`` are (time_from_start (int ns), positions, velocities)."""
         try:
@@ -547,7 +547,7 @@ class SimulationSession(_Session):
 
 class InverseSession(_Session):
     """Torques from measured joint states: accelerations by central differences (see
-    :mod:`youbot_dynamics.sim.inverse`), tau = RNEA + friction of the scene's robot."""
+    :mod:`youbot_dynamics.ros.inverse`), tau = RNEA + friction of the scene's robot."""
 
     mode = "inverse"
 
@@ -589,7 +589,7 @@ class InverseSession(_Session):
         and counts :class:`InputRejected`; a rejected sample breaks the difference stencil
         (no torque is computed across it: the next torque needs three good samples after
         it), and so does a gap or a jump back in the stamps (see
-        :mod:`youbot_dynamics.sim.inverse`). A sample whose velocity is beyond the
+        :mod:`youbot_dynamics.ros.inverse`). A sample whose velocity is beyond the
         velocity-limit bound is rejected (``out_of_limits``). A torque that is implausible
         (beyond the effort-limit bound) or not finite is not published: the sample counts as
         accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
