@@ -23,10 +23,11 @@ from std_srvs.srv import SetBool, Trigger  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E402
 
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
+from youbot_dynamics.model.lie import matrix_from_quaternion  # noqa: E402
+from youbot_dynamics.model.screws import fkin_space, screw_chain  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
 from youbot_dynamics.ros.session import TOPIC_TYPES, SimulationSession  # noqa: E402
-from youbot_dynamics.ros.frames import LinkFrames  # noqa: E402
 from youbot_dynamics.sim.scene import load_scene  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
@@ -65,13 +66,13 @@ def test_simulate_mode_publishes_the_simulated_motion() -> None:
         for field in ("position", "velocity", "effort"):
             assert np.array_equal(getattr(got, field), getattr(want, field))
     assert np.ptp([m.position[0] for m in states]) > 1e-3        # the arm moved
-    frames = LinkFrames(reference.robot)
+    chain = screw_chain(reference.robot)
     for pose, state in zip(poses, states):
         q = dict(zip(state.name, state.position))
-        position, quaternion = frames.ee_pose(np.array([q[name] for name in reference.robot.joint_names]))
+        expected = fkin_space(chain, np.array([q[name] for name in reference.robot.joint_names]))
         p, o = pose.pose.position, pose.pose.orientation
-        assert np.allclose([p.x, p.y, p.z], position, atol=1e-12)
-        assert np.allclose([o.x, o.y, o.z, o.w], quaternion, atol=1e-12)
+        assert np.allclose([p.x, p.y, p.z], expected[:3, 3], atol=1e-12)
+        assert np.allclose(matrix_from_quaternion([o.x, o.y, o.z, o.w]), expected[:3, :3], atol=1e-12)
         assert pose.header.frame_id == "base_footprint"
     assert float(diagnostics["sim_time"]) == pytest.approx(0.5)
     assert int(diagnostics["integrator.steps"]) > 0 and diagnostics["integrator.integrator"] == "cvode_bdf"
