@@ -245,6 +245,40 @@ def test_parameter_ranges_and_choices_are_enforced() -> None:
     assert bad.returncode == 2 and "mode" in bad.stderr and "dance" in bad.stderr
 
 
+def test_a_refused_parameter_set_changes_nothing_and_an_accepted_one_takes_effect() -> None:
+    """Parameters are checked on-set (all or nothing) and applied post-set: a set with one bad
+    choice leaves every value and the command handling as they were; an accepted set changes
+    how a held effort command times out. Inverse mode takes a time_scale without acting on it."""
+    with ros_context(14) as (context, _):
+        node = make_node(context, scene="arm_swing", publish_rate=100.0)
+        try:
+            commands = node.session.commands
+            node.session.effort_command(["arm_joint_1"], [1.0], 0)         # held from t = 0
+            refused = node.set_parameters_atomically([Parameter("command_timeout", value=2.0),
+                                                      Parameter("time_scale", value=0.0),
+                                                      Parameter("on_timeout", value="explode")])
+            assert not refused.successful and "explode" in refused.reason
+            assert (commands.timeout, commands.on_timeout) == (0.5, "hold")
+            assert [node.get_parameter(n).value for n in ("command_timeout", "time_scale")] == [0.5, 1.0]
+            assert (node.params["command_timeout"], node.params["time_scale"]) == (0.5, 1.0)
+            assert commands.torque(1.0) is None                             # stale after 0.5 s: the controller
+            accepted = node.set_parameters_atomically([Parameter("command_timeout", value=2.0),
+                                                       Parameter("time_scale", value=0.0),
+                                                       Parameter("on_timeout", value="zero_torque")])
+            assert accepted.successful and node.params["time_scale"] == 0.0
+            assert commands.torque(1.0)[0] == 1.0                          # still held at 1 s
+            assert np.array_equal(commands.torque(2.5), np.zeros(node.session.robot.nv))   # then zero torque
+        finally:
+            node.close()
+            node.destroy_node()
+        inverse = make_node(context, scene="arm_swing", mode="inverse")
+        try:
+            assert inverse.set_parameters([Parameter("time_scale", value=2.0)])[0].successful
+        finally:
+            inverse.close()
+            inverse.destroy_node()
+
+
 @pytest.mark.parametrize(("signum", "offset"), [(signal.SIGINT, 5), (signal.SIGTERM, 6)])
 def test_signal_finalises_the_logs(tmp_path: Path, signum: int, offset: int) -> None:
     """A node process killed by SIGINT / SIGTERM leaves an MCAP that rosbags and mcap_ros2
