@@ -114,9 +114,9 @@ def test_trajectory_is_followed_through_its_points(simulator: Simulator) -> None
 @pytest.mark.parametrize("start_ns", [0, 1_700_000_000 * NS, 2**31 * NS + NS - 1])
 def test_trajectory_times_are_relative_integer_nanoseconds(simulator: Simulator, start_ns: int) -> None:
     """Stamps of any magnitude (up to the largest builtin_interfaces/Time): a one-point
-    trajectory holds its point from the start (before the fix, a wall-clock stamp of 1.7e9 s
-    lost the 1e-9 s padding in float rounding and CubicSpline raised ValueError); points
-    1 ns apart stay distinct; the reference matches the same trajectory started at 0."""
+    trajectory holds its point from the start (at a wall-clock stamp of 1.7e9 s, float
+    seconds would lose a 1e-9 s spacing to rounding and CubicSpline would raise ValueError);
+    points 1 ns apart stay distinct; the reference matches the same trajectory started at 0."""
     robot, q0 = simulator.robot, simulator.scene.q0
     single = joint_trajectory(robot, robot.joint_names[:1], [(0, [0.5], ())], start_ns, q0)
     assert single.evaluate(start_ns / NS + 1.0)[0][0] == 0.5
@@ -198,9 +198,9 @@ def test_counters_flatten_for_diagnostics() -> None:
 @pytest.mark.parametrize("base_ns", [0, 1_700_000_000 * NS + 123_456_789])
 def test_a_rejected_joint_state_breaks_the_difference_stencil(base_ns: int) -> None:
     """Inverse mode: samples at base + 10, 20, 30, ... ms with v = 10 (t - base) (a = 10
-    rad/s^2) and a NaN sample at 25 ms. Before the fix the torques at 20 and 30 ms were
-    computed across the rejected sample; now the first torque after it is at 40 ms (three
-    good samples 30, 40, 50 ms). Torques carry their sample's stamp exactly and equal RNEA at
+    rad/s^2) and a NaN sample at 25 ms. No torque is computed across the rejected sample
+    (none at 20 or 30 ms): the first after it is at 40 ms (three good samples 30, 40, 50
+    ms). Torques carry their sample's stamp exactly and equal RNEA at
     a = 10, also at a wall-clock base (1.7e9 s; float seconds there lose 2.4e-7 s, a 1e-5
     relative error in a): tolerance 1e-12, measured difference 0.0."""
     scene = load_scene("arm_ptp")

@@ -207,7 +207,7 @@ def test_pause_and_reset_services() -> None:
             assert node.session.t == frozen
             future = reset.call_async(Trigger.Request())
             wait_until(future.done, what="reset")
-            # the scene restarts; node time goes on one increment after the last sample (issue 16)
+            # the scene restarts; node time goes on one increment after the last sample
             assert future.result().success and node.session.scene_time == 0.0
             assert node.session.stamp_ns == round(frozen * 1e9) + 10_000_000 == node.session.last_reset_ns
             future = pause.call_async(SetBool.Request(data=False))
@@ -409,8 +409,8 @@ def _urdf_movable_joints(urdf: str) -> list[str]:
 @pytest.mark.parametrize(("mode", "offset"), [("simulate", 10), ("inverse", 11)])
 def test_every_published_message_passes_the_strict_field_check(mode: str, offset: int) -> None:
     """Under ROS_PYTHON_CHECK_FIELDS=1 (test/conftest.py) the node publishes on every one of
-    its topics and no callback fails (before the fix /diagnostics raised "The 'level' field
-    must be of type 'bytes'" and, unchecked, carried a garbage level). Simulate mode's
+    its topics and no callback fails (a /diagnostics level built as an int instead of bytes
+    raises "The 'level' field must be of type 'bytes'" here). Simulate mode's
     /joint_states names every movable joint of the scene's URDF, locked ones at their value."""
     assert os.environ["ROS_PYTHON_CHECK_FIELDS"] == "1"
     scene = load_scene("arm_ptp")
@@ -546,7 +546,7 @@ def test_no_callback_failure_stops_the_node(capfd: pytest.CaptureFixture) -> Non
 
 
 def test_oversized_empty_and_slow_input_is_bounded_counted_and_reported() -> None:
-    """Issue 16: a /joint_commands message of 10 000 names (170 kB, over the 64 KiB limit) is
+    """A /joint_commands message of 10 000 names (170 kB, over the 64 KiB limit) is
     rejected before it is deserialised, an empty one is rejected (not zero torque), both
     counted; a callback slower than ``callback_budget`` (a command handler made to take
     20 ms against a 5 ms budget) is counted in /diagnostics, level WARN; the node keeps
