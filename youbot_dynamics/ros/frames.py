@@ -19,7 +19,6 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from youbot_dynamics.model.lie import quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot
 
 
@@ -43,15 +42,16 @@ class SampleFrames(NamedTuple):
     ee_pose: tuple[np.ndarray, np.ndarray]
 
 
-def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTransform:
-    return LinkTransform(parent, child, transform[:3, 3].copy(), quaternion_from_matrix(transform[:3, :3]))
-
-
 def _position_quaternion(placement: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
     """Translation (3,) m and quaternion (x, y, z, w), w >= 0, of ``placement``."""
     xyz_quaternion = pin.SE3ToXYZQUAT(placement)
     quaternion = xyz_quaternion[3:]
     return xyz_quaternion[:3], -quaternion if quaternion[3] < 0.0 else quaternion
+
+
+def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTransform:
+    """``transform`` (4x4, m) as the pose of ``child`` in ``parent``."""
+    return LinkTransform(parent, child, *_position_quaternion(pin.SE3(transform)))
 
 
 def body_transforms(world_frame: str, poses: Mapping[str, np.ndarray]) -> list[LinkTransform]:
