@@ -79,14 +79,14 @@ from std_srvs.srv import SetBool, Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
+from youbot_dynamics.ros.commands import InputRejected
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr, to_rclpy
 from youbot_dynamics.ros.parameters import check_choice, declare_all, frame_prefix_of
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
 from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
 from youbot_dynamics.ros.topics import graph_name
-from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
-from youbot_dynamics.ros.commands import InputRejected
 from youbot_dynamics.sim.scene import load_scene
 
 MAX_BURST = 20
@@ -168,8 +168,8 @@ class DynamicsNode(Node):
             except ImportError:
                 self._unpublished.add(topic)
                 continue
-            self.publishers_[topic] = self.create_publisher(cls, graph_name(topic), LATCHED if topic in LATCHED_TOPICS
-                                                            else RELIABLE_DEEP)
+            qos = LATCHED if topic in LATCHED_TOPICS else RELIABLE_DEEP
+            self.publishers_[topic] = self.create_publisher(cls, graph_name(topic), qos)
         if self._unpublished:
             self.get_logger().warning(f"not publishing {', '.join(sorted(self._unpublished))}: their message "
                                       "package is not installed (tf2_msgs: `make` builds it from interfaces/, "
