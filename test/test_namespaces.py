@@ -1,5 +1,6 @@
 """Two youBots side by side: two dynamics node processes in the namespaces /youbot1 and
-/youbot2, heard by one plain rclpy subscriber, as a ROS user runs them."""
+/youbot2, heard by one plain rclpy subscriber, as a ROS user runs them; and the naming rules
+underneath (graph names, frame prefixes) without ROS traffic."""
 from __future__ import annotations
 
 import os
@@ -17,6 +18,10 @@ pytestmark = [pytest.mark.ros, pytest.mark.timeout(240)]
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 
 from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
+from youbot_dynamics.ros.parameters import AUTO_PREFIX, frame_prefix_of  # noqa: E402
+from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
+from youbot_dynamics.ros.topics import graph_name  # noqa: E402
+from youbot_dynamics.sim.scene import load_scene  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -87,3 +92,35 @@ def test_two_nodes_in_two_namespaces_publish_apart() -> None:
     assert len({child for frames in fixed for _, child in frames}) == sum(len(frames) for frames in fixed)
     names = {s.name.split(":")[0] for m in collector.messages("/diagnostics") for s in m.status}
     assert names == {"/youbot1/dynamics_node", "/youbot2/dynamics_node"}
+
+
+def test_graph_names_are_relative_but_the_global_topics() -> None:
+    """What replay_node and dynamics_node use on the graph for a logged topic name."""
+    assert [graph_name(t) for t in ("/joint_states", "/youbot1/ee_pose", "/clock", "/tf", "/tf_static",
+                                    "/diagnostics")] == \
+        ["joint_states", "youbot1/ee_pose", "clock", "/tf", "/tf_static", "/diagnostics"]
+    assert [frame_prefix_of(AUTO_PREFIX, ns) for ns in ("/", "/youbot1", "/lab/youbot2")] == \
+        ["", "youbot1/", "lab/youbot2/"]
+    assert frame_prefix_of("", "/youbot1") == "" and frame_prefix_of("r1_", "/youbot1") == "r1_"
+
+
+def test_a_given_root_frame_is_shared_and_every_frame_of_the_robot_is_prefixed() -> None:
+    """Without ROS: frame_prefix r1/ and frame_id world put the robot under an unprefixed
+    world (world -> r1/base_footprint on /tf_static), its links, the /ee_pose header and the
+    link-fixed markers in r1/ frames (the world geometry stays in world); a free body
+    (gripping's sphere) is r1/sphere on /tf."""
+    session = SimulationSession(load_scene("gripping"), 100.0, frame_prefix="r1/", frame_id="world")
+    outputs = dict(session.step())
+    static = [(t.header.frame_id, t.child_frame_id) for t in dict(session.latched)["/tf_static"].transforms]
+    assert static[0] == ("world", "r1/world")
+    assert all(child.startswith("r1/") for _, child in static)
+    assert all(parent.startswith("r1/") for parent, _ in static[1:])
+    moving = {(t.header.frame_id, t.child_frame_id) for t in outputs["/tf"].transforms}
+    bodies = {child for parent, child in moving if parent == "world"}
+    assert bodies == {f"r1/{name}" for name in session.frames.body_shapes}
+    assert all(parent.startswith("r1/") and child.startswith("r1/") for parent, child in moving
+               if parent != "world")
+    assert outputs["/ee_pose"].header.frame_id == outputs["/free_bodies"].header.frame_id == "world"
+    frames = {m.header.frame_id for m in dict(session.latched)["/scene_markers"].markers}
+    assert "world" in frames and "r1/yb1_plate_link" in frames      # world geometry; a link's shape
+    assert all(frame == "world" or frame.startswith("r1/") for frame in frames)
