@@ -86,9 +86,10 @@ def ball_drop_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
 
 
 def offline_positions(result) -> np.ndarray:
-    """(N, 3) ball positions (m, world frame) of the offline run."""
+    """(N, 3) ball positions (m, world frame) of the offline run (outputs hold each body's
+    pose in its ``pose`` block: x, y, z, qx, qy, qz, qw)."""
     names = list(result.layout.names)
-    return result.x[:, [names.index(f"p[ball.{axis}]") for axis in "xyz"]]
+    return result.x[:, [names.index(f"pose[ball.{axis}]") for axis in "xyz"]]
 
 
 def test_tf_carries_the_sphere_as_the_simulator_moves_it(ball_drop_run) -> None:
