@@ -1,11 +1,13 @@
-"""Sub-commands for the classic studies: ``woodpecker`` (the hybrid woodpecker toy) and
-``lagrange`` (equations of motion by computer algebra)."""
+"""Sub-commands for the classic studies: ``woodpecker`` (the hybrid woodpecker toy),
+``lagrange`` (equations of motion by computer algebra) and ``rotations`` (Cardan angles,
+adaptive Cardan and quaternions on a free rigid body)."""
 from __future__ import annotations
 
 import argparse
 import json
 
-from youbot_dynamics.cli.common import add_tolerance_arguments, cell, output_file, positive, tolerances
+from youbot_dynamics.cli.common import (add_tolerance_arguments, cell, output_file, positive,
+                                        relative_tolerance, tolerances)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import limits
 from youbot_dynamics.sim.events import HybridSolution
@@ -135,6 +137,50 @@ def run_lagrange(args: argparse.Namespace) -> int:
     return 0
 
 
+ROTATION_COLUMNS = ("run", "formulation", "steps", "rhs_evals", "switches", "t_reached",
+                    "attitude_error", "rate_error", "norm_drift", "wall_time")
+
+
+def run_rotations(args: argparse.Namespace) -> int:
+    """Every orientation formulation on every run of the rotations study; a table (or
+    JSON) of steps, evaluations, errors against the closed-form top and |q| drift."""
+    from youbot_dynamics.cli.common import markdown_table
+    from youbot_dynamics.systems.rotations import (RUNS, SWITCH_ANGLE, plot_rotations,
+                                                   rotations_study, spin_wobble_sweep)
+    if args.plot:
+        output_file(args.plot, "--plot")
+    results = rotations_study(args.integrator, args.tol, runs=tuple(args.runs or RUNS))
+    rows = [result.summary() for result in results]
+    sweep = spin_wobble_sweep(args.integrator, args.tol) if "spin" in (args.runs or RUNS) else []
+    if args.plot:
+        plot_rotations(results, args.plot)
+    if args.json:
+        print(json.dumps({"integrator": args.integrator, "tol": args.tol, "rows": rows,
+                          "spin_wobble_sweep": sweep, "plot": args.plot}, indent=2))
+        return 0
+    print(f"Rotations study, {args.integrator} at rtol = atol = {args.tol:g}; errors are "
+          f"maxima over the outputs against the closed-form axisymmetric top (attitude: "
+          f"|log(R_true^T R)|, rad; rate: |w - w_true|, rad/s). cardan_adaptive switches "
+          f"x-y-z <-> x-z-y at |a2| = {SWITCH_ANGLE} rad; the quaternion is integrated "
+          f"unprojected and renormalised on output (norm_drift = max ||q| - 1|).\n")
+    for name in dict.fromkeys(row["run"] for row in rows):
+        print(f"{name}: {RUNS[name].purpose}")
+    print()
+    print(markdown_table(ROTATION_COLUMNS, ([row[c] for c in ROTATION_COLUMNS] for row in rows),
+                         digits=3))
+    if sweep:
+        print(f"\nspin with less and less wobble (w0 = ({RUNS['spin'].w0[0]:g}, wobble, 0) "
+              f"rad/s): fixed Cardan against the quaternion\n")
+        print(markdown_table(tuple(sweep[0]), ([row[c] for c in sweep[0]] for row in sweep),
+                             digits=3))
+    for row in rows:
+        if row["failure"]:
+            print(f"{row['run']} / {row['formulation']} failed: {row['failure']}")
+    if args.plot:
+        print(f"plot written to {args.plot}")
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``woodpecker`` and ``lagrange`` sub-commands."""
     parser = subparsers.add_parser("woodpecker", help="the woodpecker toy: state events, "
@@ -159,3 +205,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_tolerance_arguments(parser, LAGRANGE_RTOL, "absolute tolerance (default rtol)")
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.set_defaults(run=run_lagrange)
+
+    from youbot_dynamics.systems.rotations import RUNS
+    parser = subparsers.add_parser("rotations", help="Cardan angles vs adaptive Cardan vs "
+                                   "quaternions on a torque-free rigid body",
+                                   description="The seed's rotations study: steps, "
+                                   "evaluations, error against the closed-form top and "
+                                   "|q| drift of each orientation state on each run.")
+    parser.add_argument("--runs", nargs="+", choices=tuple(RUNS), help="runs (default all)")
+    parser.add_argument("--integrator", choices=[n for n in INTEGRATORS
+                                                 if n not in FIXED_STEP and n != "ida"],
+                        default="rk45")
+    parser.add_argument("--tol", type=relative_tolerance, default=1e-8,
+                        help="rtol = atol (default 1e-8)")
+    parser.add_argument("--plot", metavar="PNG", help="write the error and middle-angle plot")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.set_defaults(run=run_rotations)
