@@ -95,6 +95,18 @@ def run_woodpecker(args: argparse.Namespace) -> int:
     return 0
 
 
+def parameter_overrides(items: list[str] | None) -> dict[str, float]:
+    """``NAME=VALUE`` items of --param as a dict; UserInputError naming a malformed one."""
+    overrides = {}
+    for item in items or ():
+        name, _, value = item.partition("=")
+        try:
+            overrides[name.strip()] = float(value)
+        except ValueError:
+            raise UserInputError(f"--param takes NAME=VALUE with a number, got {item!r}") from None
+    return overrides
+
+
 def run_lagrange(args: argparse.Namespace) -> int:
     """Derive the pendulum's equations with sympy, simulate them and print the equations,
     final state, energy drift and statistics (or JSON)."""
@@ -103,7 +115,7 @@ def run_lagrange(args: argparse.Namespace) -> int:
     from youbot_dynamics.sim.integrators import integrate
     from youbot_dynamics.systems.lagrange import SEED_INITIAL, model
     lagrange = model(args.problem)
-    p = lagrange.parameter_values({"c": args.friction})
+    p = lagrange.parameter_values({**parameter_overrides(args.param), "c": args.friction})
     q0, u0 = SEED_INITIAL[args.problem]
     rtol, atol = tolerances(args, np.r_[q0, u0])
     rtol = LAGRANGE_RTOL if rtol is None else rtol
@@ -198,6 +210,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("problem", choices=("2d", "3d"))
     parser.add_argument("--friction", type=non_negative, default=0.0,
                         help="joint friction c: generalised force -c q_i'")
+    parser.add_argument("--param", action="append", metavar="NAME=VALUE",
+                        help="override a model parameter (SI), e.g. --param m2=0.5; "
+                             "repeatable")
     parser.add_argument("--t-end", type=positive, default=10.0, help="end time (s)")
     parser.add_argument("--integrator", choices=[n for n in INTEGRATORS
                                                  if n not in FIXED_STEP and n != "ida"],
