@@ -117,3 +117,18 @@ def test_pure_spin_about_the_first_axis_is_linear_in_cardan_angles():
     quaternion = simulate_rotation(run, "quaternion", tol=TOL)
     assert cardan.stats.steps * 10 < quaternion.stats.steps
     assert cardan.errors["attitude"] < 1e-10 and quaternion.errors["attitude"] < GLOBAL_FACTOR * TOL
+
+
+def test_cli_rotations_json_and_plot(tmp_path, capsys):
+    import json
+
+    from youbot_dynamics.cli import main
+    plot = tmp_path / "rotations.png"
+    assert main(["rotations", "--runs", "top", "--tol", "1e-6", "--plot", str(plot),
+                 "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert [row["formulation"] for row in report["rows"]] == ["cardan", "cardan_adaptive",
+                                                             "quaternion"]
+    assert report["spin_wobble_sweep"] == [] and plot.stat().st_size > 10_000
+    assert all(row["attitude_error"] < GLOBAL_FACTOR * 1e-6 for row in report["rows"])
+    assert main(["rotations", "--runs", "wobble"]) == 2

@@ -183,7 +183,8 @@ class RotationResult:
                 "wall_time": self.stats.wall_time, "failure": self.failure}
 
 
-def simulate_cardan(inertia, rotation0, w0, t_eval, integrator, options) -> RotationResult:
+def simulate_cardan(inertia: np.ndarray, rotation0: np.ndarray, w0: np.ndarray,
+                    t_eval: np.ndarray, integrator: str, options: dict) -> RotationResult:
     """The fixed x-y-z sequence."""
     x0 = np.concatenate((cardan_angles("xyz", rotation0), w0))
     solution = integrate(cardan_rhs("xyz", inertia), x0, t_eval, integrator, **options)
@@ -202,8 +203,9 @@ def sequence_switch(target: str) -> Callable[[float, np.ndarray], tuple[str, np.
     return reset
 
 
-def simulate_cardan_adaptive(inertia, rotation0, w0, t_eval, integrator,
-                             options) -> RotationResult:
+def simulate_cardan_adaptive(inertia: np.ndarray, rotation0: np.ndarray, w0: np.ndarray,
+                             t_eval: np.ndarray, integrator: str,
+                             options: dict) -> RotationResult:
     """Cardan angles switching x-y-z <-> x-z-y when |a2| > SWITCH_ANGLE."""
     def guard(t: float, x: np.ndarray) -> float:
         return abs(x[1]) - SWITCH_ANGLE
@@ -220,7 +222,8 @@ def simulate_cardan_adaptive(inertia, rotation0, w0, t_eval, integrator,
                           switches=len(solution.switches))
 
 
-def simulate_quaternion(inertia, rotation0, w0, t_eval, integrator, options) -> RotationResult:
+def simulate_quaternion(inertia: np.ndarray, rotation0: np.ndarray, w0: np.ndarray,
+                        t_eval: np.ndarray, integrator: str, options: dict) -> RotationResult:
     """Quaternion (x, y, z, w) integrated unprojected, renormalised on output."""
     x0 = np.concatenate((quaternion_from_matrix(rotation0), w0))
     solution = integrate(quaternion_rhs(inertia), x0, t_eval, integrator, **options)
@@ -269,7 +272,7 @@ def simulate_rotation(run: TopRun, formulation: str, *, integrator: str = "rk45"
 
 
 def rotations_study(integrator: str = "rk45", tol: float = 1e-8, n_out: int = 401,
-                    runs=tuple(RUNS)) -> list[RotationResult]:
+                    runs: tuple[str, ...] = tuple(RUNS)) -> list[RotationResult]:
     """Every formulation on every named run."""
     return [simulate_rotation(RUNS[name], formulation, integrator=integrator, tol=tol,
                               n_out=n_out)
@@ -281,7 +284,7 @@ SPIN_WOBBLES = (0.0, 1e-3, 1e-2, 0.2, 1.0)
 
 
 def spin_wobble_sweep(integrator: str = "rk45", tol: float = 1e-8,
-                      wobbles=SPIN_WOBBLES) -> list[dict]:
+                      wobbles: tuple[float, ...] = SPIN_WOBBLES) -> list[dict]:
     """The seed's claim that Cardan angles take larger steps when the body turns mostly
     about one axis, measured: the ``spin`` run with each wobble, fixed Cardan against the
     quaternion (steps, evaluations, attitude error)."""
