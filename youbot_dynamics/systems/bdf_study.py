@@ -189,3 +189,44 @@ def stability_points(rows: Sequence[FixedStepRow]) -> dict[str, complex]:
     """z = h i sqrt(k) of the BDF cells (the spring's eigenvalue near r = 1), labelled."""
     return {f"{row.method} k={row.k:g} N={row.n_steps}": 1j * row.h_omega
             for row in rows if row.method != "euler"}
+
+
+#: The seed's loose-tolerance runs: CVODE at rtol = atol = 0.1 on k = 10.
+CHOPPY_TOL, CHOPPY_K = 0.1, 10.0
+
+
+def plot_choppy_traces(path: str, t_end: float = SEED_T_END, n_out: int = 2001) -> dict:
+    """PNG of x(t) and y(t) from CVODE BDF and Adams at rtol = atol = CHOPPY_TOL (k =
+    CHOPPY_K, CVODE's difference-quotient Jacobian) against DOP853 at 1e-12, outputs by
+    CVODE's interpolation every t_end / (n_out - 1) s. Returns each run's steps and max
+    position error (m)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    reference, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, t_end, "dop853",
+                                             rtol=1e-12, atol=1e-12, n_out=n_out)
+    figure, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    figures = {}
+    for integrator in ("cvode_bdf", "cvode_adams"):
+        solution, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, t_end, integrator,
+                                                rtol=CHOPPY_TOL, atol=CHOPPY_TOL,
+                                                n_out=n_out, jacobian="difference")
+        error = float(np.max(np.linalg.norm(solution.x[:, :2] - reference.x[:, :2], axis=1)))
+        figures[integrator] = {"steps": solution.stats.steps, "position_error": error}
+        for axis, column in zip(axes, (0, 1)):
+            axis.plot(solution.t, solution.x[:, column], linewidth=0.9,
+                      label=f"{integrator} ({solution.stats.steps} steps)")
+    for axis, column, label in zip(axes, (0, 1), ("x (m)", "y (m)")):
+        axis.plot(reference.t, reference.x[:, column], "k--", linewidth=0.6,
+                  label="DOP853 1e-12")
+        axis.set_ylabel(label)
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize=8, loc="upper right")
+    axes[0].set_title(f"Elastic pendulum k = {CHOPPY_K:g}, CVODE at rtol = atol = "
+                      f"{CHOPPY_TOL:g}", fontsize=10)
+    axes[1].set_xlabel("t (s)")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+    return figures
