@@ -132,3 +132,19 @@ def test_cli_rotations_json_and_plot(tmp_path, capsys):
     assert report["spin_wobble_sweep"] == [] and plot.stat().st_size > 10_000
     assert all(row["attitude_error"] < GLOBAL_FACTOR * 1e-6 for row in report["rows"])
     assert main(["rotations", "--runs", "wobble"]) == 2
+
+
+@pytest.mark.parametrize("argv, stand_in", [
+    (["rotations", "--plot"], "youbot_dynamics.systems.rotations.rotations_study"),
+    (["uncertainty", "--plot"], "youbot_dynamics.systems.uncertain_pendulum.linear_propagation"),
+    (["bdf-study", "--choppy"], "youbot_dynamics.systems.bdf_study.fixed_step_tables"),
+])
+def test_study_plot_paths_checked_before_the_run(monkeypatch, capsys, tmp_path, argv, stand_in):
+    from youbot_dynamics.cli import main
+
+    def ran(*args, **kwargs):
+        pytest.fail("the run started before the output path was checked")
+    monkeypatch.setattr(stand_in, ran)
+    assert main([*argv, str(tmp_path / "absent" / "plot.png")]) == 2
+    error = capsys.readouterr().err
+    assert "does not exist" in error and len(error.strip().splitlines()) == 1
