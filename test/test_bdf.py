@@ -54,6 +54,15 @@ def test_root_locus_is_where_a_root_has_modulus_one(order):
 
 
 @pytest.mark.parametrize("order", ORDERS)
+def test_written_out_solver_grows_as_its_largest_characteristic_root(order):
+    """Per-step growth of the solver on x' = lambda x against max |zeta| of
+    rho - z sigma: within 1 % (measured at most 0.42 %; the max-norm of a rotating 2-vector
+    does not scale exactly)."""
+    for z in (0.3 + 0.3j, 3.0, -1.0 + 2.0j, 0.05j, -5.0):
+        assert measured_growth(order, z) == pytest.approx(amplification(order, z), rel=0.01)
+
+
+@pytest.mark.parametrize("order", ORDERS)
 @pytest.mark.parametrize("angle_deg", [0.0, 45.0, 80.0])
 def test_written_out_solver_changes_stability_at_the_root_locus(order, angle_deg):
     """The solver's own growth on x' = lambda x, 1 % inside and outside the locus radius

@@ -191,15 +191,19 @@ def alpha_angle(order: int, samples: int = 200_001) -> float:
 
 def measured_growth(order: int, z: complex, n_steps: int = 400) -> float:
     """Per-step growth factor of the written-out solver on x' = lambda x with h lambda =
-    z (as the real 2 x 2 system of Re, Im), from |x_N| / |x_{N/2}|: > 1 means unstable."""
+    z (as the real 2 x 2 system of Re, Im), from max|x_N| / max|x_{N/2}| (an overflow is
+    inf, a decay below the smallest double 0): > 1 means unstable."""
     rotation = np.array([[z.real, -z.imag], [z.imag, z.real]])
-    with np.errstate(over="ignore", invalid="ignore"):
+    with np.errstate(over="ignore", invalid="ignore", under="ignore"):
         solution = bdf_fixed_step(lambda t, x: rotation @ x, [1.0, 0.3], float(n_steps),
                                   n_steps, order, jac=lambda t, x: rotation)
-        half = n_steps // 2
-        growth = (np.linalg.norm(solution.x[-1]) / np.linalg.norm(solution.x[half])) \
-            ** (1.0 / (n_steps - half))
-    return float(growth) if np.isfinite(growth) else np.inf
+    half = n_steps // 2
+    end, middle = (float(np.max(np.abs(solution.x[i]))) for i in (-1, half))
+    if not (np.isfinite(end) and np.isfinite(middle)):
+        return np.inf
+    if middle == 0.0:  # decayed below the smallest double
+        return 0.0
+    return (end / middle) ** (1.0 / (n_steps - half))
 
 
 def measured_boundary_radius(order: int, angle: float, r_low: float = 1e-3,
