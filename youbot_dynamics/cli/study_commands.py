@@ -7,8 +7,9 @@ from __future__ import annotations
 import argparse
 import json
 
-from youbot_dynamics.cli.common import (add_tolerance_arguments, cell, output_file, positive,
-                                        relative_tolerance, tolerances)
+from youbot_dynamics.cli.common import (add_tolerance_arguments, cell, markdown_table,
+                                        output_file, positive, relative_tolerance,
+                                        tolerances)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import limits
 from youbot_dynamics.sim.events import HybridSolution
@@ -196,7 +197,6 @@ ROTATION_COLUMNS = ("run", "formulation", "steps", "rhs_evals", "switches", "t_r
 def run_rotations(args: argparse.Namespace) -> int:
     """Every orientation formulation on every run of the rotations study; a table (or
     JSON) of steps, evaluations, errors against the closed-form top and |q| drift."""
-    from youbot_dynamics.cli.common import markdown_table
     from youbot_dynamics.systems.rotations import (RUNS, SWITCH_ANGLE, plot_rotations,
                                                    rotations_study, spin_wobble_sweep)
     if args.plot:
