@@ -34,8 +34,8 @@ from hypothesis import event, given
 from hypothesis import strategies as st
 
 from youbot_dynamics.ros.session import InverseSession, SimulationSession
-from youbot_dynamics.sim.commands import InputRejected
-from youbot_dynamics.sim.inverse import plausible_limit
+from youbot_dynamics.ros.commands import InputRejected
+from youbot_dynamics.ros.inverse import plausible_limit
 from youbot_dynamics.sim.scene import load_scene
 
 try:

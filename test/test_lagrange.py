@@ -108,3 +108,34 @@ def test_command_line_prints_equations_and_energy_drift(capsys):
     report = json.loads(capsys.readouterr().out)
     assert len(report["equations"]) == 3 and "k*q3" in report["equations"][2]
     assert report["energy_relative_drift"] < 1e-8
+
+
+def test_command_line_parameter_override(capsys):
+    import json
+
+    from youbot_dynamics.cli import main
+    assert main(["lagrange", "2d", "--t-end", "0.5", "--param", "k=80", "--param", "m2=0.4",
+                 "--json"]) == 0
+    parameters = json.loads(capsys.readouterr().out)["parameters"]
+    # the seed appendix's values where not overridden
+    assert parameters == {"m1": 1.0, "l": 0.5, "m2": 0.4, "l0": 0.25, "k": 80.0, "g": 9.82,
+                          "c": 0.0}
+    assert main(["lagrange", "2d", "--param", "k"]) == 2
+    assert main(["lagrange", "2d", "--param", "spring=3"]) == 2
+
+
+def test_3d_potential_depends_on_q3_unlike_the_seeds():
+    """dV/dq3 from the sympy derivation against the hand formula m2 g l2 (sin q1 cos q3 +
+    cos q1 cos q2 sin q3): 0.823 N m at the seed's initial state, not 0 as a potential
+    without q3 would give."""
+    m = model("3d")
+    values = dict(zip(map(str, m.parameters), m.parameter_values()))
+    potential = m.energy.subs({u: 0 for u in m.u})
+    q = (0.5, 0.1, 0.5)
+    derived = float(sp.diff(potential, m.q[2]).subs(dict(zip(m.parameters,
+                                                             m.parameter_values())))
+                    .subs(dict(zip(m.q, q))))
+    expected = values["m2"] * values["g"] * values["l2"] * (
+        np.sin(q[0]) * np.cos(q[2]) + np.cos(q[0]) * np.cos(q[1]) * np.sin(q[2]))
+    assert derived == pytest.approx(expected, rel=1e-12)
+    assert derived == pytest.approx(0.8234, abs=1e-4)

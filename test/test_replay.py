@@ -78,7 +78,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def acceleration_error_bound(times: np.ndarray, q: np.ndarray, h: float) -> np.ndarray:
-    """The torque error the central difference allows at each sample (see sim/inverse.py):
+    """The torque error the central difference allows at each sample (see ros/inverse.py):
     sum_j |M_ij(q_k)| max_{|s - t_k| <= h} |a_j(s) - a_j(t_k)|, with a(s) from the
     simulator on a grid 20 times finer than the samples."""
     simulator = Simulator(load_scene("arm_ptp"))

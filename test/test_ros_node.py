@@ -23,10 +23,11 @@ from std_srvs.srv import SetBool, Trigger  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E402
 
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
+from youbot_dynamics.model.lie import matrix_from_quaternion  # noqa: E402
+from youbot_dynamics.model.screws import fkin_space, screw_chain  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
 from youbot_dynamics.ros.session import TOPIC_TYPES, SimulationSession  # noqa: E402
-from youbot_dynamics.sim.frames import LinkFrames  # noqa: E402
 from youbot_dynamics.sim.scene import load_scene  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
@@ -65,13 +66,13 @@ def test_simulate_mode_publishes_the_simulated_motion() -> None:
         for field in ("position", "velocity", "effort"):
             assert np.array_equal(getattr(got, field), getattr(want, field))
     assert np.ptp([m.position[0] for m in states]) > 1e-3        # the arm moved
-    frames = LinkFrames(reference.robot)
+    chain = screw_chain(reference.robot)
     for pose, state in zip(poses, states):
         q = dict(zip(state.name, state.position))
-        position, quaternion = frames.ee_pose(np.array([q[name] for name in reference.robot.joint_names]))
+        expected = fkin_space(chain, np.array([q[name] for name in reference.robot.joint_names]))
         p, o = pose.pose.position, pose.pose.orientation
-        assert np.allclose([p.x, p.y, p.z], position, atol=1e-12)
-        assert np.allclose([o.x, o.y, o.z, o.w], quaternion, atol=1e-12)
+        assert np.allclose([p.x, p.y, p.z], expected[:3, 3], atol=1e-12)
+        assert np.allclose(matrix_from_quaternion([o.x, o.y, o.z, o.w]), expected[:3, :3], atol=1e-12)
         assert pose.header.frame_id == "base_footprint"
     assert float(diagnostics["sim_time"]) == pytest.approx(0.5)
     assert int(diagnostics["integrator.steps"]) > 0 and diagnostics["integrator.integrator"] == "cvode_bdf"
@@ -206,7 +207,7 @@ def test_pause_and_reset_services() -> None:
             assert node.session.t == frozen
             future = reset.call_async(Trigger.Request())
             wait_until(future.done, what="reset")
-            # the scene restarts; node time goes on one increment after the last sample (issue 16)
+            # the scene restarts; node time goes on one increment after the last sample
             assert future.result().success and node.session.scene_time == 0.0
             assert node.session.stamp_ns == round(frozen * 1e9) + 10_000_000 == node.session.last_reset_ns
             future = pause.call_async(SetBool.Request(data=False))
@@ -242,6 +243,40 @@ def test_parameter_ranges_and_choices_are_enforced() -> None:
     bad = subprocess.run([sys.executable, "-m", "youbot_dynamics.ros.dynamics_node", "--ros-args",
                           "-p", "mode:=dance"], capture_output=True, text=True, timeout=120, env=env, cwd=REPO)
     assert bad.returncode == 2 and "mode" in bad.stderr and "dance" in bad.stderr
+
+
+def test_a_refused_parameter_set_changes_nothing_and_an_accepted_one_takes_effect() -> None:
+    """Parameters are checked on-set (all or nothing) and applied post-set: a set with one bad
+    choice leaves every value and the command handling as they were; an accepted set changes
+    how a held effort command times out. Inverse mode takes a time_scale without acting on it."""
+    with ros_context(14) as (context, _):
+        node = make_node(context, scene="arm_swing", publish_rate=100.0)
+        try:
+            commands = node.session.commands
+            node.session.effort_command(["arm_joint_1"], [1.0], 0)         # held from t = 0
+            refused = node.set_parameters_atomically([Parameter("command_timeout", value=2.0),
+                                                      Parameter("time_scale", value=0.0),
+                                                      Parameter("on_timeout", value="explode")])
+            assert not refused.successful and "explode" in refused.reason
+            assert (commands.timeout, commands.on_timeout) == (0.5, "hold")
+            assert [node.get_parameter(n).value for n in ("command_timeout", "time_scale")] == [0.5, 1.0]
+            assert (node.params["command_timeout"], node.params["time_scale"]) == (0.5, 1.0)
+            assert commands.torque(1.0) is None                             # stale after 0.5 s: the controller
+            accepted = node.set_parameters_atomically([Parameter("command_timeout", value=2.0),
+                                                       Parameter("time_scale", value=0.0),
+                                                       Parameter("on_timeout", value="zero_torque")])
+            assert accepted.successful and node.params["time_scale"] == 0.0
+            assert commands.torque(1.0)[0] == 1.0                          # still held at 1 s
+            assert np.array_equal(commands.torque(2.5), np.zeros(node.session.robot.nv))   # then zero torque
+        finally:
+            node.close()
+            node.destroy_node()
+        inverse = make_node(context, scene="arm_swing", mode="inverse")
+        try:
+            assert inverse.set_parameters([Parameter("time_scale", value=2.0)])[0].successful
+        finally:
+            inverse.close()
+            inverse.destroy_node()
 
 
 @pytest.mark.parametrize(("signum", "offset"), [(signal.SIGINT, 5), (signal.SIGTERM, 6)])
@@ -374,8 +409,8 @@ def _urdf_movable_joints(urdf: str) -> list[str]:
 @pytest.mark.parametrize(("mode", "offset"), [("simulate", 10), ("inverse", 11)])
 def test_every_published_message_passes_the_strict_field_check(mode: str, offset: int) -> None:
     """Under ROS_PYTHON_CHECK_FIELDS=1 (test/conftest.py) the node publishes on every one of
-    its topics and no callback fails (before the fix /diagnostics raised "The 'level' field
-    must be of type 'bytes'" and, unchecked, carried a garbage level). Simulate mode's
+    its topics and no callback fails (a /diagnostics level built as an int instead of bytes
+    raises "The 'level' field must be of type 'bytes'" here). Simulate mode's
     /joint_states names every movable joint of the scene's URDF, locked ones at their value."""
     assert os.environ["ROS_PYTHON_CHECK_FIELDS"] == "1"
     scene = load_scene("arm_ptp")
@@ -511,7 +546,7 @@ def test_no_callback_failure_stops_the_node(capfd: pytest.CaptureFixture) -> Non
 
 
 def test_oversized_empty_and_slow_input_is_bounded_counted_and_reported() -> None:
-    """Issue 16: a /joint_commands message of 10 000 names (170 kB, over the 64 KiB limit) is
+    """A /joint_commands message of 10 000 names (170 kB, over the 64 KiB limit) is
     rejected before it is deserialised, an empty one is rejected (not zero torque), both
     counted; a callback slower than ``callback_budget`` (a command handler made to take
     20 ms against a 5 ms budget) is counted in /diagnostics, level WARN; the node keeps

@@ -1,4 +1,4 @@
-"""Simulate-mode time semantics and commands, in-process (issue 16): a reset while logging
+"""Simulate-mode time semantics and commands, in-process: a reset while logging
 keeps log time monotonic; wall-clock stamped trajectories run from their arrival; far-future
 and past stamps are rejected and never latched; an empty command is rejected; efforts on
 joints without a URDF effort limit are clamped to a finite default."""
@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
 
-from youbot_dynamics.ros.session import SimulationSession
-from youbot_dynamics.sim.commands import (DEFAULT_EFFORT_LIMIT, FUTURE_LIMIT_NS, MAX_NAMES, MAX_TRAJECTORY_POINTS,
-                                          NS_PER_S as NS, EffortCommands, InputRejected, joint_trajectory)
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.io.stamps import NS_PER_S as NS
 from youbot_dynamics.model.robot import keep_joints, load_robot
+from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, FUTURE_LIMIT_NS, MAX_NAMES, MAX_TRAJECTORY_POINTS,
+                                          EffortCommands, InputRejected, joint_trajectory)
+from youbot_dynamics.ros.session import SimulationSession
+from youbot_dynamics.sim.scene import load_scene
 
 SCENE = load_scene("arm_ptp")
 ROBOT = SCENE.robot()
@@ -23,9 +24,9 @@ WALL_NS = 1_763_900_000 * NS          # a wall-clock time (Nov 2025), passed exp
 
 
 def test_reset_while_logging_keeps_log_time_monotonic(tmp_path: Path) -> None:
-    """Before the fix the samples after a reset started again at 0: log time ran backwards
-    and /joint_states stamps repeated. Now node time goes on, the scene restarts (the first
-    sample after the reset holds the initial q) and /diagnostics records the reset."""
+    """After a reset node time goes on (log time never runs backwards, no /joint_states
+    stamp repeats), the scene restarts (the first sample after the reset holds the initial
+    q) and /diagnostics records the reset."""
     path = tmp_path / "reset.mcap"
     session = SimulationSession(SCENE, 100.0, samples_per_solve=2, mcap_path=path)
     first = [session.step() for _ in range(15)]
@@ -52,8 +53,8 @@ def test_reset_while_logging_keeps_log_time_monotonic(tmp_path: Path) -> None:
 
 def test_wall_clock_stamped_trajectory_runs_from_its_arrival() -> None:
     """A two-point trajectory stamped with the wall clock (1.76e9 s) while simulated time is
-    0.1 s: before the fix it was scheduled 1.76e9 s ahead and never ran; now it starts on
-    arrival and reaches its last point 0.5 s later, as an unstamped one does."""
+    0.1 s starts on arrival (not 1.76e9 s ahead) and reaches its last point 0.5 s later, as
+    an unstamped one does."""
     def final_reference(stamp_ns: int) -> np.ndarray:
         session = SimulationSession(SCENE, 100.0, samples_per_solve=2)
         for _ in range(11):
@@ -95,8 +96,8 @@ def test_far_future_and_past_stamps_are_rejected_and_never_latched(stamp_ns: int
 
 
 def test_empty_command_is_rejected_not_zero_torque() -> None:
-    """Before the fix an empty JointState switched the scene controller off (zero torque
-    on every joint: the arm fell 2.64 rad in 2 s)."""
+    """An empty JointState is rejected: taken as a command, it would switch the scene
+    controller off (zero torque on every joint: the arm falls 2.64 rad in 2 s)."""
     commands = EffortCommands(ROBOT, 0.5, "hold")
     with pytest.raises(InputRejected) as error:
         commands.accept([], [], 0, 1.0)

@@ -24,8 +24,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                           help="default: ida for index2/ggl/index3, rk45 otherwise")
     squeezer.add_argument("--rtol", type=float, default=1e-6)
     squeezer.add_argument("--t-end", type=float, default=0.03, help="end time (s)")
-    squeezer.add_argument("--outputs", type=int, default=101,
-                          help="output times (projections happen at these)")
+    squeezer.add_argument("--outputs", type=int, default=500,
+                          help="output times (projections happen at these; default the "
+                               "seed's 500)")
     squeezer.add_argument("--dt", type=float, default=None, help="fixed step (s)")
     squeezer.add_argument("--jacobian", choices=("exact", "fd"), default="exact",
                           help="IDA's iteration matrix for index2/ggl/index3: exact (from "

@@ -1,5 +1,6 @@
-"""Sub-commands `pendulum` (simulate the elastic pendulum with any integrator) and
-`pendulum-study` (the seed's tables beside ours)."""
+"""Sub-commands `pendulum` (simulate the elastic pendulum with any integrator),
+`pendulum-study` (the seed's tables beside ours) and `bdf-study` (fixed-step BDF1-4,
+stability regions, CVODE order caps)."""
 from __future__ import annotations
 
 import argparse
@@ -8,12 +9,13 @@ import sys
 
 import numpy as np
 
-from youbot_dynamics.cli.common import add_tolerance_arguments, markdown_table, tolerances
+from youbot_dynamics.cli.common import add_tolerance_arguments, cell, markdown_table, tolerances
 from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget, progress_bar
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, IntegrationError,
                                              checked_output_spacing)
-from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, SEED_STATE0,
+from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, JACOBIANS,
+                                                      SEED_STATE0,
                                                       SEED_T_END, STABLE_BOUND,
                                                       STABLE_ENERGY_ERROR, STATE_NAMES,
                                                       elastic_pendulum_study,
@@ -58,6 +60,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--dt", type=float, help="step size for fixed-step integrators, s")
     add_tolerance_arguments(run, DEFAULT_RTOL, f"absolute tolerance (default {DEFAULT_ATOL:g})")
     add_step_budget_argument(run)
+    run.add_argument("--max-order", type=int, metavar="N",
+                     help="cap CVODE's order (cvode_bdf 1..5, cvode_adams 1..12)")
+    run.add_argument("--jacobian", choices=JACOBIANS, default="analytic",
+                     help="implicit integrators: our analytic Jacobian (default) or their "
+                          "own difference quotients (as the seed's runs)")
     run.add_argument("--json", action="store_true", help="print JSON")
     run.set_defaults(run=run_pendulum)
     study = subparsers.add_parser("pendulum-study", help="the seed's elastic-pendulum tables",
@@ -65,6 +72,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                   "with our integrators, seed figures beside ours.")
     study.add_argument("--json", action="store_true", help="print JSON")
     study.set_defaults(run=run_study)
+    bdf = subparsers.add_parser("bdf-study", help="fixed-step BDF1-4: the seed's Tables 1-4, "
+                                "stability regions, measured orders, CVODE order caps",
+                                description="The seed's fixed-step study of the elastic "
+                                "pendulum (explicit Euler, BDF2-4 over k and N) with its "
+                                "verdicts beside ours, the BDF stability regions, measured "
+                                "orders, and CVODE BDF with its order capped.")
+    bdf.add_argument("--short", action="store_true",
+                     help="only the cells the seed gives a verdict for, no CVODE order 1 "
+                          "at k = 50 (a short form for CI)")
+    bdf.add_argument("--plot", metavar="PNG", help="write the stability-region plot")
+    bdf.add_argument("--choppy", metavar="PNG", help="write the seed's loose-tolerance "
+                     "traces: CVODE BDF and Adams at rtol = atol = 0.1, k = 10")
+    bdf.add_argument("--json", action="store_true", help="print JSON")
+    bdf.set_defaults(run=run_bdf_study)
 
 
 def run_pendulum(args: argparse.Namespace) -> int:
@@ -74,6 +95,9 @@ def run_pendulum(args: argparse.Namespace) -> int:
     if args.dt is not None and integrator not in FIXED_STEP:
         raise UserInputError(f"--dt applies to fixed-step integrators only, not "
                              f"{integrator!r}; use --tol or --rtol/--atol")
+    if args.max_order is not None and not integrator.startswith("cvode"):
+        raise UserInputError(f"--max-order applies to cvode_bdf and cvode_adams only, not "
+                             f"{integrator!r}")
     state0 = parse_state0(args.state0)
     rtol, atol = tolerances(args, state0)
     times = np.linspace(0.0, args.t_end, OUTPUTS) if args.t_end > 0 else np.zeros(0)
@@ -87,7 +111,8 @@ def run_pendulum(args: argparse.Namespace) -> int:
                 args.k, state0, args.t_end, integrator, dt=args.dt,
                 rtol=DEFAULT_RTOL if rtol is None else rtol,
                 atol=DEFAULT_ATOL if atol is None else atol, n_out=OUTPUTS,
-                max_steps=args.max_steps, progress=progress)
+                max_steps=args.max_steps, progress=progress, max_order=args.max_order,
+                jacobian=args.jacobian)
     except IntegrationError as error:
         print(f"youbot-dynamics pendulum: {error}", file=sys.stderr)
         return 1
@@ -107,7 +132,8 @@ TABLE_TITLES = {
     "euler_stability": f"Explicit Euler on [0, {SEED_T_END:g}] from x0 = 1.2 (stable: finite, "
                        f"|state| <= {STABLE_BOUND:g} and max|E-E0| < {STABLE_ENERGY_ERROR:g}; "
                        f"accurate: max|E-E0| < {ACCURATE_ENERGY_ERROR:g})",
-    "cvode_statistics": "Statistics at rtol = atol = 1e-6 from x0 = 1.2 on [0, 20]",
+    "cvode_statistics": "Statistics at rtol = atol = 1e-6 from x0 = 1.2 on [0, 20] (CVODE "
+                        "with its own difference-quotient Jacobian, as the seed's runs)",
     "energy_error": "Energy error max|E-E0| versus step size / tolerance",
 }
 COLUMNS = ("integrator", "k", "setting", "verdict", "energy_error", "steps", "rhs_evals",
@@ -125,4 +151,82 @@ def run_study(args: argparse.Namespace) -> int:
         print(f"\n{title}\n")
         print(markdown_table(COLUMNS, ([(getattr(row, c) or "-") if c in TEXT_COLUMNS else getattr(row, c)
                                         for c in COLUMNS] for row in rows if row.table == table), digits=3))
+        for row in rows:
+            if row.table == table and row.verdict and row.seed and row.verdict != row.seed:
+                print(f"- k={row.k:g} {row.setting}: the seed says {row.seed!r}, our energy "
+                      f"criterion {row.verdict!r} (max|E-E0| {cell(row.energy_error)}); "
+                      f"bdf-study judges position against a reference instead")
+    return 0
+
+
+FIXED_STEP_COLUMNS = ("k", "n_steps", "h_omega", "seed", "verdict", "energy_verdict",
+                      "energy_growth", "energy_error", "position_error", "diverged_at",
+                      "newton_iterations")
+METHOD_TITLES = {"euler": "Table 1: explicit Euler", "bdf2": "Table 2: BDF2",
+                 "bdf3": "Table 3: BDF3", "bdf4": "Table 4: BDF4"}
+
+
+def run_bdf_study(args: argparse.Namespace) -> int:
+    """Print (or JSON) Tables 1-4, the stability figures, measured orders and the CVODE
+    order-cap rows; optionally plot the stability regions."""
+    import math
+
+    from youbot_dynamics.analysis.bdf import (alpha_angle, locus_radius_on_ray,
+                                              measured_boundary_radius,
+                                              plot_stability_regions)
+    from youbot_dynamics.cli.common import output_file
+    from youbot_dynamics.systems.bdf_study import (ENERGY_GROWTH, METHODS,
+                                                   POSITION_TOLERANCE, REFERENCE_TOL,
+                                                   cvode_order_rows, fixed_step_tables,
+                                                   measured_orders, plot_choppy_traces,
+                                                   stability_points)
+    for path, flag in ((args.plot, "--plot"), (args.choppy, "--choppy")):
+        if path:
+            output_file(path, flag)
+    rows = fixed_step_tables(seed_only=args.short)
+    stability = [{"order": order, "alpha_deg": math.degrees(alpha_angle(order)),
+                  "real_axis_boundary": locus_radius_on_ray(order, 0.0),
+                  "measured_by_solver": measured_boundary_radius(order, 0.0, iterations=20)}
+                 for order in (1, 2, 3, 4)]
+    orders = measured_orders()
+    cvode = cvode_order_rows((10,) if args.short else (10, 50))
+    if args.plot:
+        plot_stability_regions(args.plot, points=stability_points(
+            [row for row in rows if row.n_steps == 1000]))
+    choppy = plot_choppy_traces(args.choppy) if args.choppy else None
+    if args.json:
+        print(json.dumps({"tables": [row.as_dict() for row in rows], "stability": stability,
+                          "measured_orders": orders, "cvode_max_order": cvode,
+                          "choppy": choppy, "plot": args.plot}, indent=2))
+        return 0
+    print(f"Elastic pendulum on [0, {SEED_T_END:g}] from x0 = 1.2 at rest, N fixed steps. "
+          f"Our verdict: unstable if the run diverges or its energy grows by more than "
+          f"{ENERGY_GROWTH:g}; accurate if (x, y) stays within {POSITION_TOLERANCE:g} m of "
+          f"DOP853 at rtol = atol = {REFERENCE_TOL:g} (outputs every 0.1 s). energy_verdict "
+          f"is pendulum-study's (unstable at max|E-E0| >= {STABLE_ENERGY_ERROR:g}, accurate "
+          f"below {ACCURATE_ENERGY_ERROR:g}). h_omega = h sqrt(k).")
+    for method in METHODS:
+        print(f"\n{METHOD_TITLES[method]}\n")
+        print(markdown_table(FIXED_STEP_COLUMNS, ([getattr(row, c) if getattr(row, c) != ""
+                                                   else "-" for c in FIXED_STEP_COLUMNS]
+                                                  for row in rows if row.method == method),
+                             digits=3))
+    print("\nStability: A(alpha) angle and the real-axis boundary h lambda of each BDF, "
+          "from the root locus and measured by bisection on the solver's own growth on "
+          "x' = lambda x\n")
+    print(markdown_table(tuple(stability[0]), ([r[c] for c in r] for r in stability), digits=6))
+    print("\nMeasured orders (elastic pendulum k = 10 on [0, 2], final-state error against "
+          "DOP853 at 1e-13)\n")
+    print(markdown_table(("order", "error N=400", "error N=800", "measured_order"),
+                         ([r["order"], *r["errors"], r["measured_order"]] for r in orders),
+                         digits=4))
+    print("\nCVODE BDF at rtol = atol = 1e-6, order capped (its difference-quotient "
+          "Jacobian, as the seed's runs)\n")
+    print(markdown_table(tuple(cvode[0]), ([r[c] for c in r] for r in cvode), digits=4))
+    if args.plot:
+        print(f"\nplot written to {args.plot}")
+    if choppy:
+        print(f"rtol = atol = 0.1 traces written to {args.choppy}: " + "; ".join(
+            f"{name} {figures['steps']} steps, position off by up to "
+            f"{figures['position_error']:.2f} m" for name, figures in choppy.items()))
     return 0

@@ -1,11 +1,15 @@
-"""Sub-commands for the classic studies: ``woodpecker`` (the hybrid woodpecker toy) and
-``lagrange`` (equations of motion by computer algebra)."""
+"""Sub-commands for the classic studies: ``woodpecker`` (the hybrid woodpecker toy),
+``lagrange`` (equations of motion by computer algebra), ``rotations`` (Cardan angles,
+adaptive Cardan and quaternions on a free rigid body) and ``uncertainty`` (the pendulum
+with uncertain parameters: linear propagation against Monte Carlo)."""
 from __future__ import annotations
 
 import argparse
 import json
 
-from youbot_dynamics.cli.common import add_tolerance_arguments, cell, output_file, positive, tolerances
+from youbot_dynamics.cli.common import (add_tolerance_arguments, cell, markdown_table,
+                                        output_file, positive, relative_tolerance,
+                                        tolerances)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import limits
 from youbot_dynamics.sim.events import HybridSolution
@@ -93,6 +97,18 @@ def run_woodpecker(args: argparse.Namespace) -> int:
     return 0
 
 
+def parameter_overrides(items: list[str] | None) -> dict[str, float]:
+    """``NAME=VALUE`` items of --param as a dict; UserInputError naming a malformed one."""
+    overrides = {}
+    for item in items or ():
+        name, _, value = item.partition("=")
+        try:
+            overrides[name.strip()] = float(value)
+        except ValueError:
+            raise UserInputError(f"--param takes NAME=VALUE with a number, got {item!r}") from None
+    return overrides
+
+
 def run_lagrange(args: argparse.Namespace) -> int:
     """Derive the pendulum's equations with sympy, simulate them and print the equations,
     final state, energy drift and statistics (or JSON)."""
@@ -101,7 +117,7 @@ def run_lagrange(args: argparse.Namespace) -> int:
     from youbot_dynamics.sim.integrators import integrate
     from youbot_dynamics.systems.lagrange import SEED_INITIAL, model
     lagrange = model(args.problem)
-    p = lagrange.parameter_values({"c": args.friction})
+    p = lagrange.parameter_values({**parameter_overrides(args.param), "c": args.friction})
     q0, u0 = SEED_INITIAL[args.problem]
     rtol, atol = tolerances(args, np.r_[q0, u0])
     rtol = LAGRANGE_RTOL if rtol is None else rtol
@@ -135,6 +151,88 @@ def run_lagrange(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_uncertainty(args: argparse.Namespace) -> int:
+    """The uncertainty study: linear propagation against Monte Carlo, figures (or JSON)
+    and optionally the band plot."""
+    from youbot_dynamics.systems.uncertain_pendulum import (FAILURE_FLOOR, FAILURE_RATIO,
+                                                            comparison,
+                                                            linear_propagation, monte_carlo,
+                                                            plot_uncertainty)
+    if args.plot:
+        output_file(args.plot, "--plot")
+    if args.samples < 2:
+        raise UserInputError(f"--samples must be at least 2, got {args.samples}")
+    linear = linear_propagation(args.t_end)
+    sampled, phi = monte_carlo(args.samples, args.t_end, args.seed)
+    figures = comparison(linear, sampled)
+    if args.plot:
+        plot_uncertainty(linear, sampled, phi, args.plot)
+    if args.json:
+        print(json.dumps({**figures, "samples": args.samples, "seed": args.seed,
+                          "plot": args.plot}, indent=2))
+        return 0
+    print(f"Damped pendulum, L = 0.8 +- 0.2 m, m = 1 +- 0.2 kg, d = 0.5 +- 0.2 N m s/rad, "
+          f"phi0 = 1.57 rad; RK4 h = 0.01 s; linear propagation (uncertainties) against "
+          f"{args.samples} Monte Carlo samples (seed {args.seed})")
+    print(f"at t = {figures['t_end']:g} s: sigma(phi) linear {figures['sigma_linear_end']:.4g} "
+          f"rad, Monte Carlo {figures['sigma_monte_carlo_end']:.4g} rad (2-sigma bands "
+          f"{figures['band_width_linear_end']:.4g} and {figures['band_width_monte_carlo_end']:.4g}"
+          f" rad wide); means differ by {figures['mean_difference_end']:.3g} rad")
+    fails = figures["linearisation_fails_at"]
+    print(f"sigma_linear / sigma_MC ranges over [{figures['min_ratio']:.3g}, "
+          f"{figures['max_ratio']:.3g}]; linearisation fails (beyond +-{FAILURE_RATIO:.0%} "
+          f"and {FAILURE_FLOOR:g} rad) "
+          + ("nowhere" if fails is None else f"first at t = {fails:g} s"))
+    print(f"wall time: linear {figures['wall_time_linear']:.3g} s, Monte Carlo "
+          f"{figures['wall_time_monte_carlo']:.3g} s")
+    if args.plot:
+        print(f"plot written to {args.plot}")
+    return 0
+
+
+ROTATION_COLUMNS = ("run", "formulation", "steps", "rhs_evals", "switches", "t_reached",
+                    "attitude_error", "rate_error", "norm_drift", "wall_time")
+
+
+def run_rotations(args: argparse.Namespace) -> int:
+    """Every orientation formulation on every run of the rotations study; a table (or
+    JSON) of steps, evaluations, errors against the closed-form top and |q| drift."""
+    from youbot_dynamics.systems.rotations import (RUNS, SWITCH_ANGLE, plot_rotations,
+                                                   rotations_study, spin_wobble_sweep)
+    if args.plot:
+        output_file(args.plot, "--plot")
+    results = rotations_study(args.integrator, args.tol, runs=tuple(args.runs or RUNS))
+    rows = [result.summary() for result in results]
+    sweep = spin_wobble_sweep(args.integrator, args.tol) if "spin" in (args.runs or RUNS) else []
+    if args.plot:
+        plot_rotations(results, args.plot)
+    if args.json:
+        print(json.dumps({"integrator": args.integrator, "tol": args.tol, "rows": rows,
+                          "spin_wobble_sweep": sweep, "plot": args.plot}, indent=2))
+        return 0
+    print(f"Rotations study, {args.integrator} at rtol = atol = {args.tol:g}; errors are "
+          f"maxima over the outputs against the closed-form axisymmetric top (attitude: "
+          f"|log(R_true^T R)|, rad; rate: |w - w_true|, rad/s). cardan_adaptive switches "
+          f"x-y-z <-> x-z-y at |a2| = {SWITCH_ANGLE} rad; the quaternion is integrated "
+          f"unprojected and renormalised on output (norm_drift = max ||q| - 1|).\n")
+    for name in dict.fromkeys(row["run"] for row in rows):
+        print(f"{name}: {RUNS[name].purpose}")
+    print()
+    print(markdown_table(ROTATION_COLUMNS, ([row[c] for c in ROTATION_COLUMNS] for row in rows),
+                         digits=3))
+    if sweep:
+        print(f"\nspin with less and less wobble (w0 = ({RUNS['spin'].w0[0]:g}, wobble, 0) "
+              f"rad/s): fixed Cardan against the quaternion\n")
+        print(markdown_table(tuple(sweep[0]), ([row[c] for c in sweep[0]] for row in sweep),
+                             digits=3))
+    for row in rows:
+        if row["failure"]:
+            print(f"{row['run']} / {row['formulation']} failed: {row['failure']}")
+    if args.plot:
+        print(f"plot written to {args.plot}")
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``woodpecker`` and ``lagrange`` sub-commands."""
     parser = subparsers.add_parser("woodpecker", help="the woodpecker toy: state events, "
@@ -152,6 +250,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("problem", choices=("2d", "3d"))
     parser.add_argument("--friction", type=non_negative, default=0.0,
                         help="joint friction c: generalised force -c q_i'")
+    parser.add_argument("--param", action="append", metavar="NAME=VALUE",
+                        help="override a model parameter (SI), e.g. --param m2=0.5; "
+                             "repeatable")
     parser.add_argument("--t-end", type=positive, default=10.0, help="end time (s)")
     parser.add_argument("--integrator", choices=[n for n in INTEGRATORS
                                                  if n not in FIXED_STEP and n != "ida"],
@@ -159,3 +260,28 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_tolerance_arguments(parser, LAGRANGE_RTOL, "absolute tolerance (default rtol)")
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.set_defaults(run=run_lagrange)
+
+    from youbot_dynamics.systems.rotations import RUNS
+    parser = subparsers.add_parser("rotations", help="Cardan angles vs adaptive Cardan vs "
+                                   "quaternions on a torque-free rigid body",
+                                   description="The seed's rotations study: steps, "
+                                   "evaluations, error against the closed-form top and "
+                                   "|q| drift of each orientation state on each run.")
+    parser.add_argument("--runs", nargs="+", choices=tuple(RUNS), help="runs (default all)")
+    parser.add_argument("--integrator", choices=[n for n in INTEGRATORS
+                                                 if n not in FIXED_STEP and n != "ida"],
+                        default="rk45")
+    parser.add_argument("--tol", type=relative_tolerance, default=1e-8,
+                        help="rtol = atol (default 1e-8)")
+    parser.add_argument("--plot", metavar="PNG", help="write the error and middle-angle plot")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.set_defaults(run=run_rotations)
+
+    parser = subparsers.add_parser("uncertainty", help="the damped pendulum with uncertain "
+                                   "L, m, d: linear propagation against Monte Carlo")
+    parser.add_argument("--samples", type=int, default=1000, help="Monte Carlo samples")
+    parser.add_argument("--seed", type=int, default=0, help="random seed of the samples")
+    parser.add_argument("--t-end", type=positive, default=10.0, help="end time (s)")
+    parser.add_argument("--plot", metavar="PNG", help="write the band plot")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.set_defaults(run=run_uncertainty)

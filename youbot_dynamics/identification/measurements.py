@@ -30,7 +30,7 @@ from tqdm import tqdm
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag
-from youbot_dynamics.sim.commands import stamp_ns_of
+from youbot_dynamics.io.stamps import stamp_ns_of
 
 #: Fewer samples than this cannot carry an identification (and filtfilt needs 3 x 15).
 MIN_SAMPLES = 50

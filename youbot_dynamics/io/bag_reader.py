@@ -20,7 +20,8 @@ from rosbags.interfaces import QosDurability
 from rosbags.rosbag2 import ReaderError
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.io.messages import NS_PER_S, TYPESTORE
+from youbot_dynamics.io.messages import TYPESTORE
+from youbot_dynamics.io.stamps import NS_PER_S
 
 _BAG_ERRORS = (AnyReaderError, ReaderError, OSError, ValueError, KeyError)
 """What rosbags raises for a missing, truncated or malformed bag."""

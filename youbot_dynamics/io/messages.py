@@ -21,8 +21,8 @@ from rosbags.typesys import Stores, get_typestore
 
 from youbot_dynamics.dynamics.collision import Shape
 from youbot_dynamics.model.lie import quaternion_from_matrix
-from youbot_dynamics.sim.commands import NS_PER_S
-from youbot_dynamics.sim.frames import drawn_shape
+from youbot_dynamics.io.stamps import NS_PER_S
+from youbot_dynamics.io.drawn_shapes import drawn_shape
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 """The rosbags typestore (ROS 2 Jazzy) every message here comes from."""
@@ -297,7 +297,7 @@ def shape_markers(stamp_ns: int, frame_id: str, name: str, shape: Shape, placeme
     """The markers that draw ``shape`` (m) placed by ``placement`` (4x4) in ``frame_id``,
     in namespace ``name``: a sphere, box or cylinder is one marker (id 0); a capsule (no
     marker type of its own) a cylinder (id 0) and its two end spheres (ids 1, 2); a
-    halfspace the plate ``sim.frames.drawn_shape`` draws."""
+    halfspace the plate ``io.drawn_shapes.drawn_shape`` draws."""
     shape, placement = drawn_shape(shape, placement)
     radius, length = shape.radius, shape.length
 

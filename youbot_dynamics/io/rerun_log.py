@@ -23,7 +23,7 @@ Layout of the recording (Rerun 0.41):
 - ``/geometry/<name>``: the scene's static world geometry (in the world frame) and its
   geometry on robot links (in the link's frame, which the URDF loader names after the
   link), static solids placed as the scene places them; a halfspace is drawn as a thin
-  square plate on its boundary plane (``sim.frames.drawn_shape``);
+  square plate on its boundary plane (``io.drawn_shapes.drawn_shape``);
 - ``/world_frame``: if the world frame is not the URDF root link (a ``frame_id`` such as
   ``odom``), a static identity transform world frame -> root link joins the two trees.
 
@@ -54,7 +54,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.messages import finite_array, finite_floats, stamps_ns
 from youbot_dynamics.model.lie import quaternion_from_matrix
-from youbot_dynamics.sim.frames import drawn_shape
+from youbot_dynamics.io.drawn_shapes import drawn_shape
 
 TIMELINE = "sim_time"
 JOINT_TRANSFORMS = "/joint_transforms"

@@ -14,16 +14,24 @@ the contact events), subscribes
 (std_srvs/SetBool). inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
 default keep-all: a replay as fast as possible loses no sample; best_effort for drivers that
 publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics. Parameters:
-:mod:`youbot_dynamics.ros.parameters`.
+:mod:`youbot_dynamics.ros.parameters`, checked (all or nothing) in the on-set callback and
+applied in the post-set callback.
+
+Names: the topics above are the logged names; on the graph the node uses relative names
+(:mod:`youbot_dynamics.ros.topics`), so ``--ros-args -r __ns:=/youbot1`` publishes
+/youbot1/joint_states, /youbot1/clock, ... and subscribes /youbot1/joint_commands; /tf,
+/tf_static and /diagnostics stay global. Frames on /tf carry ``frame_prefix`` (by default the
+namespace: ``youbot1/arm_link_1``), so two robots on one /tf never name the same frame; the
+/diagnostics status carries the node's full name (``/youbot1/dynamics_node: ...``).
 
 Bounded work per message: the subscriptions take the serialized message and refuse (count
 as ``rejected.too_large``, without deserialising) one over :data:`MAX_MESSAGE_BYTES`; the
 session's checks are linear in the message and refuse more than
-:data:`~youbot_dynamics.sim.commands.MAX_NAMES` names or
-:data:`~youbot_dynamics.sim.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
+:data:`~youbot_dynamics.ros.commands.MAX_NAMES` names or
+:data:`~youbot_dynamics.ros.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
 callback against ``callback_budget`` and reports overruns in /diagnostics (level WARN,
 ``overruns.<source>``, ``worst_callback_s``). Time semantics of stamps:
-:mod:`youbot_dynamics.sim.commands`; inverse mode gives unstamped samples the node clock's
+:mod:`youbot_dynamics.ros.commands`; inverse mode gives unstamped samples the node clock's
 receive time.
 
 No input kills the node: every subscription, timer and service callback runs behind
@@ -71,12 +79,14 @@ from std_srvs.srv import SetBool, Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
+from youbot_dynamics.ros.commands import InputRejected
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr, to_rclpy
-from youbot_dynamics.ros.parameters import check_choice, declare_all
+from youbot_dynamics.ros.parameters import check_choice, declare_all, frame_prefix_of
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
 from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
-from youbot_dynamics.sim.commands import NS_PER_S, InputRejected, stamp_ns_of
+from youbot_dynamics.ros.topics import graph_name
 from youbot_dynamics.sim.scene import load_scene
 
 MAX_BURST = 20
@@ -108,7 +118,9 @@ class DynamicsNode(Node):
         p = self.params
         scene = load_scene(p["scene"])
         logs = {"mcap_path": p["mcap_path"] or None, "rrd_path": p["rrd_path"] or None,
-                "frame_id": p["frame_id"], "ee_link": p["ee_link"]}
+                "frame_id": p["frame_id"], "ee_link": p["ee_link"],
+                "frame_prefix": frame_prefix_of(p["frame_prefix"], self.get_namespace()),
+                "node_name": self.get_fully_qualified_name()}
         if p["mode"] == "simulate":
             self.session = SimulationSession(
                 scene, p["publish_rate"], command_timeout=p["command_timeout"], on_timeout=p["on_timeout"],
@@ -139,7 +151,8 @@ class DynamicsNode(Node):
         self._diagnostics_mark = (time.monotonic(), self.session.t)
         self.create_timer(p["diagnostics_period"], self._guarded("diagnostics timer", self._on_diagnostics),
                           clock=steady)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
         self.get_logger().info(f"{p['mode']} {scene.name} ({scene.source}); logs: "
                                f"{', '.join(map(str, self.session.recorder.paths)) or 'none'}")
 
@@ -155,8 +168,8 @@ class DynamicsNode(Node):
             except ImportError:
                 self._unpublished.add(topic)
                 continue
-            self.publishers_[topic] = self.create_publisher(cls, topic, LATCHED if topic in LATCHED_TOPICS
-                                                            else RELIABLE_DEEP)
+            qos = LATCHED if topic in LATCHED_TOPICS else RELIABLE_DEEP
+            self.publishers_[topic] = self.create_publisher(cls, graph_name(topic), qos)
         if self._unpublished:
             self.get_logger().warning(f"not publishing {', '.join(sorted(self._unpublished))}: their message "
                                       "package is not installed (tf2_msgs: `make` builds it from interfaces/, "
@@ -190,7 +203,7 @@ class DynamicsNode(Node):
         session, p = self.session, self.params
         if self.finished or session.paused or session.failure or (self._waiting and not self._subscribers_ready()):
             return
-        rate = p["publish_rate"] * self.get_parameter("time_scale").value    # samples per wall s
+        rate = p["publish_rate"] * p["time_scale"]    # samples per wall s
         due = MAX_BURST if rate == 0.0 else \
             int((time.monotonic() - self._pace_start) * rate) - (session.k - self._pace_k0)
         if due > MAX_LAG * rate:
@@ -222,9 +235,10 @@ class DynamicsNode(Node):
 
     # ---- the node boundary ---------------------------------------------------------------
     def _subscribe(self, msg_type: type, topic: str, callback: Callable, qos: Any, **options) -> None:
-        """Subscribe ``callback`` to ``topic`` behind the node boundary, taking the
-        serialized message: one over ``MAX_MESSAGE_BYTES[topic]`` is rejected (counted,
-        ``too_large``) before it is deserialised."""
+        """Subscribe ``callback`` to ``topic`` (its graph name: relative, see
+        :mod:`~youbot_dynamics.ros.topics`) behind the node boundary, taking the serialized
+        message: one over ``MAX_MESSAGE_BYTES[topic]`` is rejected (counted, ``too_large``)
+        before it is deserialised."""
         limit = MAX_MESSAGE_BYTES[topic]
 
         def decode(data: bytes) -> object:
@@ -234,7 +248,8 @@ class DynamicsNode(Node):
                 raise error
             return deserialize_message(data, msg_type)
 
-        self.create_subscription(msg_type, topic, self._guarded(topic, callback, decode), qos, raw=True, **options)
+        self.create_subscription(msg_type, graph_name(topic), self._guarded(topic, callback, decode), qos, raw=True,
+                                 **options)
 
     def _guarded(self, source: str, callback: Callable, decode: Callable | None = None) -> Callable:
         """``callback`` (of a subscription, timer or service, named ``source``) behind the
@@ -315,20 +330,25 @@ class DynamicsNode(Node):
         response.success, response.message = True, "paused" if request.data else "running"
         return response
 
-    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        """On-set: accept or refuse a set of parameters as a whole, changing nothing (rclpy
+        has checked ranges and read-only flags; this checks the string choices)."""
         for parameter in parameters:
             problem = check_choice(parameter.name, parameter.value)
             if problem:
                 return SetParametersResult(successful=False, reason=problem)
-        commands = getattr(self.session, "commands", None)
-        for parameter in parameters:
-            if parameter.name == "time_scale":
-                self._restart_pacing()
-            elif commands is not None and parameter.name == "command_timeout":
-                commands.timeout = float(parameter.value)
-            elif commands is not None and parameter.name == "on_timeout":
-                commands.on_timeout = parameter.value
         return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters: list[Parameter]) -> None:
+        """Post-set: make an accepted set take effect (``params`` holds the values in force;
+        the writable ones act in simulate mode only)."""
+        self.params.update((parameter.name, parameter.value) for parameter in parameters)
+        if self.params["mode"] != "simulate":
+            return
+        if any(parameter.name == "time_scale" for parameter in parameters):
+            self._restart_pacing()
+        self.session.commands.timeout = float(self.params["command_timeout"])
+        self.session.commands.on_timeout = self.params["on_timeout"]
 
     def close(self) -> None:
         """Finalise the logs (idempotent)."""

@@ -14,9 +14,11 @@ from rclpy.node import Node
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.ros.qos import SUBSCRIPTION_PROFILES
-from youbot_dynamics.sim.commands import TIMEOUT_ACTIONS
+from youbot_dynamics.ros.commands import TIMEOUT_ACTIONS
 
 MODES = ("simulate", "inverse")
+AUTO_PREFIX = "auto"
+"""``frame_prefix`` value that derives the prefix from the node's namespace."""
 CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS, "joint_states_qos": tuple(SUBSCRIPTION_PROFILES)}
 
 
@@ -43,7 +45,11 @@ PARAMETERS: dict[str, Spec] = {
                      (0.0, 1.0e6)),
     "solve_horizon": Spec(0.02, "simulated time (s) per integrator run (samples handed out one by one; "
                           "commands take effect at the next run)", (0.0, 1.0)),
-    "frame_id": Spec("", "frame of /ee_pose and /free_bodies, root of /tf ('' : the URDF root link; world without a robot)"),
+    "frame_id": Spec("", "frame of /ee_pose and /free_bodies, root of /tf, used as given ('' : the URDF root link, "
+                     "world without a robot, with frame_prefix)"),
+    "frame_prefix": Spec(AUTO_PREFIX, "prefix of every frame the node names (URDF links, free bodies, the default "
+                         "root frame), as robot_state_publisher's frame_prefix; auto: the node's namespace without "
+                         "its leading slash, plus / (youbot1/ in /youbot1, none in the root namespace)"),
     "ee_link": Spec("", "link reported on /ee_pose ('' : the robot's end effector)"),
     "mcap_path": Spec("", "MCAP log (rosbag2 form) of every published topic plus /tf, /tf_static ('' : none)"),
     "rrd_path": Spec("", "Rerun recording ('' : none)"),
@@ -87,6 +93,15 @@ def check_choice(name: str, value: object) -> str | None:
     if choices is not None and value not in choices:
         return f"parameter {name}: {value!r} is not one of {', '.join(choices)}"
     return None
+
+
+def frame_prefix_of(value: str, namespace: str) -> str:
+    """The frame prefix ``frame_prefix`` = ``value`` means for a node in ``namespace``:
+    ``value`` itself, or for :data:`AUTO_PREFIX` the namespace without its leading slash
+    plus "/" (``/youbot1`` -> ``youbot1/``; the root namespace ``/`` -> no prefix)."""
+    if value != AUTO_PREFIX:
+        return value
+    return "" if namespace == "/" else namespace.lstrip("/") + "/"
 
 
 def declare_all(node: Node) -> dict[str, object]:

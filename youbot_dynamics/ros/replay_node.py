@@ -13,6 +13,13 @@ the node drives /clock with each message's log time, so nodes with use_sim_time 
 bag. Topics recorded latched (/tf_static) are offered transient-local. Types without an rclpy
 message package (tf2_msgs with these wheels) are skipped with a warning.
 
+Topic names: each recorded topic goes out under its graph name
+(:func:`~youbot_dynamics.ros.topics.graph_name`): relative to the node's namespace (the
+recorded /joint_states as ``joint_states``), /tf, /tf_static and /diagnostics as they are. In
+the root namespace every topic goes out as recorded; ``--ros-args -r __ns:=/youbot1`` replays
+a dynamics node's bag under /youbot1. The ``topics`` and ``wait_for`` parameters take the
+recorded names.
+
 Run: ``ros2 run youbot_dynamics replay_node --ros-args -p bag:=out/run.mcap -p rate:=0.0``
 or ``youbot-dynamics replay BAG [--rate R | --fast]``.
 """
@@ -37,6 +44,7 @@ from youbot_dynamics.io.bag_reader import bag_topics, paced, read_bag
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
 from youbot_dynamics.ros.process import ACK_TIMEOUT, stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import RELIABLE_DEEP, profile
+from youbot_dynamics.ros.topics import graph_name
 
 WAIT_FOR_TIMEOUT = 30.0
 """Longest wait (wall s) for a subscriber on ``wait_for`` before replaying anyway."""
@@ -84,8 +92,9 @@ class ReplayNode(Node):
                 self.get_logger().warning(f"{topic.topic}: no rclpy message {topic.msgtype} here; not replayed")
                 continue
             self.publishers_[topic.topic] = self.create_publisher(
-                cls, topic.topic, profile(topic.latched, keep_all=self.rate == 0.0))
-        self.clock = None if "/clock" in self.publishers_ else self.create_publisher(Clock, "/clock", RELIABLE_DEEP)
+                cls, graph_name(topic.topic), profile(topic.latched, keep_all=self.rate == 0.0))
+        self.clock = None if "/clock" in self.publishers_ else \
+            self.create_publisher(Clock, graph_name("/clock"), RELIABLE_DEEP)
         if self.wait_for and self.wait_for not in self.publishers_:
             raise UserInputError(f"replay_node: wait_for {self.wait_for} is not a replayed topic of {self.bag} "
                                  f"(replayed: {', '.join(sorted(self.publishers_)) or 'none'})")

@@ -4,7 +4,11 @@ them through ``io`` (MCAP in rosbag2 form, Rerun). The node only moves messages 
 
 Every output is a list of ``(topic, message)`` (rosbags objects) that the caller publishes
 (``session.topics`` names them), /tf (every moving link and every free body) among them in
-every sample; everything published is also logged. ``session.latched`` holds what is sent
+every sample; everything published is also logged. Topics are named as logged, as in the
+root namespace (``/joint_states``); the node publishes them under their graph names
+(:mod:`youbot_dynamics.ros.topics`). Frame names carry ``frame_prefix`` (see ``_Frames``).
+One kinematics pass per sample (:meth:`~youbot_dynamics.ros.frames.LinkFrames.at`) gives
+/tf, /ee_pose and /ee_poses. ``session.latched`` holds what is sent
 once, latched (transient local), and logged at t = 0: /tf_static (every fixed link) and,
 with a robot, /robot_description (std_msgs/String: the URDF of what is simulated, the
 composed URDF for a composed scene), named as robot_state_publisher names them. Stamps and
@@ -15,7 +19,7 @@ Shapes for viewers (visualization_msgs/MarkerArray, namespace = the shape's name
 /free_bodies_markers draws every free body at every sample (in the root frame);
 /scene_markers, latched (transient local, published once at start and logged at t = 0),
 draws the static world geometry (root frame) and the geometry on links (in the link's
-frame, frame-locked). A halfspace is drawn as a plate (``sim.frames.drawn_shape``).
+frame, frame-locked). A halfspace is drawn as a plate (``io.drawn_shapes.drawn_shape``).
 
 Free bodies (simulate mode) appear like the robot's links: on /tf as ``<root frame> ->
 <body name>`` and in the Rerun recording as their shapes; on ROS, as one
@@ -40,7 +44,7 @@ scene but not the clock: the samples after a reset continue from the last stamp 
 scene's t = 0 is then at ``epoch_ns``), so /clock, every header stamp and the log times of
 the MCAP and the Rerun recording stay monotonic in one run and no stamp repeats. The reset
 is recorded as an event: /diagnostics (also logged) carries ``resets`` and
-``last_reset_at`` (node time, s). Time semantics of the inputs: :mod:`youbot_dynamics.sim.commands`.
+``last_reset_at`` (node time, s). Time semantics of the inputs: :mod:`youbot_dynamics.ros.commands`.
 """
 from __future__ import annotations
 
@@ -59,19 +63,19 @@ from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
+from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
+from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                           follow, joint_sample, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.sim.frames import LinkFrames, LinkTransform, body_transforms
-from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
-from youbot_dynamics.sim.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
+from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, body_transforms
+from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
                                          implausible_joints)
+from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
 from youbot_dynamics.sim.scene import Scene
 from youbot_dynamics.sim.model import robot_with_gravity
 from youbot_dynamics.sim.simulator import Simulator, Snapshot
 
-NS_PER_S = messages.NS_PER_S
 Outputs = list[tuple[str, object]]
 
 TOPIC_TYPES = {
@@ -171,38 +175,51 @@ class Recorder:
 class _Frames:
     """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame``, /tf, /free_bodies
     and /free_bodies_markers messages of the free bodies among ``geometries`` (frame names
-    distinct from the robot's links) and the /scene_markers of the others."""
+    distinct from the robot's links) and the /scene_markers of the others.
+
+    Frame names: every frame the node names itself (the robot's links, the free bodies, the
+    default root frame) carries ``prefix`` (robot_state_publisher's ``frame_prefix``: two
+    robots on one /tf keep their frames apart); a ``root_frame`` given is used as it is."""
 
     def __init__(self, robot: Robot, root_frame: str, ee_link: str | None,
-                 geometries: Sequence[Geometry] = ()) -> None:
+                 geometries: Sequence[Geometry] = (), prefix: str = "") -> None:
         self.links = LinkFrames(robot, ee_link or None)
-        self.root_frame = root_frame or robot.root_link
+        self.prefix = prefix
+        self.root_frame = root_frame or prefix + robot.root_link
         self.has_robot = bool(robot.tree)
         self.body_shapes = {g.name: (g.shape, g.placement) for g in geometries if g.owner == "body"}
         self.static_geometry = tuple(g for g in geometries if g.owner != "body")
-        clash = sorted(set(self.body_shapes) & {self.root_frame, *robot.link_names})
+        clash = sorted(set(self.body_shapes) & {root_frame or robot.root_link, *robot.link_names})
         if clash:
             raise UserInputError(f"free bodies {clash} have the names of robot frames; /tf needs distinct "
                                  "frame names: rename the bodies in the scene")
 
+    def _transform(self, stamp_ns: int, transform: LinkTransform, parent: str | None = None) -> object:
+        """``transform`` as a TransformStamped, its frames prefixed (the parent: ``parent``
+        if given)."""
+        return messages.transform_stamped(stamp_ns, parent or self.prefix + transform.parent,
+                                          self.prefix + transform.child, transform.translation,
+                                          transform.quaternion_xyzw)
+
     def tf_static(self) -> object:
         """/tf_static: every fixed link, and root frame -> URDF root link if they differ."""
-        transforms = [messages.transform_stamped(0, t.parent, t.child, t.translation, t.quaternion_xyzw)
-                      for t in self.links.static]
-        if self.root_frame != self.links.root_link:
-            transforms.insert(0, messages.transform_stamped(0, self.root_frame, self.links.root_link,
+        transforms = [self._transform(0, t) for t in self.links.static]
+        root_link = self.prefix + self.links.root_link
+        if self.root_frame != root_link:
+            transforms.insert(0, messages.transform_stamped(0, self.root_frame, root_link,
                                                             (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
         return messages.tf_message(transforms)
 
     def bodies(self, poses: dict[str, np.ndarray]) -> list[LinkTransform]:
-        """Root frame -> body transforms from the bodies' world poses (4x4, m)."""
+        """Root frame -> body transforms from the bodies' world poses (4x4, m); the child
+        frame is the body's name (unprefixed)."""
         return body_transforms(self.root_frame, poses)
 
-    def tf(self, stamp_ns: int, q: np.ndarray, bodies: Sequence[LinkTransform] = ()) -> object:
-        """The moving links at q, then the free bodies."""
-        return messages.tf_message(messages.transform_stamped(stamp_ns, t.parent, t.child, t.translation,
-                                                              t.quaternion_xyzw)
-                                   for t in (*self.links.moving(q), *bodies))
+    def tf(self, stamp_ns: int, sample: SampleFrames | None, bodies: Sequence[LinkTransform] = ()) -> object:
+        """The moving links of the sample's kinematics (none without a robot), then the free
+        bodies."""
+        links = [self._transform(stamp_ns, t) for t in sample.moving] if sample is not None else []
+        return messages.tf_message([*links, *(self._transform(stamp_ns, b, self.root_frame) for b in bodies)])
 
     def free_bodies(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
         """/free_bodies: the bodies' poses in the root frame, in order."""
@@ -226,8 +243,12 @@ class _Frames:
         namespace: the geometry's name."""
         return messages.marker_array(
             marker for g in self.static_geometry
-            for marker in messages.shape_markers(0, self.root_frame if g.owner == "world" else g.owner_name, g.name,
-                                                 g.shape, g.placement, GEOMETRY_RGBA, frame_locked=g.owner == "link"))
+            for marker in messages.shape_markers(0, self._geometry_frame(g), g.name, g.shape, g.placement,
+                                                 GEOMETRY_RGBA, frame_locked=g.owner == "link"))
+
+    def _geometry_frame(self, geometry: Geometry) -> str:
+        """The frame static geometry is placed in: the root frame, or its link's frame."""
+        return self.root_frame if geometry.owner == "world" else self.prefix + geometry.owner_name
 
     @property
     def scene_topics(self) -> tuple[str, ...]:
@@ -239,14 +260,13 @@ class _Frames:
         """/ee_pose, and /ee_poses for a model of several robots."""
         return ("/ee_pose", "/ee_poses") if len(self.links.ee_links) > 1 else ("/ee_pose",)
 
-    def ee_outputs(self, stamp_ns: int, q: np.ndarray) -> tuple[Outputs, np.ndarray]:
-        """/ee_pose (and /ee_poses, see ``ee_topics``) at q, and the position (m, root frame)
-        of the /ee_pose link."""
-        position, quaternion = self.links.ee_pose(q)
+    def ee_outputs(self, stamp_ns: int, sample: SampleFrames) -> Outputs:
+        """/ee_pose (and /ee_poses, see ``ee_topics``) of the sample's kinematics."""
+        position, quaternion = sample.ee_pose
         outputs: Outputs = [("/ee_pose", messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion))]
         if len(self.links.ee_links) > 1:
-            outputs.append(("/ee_poses", messages.pose_array(stamp_ns, self.root_frame, self.links.ee_poses(q))))
-        return outputs, position
+            outputs.append(("/ee_poses", messages.pose_array(stamp_ns, self.root_frame, sample.ee_poses)))
+        return outputs
 
 
 NOT_REPORTED = "n/a"
@@ -306,12 +326,13 @@ class _Session(ClosesOnExit):
     topics: tuple[str, ...]
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
-                 mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float) -> None:
-        self.scene, self.robot = scene, robot
+                 mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float,
+                 frame_prefix: str, node_name: str) -> None:
+        self.scene, self.robot, self.node_name = scene, robot, node_name
         self.counters = InputCounters()
         self.watchdog = Watchdog(callback_budget)
         geometries = [g for g in scene.geometries if self.mode == "simulate" or g.owner != "body"]
-        self.frames = _Frames(robot, frame_id, ee_link, geometries)
+        self.frames = _Frames(robot, frame_id, ee_link, geometries, frame_prefix)
         self.latched: Outputs = [("/tf_static", self.frames.tf_static())]
         """Messages to publish once, latched (transient local), when the node starts."""
         if self.frames.has_robot:
@@ -319,7 +340,7 @@ class _Session(ClosesOnExit):
         if self.frames.static_geometry:
             self.latched.append(("/scene_markers", self.frames.scene_markers()))
         self.recorder = Recorder(self.mode, scene, robot, (*self.topics, *(t for t, _ in self.latched)),
-                                 mcap_path, rrd_path, self.frames.root_frame)
+                                 mcap_path, rrd_path, frame_id or robot.root_link)
         self.recorder.write(self.latched, 0)
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
@@ -333,7 +354,7 @@ class _Session(ClosesOnExit):
         if self.frames.has_robot:
             values = {"ee_link": self.frames.links.ee_link, "ee_links": ",".join(self.frames.links.ee_links),
                       **values}
-        status = messages.diagnostic_status(f"dynamics_node: {self.scene.name} ({self.mode})", level, text,
+        status = messages.diagnostic_status(f"{self.node_name}: {self.scene.name} ({self.mode})", level, text,
                                             hardware_id=self.robot.name, values=values)
         outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
         self.recorder.write(outputs, self.stamp_ns)
@@ -374,9 +395,11 @@ class SimulationSession(_Session):
     def __init__(self, scene: Scene, publish_rate: float, *, command_timeout: float = 0.5,
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
                  mcap_path: str | Path | None = None, rrd_path: str | Path | None = None,
-                 default_effort_limit: float = DEFAULT_EFFORT_LIMIT, callback_budget: float = 0.05) -> None:
+                 default_effort_limit: float = DEFAULT_EFFORT_LIMIT, callback_budget: float = 0.05,
+                 frame_prefix: str = "", node_name: str = "dynamics_node") -> None:
         self.simulator = Simulator(scene, resolve_integrator(scene, progress=False))
-        super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget)
+        super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget,
+                         frame_prefix, node_name)
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         checked_output_spacing(self.simulator.integrator.dt, np.array([0.0, self.step_ns / NS_PER_S]),
                                f"{scene.source}: integrator.dt (publish_rate {publish_rate:g} Hz)")
@@ -427,7 +450,7 @@ class SimulationSession(_Session):
     def trajectory(self, names: Sequence[str], points: Sequence[tuple[int, Sequence[float], Sequence[float]]],
                    stamp_ns: int, wall_ns: int | None = None) -> None:
         """Follow a joint trajectory from its stamp (node time, see
-        :func:`~youbot_dynamics.sim.commands.node_time_of_stamp`: unstamped or a past stamp
+        :func:`~youbot_dynamics.ros.commands.node_time_of_stamp`: unstamped or a past stamp
         within the command timeout: now; a wall-clock stamp: by its age; far future or older:
         rejected); ``points`` are (time_from_start (int ns), positions, velocities)."""
         try:
@@ -472,21 +495,23 @@ class SimulationSession(_Session):
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
         bodies = self.frames.bodies(snapshot.bodies)
+        sample = self.frames.links.at(q) if self.frames.has_robot else None
         try:
             outputs = [("/clock", messages.clock(stamp))]
-            if self.frames.has_robot:
-                poses, position = self.frames.ee_outputs(stamp, q)
-                outputs += [("/joint_states", self._joint_state(stamp, snapshot)), *poses]
+            if sample is not None:
+                outputs += [("/joint_states", self._joint_state(stamp, snapshot)),
+                            *self.frames.ee_outputs(stamp, sample)]
             if bodies:
                 outputs += [("/free_bodies", self.frames.free_bodies(stamp, bodies)),
                             ("/free_bodies_markers", self.frames.free_body_markers(stamp, bodies))]
-            outputs.append(("/tf", self.frames.tf(stamp, q, bodies)))
+            outputs.append(("/tf", self.frames.tf(stamp, sample, bodies)))
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
-        if self.frames.has_robot:
-            self.recorder.sample(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy, position)
+        if sample is not None:
+            self.recorder.sample(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy,
+                                 sample.ee_pose[0])
         if bodies:
             self.recorder.bodies(stamp, bodies)
         return outputs
@@ -543,7 +568,7 @@ class SimulationSession(_Session):
 
 class InverseSession(_Session):
     """Torques from measured joint states: accelerations by central differences (see
-    :mod:`youbot_dynamics.sim.inverse`), tau = RNEA + friction of the scene's robot."""
+    :mod:`youbot_dynamics.ros.inverse`), tau = RNEA + friction of the scene's robot."""
 
     mode = "inverse"
 
@@ -555,11 +580,13 @@ class InverseSession(_Session):
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS,
                  frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
-                 rrd_path: str | Path | None = None, callback_budget: float = 0.05) -> None:
+                 rrd_path: str | Path | None = None, callback_budget: float = 0.05, frame_prefix: str = "",
+                 node_name: str = "dynamics_node") -> None:
         robot = robot_with_gravity(scene.robot(), scene.gravity)
         if not robot.tree:
             raise UserInputError(f"{scene.source}: inverse mode needs a robot; the scene has none")
-        super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget)
+        super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget, frame_prefix,
+                         node_name)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
@@ -585,7 +612,7 @@ class InverseSession(_Session):
         and counts :class:`InputRejected`; a rejected sample breaks the difference stencil
         (no torque is computed across it: the next torque needs three good samples after
         it), and so does a gap or a jump back in the stamps (see
-        :mod:`youbot_dynamics.sim.inverse`). A sample whose velocity is beyond the
+        :mod:`youbot_dynamics.ros.inverse`). A sample whose velocity is beyond the
         velocity-limit bound is rejected (``out_of_limits``). A torque that is implausible
         (beyond the effort-limit bound) or not finite is not published: the sample counts as
         accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
@@ -625,11 +652,11 @@ class InverseSession(_Session):
                                                f"finite on {', '.join(implausible)}"))
             self.estimator.restart("implausible" if finite else "non_finite")
             return []
+        sample = self.frames.links.at(middle.q)
         try:
-            poses, position_ee = self.frames.ee_outputs(stamp, middle.q)
             outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
-                                                                  middle.v, tau)), *poses,
-                       ("/tf", self.frames.tf(stamp, middle.q))]
+                                                                  middle.v, tau)),
+                       *self.frames.ee_outputs(stamp, sample), ("/tf", self.frames.tf(stamp, sample))]
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             self.estimator.restart("non_finite")
@@ -637,7 +664,7 @@ class InverseSession(_Session):
         self.recorder.write(outputs, stamp)
         data = self.dynamics.data
         energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
-        self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, position_ee)
+        self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, sample.ee_pose[0])
         self.stamp_ns, self.samples = stamp, self.samples + 1
         return outputs
 

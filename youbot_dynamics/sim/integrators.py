@@ -119,7 +119,8 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
               monitor: Callable[[float, np.ndarray], str | None] | None = None,
               max_step: float = np.inf, min_step: float | None = None,
               max_steps: int | None = None,
-              progress: Callable[[float], None] | None = None) -> Solution:
+              progress: Callable[[float], None] | None = None,
+              max_order: int | None = None) -> Solution:
     """Solve x' = rhs(t, x) from x0 at t_eval[0], with outputs at t_eval (s).
 
     Fixed-step methods need ``dt`` (s); adaptive ones use ``rtol``/``atol`` (``jac``, the
@@ -129,7 +130,7 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
     is a DivergenceError. Adaptive steps below ``min_step`` (s) are a DivergenceError. A
     run of more than ``max_steps`` steps is a StepBudgetError (fixed steps: before the
     first; a dt that cannot move the clock is a UserInputError). ``progress(t)`` is called
-    with the time reached (s) after each output.
+    with the time reached (s) after each output. ``max_order`` caps CVODE's order.
     """
     start = time.perf_counter()
     if integrator not in INTEGRATORS or integrator == "ida":
@@ -163,7 +164,7 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
         else:
             stepper = CvodeStepper(CVODE_METHODS[integrator], integrator, rhs, times[0], x,
                                    times[-1], rtol, atol, jac, max_step, min_step,
-                                   tuple(events))
+                                   tuple(events), max_order)
     solution = drive(stepper, integrator, times, events, check, names, max_steps=max_steps,
                      progress=progress)
     solution.stats.wall_time = time.perf_counter() - start

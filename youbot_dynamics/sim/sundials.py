@@ -24,6 +24,7 @@ import numpy as np
 from sksundae.cvode import CVODE
 from sksundae.ida import IDA
 
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integration import (DivergenceError, Event, IntegrationError,
                                              IntegratorStats)
 
@@ -112,16 +113,28 @@ def common_options(rtol: float, atol, max_step: float, min_step: float | None) -
             "min_step": min_step or 0.0, "max_num_steps": 100_000}
 
 
+#: Highest order of each CVODE method (SUNDIALS' defaults and limits).
+CVODE_MAX_ORDER = {"BDF": 5, "Adams": 12}
+
+
 class CvodeStepper(SundialsStepper):
-    """CVODE with method 'BDF' or 'Adams'; ``jac(t, x)`` is d rhs / dx if given."""
+    """CVODE with method 'BDF' or 'Adams'; ``jac(t, x)`` is d rhs / dx if given;
+    ``max_order`` caps the method's order (1..5 for BDF, 1..12 for Adams; None: the
+    highest)."""
 
     def __init__(self, method: str, name: str, rhs: Callable, t0: float, x0: np.ndarray,
                  t_end: float, rtol: float, atol, jac, max_step: float,
-                 min_step: float | None, events: tuple[Event, ...] = ()) -> None:
+                 min_step: float | None, events: tuple[Event, ...] = (),
+                 max_order: int | None = None) -> None:
         def rhsfn(t, y, yp):
             yp[:] = rhs(t, y)
 
         options = common_options(rtol, atol, max_step, min_step)
+        if max_order is not None:
+            if not 1 <= max_order <= CVODE_MAX_ORDER[method]:
+                raise UserInputError(f"{name}: max_order must be 1..{CVODE_MAX_ORDER[method]}, "
+                                     f"got {max_order!r}")
+            options["max_order"] = int(max_order)
         options.update(events_options(events, with_yp=False))
         if jac is not None:
             def jacfn(t, y, yp, jj):

@@ -15,10 +15,21 @@ Models (angles in rad, lengths in m, masses in kg; z up, gravity -g z):
 - ``arm``: a planar 2-link arm (uniform links m1, l1 and m2, l2, revolute joints about z,
   q from the x axis, gravity -g y), for the cross-check against Pinocchio's RNEA.
 
-Chosen parameter values (the seed gives none): see DEFAULTS. For ``3d`` a light particle on
-a long arm (m2 = 0.1 kg, l2 = 1 m, rod 1 kg, 0.5 m) makes the seed's chaos test show: from
-(0.5, 0.1, 0.5) at rest versus q1 = 0.6 the q2 curves agree to 0.01 rad up to t = 0.82 s
-and differ by 0.1 rad at 0.94 s, by 0.5 rad at 1.03 s.
+Parameter values (DEFAULTS; any can be overridden, ``lagrange --param NAME=VALUE``):
+
+- ``2d``: the seed appendix's, m1 = 1 kg, m2 = 0.5 kg, k = 50 N/m, l0 = 0.25 m,
+  l = 0.5 m, g = 9.82 m/s^2.
+- ``3d``: the rod as in 2d (m1 = 1 kg, l = 0.5 m) but g = 9.81 m/s^2 and a light particle
+  on a long arm (m2 = 0.1 kg, l2 = 1 m): chosen, not the seed's, so that the seed's chaos
+  test shows. From (0.5, 0.1, 0.5) at rest versus q1 = 0.6 the q2 curves agree to 0.01 rad
+  up to t = 0.82 s and differ by 0.1 rad at 0.94 s, by 0.5 rad at 1.03 s.
+
+The seed's 3D potential omits q3. With the ball joint's two angles both tilting AB, the
+particle's height depends on q3: here z_B = -l cos q1 - l2 (cos q1 cos q2 cos q3 -
+sin q1 sin q3), so V = -m1 g l cos q1 / 2 + m2 g z_B and dV/dq3 = m2 g l2 (sin q1 cos q3 +
+cos q1 cos q2 sin q3), 0.82 N m at the seed's initial state (0.5, 0.1, 0.5). A potential
+without q3 drops that gravity torque: right only while q1 = q3 = 0 (hanging in the rod's
+plane), and the energy it defines is not conserved by the true motion. Ours keeps q3.
 """
 from __future__ import annotations
 
@@ -34,7 +45,7 @@ from youbot_dynamics.errors import UserInputError
 
 #: Parameter values used unless given (SI). c is the joint friction coefficient.
 DEFAULTS = {
-    "2d": {"m1": 1.0, "l": 1.0, "m2": 0.5, "l0": 0.5, "k": 40.0, "g": 9.81, "c": 0.0},
+    "2d": {"m1": 1.0, "l": 0.5, "m2": 0.5, "l0": 0.25, "k": 50.0, "g": 9.82, "c": 0.0},
     "3d": {"m1": 1.0, "l": 0.5, "m2": 0.1, "l2": 1.0, "g": 9.81, "c": 0.0},
     "arm": {"m1": 1.3, "l1": 0.7, "m2": 0.9, "l2": 0.5, "g": 9.81, "c": 0.0},
 }

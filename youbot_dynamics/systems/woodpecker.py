@@ -43,7 +43,9 @@ MODES = ("I", "II", "III")
 #: Switch kinds: blocking impacts, releases and the beak hit.
 BLOCK_II, BLOCK_III, RELEASE_II, RELEASE_III, BEAK = (
     "block_II", "block_III", "release_II", "release_III", "beak")
-#: The seed's initial state (mode II; its lambda = (-0.628993, 0.047088) are outputs here).
+#: The seed's initial state, in mode II. lambda is no state here but an output of the state:
+#: (lambda1, lambda2) = (-0.69113, -0.14163) N at it, not the seed's listed initial values
+#: (-0.628993, 0.047088), which this model does not reproduce from the seed's state.
 SEED_INITIAL_MODE = "II"
 SEED_INITIAL_STATE = (0.0, -0.10344, -0.65, 0.0, 0.0, 0.0)
 #: The seed's published figures over [0, 2] s (benchmarks.md section 2).

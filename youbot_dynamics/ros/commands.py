@@ -38,7 +38,7 @@ Time semantics (the one place they are written down)
 - Inverse mode: samples carry the sender's time base; it is never compared with node
   time. A sample that is not later than the previous one, or comes more than the
   estimator's ``max_gap_ns`` after it, restarts the acceleration estimate
-  (:class:`~youbot_dynamics.sim.inverse.AccelerationEstimator`), so a replay that restarts,
+  (:class:`~youbot_dynamics.ros.inverse.AccelerationEstimator`), so a replay that restarts,
   a one-off stamp of 1e6 s or a pause in the stream costs at most one stencil (three
   samples) of torques.
 """
@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.controllers import Reference
 
@@ -60,8 +61,6 @@ REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_
                    "too_large", "implausible_torque")
 """Kinds of rejected input, as counted in /diagnostics."""
 
-NS_PER_S = 1_000_000_000
-"""Nanoseconds per second: sample stamps and trajectory times are integer nanoseconds."""
 STAMP_LIMIT_NS = 2**31 * NS_PER_S
 """Stamps (ns) must lie in [0, STAMP_LIMIT_NS): the range of builtin_interfaces/Time."""
 
@@ -159,11 +158,6 @@ def _values(values: Sequence[float], label: str, count: int) -> np.ndarray:
         index = int(np.flatnonzero(~np.isfinite(array))[0])
         raise InputRejected("non_finite", f"{label}[{index}] is {array[index]}")
     return array
-
-
-def stamp_ns_of(stamp: object) -> int:
-    """A builtin_interfaces Time or Duration (``sec``, ``nanosec``) as integer nanoseconds."""
-    return stamp.sec * NS_PER_S + stamp.nanosec
 
 
 def stamp_in_range(stamp_ns: int, what: str) -> int:

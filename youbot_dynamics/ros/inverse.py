@@ -46,8 +46,9 @@ import numpy as np
 
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
+from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.commands import DEFAULT_EFFORT_LIMIT, NS_PER_S, InputRejected, JointSample
+from youbot_dynamics.ros.commands import DEFAULT_EFFORT_LIMIT, InputRejected, JointSample
 
 DEFAULT_MAX_GAP_NS = 100_000_000
 """Largest spacing (ns) of two samples in one stencil by default (0.1 s: 50 periods of a
