@@ -50,11 +50,12 @@ TWIST_LABELS = ("base.vx", "base.vy", "base.wz")
 
 @dataclass(frozen=True)
 class BaseMotion:
-    """A kinematic base's motion at one instant: pose (x, y, yaw; world, m and rad), body
+    """A kinematic base's motion at one instant: pose (x, y, yaw; world, m and rad; None
+    under a twist command: the base integrates it), body
     twist (vx, vy, wz) and its rate, wheel speeds (rad/s) and accelerations (rad/s^2), the
     wheels in ``mecanum.names`` order."""
 
-    pose: np.ndarray
+    pose: np.ndarray | None
     twist: np.ndarray
     acceleration: np.ndarray
     wheel_speeds: np.ndarray
@@ -105,11 +106,14 @@ class BaseModel:
         return self.mode == "dynamic"
 
     # ---- the commanded motion -----------------------------------------------------------------
-    def command(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def command(self, t: float, twist: np.ndarray | None = None) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
         """The commanded pose (x, y, yaw; world, m and rad), body-frame twist (vx, vy, wz) and
-        its time derivative at t (s): the path's, or rest at the initial pose without one.
+        its time derivative at t (s): a held ``twist`` command's (no pose: the base
+        integrates it; zero derivative), else the path's, or rest at the initial pose.
         With R the path's yaw rotation, V = (R^T p', yaw') and
         dV/dt = (R^T p'' - yaw' S V_xy, yaw'') with S (vx, vy) = (-vy, vx)."""
+        if twist is not None:
+            return None, np.asarray(twist, dtype=float), np.zeros(3)
         if self.path is None:
             return self.pose0, np.zeros(3), np.zeros(3)
         pose, rate, acceleration = self.path.evaluate(t)
@@ -118,10 +122,10 @@ class BaseModel:
         ax, ay = c * acceleration[0] + s * acceleration[1], -s * acceleration[0] + c * acceleration[1]
         return pose, np.array([vx, vy, rate[2]]), np.array([ax + rate[2] * vy, ay - rate[2] * vx, acceleration[2]])
 
-    def motion(self, t: float) -> BaseMotion:
-        """The commanded motion at t (s) with the wheels rolling without slip along it:
-        speeds H V and accelerations H dV/dt."""
-        pose, twist, acceleration = self.command(t)
+    def motion(self, t: float, twist: np.ndarray | None = None) -> BaseMotion:
+        """The commanded motion at t (s) (of a held ``twist`` if given) with the wheels rolling
+        without slip along it: speeds H V and accelerations H dV/dt."""
+        pose, twist, acceleration = self.command(t, twist)
         return BaseMotion(pose, twist, acceleration, wheel_speeds(self.mecanum, twist),
                           wheel_speeds(self.mecanum, acceleration))
 
@@ -165,12 +169,14 @@ class BaseModel:
         generalised[3 + self.wheels] = wheel_spin_torques(self.mecanum, forces)
         return generalised
 
-    def wheel_torques(self, t: float, speeds: np.ndarray, integral: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def wheel_torques(self, t: float, speeds: np.ndarray, integral: np.ndarray,
+                      twist: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(torque N m, d integral/dt N m/s) of the PI loop per wheel (``mecanum.names``
-        order) toward the commanded twist at t (s); zero once released or without a loop."""
+        order) toward the commanded twist at t (s) (``twist`` if given, else the path's);
+        zero once released or without a loop."""
         if self.pi is None or t >= self.release:
             return np.zeros(len(self.wheels)), np.zeros(len(self.wheels))
-        return self.pi.torques(self.command(t)[1], speeds, integral)
+        return self.pi.torques(self.command(t, twist)[1], speeds, integral)
 
     def prescribed_accelerations(self, plant: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray,
                                  generalised: np.ndarray, imposed: np.ndarray) -> np.ndarray:

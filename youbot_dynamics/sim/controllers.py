@@ -32,10 +32,13 @@ from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
 @dataclass(frozen=True)
 class Reference:
-    """What the controller tracks: a trajectory, or a constant set point ``hold`` (rad)."""
+    """What the controllers track: a trajectory, or a constant set point ``hold`` (rad); a
+    moving base's held twist command ``base_twist`` (vx m/s, vy m/s, wz rad/s, body frame;
+    None: the scene's base path)."""
 
     hold: np.ndarray
     trajectory: PointToPointTrajectory | None = None
+    base_twist: np.ndarray | None = None
 
     def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Desired position, velocity and acceleration at t (s)."""

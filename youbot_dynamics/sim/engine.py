@@ -156,13 +156,16 @@ def robot_torque(model: SimModel, reference, t: float, x: np.ndarray, command: n
         return tau
     base = model.base
     tau = np.array(tau, dtype=float)
-    tau[base.wheels] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[model.block("wheel_i")])[0]
+    tau[base.wheels] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[model.block("wheel_i")],
+                                          reference.base_twist)[0]
     return tau
 
 
-def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float = 0.0) -> np.ndarray:
-    """dx/dt at state x and time t (s) under robot joint torques tau (N m, N)."""
-    motion = model.base_motion(t)
+def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float = 0.0,
+               twist: np.ndarray | None = None) -> np.ndarray:
+    """dx/dt at state x and time t (s) under robot joint torques tau (N m, N) and a moving
+    base's held ``twist`` command (None: its path)."""
+    motion = model.base_motion(t, twist)
     x = model.imposed(x, motion)
     dx = np.zeros_like(x)
     dx[model.block("q")] = x[model.block("v")]
@@ -178,7 +181,7 @@ def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float =
         dx[model.block("base")] = base.pose_rate(x[model.block("base")], x[model.block("base_v")])
         integral = model.block("wheel_i")
         if integral.stop > integral.start:
-            dx[integral] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[integral])[1]
+            dx[integral] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[integral], twist)[1]
     return dx
 
 
@@ -217,7 +220,7 @@ class ConstraintStepping:
 
     def __init__(self, model: SimModel, state: SimState, torque: Callable[[float, np.ndarray], np.ndarray],
                  deepest_allowed: float) -> None:
-        self.model, self.data, self.torque = model, state.data, torque
+        self.model, self.data, self.torque, self.twist = model, state.data, torque, state.reference.base_twist
         self.t, self.x = state.t, state.x.copy()
         self.q, self.v = model.configuration(self.x), model.velocity(self.x).copy()
         self.h, self.steps, self.iterations = 0.0, 0, 0
@@ -257,7 +260,7 @@ class ConstraintStepping:
                 if integral.stop > integral.start:  # the PI's integral terms, explicit Euler
                     base = model.base
                     self.x[integral] += h * base.wheel_torques(self.t, self.v[model.joint_velocities][base.wheels],
-                                                               self.x[integral])[1]
+                                                               self.x[integral], self.twist)[1]
             self.q, self.v, report = model.stepper.step(self.data, self.q, self.v, tau, h)
             self.t = t_target if i == count else start + i * h
             self.steps += 1
@@ -339,14 +342,14 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
         return robot_torque(model, reference, t, x, command)
 
     def rhs(t: float, x: np.ndarray) -> np.ndarray:
-        return derivative(model, data, x, torque(t, x), t)
+        return derivative(model, data, x, torque(t, x), t, reference.base_twist)
 
     outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress)
     outcome.held = held
     s = outcome.solution
     keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
     # outputs with every chart folded into its pose: the pose block is the body's pose
-    outcome.solution = Solution(s.t[keep], np.array([model.imposed(model.recentred(x), model.base_motion(t))
+    outcome.solution = Solution(s.t[keep], np.array([model.imposed(model.recentred(x), model.base_motion(t, reference.base_twist))
                                                      for t, x in zip(s.t[keep], s.x[keep])]), s.stats,
                                 s.state_names)
     return outcome

@@ -174,9 +174,10 @@ class SimModel:
         x[self.block("chart")] = 0.0
         return x
 
-    def base_motion(self, t: float) -> BaseMotion | None:
-        """A kinematic base's commanded motion at t (s); None for a fixed or dynamic base."""
-        return None if self.base is None or self.base.dynamic else self.base.motion(t)
+    def base_motion(self, t: float, twist: np.ndarray | None = None) -> BaseMotion | None:
+        """A kinematic base's commanded motion at t (s) (under a held ``twist`` command if
+        given); None for a fixed or dynamic base."""
+        return None if self.base is None or self.base.dynamic else self.base.motion(t, twist)
 
     def imposed(self, x: np.ndarray, motion: BaseMotion | None) -> np.ndarray:
         """x with a kinematic base's ``motion`` imposed (pose, twist, wheel speeds); x
@@ -184,7 +185,9 @@ class SimModel:
         if motion is None:
             return x
         x = x.copy()
-        x[self.block("base")], x[self.block("base_v")] = motion.pose, motion.twist
+        if motion.pose is not None:
+            x[self.block("base")] = motion.pose
+        x[self.block("base_v")] = motion.twist
         x[self.block("v").start + self.base.wheels] = motion.wheel_speeds
         return x
 
