@@ -51,6 +51,10 @@ MeshFile = _T["visualization_msgs/msg/MeshFile"]
 Marker = _T["visualization_msgs/msg/Marker"]
 MarkerArray = _T["visualization_msgs/msg/MarkerArray"]
 String = _T["std_msgs/msg/String"]
+Odometry = _T["nav_msgs/msg/Odometry"]
+Twist = _T["geometry_msgs/msg/Twist"]
+TwistWithCovariance = _T["geometry_msgs/msg/TwistWithCovariance"]
+PoseWithCovariance = _T["geometry_msgs/msg/PoseWithCovariance"]
 
 UNIT_QUATERNION_TOLERANCE = 1e-6
 """Largest accepted | |q| - 1 | for a quaternion in a message."""
@@ -206,6 +210,22 @@ def transform_stamped(
     return TransformStamped(
         header=header(stamp_ns, parent), child_frame_id=str(child), transform=transform
     )
+
+
+def odometry(stamp_ns: int, frame_id: str, child_frame_id: str, position_xyz: Sequence[float],
+             quaternion_xyzw: Sequence[float], twist: Sequence[float], pose_covariance: Sequence[float],
+             twist_covariance: Sequence[float]) -> Odometry:
+    """nav_msgs/Odometry: the pose (m, unit quaternion) of ``child_frame_id`` in
+    ``frame_id``, its twist (vx, vy, vz m/s, wx, wy, wz rad/s) in ``child_frame_id``, the
+    row-major 6x6 covariances (x, y, z, rotation about x, y, z)."""
+    vx, vy, vz, wx, wy, wz = finite_floats(twist, "Odometry.twist", 6)
+    return Odometry(header=header(stamp_ns, frame_id), child_frame_id=str(child_frame_id),
+                    pose=PoseWithCovariance(pose=pose(position_xyz, quaternion_xyzw, "Odometry.pose"),
+                                            covariance=finite_array(pose_covariance, "Odometry.pose.covariance", 36)),
+                    twist=TwistWithCovariance(twist=Twist(linear=Vector3(x=vx, y=vy, z=vz),
+                                                          angular=Vector3(x=wx, y=wy, z=wz)),
+                                              covariance=finite_array(twist_covariance, "Odometry.twist.covariance",
+                                                                      36)))
 
 
 def tf_message(transforms: Iterable[TransformStamped]) -> TFMessage:

@@ -74,6 +74,7 @@ from rclpy.qos import qos_policy_name_from_kind
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.serialization import deserialize_message
 from rclpy.signals import SignalHandlerOptions
+from geometry_msgs.msg import Twist
 from sensor_msgs.msg import JointState
 from std_srvs.srv import SetBool, Trigger
 from trajectory_msgs.msg import JointTrajectory
@@ -102,7 +103,7 @@ TFMessage's nested rclpy objects cost about five times as much to build (0.5 ms 
 of the gripping scene, a quarter of its 500 Hz period)."""
 QUOTED_CHARACTERS = 500
 """Characters of the message that made a callback fail quoted in the log."""
-MAX_MESSAGE_BYTES = {"/joint_commands": 64 * 1024, "/joint_states": 64 * 1024, "/joint_trajectory": 1024 * 1024}
+MAX_MESSAGE_BYTES = {"/cmd_vel": 1024, "/joint_commands": 64 * 1024, "/joint_states": 64 * 1024, "/joint_trajectory": 1024 * 1024}
 """Largest serialized message (bytes) each subscription deserialises: 64 KiB holds a
 JointState of MAX_NAMES (256) joints four times over; 1 MiB a trajectory of
 MAX_TRAJECTORY_POINTS (1000) points of 16 joints with positions, velocities,
@@ -137,6 +138,8 @@ class DynamicsNode(Node):
         if p["mode"] == "simulate":
             self._subscribe(JointState, "/joint_commands", self._on_command, RELIABLE_DEEP)
             self._subscribe(JointTrajectory, "/joint_trajectory", self._on_trajectory, RELIABLE_DEEP)
+            if self.session.moving_base is not None:
+                self._subscribe(Twist, "/cmd_vel", self._on_cmd_vel, RELIABLE_DEEP)
             self.create_service(Trigger, "~/reset", self._guarded("~/reset", self._on_reset))
             self.create_service(SetBool, "~/pause", self._guarded("~/pause", self._on_pause))
             self._wait_deadline = time.monotonic() + p["wait_timeout"]
@@ -307,6 +310,10 @@ class DynamicsNode(Node):
         if self.session.counters.clamped > before:
             self.get_logger().warning("/joint_commands: efforts beyond the URDF effort limits were clamped",
                                       throttle_duration_sec=WARN_THROTTLE)
+
+    def _on_cmd_vel(self, msg: Twist) -> None:
+        self.session.base_command((msg.linear.x, msg.linear.y, msg.linear.z),
+                                  (msg.angular.x, msg.angular.y, msg.angular.z))
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
         points = [(stamp_ns_of(point.time_from_start), point.positions, point.velocities) for point in msg.points]

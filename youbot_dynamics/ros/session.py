@@ -48,6 +48,7 @@ is recorded as an event: /diagnostics (also logged) carries ``resets`` and
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Sequence
@@ -68,6 +69,8 @@ from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                           follow, joint_sample, joint_trajectory, node_time_of_stamp)
+from youbot_dynamics.ros.mobile_base import TOPICS as MOBILE_BASE_TOPICS
+from youbot_dynamics.ros.mobile_base import MobileBase
 from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, body_transforms
 from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
                                          implausible_joints)
@@ -91,6 +94,8 @@ TOPIC_TYPES = {
     "/tf": "tf2_msgs/msg/TFMessage",
     "/tf_static": "tf2_msgs/msg/TFMessage",
     "/robot_description": "std_msgs/msg/String",
+    "/odom": "nav_msgs/msg/Odometry",
+    "/base_pose_ground_truth": "nav_msgs/msg/Odometry",
 }
 """Every topic the node publishes and logs, with its type (tf2_msgs has no PyPI wheel:
 ``make`` builds it from interfaces/; without it the node publishes neither /tf nor /tf_static
@@ -182,9 +187,9 @@ class _Frames:
     robots on one /tf keep their frames apart); a ``root_frame`` given is used as it is."""
 
     def __init__(self, robot: Robot, root_frame: str, ee_link: str | None,
-                 geometries: Sequence[Geometry] = (), prefix: str = "") -> None:
+                 geometries: Sequence[Geometry] = (), prefix: str = "", moving_root: bool = False) -> None:
         self.links = LinkFrames(robot, ee_link or None)
-        self.prefix = prefix
+        self.prefix, self.moving_root = prefix, moving_root
         self.root_frame = root_frame or prefix + robot.root_link
         self.has_robot = bool(robot.tree)
         self.body_shapes = {g.name: (g.shape, g.placement) for g in geometries if g.owner == "body"}
@@ -205,7 +210,7 @@ class _Frames:
         """/tf_static: every fixed link, and root frame -> URDF root link if they differ."""
         transforms = [self._transform(0, t) for t in self.links.static]
         root_link = self.prefix + self.links.root_link
-        if self.root_frame != root_link:
+        if self.root_frame != root_link and not self.moving_root:  # a moving base's is on /tf
             transforms.insert(0, messages.transform_stamped(0, self.root_frame, root_link,
                                                             (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
         return messages.tf_message(transforms)
@@ -215,11 +220,12 @@ class _Frames:
         frame is the body's name (unprefixed)."""
         return body_transforms(self.root_frame, poses)
 
-    def tf(self, stamp_ns: int, sample: SampleFrames | None, bodies: Sequence[LinkTransform] = ()) -> object:
-        """The moving links of the sample's kinematics (none without a robot), then the free
-        bodies."""
+    def tf(self, stamp_ns: int, sample: SampleFrames | None, bodies: Sequence[LinkTransform] = (),
+           base: Sequence[object] = ()) -> object:
+        """``base`` (a moving base's odom -> base_footprint), the moving links of the
+        sample's kinematics (none without a robot), then the free bodies."""
         links = [self._transform(stamp_ns, t) for t in sample.moving] if sample is not None else []
-        return messages.tf_message([*links, *(self._transform(stamp_ns, b, self.root_frame) for b in bodies)])
+        return messages.tf_message([*base, *links, *(self._transform(stamp_ns, b, self.root_frame) for b in bodies)])
 
     def free_bodies(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
         """/free_bodies: the bodies' poses in the root frame, in order."""
@@ -324,6 +330,7 @@ class _Session(ClosesOnExit):
     mode: str
     stamp_ns: int
     topics: tuple[str, ...]
+    moving_base: MobileBase | None = None
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
                  mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float,
@@ -332,7 +339,7 @@ class _Session(ClosesOnExit):
         self.counters = InputCounters()
         self.watchdog = Watchdog(callback_budget)
         geometries = [g for g in scene.geometries if self.mode == "simulate" or g.owner != "body"]
-        self.frames = _Frames(robot, frame_id, ee_link, geometries, frame_prefix)
+        self.frames = _Frames(robot, frame_id, ee_link, geometries, frame_prefix, self.moving_base is not None)
         self.latched: Outputs = [("/tf_static", self.frames.tf_static())]
         """Messages to publish once, latched (transient local), when the node starts."""
         if self.frames.has_robot:
@@ -384,7 +391,8 @@ class SimulationSession(_Session):
         /diagnostics (the latched topics are in ``latched``)."""
         robot = ("/joint_states", *self.frames.ee_topics) if self.robot.tree else ()
         bodies = ("/free_bodies", "/free_bodies_markers") if self.frames.body_shapes else ()
-        return ("/clock", *robot, *bodies, "/tf", "/diagnostics")
+        base = MOBILE_BASE_TOPICS if self.moving_base is not None else ()
+        return ("/clock", *robot, *base, *bodies, "/tf", "/diagnostics")
 
     @property
     def sample_topic(self) -> str:
@@ -398,8 +406,13 @@ class SimulationSession(_Session):
                  default_effort_limit: float = DEFAULT_EFFORT_LIMIT, callback_budget: float = 0.05,
                  frame_prefix: str = "", node_name: str = "dynamics_node") -> None:
         self.simulator = Simulator(scene, resolve_integrator(scene, progress=False))
+        if self.simulator.model.base is not None:
+            self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix)
+            frame_id = frame_id or self.moving_base.odom_frame
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget,
                          frame_prefix, node_name)
+        if self.moving_base is not None:
+            self.moving_base.counters = self.counters
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
         checked_output_spacing(self.simulator.integrator.dt, np.array([0.0, self.step_ns / NS_PER_S]),
                                f"{scene.source}: integrator.dt (publish_rate {publish_rate:g} Hz)")
@@ -436,6 +449,8 @@ class SimulationSession(_Session):
             self.resets += 1
         self.simulator.reset()
         self.commands.clear()
+        if self.moving_base is not None:
+            self.moving_base.reset()
         self.k, self.failure, self.wall_time, self._pending = 0, None, 0.0, []
         self.snapshot = self.simulator.snapshot()
         self.energy0, self.energy_error = self.snapshot.energy, 0.0
@@ -446,6 +461,15 @@ class SimulationSession(_Session):
         """Accept an effort command (raises and counts :class:`InputRejected`); ``wall_ns``:
         the wall clock (default: the machine's), for wall-clock stamps."""
         self.commands.accept(names, efforts, stamp_ns, self.t, wall_ns)
+
+    def base_command(self, linear: Sequence[float], angular: Sequence[float]) -> None:
+        """Accept a /cmd_vel twist (raises and counts :class:`InputRejected`; a scene without
+        a moving base rejects it as ``no_controller``)."""
+        if self.moving_base is None:
+            error = InputRejected("no_controller", f"/cmd_vel: scene {self.scene.name!r} has a fixed base")
+            self.counters.reject(error)
+            raise error
+        self.moving_base.accept(linear, angular, self.t)
 
     def trajectory(self, names: Sequence[str], points: Sequence[tuple[int, Sequence[float], Sequence[float]]],
                    stamp_ns: int, wall_ns: int | None = None) -> None:
@@ -478,6 +502,9 @@ class SimulationSession(_Session):
             return self._outputs(self.snapshot)
         if not self._pending:
             times = (self.k + 1 + np.arange(self.samples_per_solve)) * self.step_ns / NS_PER_S
+            if self.moving_base is not None:
+                state = self.simulator.state
+                state.reference = dataclasses.replace(state.reference, base_twist=self.moving_base.twist(self.t))
             start = time.perf_counter()
             try:
                 self._pending = self.simulator.advance_through(times, self.commands.torque(self.t))[::-1]
@@ -504,7 +531,12 @@ class SimulationSession(_Session):
             if bodies:
                 outputs += [("/free_bodies", self.frames.free_bodies(stamp, bodies)),
                             ("/free_bodies_markers", self.frames.free_body_markers(stamp, bodies))]
-            outputs.append(("/tf", self.frames.tf(stamp, sample, bodies)))
+            base: Sequence[object] = ()
+            if self.moving_base is not None:
+                odometry, transform = self.moving_base.outputs(stamp, self.scene_time, snapshot)
+                outputs += odometry
+                base = (transform,)
+            outputs.append(("/tf", self.frames.tf(stamp, sample, bodies, base)))
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"

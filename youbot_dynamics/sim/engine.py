@@ -53,7 +53,9 @@ class Snapshot:
     deflections), tau (applied joint torque, N m or N), energy (kinetic + potential, J) and
     ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m;
     the first robot's for composed robots, ``Robot.end_effectors``);
-    bodies: the world pose (4x4, m) of each free body by name, in the scene's order."""
+    bodies: the world pose (4x4, m) of each free body by name, in the scene's order;
+    base: a moving base's (x, y, yaw, vx, vy, wz) (world pose in m and rad, body-frame twist
+    in m/s and rad/s), None for a fixed base."""
 
     t: float
     joint_names: tuple[str, ...]
@@ -64,6 +66,7 @@ class Snapshot:
     energy: float
     ee_pose: np.ndarray
     bodies: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    base: np.ndarray | None = None
 
 
 @dataclass
@@ -489,4 +492,5 @@ def snapshot(model: SimModel, state: SimState) -> Snapshot:
     x, data = state.x, state.data
     return Snapshot(state.t, model.joint_names, x[model.block("q")].copy(), x[model.block("v")].copy(),
                     x[model.block("z")].copy(), np.array(state.tau), model.energy(data, x), model.ee_pose(data, x),
-                    model.body_poses(data, x))
+                    model.body_poses(data, x),
+                    None if model.base is None else np.concatenate([x[model.block("base")], x[model.block("base_v")]]))

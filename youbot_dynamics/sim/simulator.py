@@ -93,7 +93,7 @@ class Simulator:
     def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
         """dx/dt with the scene's controller (what the integrators call)."""
         tau = engine.robot_torque(self.model, self.state.reference, t, x, None)
-        return engine.derivative(self.model, self.state.data, x, tau)
+        return engine.derivative(self.model, self.state.data, x, tau, t, self.state.reference.base_twist)
 
     def rhs_cost(self) -> dict[str, int | str]:
         """What one rhs evaluation computes, by count: the state dimension, the plant's

@@ -1,0 +1,96 @@
+"""The moving base through the ROS session (no rclpy): /cmd_vel in; /odom, odom ->
+base_footprint on /tf and the ground truth out, every sample (REP-105)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from youbot_dynamics.dynamics.mobile.odometry import se2_step
+from youbot_dynamics.ros.commands import InputRejected
+from youbot_dynamics.ros.session import SimulationSession
+from youbot_dynamics.sim.scene import load_scene, scene_dir
+
+RATE = 100.0
+
+
+def yaw_of(q) -> float:
+    return 2.0 * math.atan2(q.z, q.w)
+
+
+@pytest.fixture
+def session():
+    with SimulationSession(load_scene(scene_dir() / "base_square.yaml"), RATE, samples_per_solve=5,
+                           command_timeout=0.3) as session:
+        yield session
+
+
+def by_topic(outputs):
+    return {topic: message for topic, message in outputs}
+
+
+def test_odom_every_sample_and_tf_agrees(session):
+    assert {"/odom", "/base_pose_ground_truth"} <= set(session.topics)
+    static = session.latched[0][1]
+    assert all(t.child_frame_id != "base_footprint" for t in static.transforms)  # odom -> base_footprint moves
+    stamps = []
+    for _ in range(60):
+        session.base_command((0.2, 0.1, 0.0), (0.0, 0.0, 0.4))  # a /cmd_vel stream at the publish rate
+        out = by_topic(session.step())
+        odom, tf = out["/odom"], out["/tf"]
+        stamps.append(odom.header.stamp.sec * 10**9 + odom.header.stamp.nanosec)
+        base = next(t for t in tf.transforms if t.child_frame_id == "base_footprint")
+        assert (base.header.frame_id, odom.header.frame_id, odom.child_frame_id) == ("odom", "odom", "base_footprint")
+        assert base.header.stamp == odom.header.stamp
+        p, r = odom.pose.pose.position, odom.pose.pose.orientation
+        t, q = base.transform.translation, base.transform.rotation
+        np.testing.assert_allclose([t.x, t.y, t.z, q.x, q.y, q.z, q.w], [p.x, p.y, p.z, r.x, r.y, r.z, r.w],
+                                   atol=1e-12, rtol=0)
+        assert np.all(np.diag(odom.pose.covariance.reshape(6, 6)) > 0.0)
+    assert np.all(np.diff(stamps) == round(1e9 / RATE))  # one /odom per sample, at the publish rate
+    # a kinematic base follows the held twist: odometry and ground truth on the SE(2) exponential
+    truth = out["/base_pose_ground_truth"].pose.pose
+    t = 59 / RATE
+    expected = se2_step(np.zeros(3), [0.2, 0.1, 0.4], t)
+    np.testing.assert_allclose([truth.position.x, truth.position.y, yaw_of(truth.orientation)], expected, atol=1e-6)
+    # the odometry holds each sample's wheel speeds over the next increment: the first one
+    # (the t = 0 sample, before the command) was at rest
+    np.testing.assert_allclose([p.x, p.y, yaw_of(r)], se2_step(np.zeros(3), [0.2, 0.1, 0.4], t - 1 / RATE),
+                               atol=1e-12)
+
+
+def test_cmd_vel_timeout_stops_the_base(session):
+    session.base_command((0.3, 0.0, 0.0), (0.0, 0.0, 0.0))
+    for _ in range(80):  # 0.8 s, beyond the 0.3 s timeout
+        out = by_topic(session.step())
+    twist = out["/base_pose_ground_truth"].twist.twist
+    assert (twist.linear.x, twist.linear.y, twist.angular.z) == (0.0, 0.0, 0.0)
+    x = out["/base_pose_ground_truth"].pose.pose.position.x
+    assert 0.3 * 0.3 <= x <= 0.3 * (0.3 + 5 / RATE) + 1e-9  # ran for the timeout (+ one solve block)
+
+
+@pytest.mark.parametrize("linear, angular, kind", [
+    ((math.nan, 0.0, 0.0), (0.0, 0.0, 0.0), "non_finite"),
+    ((0.0, 0.0, 0.1), (0.0, 0.0, 0.0), "out_of_limits"),
+    ((9.0, 0.0, 0.0), (0.0, 0.0, 0.0), "out_of_limits"),
+    ((0.0, 0.0, 0.0), (0.0, 0.0, 50.0), "out_of_limits"),
+])
+def test_bad_cmd_vel_is_counted_and_rejected(session, linear, angular, kind):
+    with pytest.raises(InputRejected):
+        session.base_command(linear, angular)
+    assert session.counters.rejected[kind] == 1
+    assert session.moving_base.twist(0.0) is None  # nothing taken: the scene's path goes on
+
+
+def test_fixed_base_rejects_cmd_vel():
+    with SimulationSession(load_scene("arm_swing"), RATE) as session:
+        assert "/odom" not in session.topics
+        with pytest.raises(InputRejected):
+            session.base_command((0.1, 0.0, 0.0), (0.0, 0.0, 0.0))
+        assert session.counters.rejected["no_controller"] == 1
+
+
+def test_wheel_joints_are_in_joint_states(session):
+    names = by_topic(session.step())["/joint_states"].name
+    assert {"wheel_joint_fl", "wheel_joint_fr", "wheel_joint_bl", "wheel_joint_br"} <= set(names)
