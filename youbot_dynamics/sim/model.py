@@ -368,9 +368,9 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
     stepper = ConstraintStepper(contact, StepperSettings(solver=integrator.method)) \
         if integrator.method in STEPPERS else None
     velocity = layout.slice("v")
-    velocity_index = slice(velocity.start, velocity.stop + 6 * len(scene.free_bodies))
-    if base is not None:
-        velocity_index = np.r_[layout.slice("base_v"), velocity_index]
+    velocity_index = slice(velocity.start, velocity.stop + 6 * len(scene.free_bodies))  # [v, twist]
+    if base is not None:  # [base_v, v, twist], with base, base_v and wheel_i between v and twist
+        velocity_index = np.r_[layout.slice("base_v"), velocity, layout.slice("twist")]
     passive = spec.type == "none" and (base is None or (base.dynamic and base.pi is None))
     return SimModel(
         scene=scene, integrator=integrator, limits=limits, robot=robot, plant=plant,
