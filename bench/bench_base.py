@@ -1,0 +1,47 @@
+"""Real-time factor of mobile_pick next to gripping's (measured figures, not tests).
+
+Both scenes over their first ``DURATION`` seconds through the dynamics node's session
+without ROS (ros/session.py: the simulator advanced sample by sample, solve horizon 0.02 s,
+the messages built) at the node's 500 Hz, logs off and on (MCAP in rosbag2 form and a Rerun
+recording, as the node writes them), in one run of this script. Real-time factor =
+simulated / wall time, the best of ``REPEATS`` runs (a shared machine slows single runs).
+
+Run: python bench/bench_base.py [duration_s]
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
+
+from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
+from youbot_dynamics.sim.scene import load_scene  # noqa: E402
+
+RATE, REPEATS = 500.0, 2
+DURATION = float(sys.argv[1]) if len(sys.argv) > 1 else 9.0
+
+
+def session_wall(name: str, logs: Path | None) -> float:
+    """Wall time (s) of the session over the first DURATION s of scene ``name``."""
+    paths = {} if logs is None else {"mcap_path": logs / f"{name}.mcap", "rrd_path": logs / f"{name}.rrd"}
+    scene = load_scene(name).with_duration(DURATION)
+    session = SimulationSession(scene, RATE, samples_per_solve=round(0.02 * RATE), **paths)
+    start = time.perf_counter()
+    while session.t < DURATION:
+        session.step()
+    session.close()
+    return time.perf_counter() - start
+
+
+if __name__ == "__main__":
+    print(f"| scene | rate Hz | logs | wall s ({DURATION:g} s simulated) | real-time factor |")
+    print("|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        for name in ("mobile_pick", "gripping"):
+            for logs in (None, Path(folder)):
+                best = min(session_wall(name, logs) for _ in range(REPEATS))
+                print(f"| {name} | {RATE:g} | {'MCAP + Rerun' if logs else 'off'} | {best:.2f} | "
+                      f"{DURATION / best:.2f} |", flush=True)
