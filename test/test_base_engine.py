@@ -23,6 +23,7 @@ import yaml
 
 from youbot_dynamics.dynamics.mobile.mecanum import wheel_speeds
 from youbot_dynamics.dynamics.mobile.odometry import se2_step
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.engine import advance, initial_state, robot_torque, run
 from youbot_dynamics.sim.model import compile
 from youbot_dynamics.sim.scene import SceneError, load_scene, scene_dir
@@ -216,3 +217,12 @@ def test_a_held_twist_command_drives_the_dynamic_base(tmp_path):
     # the arm swings on it, so the base tracks within the PI's disturbance rejection
     # (measured within 0.02 m/s)
     np.testing.assert_allclose(state.x[model.block("base_v")], twist, atol=0.05)
+
+
+def test_a_kinematic_base_refuses_the_constraint_stepper(tmp_path):
+    data = yaml.safe_load((scene_dir() / "mobile_pick.yaml").read_text())
+    data["base"] = {"mode": "kinematic"}
+    path = tmp_path / "kinematic_pick.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(UserInputError, match="constraint stepper"):
+        compile(load_scene(path))
