@@ -33,7 +33,8 @@ import numpy as np
 from tqdm import tqdm
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import FIXED_STEP, IntegrationError
+from youbot_dynamics.sim.integrators import IntegrationError
+from youbot_dynamics.sim.registry import FIXED_STEP
 from youbot_dynamics.sim.scene import IntegratorSpec, Scene
 from youbot_dynamics.sim.simulator import SimulationResult, Simulator
 

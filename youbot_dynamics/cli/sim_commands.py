@@ -16,8 +16,9 @@ from youbot_dynamics.analysis.work_precision import resolve_integrator, work_pre
 from youbot_dynamics.cli.common import (CommandError, add_tolerance_arguments, finite_or_none, output_file,
                                         output_folder)
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
-from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, IntegrationError, StepBudgetError,
-                                             checked_fixed_step, fixed_step_count)
+from youbot_dynamics.sim.integrators import (IntegrationError, StepBudgetError, checked_fixed_step,
+                                             fixed_step_count)
+from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.sim.scene import Scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
 

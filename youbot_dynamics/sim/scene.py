@@ -61,7 +61,8 @@ from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import limits
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
-from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, tolerances_from_tol
+from youbot_dynamics.sim.integrators import tolerances_from_tol
+from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.sim.scene_contacts import (EMPTY_ROBOT, ContactPairSpec, FreeBodySpec, composed_urdf,
                                                 read_contacts, read_free_bodies, read_geometries)
 from youbot_dynamics.sim.scene_reader import SceneError, SceneReader, read_yaml
