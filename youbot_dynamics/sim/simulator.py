@@ -47,7 +47,6 @@ from youbot_dynamics.dynamics.rigid_body import (forward_dynamics, kinetic_energ
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import require_fixed_root
 from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_matrix
-from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.contact_system import ContactEvent, ContactSystem
 from youbot_dynamics.sim.controllers import Reference, make_controller
 from youbot_dynamics.sim.divergence import (DivergenceLimits, Monitor, all_of, energy_ledger_monitor,
@@ -57,7 +56,8 @@ from youbot_dynamics.sim.integration import StateCheck
 from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution,
                                              checked_fixed_step, checked_output_spacing, integrate,
                                              integrate_dae)
-from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
+from youbot_dynamics.sim.registry import STEPPERS
+from youbot_dynamics.sim.scene import IntegratorSpec, Scene
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
@@ -65,16 +65,6 @@ from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 TorqueCommand = Sequence[float] | np.ndarray | Mapping[str, float]
 #: A joint velocity beyond this multiple of its URDF limit is divergence.
 VELOCITY_LIMIT_FACTOR = 100.0
-
-
-def robot_with_gravity(robot: Robot, gravity: np.ndarray) -> Robot:
-    """The same Robot with another gravity vector (m/s^2, root frame) on a model copy."""
-    gravity = np.asarray(gravity, dtype=float)
-    if np.array_equal(robot.model.gravity.linear, gravity):
-        return robot
-    model = pin.Model(robot.model)
-    model.gravity = pin.Motion(gravity, np.zeros(3))
-    return dataclasses.replace(robot, model=model)
 
 
 @dataclass(frozen=True)
@@ -165,7 +155,7 @@ class Simulator:
         if self.integrator.method == "auto":
             raise UserInputError(f"{scene.source}: integrator.method: 'auto' must be resolved first "
                                  "(youbot_dynamics.analysis.work_precision.resolve_integrator)")
-        self.robot = robot_with_gravity(scene.robot(), scene.gravity)
+        self.robot = scene.robot  # reduced, with the scene's gravity
         require_fixed_root(self.robot, scene.source)  # the state layout and steppers assume nq == nv
         self.data = self.robot.model.createData()
         self.friction = scene.joint_friction(self.robot)
