@@ -27,8 +27,10 @@ def no_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     def ran(*args, **kwargs):
         pytest.fail("the run started before the output path was checked")
     monkeypatch.setattr(Simulator, "run", ran)
-    monkeypatch.setattr(work_precision, "work_precision", ran)
+    # the command module first: importing it here must bind the real function, which the
+    # undo then restores (after the next line it would bind the stand-in for good)
     monkeypatch.setattr("youbot_dynamics.cli.sim_commands.work_precision", ran)
+    monkeypatch.setattr(work_precision, "work_precision", ran)
     monkeypatch.setattr("youbot_dynamics.ros.dynamics_node.run", ran)
     monkeypatch.setattr("youbot_dynamics.ros.replay_node.replay_once", ran)
     monkeypatch.setattr("youbot_dynamics.systems.squeezer.simulate_squeezer", ran)
