@@ -88,7 +88,8 @@ def test_counts_repeat_exactly_so_the_choice_does():
     for _ in range(2):
         reference = wp.reference_solution(scene)
         runs.append(wp.sweep(scene, reference, grid, progress=False))
-    assert [(p.rhs_evals, p.jac_evals, p.work) for p in runs[0]] == [(p.rhs_evals, p.jac_evals, p.work) for p in runs[1]]
+    counts = [[(p.rhs_evals, p.jac_evals, p.work) for p in points] for points in runs]
+    assert counts[0] == counts[1]
     assert wp.recommend(runs[0], 1e-5).spec == wp.recommend(runs[1], 1e-5).spec
 
 

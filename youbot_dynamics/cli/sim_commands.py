@@ -19,7 +19,7 @@ from youbot_dynamics.cli.common import (CommandError, add_tolerance_arguments, f
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
 from youbot_dynamics.sim.integrators import (IntegrationError, StepBudgetError, checked_fixed_step,
                                              fixed_step_count)
-from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
+from youbot_dynamics.sim.registry import INTEGRATORS, REGISTRY, STEPPERS, integrator_names
 from youbot_dynamics.sim.scene import Scene, find_scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
@@ -62,7 +62,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                 "or a YAML path) and print the final state by joint name, the "
                                 "integrator statistics and the energy error.")
     run.add_argument("--scene", required=True, metavar="NAME_OR_PATH")
-    run.add_argument("--integrator", help=f"override: one of {', '.join(INTEGRATORS)}, or auto (a sweep "
+    run.add_argument("--integrator", help=f"override: one of {', '.join(INTEGRATORS + STEPPERS)}, or auto (a sweep "
                      "before the run; pin it with work-precision --write-back)")
     run.add_argument("--dt", type=float, help="step size of a fixed-step integrator, s")
     add_tolerance_arguments(run)
@@ -97,10 +97,12 @@ def scene_from(args: argparse.Namespace) -> Scene:
     override = [getattr(args, name, None) for name in ("integrator", "dt", "tol", "rtol", "atol")]
     if any(value is not None for value in override):
         method = args.integrator or scene.integrator.method
-        if args.dt is not None and method not in FIXED_STEP:
-            raise CommandError(f"--dt applies to fixed-step integrators ({', '.join(FIXED_STEP)}), "
-                               f"not {method!r}; use --tol or --rtol/--atol")
-        if method in FIXED_STEP and any(value is not None for value in (args.tol, args.rtol, args.atol)):
+        fixed = method in REGISTRY and not REGISTRY[method].adaptive
+        if args.dt is not None and not fixed:
+            fixed_names = ", ".join(integrator_names(adaptive=False))
+            raise CommandError(f"--dt applies to fixed-step integrators ({fixed_names}), not {method!r}; "
+                               "use --tol or --rtol/--atol")
+        if fixed and any(value is not None for value in (args.tol, args.rtol, args.atol)):
             raise CommandError(f"--tol/--rtol/--atol apply to adaptive integrators, not {method!r}; use --dt")
         scene = scene.with_integrator(args.integrator, dt=args.dt, rtol=args.rtol, atol=args.atol,
                                       tol=args.tol)

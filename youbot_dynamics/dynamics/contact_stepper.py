@@ -28,8 +28,7 @@ from youbot_dynamics.dynamics.collision import BroadPhase, Geometry, PlacedPair
 from youbot_dynamics.dynamics.contact import ConstraintContact
 from youbot_dynamics.dynamics.free_body import FreeBody, add_free_flyer
 from youbot_dynamics.dynamics.rigid_body import symmetrised
-
-SOLVERS = ("pgs", "admm")
+from youbot_dynamics.sim.registry import STEPPERS as SOLVERS
 
 
 @dataclass(frozen=True)

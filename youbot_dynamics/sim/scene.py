@@ -338,10 +338,10 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     default_name = Path(source).stem if Path(source).suffix in (".yaml", ".yml") else "scene"
     scene = Scene(
         name=str(data.get("name", default_name)), description=str(data.get("description", "")),
-        source=source, robot=robot, urdf=urdf, urdf_path=urdf_path, moving=robot.joint_names, locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0),
-        gravity=_frozen(gravity), friction_default=friction_default,
-        friction=MappingProxyType(joint_friction), controller=controller, integrator=integrator,
-        duration=duration, outputs=OutputSpec(rate, record))
+        source=source, robot=robot, urdf=urdf, urdf_path=urdf_path, moving=robot.joint_names,
+        locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0), gravity=_frozen(gravity),
+        friction_default=friction_default, friction=MappingProxyType(joint_friction), controller=controller,
+        integrator=integrator, duration=duration, outputs=OutputSpec(rate, record))
     try:
         scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
     except UserInputError as error:

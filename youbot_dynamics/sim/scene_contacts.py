@@ -31,7 +31,7 @@ a shape is ``{type: sphere|box|cylinder|capsule|halfspace, <dimensions>}``, see
       - {pair: [ball, floor], law: hunt_crossley, stiffness: 1e5, restitution: 0.8, friction: 0.3}
 
 A free body's name is also the name of its shape in ``contacts``. Every mistake is a
-SceneError naming the file, the key and the value.
+SceneError naming the source, the key and the value.
 """
 from __future__ import annotations
 

@@ -96,7 +96,7 @@ def read_yaml(raw: bytes, source: str) -> Any:
 
 
 class SceneReader:
-    """Typed access to parsed YAML with errors naming the file, the key and the value."""
+    """Typed access to a scene's parsed data with errors naming the source, the key and the value."""
 
     def __init__(self, source: str) -> None:
         self.source = source
