@@ -7,7 +7,11 @@ from __future__ import annotations
 import csv
 import dataclasses
 import json
+import os
 import random
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -133,6 +137,19 @@ def test_write_back_pins_the_choice_and_keeps_every_comment(tmp_path, monkeypatc
         assert session.simulator.integrator.method == scene.integrator.method
     assert main(argv) == 0  # again: the same counts choose the same, the file is unchanged
     assert path.read_text(encoding="utf-8") == text
+
+
+def test_the_node_process_refuses_auto_in_one_line(tmp_path):
+    from ros_support import domain_id
+    path = tmp_path / "auto.yaml"
+    path.write_text(COMMENTED, encoding="utf-8")
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain_id(29))}
+    node = subprocess.run([sys.executable, "-m", "youbot_dynamics.ros.dynamics_node", "--ros-args", "-p",
+                           f"scene:={path}"], capture_output=True, text=True, timeout=120, env=env,
+                          cwd=Path(__file__).resolve().parents[1])
+    lines = node.stderr.strip().splitlines()
+    assert node.returncode == 2 and len(lines) == 1, node.stderr
+    assert "integrator.method" in lines[0] and "--write-back" in lines[0]
 
 
 def test_integrator_block_edit_for_flow_and_missing_blocks():

@@ -52,14 +52,13 @@ class OdeProblem:
 
 @dataclass(frozen=True)
 class IntegratorEntry:
-    """One integrator: its name, kind, step control, stiffness, where it comes from and the
-    factory that builds its :class:`~youbot_dynamics.sim.integration.Stepper`."""
+    """One integrator: its name, kind, step control, stiffness and the factory that builds
+    its :class:`~youbot_dynamics.sim.integration.Stepper`."""
 
     name: str
     kind: str
     adaptive: bool
     stiff: bool
-    source: str
     factory: Callable[[str, OdeProblem], Stepper] | None = None
 
     @property
@@ -89,20 +88,19 @@ def cvode_stepper(name: str, problem: OdeProblem) -> Stepper:
 
 
 REGISTRY: dict[str, IntegratorEntry] = {entry.name: entry for entry in (
-    IntegratorEntry("euler", "ode", False, False, "hand-written", fixed_step_stepper),
-    IntegratorEntry("symplectic_euler", "ode", False, False, "hand-written", fixed_step_stepper),
-    IntegratorEntry("rk4", "ode", False, False, "hand-written", fixed_step_stepper),
-    IntegratorEntry("rk45", "ode", True, False, "scipy RK45 (Dormand-Prince 5(4))", scipy_stepper),
-    IntegratorEntry("dop853", "ode", True, False, "scipy DOP853", scipy_stepper),
-    IntegratorEntry("radau", "ode", True, True, "scipy Radau IIA (order 5)", scipy_stepper),
-    IntegratorEntry("bdf", "ode", True, True, "scipy BDF", scipy_stepper),
-    IntegratorEntry("lsoda", "ode", True, True, "scipy LSODA (Adams / BDF, switching on stiffness)",
-                    scipy_stepper),
-    IntegratorEntry("cvode_bdf", "ode", True, True, "SUNDIALS CVODE BDF", cvode_stepper),
-    IntegratorEntry("cvode_adams", "ode", True, False, "SUNDIALS CVODE Adams", cvode_stepper),
-    IntegratorEntry("ida", "dae", True, True, "SUNDIALS IDA"),
-    IntegratorEntry("pgs", "stepper", False, False, "constraint contact, Pinocchio's PGS"),
-    IntegratorEntry("admm", "stepper", False, False, "constraint contact, Pinocchio's ADMM"),
+    IntegratorEntry("euler", "ode", False, False, fixed_step_stepper),  # hand-written loops
+    IntegratorEntry("symplectic_euler", "ode", False, False, fixed_step_stepper),
+    IntegratorEntry("rk4", "ode", False, False, fixed_step_stepper),
+    IntegratorEntry("rk45", "ode", True, False, scipy_stepper),  # Dormand-Prince 5(4)
+    IntegratorEntry("dop853", "ode", True, False, scipy_stepper),
+    IntegratorEntry("radau", "ode", True, True, scipy_stepper),  # Radau IIA, order 5
+    IntegratorEntry("bdf", "ode", True, True, scipy_stepper),
+    IntegratorEntry("lsoda", "ode", True, True, scipy_stepper),  # Adams / BDF, switching on stiffness
+    IntegratorEntry("cvode_bdf", "ode", True, True, cvode_stepper),  # SUNDIALS
+    IntegratorEntry("cvode_adams", "ode", True, False, cvode_stepper),
+    IntegratorEntry("ida", "dae", True, True),  # SUNDIALS IDA: integrate_dae
+    IntegratorEntry("pgs", "stepper", False, False),  # constraint contact: Pinocchio's PGS
+    IntegratorEntry("admm", "stepper", False, False),  # and ADMM
 )}
 
 

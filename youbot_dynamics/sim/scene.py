@@ -457,7 +457,7 @@ def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
     method = data.get("method", "rk45")
     if method != AUTO and (not isinstance(method, str) or method not in REGISTRY):
         raise SceneError(reader.source, f"{key}.method", f"expected auto or one of {', '.join(REGISTRY)}", method)
-    fixed = method != AUTO and is_fixed_step(method)
+    options = ("tol", "rtol", "atol") if method == AUTO else REGISTRY[method].options
     numbers = {name: reader.number(data[name], f"{key}.{name}") for name in
                ("dt", "tol", "rtol", "atol", "target_error", "energy_tolerance") if data.get(name) is not None}
     for name, number in numbers.items():
@@ -467,13 +467,13 @@ def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
             raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
         if name in ("tol", "rtol") and limits.tolerance_problem(number):
             raise SceneError(reader.source, f"{key}.{name}", limits.tolerance_problem(number))
-    if fixed and "dt" not in numbers:
+    if "dt" in options and "dt" not in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"missing: fixed-step method {method!r} needs dt (s)")
-    if not fixed and "dt" in numbers:
+    if "dt" not in options and "dt" in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"only for fixed-step methods "
                          f"({', '.join(integrator_names(adaptive=False))}); {method!r} uses rtol/atol", numbers["dt"])
     if "tol" in numbers:
-        if fixed:
+        if "tol" not in options:
             raise SceneError(reader.source, f"{key}.tol", f"only for adaptive methods; {method!r} uses dt",
                              numbers["tol"])
         numbers.setdefault("rtol", numbers["tol"])
