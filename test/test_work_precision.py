@@ -153,14 +153,16 @@ def test_the_node_process_refuses_auto_in_one_line(tmp_path):
 
 
 def test_integrator_block_edit_for_flow_and_missing_blocks():
-    flow = "name: x\nintegrator: {method: pgs, dt: 1.0e-3, energy_tolerance: 0.5}  # stepper\nduration: 1.0\n"
+    flow = "name: x\nintegrator: {method: pgs, dt: 1.0e-3, energy_tolerance: 1.0e-8}  # stepper\nduration: 1.0\n"
     edited = wp.with_integrator_block(flow, {"method": "admm", "dt": 1e-4}, "test")
     assert yaml.safe_load(edited) == {"name": "x", "duration": 1.0,
-                                      "integrator": {"method": "admm", "dt": 1e-4, "energy_tolerance": 0.5}}
+                                      "integrator": {"method": "admm", "dt": 1e-4, "energy_tolerance": 1e-8}}
     assert "integrator:  # stepper" in edited
     missing = wp.with_integrator_block("name: x\n", {"method": "rk45", "rtol": 1e-6, "atol": 1e-8}, "test")
     assert yaml.safe_load(missing)["integrator"] == {"method": "rk45", "rtol": 1e-6, "atol": 1e-8}
-    assert wp.yaml_number(1e-6) == "1.0e-06" and yaml.safe_load(wp.yaml_number(1e-6)) == 1e-6
+    assert wp.yaml_scalar(1e-6) == "1.0e-06" and yaml.safe_load(wp.yaml_scalar(1e-6)) == 1e-6
+    assert wp.pinned_settings(dataclasses.replace(wp.spec_for("lsoda", 1e-7), atol=None, tol=1e-7)) == {
+        "method": "lsoda", "tol": 1e-7}
 
 
 def test_simulate_resolves_auto_by_the_sweep_and_says_so(tmp_path, monkeypatch, capsys):

@@ -300,9 +300,12 @@ _TOP_KEY = re.compile(r"^integrator\s*:(?P<value>[^#]*?)\s*(?P<comment>#.*)?$")
 _INNER_KEY = re.compile(r"^(?P<indent>\s+)(?P<key>[A-Za-z_]+)\s*:")
 
 
-def yaml_number(value: float) -> str:
-    """A float as YAML reads it back as a float (``1.0e-06``, never the string ``1e-06``)."""
-    text = repr(float(value))
+def yaml_scalar(value: Any) -> str:
+    """A scalar as YAML reads it back: a float always with a dot (``1.0e-06``, never the
+    string ``1e-06``), anything else as ``str`` gives it."""
+    if not isinstance(value, float):
+        return str(value)
+    text = repr(value)
     mantissa, _, exponent = text.partition("e")
     if exponent and "." not in mantissa:
         text = f"{mantissa}.0e{exponent}"
@@ -310,9 +313,11 @@ def yaml_number(value: float) -> str:
 
 
 def pinned_settings(spec: IntegratorSpec) -> dict[str, Any]:
-    """The ``integrator`` keys that pin ``spec``: method and dt, or method, rtol and atol."""
+    """The ``integrator`` keys that pin ``spec``: method and dt, or tol, or rtol and atol."""
     if spec.dt is not None:
         return {"method": spec.method, "dt": spec.dt}
+    if spec.atol is None:
+        return {"method": spec.method, "tol": spec.tol}
     return {"method": spec.method, "rtol": spec.rtol, "atol": spec.atol}
 
 
@@ -339,7 +344,8 @@ def with_integrator_block(text: str, settings: Mapping[str, Any], note: str) -> 
         flow = match["value"].strip()
         if flow:  # integrator: {method: ..., ...}: its other keys become block lines
             data = read_yaml(flow.encode("utf-8"), "integrator")
-            inner = [f"  {key}: {value}" for key, value in (data.items() if isinstance(data, Mapping) else ())]
+            items = data.items() if isinstance(data, Mapping) else ()
+            inner = [f"  {key}: {yaml_scalar(value)}" for key, value in items]
         for line in inner:
             found = _INNER_KEY.match(line)
             if found and indent is None:
@@ -347,8 +353,7 @@ def with_integrator_block(text: str, settings: Mapping[str, Any], note: str) -> 
             if not (found and found["key"] in PINNED_KEYS or line.strip().startswith(f"# {PIN_NOTE}")):
                 kept.append(line)
         start, indent = head, indent or "  "
-    values = [f"{indent}{key}: {yaml_number(value) if isinstance(value, float) else value}"
-              for key, value in settings.items()]
+    values = [f"{indent}{key}: {yaml_scalar(value)}" for key, value in settings.items()]
     block = [f"integrator:{comment}", f"{indent}# {PIN_NOTE}: {note}", *values, *kept]
     return "\n".join(lines[:start] + block + lines[end:]) + "\n"
 
