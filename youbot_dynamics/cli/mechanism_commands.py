@@ -11,7 +11,8 @@ from collections.abc import Iterable
 from youbot_dynamics.cli.common import output_file
 from youbot_dynamics.dynamics.constraints import FORMULATIONS
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import INTEGRATORS, IntegrationError
+from youbot_dynamics.sim.integrators import IntegrationError
+from youbot_dynamics.sim.registry import INTEGRATORS
 from youbot_dynamics.systems.structure import STRUCTURE_EXAMPLES, structure_report
 
 

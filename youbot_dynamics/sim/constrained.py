@@ -19,8 +19,8 @@ from youbot_dynamics.dynamics.constraints import (DAE_FORMULATIONS, FORMULATIONS
                                                   dae_tolerances, index1_rhs,
                                                   project_positions, project_velocities)
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import (INTEGRATORS, IntegratorStats, integrate,
-                                             integrate_dae)
+from youbot_dynamics.sim.integrators import IntegratorStats, integrate, integrate_dae
+from youbot_dynamics.sim.registry import INTEGRATORS
 
 __all__ = ["ConstrainedRun", "checked_choice", "simulate_holonomic"]
 

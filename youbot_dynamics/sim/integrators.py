@@ -1,9 +1,10 @@
 """Integrators behind one interface, each run returning its statistics.
 
-Names (command line and scenes): ``euler``, ``symplectic_euler``, ``rk4`` (fixed step,
-hand-written loops, sim/fixed_step.py); ``rk45`` (Dormand-Prince 5(4)), ``dop853``,
-``radau``, ``bdf`` (scipy.integrate, sim/adaptive.py); ``cvode_bdf``, ``cvode_adams`` and
-``ida`` (SUNDIALS through scikit-sundae, sim/sundials.py).
+The names, their kinds and their stepper factories are the table in sim/registry.py:
+``euler``, ``symplectic_euler``, ``rk4`` (fixed step, hand-written loops, sim/fixed_step.py);
+``rk45`` (Dormand-Prince 5(4)), ``dop853``, ``radau``, ``bdf``, ``lsoda`` (scipy.integrate,
+sim/adaptive.py); ``cvode_bdf``, ``cvode_adams`` and ``ida`` (SUNDIALS through
+scikit-sundae, sim/sundials.py).
 
 :func:`integrate` solves x' = rhs(t, x); :func:`integrate_dae` solves F(t, y, y') = 0 with
 IDA. Both return a :class:`Solution` with outputs at ``t_eval`` (which starts with t0 and
@@ -19,22 +20,17 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.adaptive import SCIPY_SOLVERS, ScipyStepper
-from youbot_dynamics.sim.fixed_step import FIXED_STEP_METHODS, FixedStepStepper
 from youbot_dynamics.sim.integration import (DivergenceError, Event, EventRecord,
                                              IntegrationError, IntegratorStats, Solution,
-                                             StateCheck, StepBudgetError, drive, finite_rhs,
+                                             StateCheck, StepBudgetError, drive,
                                              state_names_or_default)
-from youbot_dynamics.sim.sundials import CVODE_METHODS, CvodeStepper, IdaStepper
+from youbot_dynamics.sim.registry import REGISTRY, OdeProblem, integrator_names
+from youbot_dynamics.sim.sundials import CVODE_METHODS, IdaStepper
 
-__all__ = ["INTEGRATORS", "FIXED_STEP", "IntegratorStats", "Event", "EventRecord", "Solution",
-           "IntegrationError", "DivergenceError", "StepBudgetError", "integrate", "integrate_dae",
+__all__ = ["IntegratorStats", "Event", "EventRecord", "Solution", "IntegrationError",
+           "DivergenceError", "StepBudgetError", "integrate", "integrate_dae",
            "tolerances_from_tol", "fixed_step_count", "checked_fixed_step",
            "checked_output_spacing"]
-
-INTEGRATORS: tuple[str, ...] = ("euler", "symplectic_euler", "rk4", "rk45", "dop853", "radau",
-                                "bdf", "cvode_bdf", "cvode_adams", "ida")
-FIXED_STEP: tuple[str, ...] = tuple(FIXED_STEP_METHODS)
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
 
@@ -133,38 +129,36 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
     with the time reached (s) after each output. ``max_order`` caps CVODE's order.
     """
     start = time.perf_counter()
-    if integrator not in INTEGRATORS or integrator == "ida":
-        hint = " (use integrate_dae for ida)" if integrator == "ida" else ""
+    entry = REGISTRY.get(integrator)
+    if entry is None or entry.kind != "ode":
+        hint = {"dae": " (use integrate_dae for it)",
+                "stepper": " (a constraint-contact stepper)"}.get(getattr(entry, "kind", ""), "")
         raise UserInputError(f"unknown ODE integrator {integrator!r}{hint}; valid names: "
-                             + ", ".join(name for name in INTEGRATORS if name != "ida"))
+                             + ", ".join(integrator_names("ode")))
     times = checked_times(t_eval)
     x = checked_state("x0", x0)
     names = state_names_or_default(state_names, x.size)
     check = StateCheck(integrator, names, bounds, monitor)
-    if integrator in FIXED_STEP:
+    n = 0 if n_positions is None else int(n_positions)
+    if not entry.adaptive:
         if dt is None:
-            adaptive = [name for name in INTEGRATORS if name not in FIXED_STEP + ("ida",)]
             raise UserInputError(f"integrator {integrator!r} takes fixed steps: give dt (s), "
-                                 f"or use an adaptive one: {', '.join(adaptive)}")
+                                 "or use an adaptive one: "
+                                 + ", ".join(integrator_names("ode", adaptive=True)))
         checked_positive("dt", dt)
         checked_fixed_step(integrator, float(dt), times, max_steps)
-        n = 0 if n_positions is None else int(n_positions)
         if integrator == "symplectic_euler" and not 0 < 2 * n <= x.size:
             raise UserInputError("symplectic_euler needs n_positions with 0 < 2*n_positions "
                                  f"<= state size {x.size}, got {n_positions!r}")
-        stepper = FixedStepStepper(integrator, rhs, times[0], x, float(dt), n, bool(events),
-                                   check)
     else:
         checked_positive("rtol", rtol)
         checked_positive("atol", atol)
         checked_positive("max_step", max_step)
-        if integrator in SCIPY_SOLVERS:
-            stepper = ScipyStepper(integrator, finite_rhs(rhs, integrator), times[0], x,
-                                   times[-1], rtol, atol, jac, max_step, min_step)
-        else:
-            stepper = CvodeStepper(CVODE_METHODS[integrator], integrator, rhs, times[0], x,
-                                   times[-1], rtol, atol, jac, max_step, min_step,
-                                   tuple(events), max_order)
+    if max_order is not None and integrator not in CVODE_METHODS:
+        raise UserInputError(f"max_order applies to cvode_bdf and cvode_adams, not {integrator}")
+    problem = OdeProblem(rhs, times[0], x, times[-1], dt, rtol, atol, jac, max_step, min_step,
+                         n, tuple(events), check, max_order)
+    stepper = entry.factory(integrator, problem)
     solution = drive(stepper, integrator, times, events, check, names, max_steps=max_steps,
                      progress=progress)
     solution.stats.wall_time = time.perf_counter() - start
