@@ -45,7 +45,8 @@ def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vect
     try:
         tau = pin.rnea(robot.model, data, q, v, a)
         if friction is not None:
-            tau[robot.root_nv:] += friction.torque(v[robot.root_nv:], z)
+            root = robot.root_nv
+            friction.add_torque(tau[root:] if root else tau, v[root:] if root else v, z)
     except (ValueError, TypeError):
         _check_sizes(robot, q, v=v, a=a)
         raise
@@ -64,8 +65,8 @@ def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Ve
     robot.require_regular_mass_matrix()
     try:
         if friction is not None:
-            tau = np.array(tau, dtype=float)
-            tau[robot.root_nv:] -= friction.torque(v[robot.root_nv:], z)
+            tau, root = np.array(tau, dtype=float), robot.root_nv
+            friction.add_torque(tau[root:] if root else tau, v[root:] if root else v, z, -1.0)
         if robot.mimic:
             return np.linalg.solve(mass_matrix(robot, data, q), tau - bias_torque(robot, data, q, v))
         return pin.aba(robot.model, data, q, v, tau)
