@@ -52,8 +52,10 @@ def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vect
     try:
         tau = pin.rnea(robot.model, data, q, v, a)
         if friction is not None:
-            root = robot.root_nv
-            friction.add_torque(tau[root:] if root else tau, v[root:] if root else v, z)
+            if robot.root == "fixed":
+                friction.add_torque(tau, v, z)
+            else:
+                friction.add_torque(tau[robot.root_nv:], v[robot.root_nv:], z)
     except (ValueError, TypeError):
         _check_sizes(robot, q, v=v, a=a)
         raise
@@ -72,8 +74,11 @@ def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Ve
     robot.require_regular_mass_matrix()
     try:
         if friction is not None:
-            tau, root = np.array(tau, dtype=float), robot.root_nv
-            friction.add_torque(tau[root:] if root else tau, v[root:] if root else v, z, -1.0)
+            tau = np.array(tau, dtype=float)
+            if robot.root == "fixed":
+                friction.add_torque(tau, v, z, -1.0)
+            else:
+                friction.add_torque(tau[robot.root_nv:], v[robot.root_nv:], z, -1.0)
         if robot.mimic:
             return np.linalg.solve(mass_matrix(robot, data, q), tau - bias_torque(robot, data, q, v))
         return pin.aba(robot.model, data, q, v, tau)
