@@ -123,6 +123,9 @@ LAW_ARGUMENTS: dict[str, tuple[str, ...]] = {
 #: Law codes in row 0 of a JointFriction's parameter table (see :func:`parameter_table`).
 LAW_CODES = {"viscous": 0, "coulomb": 1, "stribeck": 2, "lugre": 3}
 _COULOMB, _STRIBECK, _LUGRE = LAW_CODES["coulomb"], LAW_CODES["stribeck"], LAW_CODES["lugre"]
+#: The bristle states of a robot without LuGre joints.
+_NO_STATES = np.zeros(0)
+_NO_STATES.setflags(write=False)
 
 
 @register_jitable
@@ -144,7 +147,8 @@ def _accumulate(v: Vector, z: Vector, table: np.ndarray, sign: float, out: Vecto
         out[i] += sign * tau
 
 
-# One compiled entry per sign: each argument costs the call ~0.1 us of type dispatch.
+# One compiled entry per sign, and without z for robots without LuGre joints: each argument
+# costs the call ~0.1 us of type dispatch.
 @njit(cache=True)
 def _add_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
     """out += tau_friction(v, z) (see :func:`_accumulate`)."""
@@ -155,6 +159,18 @@ def _add_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
 def _subtract_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
     """out -= tau_friction(v, z) (see :func:`_accumulate`)."""
     _accumulate(v, z, table, -1.0, out)
+
+
+@njit(cache=True)
+def _add_memoryless(v: Vector, table: np.ndarray, out: Vector) -> None:
+    """out += tau_friction(v) of a robot without LuGre joints (see :func:`_accumulate`)."""
+    _accumulate(v, _NO_STATES, table, 1.0, out)
+
+
+@njit(cache=True)
+def _subtract_memoryless(v: Vector, table: np.ndarray, out: Vector) -> None:
+    """out -= tau_friction(v) of a robot without LuGre joints (see :func:`_accumulate`)."""
+    _accumulate(v, _NO_STATES, table, -1.0, out)
 
 
 @njit(cache=True)
@@ -181,10 +197,6 @@ def parameter_table(laws: tuple[str, ...], per_joint: list[Mapping[str, Any]]) -
         keys = LAW_ARGUMENTS.get(law, ())
         table[:2 + len(keys), i] = (LAW_CODES[law], entry.get("damping", 0.0), *(entry[key] for key in keys))
     return _frozen(table)
-
-
-_NO_STATES = np.zeros(0)
-_NO_STATES.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -266,8 +278,10 @@ class JointFriction:
         """out += sign tau_friction(v, z), in place (out a float array shaped as v), sign
         +1 or -1: -1 gives the torque left to accelerate the joints, tau - tau_friction."""
         if type(v) is np.ndarray and v.shape == out.shape == self.damping.shape:
-            kernel = _add_torque if sign > 0.0 else _subtract_torque
-            kernel(v, _NO_STATES if z is None and self.lugre is None else self._bristles(z), self.table, out)
+            if z is None and self.lugre is None:
+                (_add_memoryless if sign > 0.0 else _subtract_memoryless)(v, self.table, out)
+            else:
+                (_add_torque if sign > 0.0 else _subtract_torque)(v, self._bristles(z), self.table, out)
             return
         v = np.asarray(v, dtype=float)
         if v.shape[-1:] != self.damping.shape or out.shape != v.shape or v.ndim > 2:

@@ -71,10 +71,11 @@ def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Ve
     joints) when the robot's mass matrix is singular, instead of returning inf or NaN. With
     mimic joints, a = M(q)^-1 (tau - C(q, v) v - g(q)): Pinocchio 4.1's aba refuses them.
     """
-    robot.require_regular_mass_matrix()
+    if robot.mass_matrix_defect:
+        robot.require_regular_mass_matrix()
     try:
         if friction is not None:
-            tau = np.array(tau, dtype=float)
+            tau = tau.astype(float) if type(tau) is np.ndarray else np.array(tau, dtype=float)  # a copy
             if robot.root == "fixed":
                 friction.add_torque(tau, v, z, -1.0)
             else:
