@@ -278,7 +278,7 @@ class JointFriction:
         """out += sign tau_friction(v, z), in place (out a float array shaped as v), sign
         +1 or -1: -1 gives the torque left to accelerate the joints, tau - tau_friction."""
         if type(v) is np.ndarray and v.shape == out.shape == self.damping.shape:
-            if z is None and self.lugre is None:
+            if self.lugre is None and (z is None or len(z) == 0):
                 (_add_memoryless if sign > 0.0 else _subtract_memoryless)(v, self.table, out)
             else:
                 (_add_torque if sign > 0.0 else _subtract_torque)(v, self._bristles(z), self.table, out)
@@ -314,6 +314,8 @@ class JointFriction:
 
     def _bristles(self, z: Vector | None, batch: tuple[int, ...] = ()) -> Vector:
         """z checked: n_states bristle states per velocity vector of the batch shape ``batch``."""
+        if not batch and type(z) is np.ndarray and self.lugre is not None and z.shape == self.lugre.joints.shape:
+            return z
         if self.lugre is None and z is None:
             return _NO_STATES if not batch else np.zeros((*batch, 0))
         shape = (*batch, self.n_states)
