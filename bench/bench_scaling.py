@@ -8,7 +8,7 @@ Figures, microseconds per call (best of ``repeat`` alternating loops of ``calls`
 - RNEA + URDF friction vs pin.rnea; ABA + URDF friction vs pin.aba;
 - 1 s of simulation at rest-start, rk4 at 1 ms (4000 right-hand sides): our ``integrate``
   with rigid_body.forward_dynamics (friction included) vs a bare Python rk4 loop on pin.aba
-  (milliseconds per run, best of 3).
+  (milliseconds per run, best of 5).
 
 Run: python bench/bench_scaling.py [--calls 300] [--repeat 15] [--dofs 5,10,20,40,60]
 """
@@ -115,9 +115,12 @@ def scaling(dofs: tuple[int, ...] = DOFS, calls: int = 300, repeat: int = 15) ->
         robot = load_robot(chain_urdf(n))
         pairs = {**per_call_pairs(robot), "1 s rk4 simulation": simulation_pair(robot)}
         for name, (ours, theirs) in pairs.items():
-            simulation = name == "1 s rk4 simulation"
             ours(), theirs()  # compile / warm up
-            t_ours, t_pin = best_per_call([ours, theirs], 1 if simulation else calls, min(repeat, 3) if simulation else repeat)
+            if name == "1 s rk4 simulation":
+                t_ours, t_pin = best_per_call([ours, theirs], 1, min(repeat, 5))
+            else:  # loops as short as with 5 joints (fewer preemptions on a busy machine), more of them
+                short = max(10, calls * DOFS[0] // n)
+                t_ours, t_pin = best_per_call([ours, theirs], short, min(200, repeat * calls // short))
             results[name]["ours_us"].append(t_ours * 1e6)
             results[name]["pinocchio_us"].append(t_pin * 1e6)
     for figure in results.values():
