@@ -33,14 +33,16 @@ COMMANDS: dict[str, tuple[str, str]] = {
         ("contact_commands", (("contact-extremes", "measure contact at its extremes"),)),
         ("pendulum_commands", (("pendulum", "simulate the elastic pendulum"),
                                ("pendulum-study", "the seed's elastic-pendulum tables"),
-                               ("bdf-study", "fixed-step BDF1-4: the seed's Tables 1-4, orders, stability"))),
+                               ("bdf-study", "fixed-step BDF1-4: the seed's Tables 1-4, stability regions, measured "
+                                             "orders, CVODE order caps"))),
         ("mechanism_commands", (("squeezer", "Andrew's squeezer: a constrained mechanism in one formulation"),
                                 ("structure", "structural analysis (matching, BLT, Pantelides) of an example"))),
         ("study_commands", (("woodpecker", "the woodpecker toy: state events, impacts, beak hits and statistics"),
                             ("lagrange", "equations of motion by sympy (Lagrange), simulated from the seed's "
                                          "initial state"),
-                            ("rotations", "Cardan angles vs adaptive Cardan vs quaternions on a free body"),
-                            ("uncertainty", "the damped pendulum with uncertain parameters: linear vs Monte Carlo"))),
+                            ("rotations", "Cardan angles vs adaptive Cardan vs quaternions on a torque-free rigid body"),
+                            ("uncertainty", "the damped pendulum with uncertain L, m, d: linear propagation against "
+                                            "Monte Carlo"))),
         ("ros_commands", (("replay", "publish a recorded bag on its ROS 2 topics"),
                           ("main-job", "simulate a scene with the dynamics node, log MCAP and Rerun"))),
         ("log_commands", (("log", "repair log files"),)),
