@@ -240,10 +240,11 @@ class IdaStepper(SundialsStepper):
             checked_memory(self.memory, self.last)
         if suppress_alg:
             if self.memory is None:
+                library = "missing" if ida_library() is None else "found"
                 raise NotImplementedError(
                     "suppress_alg needs IDASetSuppressAlg through scikit-sundae "
                     f"{IDA_LAYOUT_VERSION}'s SUNDIALS library, found version "
-                    f"{sksundae.__version__} (library {'missing' if ida_library() is None else 'found'})")
+                    f"{sksundae.__version__} (library {library})")
             suppress_algebraic_error(self.memory)
 
     def finish(self, stats: IntegratorStats) -> None:
