@@ -55,8 +55,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 #: Shown with every index-3 run on IDA (see dynamics/constraints.py, "Error test").
 INDEX3_CAVEAT = ("IDA runs index 3 with v, w and lambda under a loose absolute tolerance "
-                 "(with them in its error test, or only w and lambda suppressed, it fails at "
-                 "t = 0: see squeezer --table): the velocity along the motion is not "
+                 "(in its error test, or out of it by IDASetSuppressAlg, they make it fail "
+                 "at t = 0: see squeezer --table): the velocity along the motion is not "
                  "error-controlled and q's error is 1e2 to 1e4 times rtol; prefer "
                  "--integrator radau5 (the default: Hairer's index-scaled error test)")
 #: Table numbers of the seed for each formulation's suppression grid.
