@@ -311,14 +311,18 @@ def integrate_radau_dae(fun: Callable[[float, np.ndarray], np.ndarray], mass, y0
 
 
 def holonomic_index(form: DaeForm) -> np.ndarray:
-    """The index of each component of a holonomic DAE form's y (Hairer's classification):
-    ``index3``: q 1, v 2, w and lambda 3; ``index2`` and ``ggl``: q and v 1, the rest 2."""
+    """The index of each component of a holonomic DAE form's y, for its error weights.
+    ``index3``: q 1, v 2, w and lambda 3 (Hairer's classification); ``index2``: q and v 1,
+    w and lambda 2; ``ggl``: as index2, and mu (zero on exact solutions) weighted as
+    index 3: with index-2 weights on mu the squeezer's step collapsed at t = 5e-5 s at
+    rtol 1e-8, atol 1e-11 (2135 steps at rtol 1e-6); with index 3, 668 steps and 7.2e-10."""
     index = np.ones(form.y0.size, dtype=int)
     if form.name == "index3":
         index[form.n:2 * form.n] = 2
         index[2 * form.n:] = 3
     else:
-        index[2 * form.n:] = 2
+        index[2 * form.n:3 * form.n + form.m] = 2
+        index[3 * form.n + form.m:] = 3
     return index
 
 
