@@ -79,6 +79,20 @@ def test_index3_circle_against_the_closed_form(rtol):
     assert np.abs(np.hypot(*form.positions(solution.x).T) - 1.0).max() < rtol
 
 
+def test_forward_difference_jacobian_runs_as_the_exact_one():
+    """Without the exact df/dy RADAU5's forward differences stand in: the circle at rtol
+    1e-6 then measured q within 2.8e-6 (exact: 2.4e-6) with as many Jacobians, 94; bound
+    50 rtol. Their evaluations are counted: 3 per Newton iteration, 1 per step, 7 per J."""
+    omega, t = 3.0, np.array([0.0, 2.0])
+    form = dae_form(circle(omega), "index3", np.array([1.0, 0.0]), np.array([0.0, omega]),
+                    np.array([-omega ** 2, 0.0]), np.array([omega ** 2]))
+    solution, _ = integrate_dae_form(form, t, rtol=1e-6, atol=1e-6, exact_jacobian=False)
+    q_end = form.positions(solution.x[-1])
+    assert np.abs(q_end - [np.cos(omega * 2.0), np.sin(omega * 2.0)]).max() < 5e-5
+    stats = solution.stats
+    assert stats.rhs_evals >= 3 * stats.nonlinear_iterations + stats.steps + 7 * stats.jac_evals
+
+
 def test_errors_name_the_wrong_input():
     with pytest.raises(UserInputError, match="index must be 1, 2 or 3"):
         integrate_radau_dae(lambda t, y: -y, np.eye(1), [1.0], [0.0, 1.0], index=[4])

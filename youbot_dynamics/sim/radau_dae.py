@@ -94,7 +94,7 @@ def forward_difference_jacobian(fun: Callable, t: float, y: np.ndarray, f: np.nd
     """df/dy by forward differences, increments sqrt(eps) max(|y_j|, 1e-5) (RADAU5's)."""
     jacobian = np.empty((f.size, y.size))
     for j in range(y.size):
-        step = np.sqrt(np.finfo(float).eps) * max(abs(y[j]), 1e-5)
+        step = np.sqrt(EPS) * max(abs(y[j]), 1e-5)
         shifted = y.copy()
         shifted[j] += step
         jacobian[:, j] = (fun(t, shifted) - f) / step
@@ -124,7 +124,7 @@ class Radau5Dae:
         self.t_end, self.rtol, self.max_step = float(t_end), float(rtol), float(max_step)
         self.atol = np.broadcast_to(np.asarray(atol, dtype=float), y0.shape).copy()
         self.exponent = np.asarray(index, dtype=float) - 1.0
-        self.newton_tol = max(10.0 * np.finfo(float).eps / rtol, min(0.03, rtol ** 0.5))
+        self.newton_tol = max(10.0 * EPS / rtol, min(0.03, rtol ** 0.5))
         self.t, self.x = float(t0), np.array(y0, dtype=float)
         self.f = self.fun(self.t, self.x)
         self.jacobian = self.jac(self.t, self.x, self.f)
@@ -142,7 +142,7 @@ class Radau5Dae:
     def jac(self, t: float, y: np.ndarray, f: np.ndarray) -> np.ndarray:
         self.counters["jac_evals"] += 1
         if self.user_jac is None:
-            return forward_difference_jacobian(self.user_fun, t, y, f)
+            return forward_difference_jacobian(self.fun, t, y, f)
         return np.asarray(self.user_jac(t, y), dtype=float)
 
     def weights(self, magnitude: np.ndarray, h: float) -> np.ndarray:
