@@ -177,9 +177,9 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
     """Solve the DAE residual(t, y, y') = 0 with SUNDIALS IDA (integrator ``ida``).
 
     ``algebraic[i]`` marks y_i as algebraic (no y_i' in the equations). y0, yp0 must be
-    consistent. ``exclude_from_error_test`` (IDASetSuppressAlg, for index-3 forms) is not
-    available through scikit-sundae 1.2: any True entry raises NotImplementedError (see
-    sim/sundials.py); all-False or None is accepted. ``jac(t, y, yp, cj)``
+    consistent. ``exclude_from_error_test``: IDASetSuppressAlg (sim/sundials.py), which
+    takes every algebraic component out of IDA's error test, so its True entries must be
+    exactly the algebraic ones (or none). ``jac(t, y, yp, cj)``
     returns dF/dy + cj dF/dy' (IDA builds it by finite differences without it).
     ``ida_options``: further sksundae.ida.IDA options passed as they are (first_step,
     max_step, max_order, max_nonlin_iters, max_conv_fails, ...; times in s). Events see
@@ -197,15 +197,16 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
         raise UserInputError(f"y0 has {y.size} components but yp0 has {yp.size} and "
                              f"algebraic/exclude_from_error_test have "
                              f"{[f.size for f in flags]}")
-    if len(flags) > 1 and flags[1].any():
-        raise NotImplementedError(
-            "exclude_from_error_test needs IDASetSuppressAlg, which scikit-sundae 1.2 does "
-            "not expose; use an index-2 (stabilised) or index-1 formulation instead")
+    suppress = len(flags) > 1 and bool(flags[1].any())
+    if suppress and not np.array_equal(flags[0], flags[1]):
+        raise UserInputError("exclude_from_error_test must mark exactly the algebraic "
+                             "components (IDA's suppress-alg excludes all of them), got "
+                             f"{flags[1].tolist()} for algebraic {flags[0].tolist()}")
     checked_positive("rtol", rtol)
     checked_positive("atol", atol)
     check = StateCheck("ida", names, bounds, monitor)
     stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0], rtol, atol, jac,
-                         dict(ida_options or {}), tuple(events))
+                         dict(ida_options or {}), tuple(events), suppress)
     solution = drive(stepper, "ida", times, events, check, names,
                      derivative_at=stepper.derivative_at, max_steps=max_steps,
                      progress=progress)
