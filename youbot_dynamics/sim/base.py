@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -192,7 +193,7 @@ class BaseModel:
         return a
 
 
-def planar_robot(robot_path: str, moving: Sequence[str], locked: Mapping[str, float]) -> Robot:
-    """The scene's reduced robot with a planar root (Pinocchio's planar joint between the
-    world and its root link)."""
-    return keep_joints(load_robot(robot_path, root="planar"), moving, locked)
+def planar_robot(urdf: str | Path, moving: Sequence[str], locked: Mapping[str, float]) -> Robot:
+    """The scene's reduced robot (from its URDF file or text) with a planar root
+    (Pinocchio's planar joint between the world and its root link)."""
+    return keep_joints(load_robot(urdf, root="planar"), moving, locked)

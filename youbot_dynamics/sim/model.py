@@ -51,13 +51,15 @@ from youbot_dynamics.dynamics.free_body import add_free_flyer
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy, potential_energy, symmetrised
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.compose import robot_with_gravity
 from youbot_dynamics.model.configuration import require_fixed_root
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.base import POSE_LABELS, TWIST_LABELS, BaseModel, BaseMotion, planar_robot
 from youbot_dynamics.sim.controllers import Controller, Reference, make_controller
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
-from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
+from youbot_dynamics.sim.registry import integrator_kind
+from youbot_dynamics.sim.scene import IntegratorSpec, Scene
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
@@ -279,16 +281,6 @@ class SimModel:
         return self.passive and self.callback is None and (command is None or not np.any(command))
 
 
-def robot_with_gravity(robot: Robot, gravity: np.ndarray) -> Robot:
-    """The same Robot with another gravity vector (m/s^2, root frame) on a model copy."""
-    gravity = np.asarray(gravity, dtype=float)
-    if np.array_equal(robot.model.gravity.linear, gravity):
-        return robot
-    model = pin.Model(robot.model)
-    model.gravity = pin.Motion(gravity, np.zeros(3))
-    return dataclasses.replace(robot, model=model)
-
-
 def _plant(robot: Robot, scene: Scene) -> tuple[Robot, list[int | None]]:
     """The plant (the robot's model with a free-flyer per body appended) and the frame id of
     each of the scene's geometries (None: world)."""
@@ -331,19 +323,18 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
     integrator = integrator or scene.integrator
     limits = limits or DivergenceLimits()
     if integrator.method == "auto":
-        raise UserInputError(f"{scene.source}: integrator.method: 'auto' must be resolved first "
-                             "(youbot-dynamics work-precision --write-back)")
-    robot = robot_with_gravity(scene.robot(), scene.gravity)
+        integrator = scene.pinned_integrator()   # a one-line error naming the command to run
+    robot = scene.robot
     require_fixed_root(robot, scene.source)
     friction = scene.joint_friction(robot)
     base = None
     if scene.base.mode == "fixed":
         plant, frames = _plant(robot, scene)
     else:
-        plant, frames = _plant(robot_with_gravity(planar_robot(scene.robot_path, scene.moving, scene.locked),
-                                                  scene.gravity), scene)
+        plant, frames = _plant(robot_with_gravity(planar_robot(scene.urdf_path or scene.urdf, scene.moving,
+                                                               scene.locked), scene.gravity), scene)
         base = BaseModel.compile(scene.base, robot, plant.nv, scene.gravity)
-        if plant.mimic or (base.mode == "kinematic" and integrator.method in STEPPERS):
+        if plant.mimic or (base.mode == "kinematic" and integrator_kind(integrator.method) == "stepper"):
             raise UserInputError(f"{scene.source}: base: a {base.mode} base takes neither mimic joints nor, "
                                  "when kinematic, the constraint stepper")
     pairs = [Pair(p.name, *(next(i for i, g in enumerate(scene.geometries) if g.name == name)
@@ -366,7 +357,7 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
         if not math.isfinite(period) or period <= 0.0:
             raise UserInputError(f"{scene.source}: control_rate {control_rate!r} Hz must be positive")
     stepper = ConstraintStepper(contact, StepperSettings(solver=integrator.method)) \
-        if integrator.method in STEPPERS else None
+        if integrator_kind(integrator.method) == "stepper" else None
     velocity = layout.slice("v")
     velocity_index = slice(velocity.start, velocity.stop + 6 * len(scene.free_bodies))  # [v, twist]
     if base is not None:  # [base_v, v, twist], with base, base_v and wheel_i between v and twist
