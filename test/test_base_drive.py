@@ -21,7 +21,7 @@ from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.dynamics.mobile.wheel_floor import contact_slip_velocities
 from youbot_dynamics.sim.engine import run
 from youbot_dynamics.sim.model import compile
-from youbot_dynamics.sim.scene import load_scene, scene_dir
+from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir
 
 MU, VELOCITY_SCALE, G = 0.5, 0.01, 9.81
 #: The largest acceleration four 45-degree rollers can give the base (m/s^2).
@@ -53,7 +53,7 @@ def test_kinematic_square_odometry_closes():
     assert np.abs(odometry - truth).max() < 1.0 * 0.01 * 0.5 / 2 + 1e-9
 
 
-def first_leg(tmp_path, acceleration: float):
+def first_leg(acceleration: float):
     """base_square's first leg on a dynamic base, the arm locked in the candle pose."""
     data = yaml.safe_load((scene_dir() / "base_square.yaml").read_text())
     arm = {name: value for name, value in data["initial"]["q"].items()}
@@ -63,14 +63,12 @@ def first_leg(tmp_path, acceleration: float):
                     "controller": {"kp": 2.0, "ki": 20.0, "torque_limit": 10.0},
                     "path": {"waypoints": [[1.0, 0.0, 0.0]], "v_max": 1.0, "a_max": acceleration}}
     data["integrator"] = {"method": "rk45", "rtol": 1e-7, "atol": 1e-9}
-    path = tmp_path / f"leg_{acceleration:.3f}.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return compile(load_scene(path))
+    return compile(Scene.from_dict(data, source=f"first_leg_{acceleration:.3f}"))
 
 
 @pytest.mark.parametrize("share, slips", [(0.5, False), (2.0, True)])
-def test_slip_above_the_roller_limit_only(tmp_path, share, slips):
-    model = first_leg(tmp_path, share * ROLLER_LIMIT)
+def test_slip_above_the_roller_limit_only(share, slips):
+    model = first_leg(share * ROLLER_LIMIT)
     result = run(model)
     base = model.base
     wheels = model.block("v").start + base.wheels

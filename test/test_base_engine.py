@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -26,7 +25,7 @@ from youbot_dynamics.dynamics.mobile.odometry import se2_step
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.engine import advance, initial_state, robot_torque, run
 from youbot_dynamics.sim.model import compile
-from youbot_dynamics.sim.scene import SceneError, load_scene, scene_dir
+from youbot_dynamics.sim.scene import Scene, SceneError, load_scene, scene_dir
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
 ARM = ["arm_joint_1", "arm_joint_2", "arm_joint_3", "arm_joint_4", "arm_joint_5"]
@@ -36,7 +35,7 @@ TIPPED = {"arm_joint_1": 2.9496, "arm_joint_2": 1.5345, "arm_joint_3": -2.2482, 
           "arm_joint_5": 2.9234}
 
 
-def swing_scene(tmp_path: Path, base: dict, v0: dict | None = None, duration: float = 2.0,
+def swing_scene(base: dict, v0: dict | None = None, duration: float = 2.0,
                 integrator: dict | None = None):
     """The arm falling from the tipped pose on a moving base (dop853 at rtol 1e-10 unless
     another ``integrator`` is given)."""
@@ -44,9 +43,7 @@ def swing_scene(tmp_path: Path, base: dict, v0: dict | None = None, duration: fl
             "friction": {"default": "none"}, "controller": {"type": "none"}, "base": base,
             "integrator": integrator or {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}, "duration": duration,
             "outputs": {"rate": 50, "record": ["q", "v", "energy"]}}
-    path = tmp_path / "swing.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return load_scene(path)
+    return Scene.from_dict(data, source="base_swing")
 
 
 def planar_momentum(model, data, x) -> np.ndarray:
@@ -60,8 +57,8 @@ def centre_of_mass(model, data, x) -> np.ndarray:
     return pin.centerOfMass(model.plant.model, data, model.configuration(x)).copy()
 
 
-def test_free_base_conserves_planar_momentum(tmp_path):
-    model = compile(swing_scene(tmp_path, {"mode": "dynamic", "floor": {"mu": 0.0}}, {"arm_joint_1": 0.5}))
+def test_free_base_conserves_planar_momentum():
+    model = compile(swing_scene({"mode": "dynamic", "floor": {"mu": 0.0}}, {"arm_joint_1": 0.5}))
     assert model.conservative and model.plant.root == "planar"
     result = run(model)
     data = model.plant.model.createData()
@@ -75,11 +72,11 @@ def test_free_base_conserves_planar_momentum(tmp_path):
     assert result.energy_error < 1e-6  # measured 9e-10 J
 
 
-def test_roller_friction_bounds_the_base(tmp_path):
+def test_roller_friction_bounds_the_base():
     braked = {"mode": "dynamic", "floor": {"mu": 0.3, "velocity_scale": 0.01},
               "controller": {"kp": 0.5, "ki": 5.0, "torque_limit": 20.0}}
-    model = compile(swing_scene(tmp_path, braked, duration=1.0))
-    free = compile(swing_scene(tmp_path, {"mode": "dynamic"}, duration=1.0))
+    model = compile(swing_scene(braked, duration=1.0))
+    free = compile(swing_scene({"mode": "dynamic"}, duration=1.0))
     result, frictionless = run(model), run(free)
     data = model.plant.model.createData()
     x0 = result.x[0]
@@ -116,13 +113,11 @@ def test_kinematic_base_follows_the_path_exactly():
     assert deflection > 1e-2  # the arm feels the base's acceleration
 
 
-def test_fixed_base_holds_the_arm_where_the_kinematic_base_moves_it(tmp_path):
+def test_fixed_base_holds_the_arm_where_the_kinematic_base_moves_it():
     data = yaml.safe_load((scene_dir() / "base_square.yaml").read_text())
     data["base"] = {"mode": "fixed"}
     data["duration"] = 1.0
-    path = tmp_path / "fixed.yaml"
-    path.write_text(yaml.safe_dump(data))
-    scene = load_scene(path)
+    scene = Scene.from_dict(data, source="fixed_square")
     result = run(compile(scene))
     # gravity-compensated PD at its set point: an equilibrium (measured 0 rad)
     assert np.abs(result.x[:, :len(scene.q0)] - scene.q0).max() < 1e-9
@@ -156,22 +151,20 @@ def test_prescribed_accelerations_satisfy_inverse_dynamics():
     ({"mode": "fixed", "path": {}}, "base.path"),
     ({"mode": "dynamic", "path": {"waypoints": [[1, 0, 0]], "v_max": 1.0}}, "base.path.a_max"),
 ])
-def test_bad_base_sections_name_the_key(tmp_path, base, key):
+def test_bad_base_sections_name_the_key(base, key):
     with pytest.raises(SceneError) as error:
-        swing_scene(tmp_path, base)
+        swing_scene(base)
     assert error.value.key == key
 
 
-def test_wheels_must_move(tmp_path):
+def test_wheels_must_move():
     data = yaml.safe_load((scene_dir() / "base_square.yaml").read_text())
     data["moving"] = ARM
     for name in list(data["controller"]["kp"]):
         if name.startswith("wheel"):
             del data["controller"]["kp"][name], data["controller"]["kd"][name]
-    path = tmp_path / "nowheels.yaml"
-    path.write_text(yaml.safe_dump(data))
     with pytest.raises(SceneError, match="base.wheels"):
-        load_scene(path)
+        Scene.from_dict(data, source="no_wheels")
 
 
 def test_yaw_rate_of_a_turning_path_is_body_frame():
@@ -206,10 +199,10 @@ def test_a_held_twist_command_moves_the_kinematic_base_on_se2():
                                   wheel_speeds(model.base.mecanum, twist))
 
 
-def test_a_held_twist_command_drives_the_dynamic_base(tmp_path):
+def test_a_held_twist_command_drives_the_dynamic_base():
     braked = {"mode": "dynamic", "floor": {"mu": 0.5, "velocity_scale": 0.01},
               "controller": {"kp": 2.0, "ki": 20.0, "torque_limit": 10.0}}
-    model = compile(swing_scene(tmp_path, braked, integrator={"method": "rk45", "rtol": 1e-7, "atol": 1e-9}))
+    model = compile(swing_scene(braked, integrator={"method": "rk45", "rtol": 1e-7, "atol": 1e-9}))
     state = initial_state(model)
     twist = np.array([0.3, 0.0, 0.0])
     state.reference = dataclasses.replace(state.reference, base_twist=twist)
@@ -219,10 +212,8 @@ def test_a_held_twist_command_drives_the_dynamic_base(tmp_path):
     np.testing.assert_allclose(state.x[model.block("base_v")], twist, atol=0.05)
 
 
-def test_a_kinematic_base_refuses_the_constraint_stepper(tmp_path):
+def test_a_kinematic_base_refuses_the_constraint_stepper():
     data = yaml.safe_load((scene_dir() / "mobile_pick.yaml").read_text())
     data["base"] = {"mode": "kinematic"}
-    path = tmp_path / "kinematic_pick.yaml"
-    path.write_text(yaml.safe_dump(data))
     with pytest.raises(UserInputError, match="constraint stepper"):
-        compile(load_scene(path))
+        compile(Scene.from_dict(data, source="kinematic_pick"))

@@ -11,7 +11,7 @@ import yaml
 
 from youbot_dynamics.sim.engine import run
 from youbot_dynamics.sim.model import compile
-from youbot_dynamics.sim.scene import load_scene, scene_dir
+from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir
 
 
 def test_the_sphere_rests_while_the_base_drives():
@@ -36,19 +36,17 @@ def test_mobile_pick_carries_the_sphere_away():
     assert sphere[-1, 2] > 0.5 and abs(sphere[-1, 0] - base[-1, 0]) < 0.4
 
 
-def spin_arm(tmp_path, release: float, duration: float):
+def spin_arm(release: float, duration: float):
     data = yaml.safe_load((scene_dir() / "base_spin_arm.yaml").read_text())
     data["base"]["controller"]["release"] = release
     data["duration"] = duration
-    path = tmp_path / "spin.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return compile(load_scene(path))
+    return compile(Scene.from_dict(data, source="base_spin_arm_short"))
 
 
-def test_base_spin_arm_braked_then_free(tmp_path):
+def test_base_spin_arm_braked_then_free():
     """base_spin_arm's short form: the wheels braked for 0.5 s, then free, while the arm
     swings joint 1: the base holds its yaw while braked and turns against the arm once free."""
-    model = spin_arm(tmp_path, 0.5, 1.6)
+    model = spin_arm(0.5, 1.6)
     result = run(model)
     yaw = result.x[:, model.block("base")][:, 2]
     braked = result.t <= 0.5
