@@ -11,7 +11,10 @@ and /ee_pose), /scene_markers (latched) when it has static geometry, and /diagno
 the contact events), subscribes
 /joint_commands (sensor_msgs/JointState efforts by joint name) and /joint_trajectory
 (trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
-(std_srvs/SetBool). inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
+(std_srvs/SetBool); with a moving base (scene ``base: kinematic | dynamic``) it also
+subscribes /cmd_vel (geometry_msgs/Twist) and publishes /odom and /base_pose_ground_truth
+(nav_msgs/Odometry) and odom -> base_footprint on /tf (:mod:`youbot_dynamics.ros.mobile_base`).
+inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
 default keep-all: a replay as fast as possible loses no sample; best_effort for drivers that
 publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics. Parameters:
 :mod:`youbot_dynamics.ros.parameters`, checked (all or nothing) in the on-set callback and

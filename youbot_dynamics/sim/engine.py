@@ -10,7 +10,10 @@
 
 The equations: the plant's accelerations come from ABA with joint friction and the compliant
 contact forces (:meth:`SimModel.accelerations`); dq/dt = v for the robot joints, the free
-bodies' charts follow their twists. Every integrator of the registry runs through
+bodies' charts follow their twists. A moving base (:mod:`youbot_dynamics.sim.base`) adds
+its pose rate R(yaw) (vx, vy), wz, the floor's roller forces and the wheel-speed PI (dynamic),
+or imposes its path's motion on the root and the wheels (kinematic); a held twist command
+(``Reference.base_twist``) replaces the path. Every integrator of the registry runs through
 ``drive()`` (sim/integration.py) with the same divergence checks: the ODE integrators
 (through ``integrate`` or, with contact guards, ``simulate_hybrid``), IDA, and the constraint
 stepper (:class:`ConstraintStepping`, a Stepper whose steps are Pinocchio contact solves).

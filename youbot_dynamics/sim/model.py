@@ -350,6 +350,8 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
     bounds = layout.velocity_bounds(robot.velocity_limit, VELOCITY_LIMIT_FACTOR)
     twist = layout.slice("twist")
     bounds[twist] = np.tile(np.repeat([limits.body_speed, limits.body_spin], 3), len(scene.free_bodies))
+    if base is not None:  # the base's twist within the free bodies' speed and spin limits
+        bounds[layout.slice("base_v")] = [limits.body_speed, limits.body_speed, limits.body_spin]
     shapes = {g.name: g.shape for g in scene.geometries}
     period = None
     if controller is not None:
