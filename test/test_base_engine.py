@@ -24,6 +24,7 @@ from youbot_dynamics.dynamics.mobile.mecanum import wheel_speeds
 from youbot_dynamics.dynamics.mobile.odometry import se2_step
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.engine import advance, initial_state, robot_torque, run
+from youbot_dynamics.sim.integrators import DivergenceError
 from youbot_dynamics.sim.model import compile
 from youbot_dynamics.sim.scene import Scene, SceneError, load_scene, scene_dir
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
@@ -217,3 +218,15 @@ def test_a_kinematic_base_refuses_the_constraint_stepper():
     data["base"] = {"mode": "kinematic"}
     with pytest.raises(UserInputError, match="constraint stepper"):
         compile(Scene.from_dict(data, source="kinematic_pick"))
+
+
+def test_a_tipping_base_is_divergence_with_its_time():
+    """Wheels 3 mm apart under the tipped arm: the centre of mass lies outside their support
+    polygon; the run stops with a DivergenceError naming the time."""
+    model = compile(swing_scene({"mode": "dynamic", "floor": {"mu": 0.5}}, duration=0.1))
+    narrow = dataclasses.replace(model.base, mecanum=dataclasses.replace(
+        model.base.mecanum, positions=model.base.mecanum.positions * 0.01))
+    tipping = dataclasses.replace(model, base=narrow)
+    with pytest.raises(DivergenceError, match="tips over") as error:
+        run(tipping)
+    assert error.value.time == 0.0

@@ -35,6 +35,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from youbot_dynamics.dynamics.mobile.wheel_floor import TipOverError
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.sim.contact_events import MODE, ContactGuards
@@ -177,7 +178,10 @@ def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float =
     dx = np.zeros_like(x)
     dx[model.block("q")] = x[model.block("v")]
     if model.plant.nv:
-        dx[model.velocity_block] = model.accelerations(data, x, tau, motion)
+        try:
+            dx[model.velocity_block] = model.accelerations(data, x, tau, motion)
+        except TipOverError as error:
+            raise DivergenceError(t, model.integrator.method, math.nan, f"the base tips over: {error}") from None
     z = model.block("z")
     if z.stop > z.start:
         dx[z] = model.friction.state_derivative(x[model.block("v")], x[z])
@@ -262,7 +266,10 @@ class ConstraintStepping:
                 if model.friction is not None:
                     tau[joints] -= model.friction.torque(self.v[joints])
             if model.base is not None:  # dynamic (a kinematic base refuses the stepper)
-                tau += model.base.floor_force(model.plant.model, self.data, self.q, self.v)
+                try:
+                    tau += model.base.floor_force(model.plant.model, self.data, self.q, self.v)
+                except TipOverError as error:
+                    raise DivergenceError(self.t, model.integrator.method, h, f"the base tips over: {error}") from None
                 integral = model.block("wheel_i")
                 if integral.stop > integral.start:  # the PI's integral terms, explicit Euler
                     base = model.base
