@@ -160,12 +160,6 @@ def _write_urdf(args: argparse.Namespace, result) -> None:
     if not fit.success:
         raise CommandError(f"--write-urdf: the consistent fit did not converge ({fit.message})")
     named = dict(zip(result.layout.names, fit.theta))
-    negative = [f"{name} {value:.3g}" for name, value in named.items()
-                if name.endswith((".viscous", ".coulomb")) and value < 0.0]
-    if negative:
-        raise CommandError(f"--write-urdf: negative friction identified ({', '.join(negative)}); a URDF's damping "
-                           "and friction must be >= 0: record a longer excitation or identify without that term "
-                           "(--friction)")
     offsets = {n: v for n, v in named.items() if n.endswith(".offset")}
     moved = (f"at most {np.abs(fit.moved_std).max():.3g} standard deviations "
              f"(rms {np.sqrt(np.mean(fit.moved_std ** 2)):.3g})")
