@@ -85,3 +85,13 @@ def test_slip_above_the_roller_limit_only(share, slips):
     else:
         assert slip < VELOCITY_SCALE
     assert abs(result.x[-1, model.block("base")][0] - 1.0) < 1e-3  # the controller still gets there
+
+
+def test_the_base_is_recorded():
+    model = compile(load_scene(scene_dir() / "base_square.yaml").with_duration(1.0))
+    result = run(model)
+    names, table = result.columns(model.scene.outputs.record)
+    k = names.index("base[base.x]")
+    assert names[k:k + 6] == ["base[base.x]", "base[base.y]", "base[base.yaw]",
+                              "base_v[base.vx]", "base_v[base.vy]", "base_v[base.wz]"]
+    np.testing.assert_array_equal(table[:, k], [model.base.command(t)[0][0] for t in result.t])

@@ -108,7 +108,7 @@ class SimulationResult:
         """Column names and the (k, m) table of t and the recorded quantities."""
         names, blocks = ["t"], [self.t[:, None]]
         for item in record:
-            if item in ("q", "v", "z"):
+            if item in ("q", "v", "z", "base", "base_v"):
                 part = self.layout.slice(item)
                 names += list(self.layout.names[part])
                 blocks.append(self.x[:, part])

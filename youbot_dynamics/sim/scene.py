@@ -37,8 +37,9 @@ Keys (units SI, angles rad; joint values are mappings by joint name)::
       target_error: rad             # the final joint-space error auto (work-precision) meets
       energy_tolerance: J           # conservative scenes: allowed energy growth
     duration: s
-    outputs: {rate: Hz, record: [q, v, z, tau, energy, ee_position]}
+    outputs: {rate: Hz, record: [q, v, z, base, base_v, tau, energy, ee_position]}
     robot: none | {compose: [...]}  # no robot, or several composed into one (model/compose.py)
+    base: {mode: fixed | kinematic | dynamic, ...}   # the moving base (sim/scene_base.py)
     free_bodies: [...]              # rigid objects (see sim/scene_contacts.py for these four)
     world: [...]                    # static geometry
     geometry: [...]                 # geometry on robot links
@@ -73,7 +74,7 @@ from youbot_dynamics.sim.scene_base import BaseSpec, read_base
 from youbot_dynamics.sim.scene_reader import SceneError, SceneReader, read_yaml
 
 CONTROLLERS = ("none", "pd", "computed_torque")
-RECORDABLE = ("q", "v", "z", "tau", "energy", "ee_position")
+RECORDABLE = ("q", "v", "z", "base", "base_v", "tau", "energy", "ee_position")
 FRICTION_DEFAULTS = ("urdf", "none")
 CONTACT_SECTIONS = ("free_bodies", "world", "geometry", "contacts")
 TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "gravity", "friction",
