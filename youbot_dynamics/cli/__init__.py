@@ -24,6 +24,7 @@ COMMAND_MODULES = (
     "youbot_dynamics.cli.log_commands",
     "youbot_dynamics.cli.identify_commands",
     "youbot_dynamics.cli.mobile_commands",
+    "youbot_dynamics.cli.report_commands",
 )
 
 

@@ -14,8 +14,8 @@ from tqdm import tqdm
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
 from youbot_dynamics.io.csv_table import write_csv
-from youbot_dynamics.cli.common import (CommandError, add_tolerance_arguments, finite_or_none, output_file,
-                                        output_folder)
+from youbot_dynamics.cli.common import (CommandError, add_sweep_arguments, add_tolerance_arguments,
+                                        finite_or_none, output_file, output_folder)
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
 from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, IntegrationError, StepBudgetError,
                                              checked_fixed_step, fixed_step_count)
@@ -77,6 +77,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study.add_argument("--target-error", type=float, help="final joint-space error to meet, rad")
     study.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
     study.add_argument("--out", default="out/work_precision", metavar="DIR", help="output folder")
+    add_sweep_arguments(study)
     study.add_argument("--json", action="store_true", help="print JSON")
     study.set_defaults(run=run_work_precision)
 
@@ -152,7 +153,8 @@ def run_work_precision(args: argparse.Namespace) -> int:
     """Sweep, write the files, print where they are and the recommendation."""
     output_folder(args.out, "--out")
     scene = scene_from(args)
-    study = work_precision(scene, args.out, target_error=args.target_error, progress=not args.json)
+    study = work_precision(scene, args.out, target_error=args.target_error, progress=not args.json,
+                           workers=args.workers, scheduler=args.scheduler)
     best = study.best
     if args.json:
         print(json.dumps({"scene": scene.name, "reference": study.reference.spec.describe(),
