@@ -25,6 +25,10 @@ from tqdm import tqdm
 from youbot_dynamics.errors import UserInputError
 
 
+#: How long a client waits for the scheduler at ``--scheduler`` before giving up.
+CONNECT_TIMEOUT = "10s"
+
+
 class CaseError(RuntimeError):
     """A case of a sweep failed: names the function and the case."""
 
@@ -47,7 +51,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None,
     from distributed import Client, LocalCluster
     if scheduler is not None:
         try:
-            client = Client(scheduler, timeout="20s")
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
         except OSError as error:
             raise UserInputError(f"--scheduler {scheduler}: cannot reach a Dask scheduler "
                                  f"there ({error})") from None
@@ -56,7 +60,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None,
         return
     n = default_workers(n_cases) if workers is None else workers
     with LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster, Client(cluster) as client:
+                      dashboard_address=":0") as cluster, Client(cluster) as client:
         yield client
 
 
