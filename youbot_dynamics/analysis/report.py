@@ -108,10 +108,13 @@ STUDIES: tuple[Study, ...] = (
                  "are."),
     Study("lagrange-2d", "Lagrange by sympy: planar elastic double pendulum (seed 000 "
           "appendix)", ("lagrange", "2d"),
-          seed="The equations of motion and a conserved energy without friction.",
-          method="Energy drift is our figure of merit; the seed gives no trajectory numbers."),
+          seed="The equations of motion with the appendix's parameters (m1 1, m2 0.5, k 50, "
+               "l0 0.25, l 0.5, g 9.82); no trajectory figures.",
+          method="Ours prints its parameters above the equations; energy drift (conserved "
+                 "without friction) is our figure of merit."),
     Study("lagrange-3d", "Lagrange by sympy: 3D pendulum (seed 000 appendix)", ("lagrange", "3d"),
-          seed="The equations of motion from the seed's Lagrangian.",
+          seed="The equations of motion from the seed's Lagrangian (whose potential omits "
+               "q3).",
           method="Energy drift is our figure of merit."),
     Study("structure-lowpass", "Structural analysis: the low-pass filter (seed 000 item 4)",
           ("structure", "lowpass"),
