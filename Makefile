@@ -16,7 +16,7 @@ LOCK_CONSTRAINTS ?=
 # the thorough fuzzing profile.
 PYTEST_ARGS ?= -m "not slow"
 
-.PHONY: run test test-all bench install lock clean
+.PHONY: run test test-all bench bench-all install lock clean
 
 # tf2_msgs (no PyPI wheel) built from interfaces/ into the venv once; skipped where a ROS 2
 # Jazzy provides it. Needs cmake and a C/C++ compiler (Debian: apt-get install cmake g++).
@@ -46,9 +46,13 @@ test-all: PYTEST_ARGS =
 test-all: export HYPOTHESIS_PROFILE = thorough
 test-all: test
 
+# The summary table of the speed figures (bench/results.json); bench-all runs every script.
 bench: $(STAMP)
+	$(PY) bench/summary.py
+
+bench-all: $(STAMP)
 	$(PY) -m pip install --quiet -r requirements-bench.txt -c $(LOCK)
-	for b in bench/*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
+	for b in bench/bench_*.py bench/summary.py; do echo "== $$b"; $(PY) $$b || exit 1; done
 
 # The test and build requirements (runtime ones included) resolved together in a fresh venv,
 # pinned exactly.

@@ -36,9 +36,9 @@ import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
 
-from youbot_dynamics.analysis.contact_extremes import ball_drop_data, scene_from  # noqa: E402
+from youbot_dynamics.analysis.contact_extremes import ball_drop_data  # noqa: E402
 from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
-from youbot_dynamics.sim.scene import load_scene, scene_dir  # noqa: E402
+from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 E, H0, RADIUS, G = 0.8, 1.0, 0.025, 9.81
@@ -47,7 +47,7 @@ REPEATS = 2
 
 
 def timed(data: dict) -> tuple[Simulator, object, float]:
-    simulator = Simulator(scene_from(data))
+    simulator = Simulator(Scene.from_dict(data, "bench"))
     start = time.perf_counter()
     result = simulator.run()
     return simulator, result, time.perf_counter() - start

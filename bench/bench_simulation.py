@@ -73,7 +73,7 @@ def rhs_table(calls: int, repeat: int) -> None:
 def mujoco_urdf(scene: Scene) -> str:
     """The scene's URDF as MuJoCo should load it: locked joints fixed (all locked at 0 in
     arm_swing), no <dynamics>, no visuals, a <mujoco> compiler block keeping every body."""
-    root = etree.parse(scene.robot_path).getroot()
+    root = etree.parse(scene.urdf_path).getroot()
     for joint in root.findall("joint"):
         if joint.get("type") != "fixed" and joint.get("name") not in scene.moving:
             assert scene.locked[joint.get("name")] == 0.0, "only zero locks are handled"

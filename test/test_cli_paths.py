@@ -1,11 +1,10 @@
 """Command-line output paths are checked before any work, and files that are no bag are
-refused before ROS 2 starts: one line on stderr, exit 2 (issue 16).
+refused before ROS 2 starts: one line on stderr, exit 2.
 
-Before the fix: ``simulate --output`` to a missing folder, a folder or an unwritable file
-raised a traceback after the whole run, ``replay`` of a file that is neither .mcap nor a bag
-folder raised an uncaught AnyReaderError, and ``main-job --out`` naming a file raised
-FileExistsError. The runs are replaced by a failing stand-in, so a check made after the run
-fails the test instead of taking its time.
+Covered: ``simulate --output`` to a missing folder, a folder or an unwritable file;
+``replay`` of a file that is neither .mcap nor a bag folder; ``main-job --out`` and
+``work-precision --out`` naming a file. The runs are replaced by a failing stand-in, so a
+check made after the run fails the test instead of taking its time.
 """
 from __future__ import annotations
 
@@ -27,8 +26,10 @@ def no_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     def ran(*args, **kwargs):
         pytest.fail("the run started before the output path was checked")
     monkeypatch.setattr(Simulator, "run", ran)
-    monkeypatch.setattr(work_precision, "work_precision", ran)
+    # the command module first: importing it here must bind the real function, which the
+    # undo then restores (after the next line it would bind the stand-in for good)
     monkeypatch.setattr("youbot_dynamics.cli.sim_commands.work_precision", ran)
+    monkeypatch.setattr(work_precision, "work_precision", ran)
     monkeypatch.setattr("youbot_dynamics.ros.dynamics_node.run", ran)
     monkeypatch.setattr("youbot_dynamics.ros.replay_node.replay_once", ran)
     monkeypatch.setattr("youbot_dynamics.systems.squeezer.simulate_squeezer", ran)

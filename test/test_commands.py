@@ -157,7 +157,7 @@ def test_link_frames_match_the_urdf_tree_and_the_screw_kinematics(scene: str) ->
     q) or translation axis q), each end effector against the product of exponentials of
     model/screws.py. Measured worst differences 6.7e-16 (arm) and 1.3e-15 (two youBots); bound
     1e-12."""
-    robot = load_scene(scene).robot()
+    robot = load_scene(scene).robot
     frames = LinkFrames(robot)
     q = np.random.default_rng(1).uniform(robot.lower, robot.upper)
     sample = frames.at(q)
@@ -183,7 +183,7 @@ def test_link_frames_match_the_urdf_tree_and_the_screw_kinematics(scene: str) ->
 
 
 def test_link_frames_name_an_unknown_end_effector() -> None:
-    robot = load_scene("arm_ptp").robot()
+    robot = load_scene("arm_ptp").robot
     with pytest.raises(UserInputError, match="unknown frame 'palm'.*links: base_footprint"):
         LinkFrames(robot, "palm")
 

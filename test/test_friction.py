@@ -143,3 +143,34 @@ def test_wrong_bristle_state_is_an_error(youbot, mixed):
         mixed.torque(np.zeros(youbot.nv))
     with pytest.raises(UserInputError, match="2 LuGre bristle states"):
         mixed.state_derivative(np.zeros(youbot.nv), np.zeros(3))
+
+
+def test_batch_rows_and_in_place_forms_equal_the_single_torque(youbot, mixed):
+    """torque of a batch (N, n) row by row, add_torque with either sign, and the laws in
+    numpy joint by joint: the compiled loop evaluates the same formulas (measured equal; the
+    bound allows one rounding of libm's tanh/exp against numpy's)."""
+    rng = np.random.default_rng(11)
+    v, z = rng.normal(0.0, 0.5, (6, youbot.nv)), rng.normal(0.0, 1e-3, (6, 2))
+    rows = np.array([mixed.torque(v[k], z[k]) for k in range(6)])
+    np.testing.assert_array_equal(mixed.torque(v, z), rows)
+    tau = rng.normal(size=youbot.nv)
+    for sign in (1.0, -1.0):
+        out = tau.copy()
+        mixed.add_torque(out, v[0], z[0], sign)
+        np.testing.assert_allclose(out, tau + sign * rows[0], rtol=1e-15, atol=1e-15)
+    lugre = [youbot.joint_index("arm_joint_2"), youbot.joint_index("arm_joint_4")]
+    i3 = youbot.joint_index("arm_joint_3")
+    assert rows[0, lugre[0]] == pytest.approx(fr.lugre(v[0, lugre[0]], z[0, 0], 2e3, 5.0, 0.2, 0.5, 0.9, 0.05),
+                                              rel=1e-15)
+    assert rows[0, i3] == pytest.approx(0.3 * v[0, i3] + fr.stribeck(v[0, i3], 0.4, 0.7, 0.1, 1e-3), rel=1e-15)
+
+
+def test_wrong_velocity_size_is_refused_before_the_compiled_loop(youbot, mixed):
+    """The compiled loop does not check bounds: a wrong size must stop in Python."""
+    z = np.zeros(2)
+    for v, out in ((np.zeros(youbot.nv - 1), np.zeros(youbot.nv - 1)), (np.zeros(youbot.nv + 3), np.zeros(youbot.nv)),
+                   (np.zeros((2, 3, youbot.nv)), np.zeros((2, 3, youbot.nv)))):
+        with pytest.raises(ValueError, match=f"n = {youbot.nv} joints"):
+            mixed.add_torque(out, v, z)
+    with pytest.raises(UserInputError, match="2 LuGre bristle states"):
+        mixed.torque(np.zeros((4, youbot.nv)), np.zeros((4, 3)))

@@ -167,7 +167,7 @@ def test_mutated_scenes_load_or_raise_a_one_line_scene_error(tmp_path: Path, bas
         return
     for vector in (scene.q0, scene.v0, scene.gravity):
         assert np.isfinite(vector).all()
-    robot = scene.robot()
+    robot = scene.robot
     assert np.all((robot.lower <= scene.q0) & (scene.q0 <= robot.upper))
 
 

@@ -44,7 +44,7 @@ except ImportError:          # no rclpy: the strict field check is skipped, the 
     to_rclpy = None
 
 SCENE = load_scene("arm_ptp")
-ROBOT = SCENE.robot()
+ROBOT = SCENE.robot
 MOVING = list(ROBOT.joint_names)
 LOCKED = list(ROBOT.locked)
 STEP_NS = 10_000_000

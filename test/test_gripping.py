@@ -49,7 +49,7 @@ def closed_samples(simulator: Simulator, result, robot: str) -> np.ndarray:
 
 def test_two_youbots_composed_with_prefixed_names_poses_and_corrected_fingers():
     scene = load_scene("gripping")
-    robot = scene.robot()
+    robot = scene.robot
     assert robot.nv == 14 and all(name.startswith(("yb1_", "yb2_")) for name in robot.joint_names)
     data = robot.model.createData()
     pin.framesForwardKinematics(robot.model, data, scene.q0)
@@ -92,7 +92,7 @@ def test_grip_force_budget_carries_the_sphere_below_the_finger_effort_limit():
     """Each finger, commanded 1 mm into the sphere, presses with kp m e below its 1 N limit;
     two of them carry the sphere's weight by friction with margin."""
     scene = load_scene("gripping")
-    robot = scene.robot()
+    robot = scene.robot
     name = "yb1_gripper_finger_joint_l"
     finger = robot.joint_index(name)
     mass = robot.model.inertias[robot.model.getJointId(name)].mass

@@ -21,7 +21,7 @@ from youbot_dynamics.ros.inverse import PLAUSIBLE_FACTOR, AccelerationEstimator
 from youbot_dynamics.sim.scene import load_scene
 
 SCENE = load_scene("arm_ptp")
-ROBOT = SCENE.robot()
+ROBOT = SCENE.robot
 NAMES = list(ROBOT.joint_names)
 PERIOD_NS = 2_000_000
 COUNT = 40

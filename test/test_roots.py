@@ -9,6 +9,7 @@ exponential (model/lie.py) for integration, and closed forms (gravity, planar mo
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -28,7 +29,7 @@ from youbot_dynamics.model.lie import exp_se3, matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
 from youbot_dynamics.model.screws import (fkin_body, fkin_space, jacobian_body, jacobian_space,
                                           screw_chain)
-from youbot_dynamics.sim.scene import Scene, load_scene
+from youbot_dynamics.sim.scene import load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
 YOUBOT = Path(__file__).resolve().parents[1] / "urdf" / "youbot.urdf"
@@ -374,8 +375,7 @@ def test_cli_dynamics_with_a_floating_root(capsys: pytest.CaptureFixture[str]) -
 
 
 # ---- the simulator refuses what it would integrate wrongly --------------------------------
-def test_simulator_refuses_a_movable_root(monkeypatch: pytest.MonkeyPatch) -> None:
-    scene = load_scene("arm_swing")
-    monkeypatch.setattr(Scene, "robot", lambda self: load_robot(YOUBOT, root="planar"))
+def test_simulator_refuses_a_movable_root() -> None:
+    scene = dataclasses.replace(load_scene("arm_swing"), robot=load_robot(YOUBOT, root="planar"))
     with pytest.raises(UserInputError, match=r"arm_swing.yaml: robot 'youbot' has a planar root \(nq = 15, nv = 14\)"):
         Simulator(scene)

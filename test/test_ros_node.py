@@ -428,7 +428,7 @@ def test_every_published_message_passes_the_strict_field_check(mode: str, offset
                 nonlocal k
                 if states is not None:        # inverse mode: feed joint states until it answers
                     k += 1
-                    msg = JointState(name=list(scene.robot().joint_names), position=list(scene.q0),
+                    msg = JointState(name=list(scene.robot.joint_names), position=list(scene.q0),
                                      velocity=[0.01 * k] * 5)
                     msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(10_000_000 * k, 10**9)
                     states.publish(msg)
@@ -441,9 +441,9 @@ def test_every_published_message_passes_the_strict_field_check(mode: str, offset
     assert {status.level for array in diagnostics for status in array.status} == {0}
     assert diagnostic_values(diagnostics[-1])["failed.total"] == "0"
     if joint_states:
-        movable = _urdf_movable_joints(scene.robot_path)
+        movable = _urdf_movable_joints(scene.urdf)
         assert sorted(joint_states[0].name) == sorted(movable) and len(movable) == 11
-        robot = scene.robot()
+        robot = scene.robot
         by_name = dict(zip(joint_states[-1].name, joint_states[-1].position))
         assert robot.locked and all(by_name[name] == value for name, value in robot.locked.items())
 
@@ -461,9 +461,9 @@ def test_composed_scene_joint_states_and_field_check() -> None:
     for _, message in outputs:
         to_rclpy(message)
     message = dict(outputs)["/joint_states"]
-    assert sorted(message.name) == sorted(_urdf_movable_joints(scene.robot_path))
+    assert sorted(message.name) == sorted(_urdf_movable_joints(scene.urdf))
     assert len(message.name) == len(message.position) == len(message.velocity) == len(message.effort) == 22
-    assert all(message.position[list(message.name).index(name)] == value for name, value in scene.robot().locked.items())
+    assert all(message.position[list(message.name).index(name)] == value for name, value in scene.robot.locked.items())
 
 
 def test_no_callback_failure_stops_the_node(capfd: pytest.CaptureFixture) -> None:

@@ -1,15 +1,20 @@
-"""Scenes: the packaged ones load; every kind of mistake names the file, the key and the
-value; locking joints shrinks the state and the model the rhs works on."""
+"""Scenes: the packaged ones load, from their files and from mappings alike; every kind of
+mistake names the source, the key and the value; the robot is loaded once; locking joints
+shrinks the state and the model the rhs works on."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
-from youbot_dynamics.sim.scene import SceneError, load_scene, scene_dir
+import youbot_dynamics.sim.scene as scene_module
+from youbot_dynamics import default_urdf
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.sim.scene import Scene, SceneError, load_scene, scene_dir
 from youbot_dynamics.sim.simulator import Simulator
 from youbot_dynamics.sim.state import StateLayout
 
@@ -33,6 +38,91 @@ def error_of(tmp_path: Path, data: dict) -> SceneError:
     assert caught.value.source == str(path)
     assert str(path) in str(caught.value)
     return caught.value
+
+
+def assert_same(a, b, where: str = "scene") -> None:
+    """Field by field (arrays exactly, Robots by name, source, joints and Pinocchio model)."""
+    if isinstance(a, Robot):
+        assert (a.name, a.source, a.joint_names, dict(a.locked)) == (b.name, b.source, b.joint_names, dict(b.locked))
+        assert a.model == b.model, where
+    elif dataclasses.is_dataclass(a):
+        assert type(a) is type(b), where
+        for field in dataclasses.fields(a):
+            assert_same(getattr(a, field.name), getattr(b, field.name), f"{where}.{field.name}")
+    elif isinstance(a, np.ndarray):
+        assert np.array_equal(a, b), where
+    elif isinstance(a, (tuple, list)):
+        assert len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_same(x, y, f"{where}[{i}]")
+    elif hasattr(a, "items"):
+        assert a.keys() == b.keys(), where
+        for key in a:
+            assert_same(a[key], b[key], f"{where}.{key}")
+    else:
+        assert a == b, where
+
+
+@pytest.mark.parametrize("path", sorted(scene_dir().glob("*.yaml")), ids=lambda p: p.stem)
+def test_every_packaged_scene_from_its_mapping_equals_the_loaded_file(path):
+    data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    assert_same(Scene.from_dict(data, str(path), path.parent), load_scene(path.stem))
+
+
+def test_scene_from_a_mapping_without_any_file():
+    data = {"robot": "none", "gravity": [0, 0, -1.62], "duration": 0.5,
+            "free_bodies": [{"name": "ball", "shape": {"type": "sphere", "radius": 0.05}, "density": 700,
+                             "position": [0, 0, 1]}],
+            "integrator": {"method": "lsoda", "tol": 1e-8}}
+    scene = Scene.from_dict(data)
+    assert (scene.name, scene.source, scene.urdf_path) == ("scene", "<dict>", None)
+    assert scene.robot.nv == 0 and scene.free_bodies[0].body.name == "ball"
+    assert scene.robot.model.gravity.linear.tolist() == [0, 0, -1.62]  # the scene's gravity in the model
+    arm = Scene.from_dict({"moving": ARM[:2], "duration": 0.1}, source="notebook cell 3")
+    assert arm.urdf_path == Path(default_urdf()) and arm.urdf == Path(default_urdf()).read_text(encoding="utf-8")
+    assert arm.robot.joint_names == tuple(ARM[:2]) and arm.name == "scene"
+    with pytest.raises(SceneError) as caught:
+        Scene.from_dict({"moving": ["arm_joint_9"]}, source="notebook cell 3")
+    assert caught.value.key == "moving[0]" and str(caught.value).startswith("notebook cell 3: moving[0]: ")
+
+
+def test_relative_files_are_found_in_base_dir_then_the_package_share(tmp_path):
+    urdf = Path(default_urdf())
+    (tmp_path / "mine.urdf").write_text(urdf.read_text(encoding="utf-8"), encoding="utf-8")
+    data = {"robot": "mine.urdf", "moving": ARM}
+    assert Scene.from_dict(data, base_dir=tmp_path).urdf_path == tmp_path / "mine.urdf"
+    with pytest.raises(SceneError, match="file not found in .*share") as caught:
+        Scene.from_dict(data)  # no base_dir: the package share only
+    assert caught.value.key == "robot" and caught.value.value == "mine.urdf"
+    packaged_urdf = {"robot": "urdf/youbot.urdf", "moving": ARM}
+    assert Scene.from_dict(packaged_urdf).urdf_path == urdf.resolve()
+
+
+def test_the_robot_is_parsed_once_per_scene(monkeypatch):
+    calls = []
+    real = scene_module.load_robot
+    monkeypatch.setattr(scene_module, "load_robot", lambda *a, **k: calls.append(a) or real(*a, **k))
+    scene = load_scene("arm_friction")
+    assert len(calls) == 1 and isinstance(scene.robot, Robot) and scene.robot.nv == 5
+    simulator = Simulator(scene)
+    assert simulator.robot is scene.robot and len(calls) == 1
+    assert scene.with_duration(0.1).robot is scene.robot and len(calls) == 1
+
+
+def test_composed_robot_keeps_its_urdf_text_and_no_file():
+    scene = load_scene("gripping")
+    assert scene.urdf_path is None and "yb2_world_joint" in scene.urdf
+    assert scene.robot.nv == 14 and scene.robot.source == "<URDF string>"
+
+
+def test_auto_is_refused_where_no_sweep_may_run(tmp_path):
+    data = packaged("arm_swing")
+    data["integrator"] = {"method": "auto", "target_error": 1e-5}
+    scene = load_scene(write(tmp_path, data))
+    with pytest.raises(SceneError, match="work-precision --scene .* --target-error 1e-05 --write-back") as caught:
+        scene.pinned_integrator()
+    assert caught.value.key == "integrator.method" and "\n" not in str(caught.value)
+    assert load_scene("arm_swing").pinned_integrator().method == "dop853"
 
 
 @pytest.mark.parametrize("name", ["arm_swing", "arm_friction", "arm_ptp"])

@@ -18,7 +18,7 @@ from youbot_dynamics.ros.session import SimulationSession
 from youbot_dynamics.sim.scene import load_scene
 
 SCENE = load_scene("arm_ptp")
-ROBOT = SCENE.robot()
+ROBOT = SCENE.robot
 NAMES = list(ROBOT.joint_names)
 WALL_NS = 1_763_900_000 * NS          # a wall-clock time (Nov 2025), passed explicitly
 
@@ -106,7 +106,7 @@ def test_empty_command_is_rejected_not_zero_torque() -> None:
 
 
 def test_efforts_on_continuous_joints_are_clamped_to_a_finite_limit() -> None:
-    robot = keep_joints(load_robot(SCENE.robot_path), ["wheel_joint_fl", "arm_joint_1"])
+    robot = keep_joints(load_robot(SCENE.urdf_path), ["wheel_joint_fl", "arm_joint_1"])
     assert np.isinf(robot.effort_limit[robot.joint_index("wheel_joint_fl")])   # the premise
     commands = EffortCommands(robot, 0.5, "hold")
     out = commands.accept(["wheel_joint_fl", "arm_joint_1"], [1e150, -1e150], 0, 1.0)

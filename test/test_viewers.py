@@ -63,7 +63,7 @@ def rerun_rows(path: Path) -> tuple[dict[str, list[dict]], dict[str, list[dict]]
 def palm_poses(scene, names: list[str], q: list[float]) -> dict[str, pin.SE3]:
     """World poses of both palms by Pinocchio's forward kinematics at q given by joint name
     (the locked joints, also on /joint_states, are folded into the scene's reduced model)."""
-    robot = scene.robot()
+    robot = scene.robot
     config = pin.neutral(robot.model)
     for name, value in zip(names, q, strict=True):
         if name in robot.locked:

@@ -2,16 +2,14 @@
 stepper at several steps, a 1 g body on a heavy one, a thin fast object against a 1 cm
 plate (tunnelling) and a grasp at the friction-cone limit.
 
-Every case is a scene (built here as a mapping, written to a temporary YAML file and loaded
-like any other) run by the :class:`~youbot_dynamics.sim.simulator.Simulator`; the tables
-are lists of dicts (one row per run) with the figures named in their keys.
+Every case is a scene built here as a mapping and validated by :meth:`Scene.from_dict` like
+any file, run by the :class:`~youbot_dynamics.sim.simulator.Simulator`; the tables are lists
+of dicts (one row per run) with the figures named in their keys.
 """
 from __future__ import annotations
 
 import math
-import tempfile
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -19,20 +17,13 @@ import yaml
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integration import IntegrationError
-from youbot_dynamics.sim.scene import STEPPERS, Scene, load_scene, scene_dir
+from youbot_dynamics.sim.registry import STEPPERS
+from youbot_dynamics.sim.scene import Scene, scene_dir
 from youbot_dynamics.sim.simulator import SimulationResult, Simulator
 
 STIFFNESSES = (1e3, 1e4, 1e5, 1e6, 1e7, 1e8)
 ODE_METHODS = (("rk45", None), ("radau", None), ("cvode_bdf", None), ("rk4", 1e-4))
 STEPPER_STEPS = (1e-2, 1e-3, 1e-4)
-
-
-def scene_from(data: dict[str, Any]) -> Scene:
-    """Load a scene from a mapping (through a temporary file, checked like any scene)."""
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / f"{data.get('name', 'extreme')}.yaml"
-        path.write_text(yaml.safe_dump(data))
-        return load_scene(path)
 
 
 def integrator_of(method: str, dt: float | None) -> dict[str, Any]:
@@ -44,7 +35,7 @@ def run_case(data: dict[str, Any]) -> tuple[Simulator | None, SimulationResult |
     """(simulator, result or None, status, wall time s): status ``ok`` or the failure."""
     start = time.perf_counter()
     try:
-        simulator = Simulator(scene_from(data))
+        simulator = Simulator(Scene.from_dict(data, f"contact extremes: {data.get('name', 'case')}"))
         result = simulator.run()
     except (IntegrationError, UserInputError, FloatingPointError, np.linalg.LinAlgError) as error:
         return None, None, f"failed: {str(error)[:60]}", time.perf_counter() - start

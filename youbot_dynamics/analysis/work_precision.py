@@ -8,43 +8,50 @@
   (adaptive ones, atol = rtol / 100). Per point: the final-state error in joint space
   (max_i |q_i - q_ref,i|, rad) and of the end-effector position (|p - p_ref|, m), the
   maximum energy drift max_t |E(t) - E(0)| (J) where the scene conserves energy, the wall
-  time (s), the rhs evaluations, and the failure (a DivergenceError or IntegrationError
-  message) if the run failed. The energy-growth check is off during the sweep (a drifting
-  run is a data point, not a failure); non-finite states and the velocity bound stay on.
+  time (s), the rhs and Jacobian evaluations, the counted work (:func:`counted_work`) and
+  the failure (a DivergenceError or IntegrationError message) if the run failed. The
+  energy-growth check is off during the sweep (a drifting run is a data point, not a
+  failure); non-finite states and the velocity bound stay on.
 - Output: CSV, markdown table and a PNG work-precision plot (matplotlib Agg).
-- ``recommend``: the cheapest point (wall time) whose joint-space error meets a target.
-  ``resolve_integrator`` gives a scene with ``integrator: auto`` that recommendation,
-  cached per scene under :func:`cache_dir` and keyed by the SHA-256 of the scene file's
-  content and the target error: a changed scene file is swept again.
+- ``recommend``: the point of least counted work whose joint-space error meets a target
+  (ties: registry order, then the looser setting). Counts, not wall time, so that the same
+  scene file chooses the same method on any machine; wall time is reported beside.
+- ``integrator: auto`` is an offline choice: :func:`write_back` pins the recommendation
+  into the scene file (``work-precision --write-back``), editing only its ``integrator``
+  block so every comment stays; :func:`resolve_integrator` sweeps for a one-off
+  ``simulate`` of an ``auto`` scene. Nothing is cached.
 """
 from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 import math
 import os
+import re
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
 from youbot_dynamics.analysis.sweeps import map_cases
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import FIXED_STEP, IntegrationError
-from youbot_dynamics.sim.scene import IntegratorSpec, Scene
+from youbot_dynamics.sim.integrators import IntegrationError
+from youbot_dynamics.sim.registry import AUTO, FIXED_STEP, REGISTRY, integrator_names
+from youbot_dynamics.sim.scene import IntegratorSpec, Scene, SceneError
+from youbot_dynamics.sim.scene_reader import read_yaml
 from youbot_dynamics.sim.simulator import SimulationResult, Simulator
 
-IMPLICIT = ("radau", "bdf", "cvode_bdf", "ida")
-#: Step sizes (s) of the fixed-step methods and tolerances of the adaptive ones.
+#: Step sizes (s) of the fixed-step methods and tolerances of the adaptive ones (every
+#: adaptive ODE and DAE integrator of the registry).
 DEFAULT_GRID: dict[str, tuple[float, ...]] = {
     "euler": (1e-3, 3e-4, 1e-4, 3e-5),
     "symplectic_euler": (1e-3, 3e-4, 1e-4, 3e-5),
     "rk4": (1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4),
     **{name: (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
-       for name in ("rk45", "dop853", "radau", "bdf", "cvode_bdf", "cvode_adams", "ida")},
+       for name in integrator_names(("ode", "dae"), adaptive=True)},
 }
 REFERENCE_RTOL = 1e-12
 ATOL_PER_RTOL = 1e-2
@@ -82,6 +89,8 @@ class SweepPoint:
     energy_drift: float | None
     wall_time: float
     rhs_evals: int | None
+    jac_evals: int | None
+    work: float | None
     steps: int | None
     failure: str | None
 
@@ -98,6 +107,15 @@ class SweepPoint:
 FIELDS = [f.name for f in dataclasses.fields(SweepPoint)]
 
 
+def counted_work(rhs_evals: int | None, jac_evals: int | None, state_dim: int) -> float | None:
+    """The cost model the recommendation ranks by: rhs evaluations plus Jacobian
+    evaluations times the state dimension (a Jacobian costs as much as n rhs evaluations
+    by finite differences). None when the backend does not report the rhs evaluations."""
+    if rhs_evals is None:
+        return None
+    return float(rhs_evals + (jac_evals or 0) * state_dim)
+
+
 def final_figures(simulator: Simulator, result: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
     """Final joint positions (rad) and end-effector position (m) of a run."""
     q = result.x[-1, simulator.layout.slice("q")]
@@ -106,7 +124,7 @@ def final_figures(simulator: Simulator, result: SimulationResult) -> tuple[np.nd
 
 def reference_solution(scene: Scene) -> Reference:
     """The tight-tolerance reference and its error estimate from a 10x looser run."""
-    method = "radau" if scene.integrator.method in IMPLICIT else "dop853"
+    method = "radau" if scene.integrator.method != AUTO and REGISTRY[scene.integrator.method].stiff else "dop853"
     finals = []
     for rtol in (REFERENCE_RTOL, 10 * REFERENCE_RTOL):
         simulator = Simulator(scene, spec_for(method, rtol))
@@ -126,11 +144,13 @@ def sweep_point(scene: Scene, method: str, value: float, reference: Reference) -
         result = simulator.run()
     except IntegrationError as error:
         return SweepPoint(method, parameter, value, math.nan, math.nan, None,
-                          time.perf_counter() - start, None, None, str(error))
+                          time.perf_counter() - start, None, None, None, None, str(error))
     q, ee = final_figures(simulator, result)
+    stats = result.stats
     return SweepPoint(method, parameter, value, float(np.max(np.abs(q - reference.q))),
                       float(np.linalg.norm(ee - reference.ee_position)), result.energy_error,
-                      result.stats.wall_time, result.stats.rhs_evals, result.stats.steps, None)
+                      stats.wall_time, stats.rhs_evals, stats.jac_evals,
+                      counted_work(stats.rhs_evals, stats.jac_evals, reference.state_dim), stats.steps, None)
 
 
 def sweep(scene: Scene, reference: Reference, grid: dict[str, Sequence[float]] | None = None,
@@ -147,12 +167,15 @@ def sweep(scene: Scene, reference: Reference, grid: dict[str, Sequence[float]] |
 
 
 def recommend(points: Iterable[SweepPoint], target_error: float) -> SweepPoint | None:
-    """The cheapest point (least wall time, then fewest rhs evaluations) whose joint-space
-    error is at most ``target_error`` (rad); None if none does."""
-    meeting = [p for p in points if p.meets(target_error)]
+    """The point of least counted work whose joint-space error is at most
+    ``target_error`` (rad); ties go to the registry's order, then to the looser setting.
+    Wall time plays no part: the same sweep chooses the same on any machine. None if no
+    point meets the target."""
+    order = list(REGISTRY)
+    meeting = [p for p in points if p.meets(target_error) and p.work is not None]
     if not meeting:
         return None
-    return min(meeting, key=lambda p: (p.wall_time, p.rhs_evals or 0))
+    return min(meeting, key=lambda p: (p.work, order.index(p.integrator), -p.value))
 
 
 # ---------------------------------------------------------------------------------------
@@ -183,17 +206,18 @@ def markdown_table(scene: Scene, reference: Reference, points: Sequence[SweepPoi
              f"{reference.state_dim}, reference "
              f"{reference.spec.describe()} (own error estimate {reference.error_estimate:.2g} rad).", "",
              "| integrator | dt or rtol | q error (rad) | EE error (m) | energy drift (J) | wall time (s) "
-             "| rhs evals | steps | failure |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| rhs evals | Jacobians | work | steps | failure |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for p in points:
         failure = "" if p.failure is None else p.failure.replace("|", "/")[:80]
         lines.append(f"| {p.integrator} | {p.parameter}={p.value:g} | {_cell(p.q_error)} | {_cell(p.ee_error)} "
-                     f"| {_cell(p.energy_drift)} | {p.wall_time:.3g} | {_cell(p.rhs_evals)} | {_cell(p.steps)} "
-                     f"| {failure} |")
+                     f"| {_cell(p.energy_drift)} | {p.wall_time:.3g} | {_cell(p.rhs_evals)} | {_cell(p.jac_evals)} "
+                     f"| {_cell(p.work)} | {_cell(p.steps)} | {failure} |")
+    lines += ["", "Work: rhs evaluations + Jacobians x state dimension (counted, the same on any machine)."]
     if target_error is not None:
         lines += ["", f"Target joint-space error {target_error:g} rad: " +
                   ("no configuration meets it." if best is None else
-                   f"cheapest is **{best.spec.describe()}** ({best.wall_time:.3g} s, "
+                   f"cheapest is **{best.spec.describe()}** (work {best.work:.4g}, {best.wall_time:.3g} s, "
                    f"error {best.q_error:.2g} rad).")]
     return "\n".join(lines) + "\n"
 
@@ -255,36 +279,110 @@ def work_precision(scene: Scene, out_dir: str | Path, *, target_error: float | N
 
 
 # ---------------------------------------------------------------------------------------
-# integrator: auto
+# integrator: auto, chosen offline
 # ---------------------------------------------------------------------------------------
-def cache_dir() -> Path:
-    """$YOUBOT_DYNAMICS_CACHE, else ~/.cache/youbot_dynamics."""
-    return Path(os.environ.get("YOUBOT_DYNAMICS_CACHE") or Path.home() / ".cache" / "youbot_dynamics")
-
-
-def cache_path(scene: Scene, target_error: float) -> Path:
-    """Where the recommendation for this scene content and target is cached."""
-    return cache_dir() / "auto_integrator" / f"{scene.name}-{scene.content_hash[:20]}-{target_error:.3g}.json"
-
-
 def resolve_integrator(scene: Scene, *, grid: dict[str, Sequence[float]] | None = None,
                        progress: bool = True) -> IntegratorSpec:
-    """The scene's integrator settings; for ``auto``, the cached (or freshly swept)
-    cheapest configuration meeting ``target_error``. UserInputError if none meets it."""
+    """The scene's integrator settings; for ``auto``, the sweep's recommendation for its
+    ``target_error`` (a sweep per call: pin it with :func:`write_back` instead).
+    UserInputError if no swept setting meets the target."""
     spec = scene.integrator
-    if spec.method != "auto":
+    if spec.method != AUTO:
         return spec
-    path = cache_path(scene, spec.target_error)
-    if path.is_file():
-        cached = json.loads(path.read_text(encoding="utf-8"))
-        return IntegratorSpec(**{**cached, "energy_tolerance": spec.energy_tolerance})
-    reference = reference_solution(scene)
-    best = recommend(sweep(scene, reference, grid, progress), spec.target_error)
+    best = recommend(sweep(scene, reference_solution(scene), grid, progress), spec.target_error)
     if best is None:
-        raise UserInputError(f"{scene.source}: integrator.target_error: no swept configuration "
-                             f"reaches {spec.target_error:g} rad on this scene")
-    chosen = dataclasses.replace(best.spec, energy_tolerance=spec.energy_tolerance)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    stored = {k: v for k, v in dataclasses.asdict(chosen).items() if k != "energy_tolerance"}
-    path.write_text(json.dumps(stored), encoding="utf-8")
-    return chosen
+        raise SceneError(scene.source, "integrator.target_error", f"no swept configuration reaches "
+                         f"{spec.target_error:g} rad on this scene")
+    return dataclasses.replace(best.spec, energy_tolerance=spec.energy_tolerance, target_error=spec.target_error)
+
+
+#: The integrator keys a write-back sets (every other key of the block is kept).
+PINNED_KEYS = ("method", "dt", "tol", "rtol", "atol")
+#: The comment a write-back puts above the keys it sets (an earlier one is replaced).
+PIN_NOTE = "pinned by work-precision --write-back"
+_TOP_KEY = re.compile(r"^integrator\s*:(?P<value>[^#]*?)\s*(?P<comment>#.*)?$")
+_INNER_KEY = re.compile(r"^(?P<indent>\s+)(?P<key>[A-Za-z_]+)\s*:")
+
+
+def yaml_scalar(value: Any) -> str:
+    """A scalar as YAML reads it back: a float always with a dot (``1.0e-06``, never the
+    string ``1e-06``), anything else as ``str`` gives it."""
+    if not isinstance(value, float):
+        return str(value)
+    text = repr(value)
+    mantissa, _, exponent = text.partition("e")
+    if exponent and "." not in mantissa:
+        text = f"{mantissa}.0e{exponent}"
+    return text
+
+
+def pinned_settings(spec: IntegratorSpec) -> dict[str, Any]:
+    """The ``integrator`` keys that pin ``spec``: method and dt, or tol, or rtol and atol."""
+    if spec.dt is not None:
+        return {"method": spec.method, "dt": spec.dt}
+    if spec.atol is None:
+        return {"method": spec.method, "tol": spec.tol}
+    return {"method": spec.method, "rtol": spec.rtol, "atol": spec.atol}
+
+
+def with_integrator_block(text: str, settings: Mapping[str, Any], note: str) -> str:
+    """The scene file's ``text`` with ``settings`` (PINNED_KEYS) in its top-level
+    ``integrator`` block, after the comment ``# PIN_NOTE: note``: the block's other keys, its
+    comments (but an earlier pin note) and every other line stay as they are; a flow mapping
+    (``integrator: {...}``) becomes a block, a missing block is appended."""
+    lines = text.splitlines()
+    head = next((i for i, line in enumerate(lines) if _TOP_KEY.match(line)), None)
+    if head is None:
+        start, end, kept, indent, comment = len(lines), len(lines), [], "  ", ""
+    else:
+        match = _TOP_KEY.match(lines[head])
+        comment = f"  {match['comment']}" if match["comment"] else ""
+        end, kept, indent = head + 1, [], None
+        for j in range(head + 1, len(lines)):
+            line = lines[j]
+            if line[:1] in (" ", "\t") and line.strip():
+                end = j + 1
+            elif line.strip() and not line.startswith("#"):
+                break
+        inner = lines[head + 1:end]
+        flow = match["value"].strip()
+        if flow:  # integrator: {method: ..., ...}: its other keys become block lines
+            data = read_yaml(flow.encode("utf-8"), "integrator")
+            items = data.items() if isinstance(data, Mapping) else ()
+            inner = [f"  {key}: {yaml_scalar(value)}" for key, value in items]
+        for line in inner:
+            found = _INNER_KEY.match(line)
+            if found and indent is None:
+                indent = found["indent"]
+            if not (found and found["key"] in PINNED_KEYS or line.strip().startswith(f"# {PIN_NOTE}")):
+                kept.append(line)
+        start, indent = head, indent or "  "
+    values = [f"{indent}{key}: {yaml_scalar(value)}" for key, value in settings.items()]
+    block = [f"integrator:{comment}", f"{indent}# {PIN_NOTE}: {note}", *values, *kept]
+    return "\n".join(lines[:start] + block + lines[end:]) + "\n"
+
+
+def write_back(path: str | Path, spec: IntegratorSpec, note: str) -> str:
+    """Pin ``spec`` into the scene file at ``path`` (see :func:`with_integrator_block`),
+    after checking that the edited file reads back as the same scene with that integrator;
+    the file is replaced in one step. Returns the new text."""
+    path = Path(path)
+    text = path.read_text(encoding="utf-8")
+    settings = pinned_settings(spec)
+    edited = with_integrator_block(text, settings, note)
+    before, after = (read_yaml(t.encode("utf-8"), str(path)) for t in (text, edited))
+    expected = {**{k: v for k, v in (before.get("integrator") or {}).items() if k not in PINNED_KEYS}, **settings}
+    if {k: v for k, v in before.items() if k != "integrator"} != {k: v for k, v in after.items() if k != "integrator"} \
+            or after.get("integrator") != expected:
+        raise SceneError(str(path), "integrator", "the file's integrator block could not be edited safely; "
+                         f"set it by hand to {settings}")
+    Scene.from_dict(after, str(path), path.parent)  # still a valid scene
+    with tempfile.NamedTemporaryFile("w", encoding="utf-8", dir=path.parent, delete=False,
+                                     prefix=f".{path.name}.") as handle:
+        handle.write(edited)
+    try:
+        os.chmod(handle.name, path.stat().st_mode)
+        os.replace(handle.name, path)
+    finally:
+        Path(handle.name).unlink(missing_ok=True)
+    return edited

@@ -4,6 +4,11 @@ Each module in COMMAND_MODULES exposes ``register(subparsers)``, adding its sub-
 with ``set_defaults(run=function)``; ``function(args) -> int`` does the work. User mistakes
 raise :class:`youbot_dynamics.cli.common.CommandError` (or a library error that subclasses
 ``UserInputError``) and end with a one-line message and exit status 2.
+
+Start-up: :func:`main` imports only the module of the command it runs (COMMANDS says which),
+so ``--help`` imports none of them (no numpy, Pinocchio, scipy, sympy, rerun) and a command
+pays only for what its own module needs. COMMANDS holds each command's one-line summary for
+that list; test_cli_startup checks it against what the modules register.
 """
 from __future__ import annotations
 
@@ -13,6 +18,7 @@ import sys
 
 from youbot_dynamics.errors import UserInputError
 
+<<<<<<< HEAD
 COMMAND_MODULES = (
     "youbot_dynamics.cli.model_commands",
     "youbot_dynamics.cli.sim_commands",
@@ -26,6 +32,42 @@ COMMAND_MODULES = (
     "youbot_dynamics.cli.mobile_commands",
     "youbot_dynamics.cli.report_commands",
 )
+=======
+#: command -> (the module that registers it, its one-line summary in ``--help``), in the
+#: order ``--help`` lists them.
+COMMANDS: dict[str, tuple[str, str]] = {
+    name: (f"youbot_dynamics.cli.{module}", summary) for module, commands in (
+        ("model_commands", (("info", "joints, limits, friction, fidelity report"),
+                            ("fk", "pose of a frame (PoE forward kinematics)"),
+                            ("screws", "screw axes S_i and home pose M"),
+                            ("jacobian", "space, body or Pinocchio frame Jacobian"),
+                            ("id", "inverse dynamics: torques from q, v, a"),
+                            ("fd", "forward dynamics: accelerations from q, v, tau"))),
+        ("sim_commands", (("simulate", "simulate a scene"),
+                          ("work-precision", "speed versus accuracy on a scene"))),
+        ("contact_commands", (("contact-extremes", "measure contact at its extremes"),)),
+        ("pendulum_commands", (("pendulum", "simulate the elastic pendulum"),
+                               ("pendulum-study", "the seed's elastic-pendulum tables"),
+                               ("bdf-study", "fixed-step BDF1-4: the seed's Tables 1-4, stability regions, measured "
+                                             "orders, CVODE order caps"))),
+        ("mechanism_commands", (("squeezer", "Andrew's squeezer: a constrained mechanism in one formulation"),
+                                ("structure", "structural analysis (matching, BLT, Pantelides) of an example"))),
+        ("study_commands", (("woodpecker", "the woodpecker toy: state events, impacts, beak hits and statistics"),
+                            ("lagrange", "equations of motion by sympy (Lagrange), simulated from the seed's "
+                                         "initial state"),
+                            ("rotations", "Cardan angles vs adaptive Cardan vs quaternions on a torque-free rigid body"),
+                            ("uncertainty", "the damped pendulum with uncertain L, m, d: linear propagation against "
+                                            "Monte Carlo"))),
+        ("ros_commands", (("replay", "publish a recorded bag on its ROS 2 topics"),
+                          ("main-job", "simulate a scene with the dynamics node, log MCAP and Rerun"))),
+        ("log_commands", (("log", "repair log files"),)),
+        ("identify_commands", (("excite", "optimise an excitation trajectory for identification"),
+                               ("identify", "identify base parameters from a bag's /joint_states"))),
+        ("mobile_commands", (("unicycle", "the differential drive against its closed forms"),
+                             ("mecanum", "youBot base: wheel speeds of a twist, and its odometry"))),
+    ) for name, summary in commands}
+COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
+>>>>>>> main
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -35,22 +77,29 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every sub-command registered (sub-parsers of the same
-    one-line class)."""
+def build_parser(modules: tuple[str, ...] | None = None) -> argparse.ArgumentParser:
+    """The argument parser with the sub-commands of ``modules`` registered (default
+    COMMAND_MODULES, every one; sub-parsers of the same one-line class). ``()`` gives the
+    bare list of COMMANDS with their summaries, importing no command module."""
     parser = OneLineParser(
         prog="youbot-dynamics",
         description="youBot kinematics, dynamics, simulation and classic studies.",
     )
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name in COMMAND_MODULES:
+    modules = COMMAND_MODULES if modules is None else modules
+    if not modules:
+        for name, (_, summary) in COMMANDS.items():
+            subparsers.add_parser(name, help=summary)
+    for name in modules:
         importlib.import_module(name).register(subparsers)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (0 ok, 2 bad input, 1 failure)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else argv
+    command = COMMANDS.get(argv[0]) if argv else None
+    parser = build_parser(() if command is None else (command[0],))
     try:
         args = parser.parse_args(argv)
     except SystemExit as done:  # --help (0) or a usage error (2, one line on stderr)

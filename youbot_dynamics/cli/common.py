@@ -14,15 +14,16 @@ import json
 import math
 import tempfile
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Sequence
 
 import numpy as np
 
 from youbot_dynamics import default_urdf
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.model import limits
-from youbot_dynamics.model.lie import quaternion_from_matrix
-from youbot_dynamics.model.robot import Robot, load_robot
+from youbot_dynamics.model import lie, limits
+
+if TYPE_CHECKING:  # the robot loader (yourdfpy, trimesh, Pinocchio) only for commands that load one
+    from youbot_dynamics.model.robot import Robot
 
 
 class CommandError(UserInputError):
@@ -89,6 +90,8 @@ def tolerances(args: argparse.Namespace, x0) -> tuple[float | None, Any]:
 def robot_from(args: argparse.Namespace, root: str = "fixed") -> Robot:
     """The robot of --urdf, or the packaged youBot, with the given root joint (--strict:
     warnings are errors)."""
+    from youbot_dynamics.model.robot import load_robot
+
     return load_robot(args.urdf if args.urdf else default_urdf(), root=root,
                       strict=getattr(args, "strict", False))
 
@@ -127,7 +130,7 @@ def _number(text: str, flag: str) -> float:
 def pose_record(transform: np.ndarray) -> dict[str, Any]:
     """A 4x4 pose as JSON-ready data: position (m), quaternion (x, y, z, w), rotation rows."""
     return {"position": transform[:3, 3].tolist(),
-            "quaternion_xyzw": quaternion_from_matrix(transform[:3, :3]).tolist(),
+            "quaternion_xyzw": lie.quaternion_from_matrix(transform[:3, :3]).tolist(),
             "rotation": transform[:3, :3].tolist()}
 
 

@@ -15,7 +15,8 @@ from youbot_dynamics.dynamics.mobile.mecanum import base_twist, wheel_speeds, yo
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import limits
-from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, IntegrationError
+from youbot_dynamics.sim.integrators import IntegrationError
+from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.systems.unicycle import (MAX_DURATION, STATE_NAMES, Unicycle, heading_and_speeds,
                                               simulate_unicycle, unicycle_closed_form)
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -19,11 +20,10 @@ import pinocchio as pin
 from youbot_dynamics.cli.common import (CommandError, add_joint_argument, add_robot_arguments,
                                         finite_or_none, joint_vector, matrix_text, number,
                                         pose_record, print_json, robot_from, table)
-from youbot_dynamics.dynamics.friction import JointFriction
-from youbot_dynamics.dynamics.rigid_body import forward_dynamics, inverse_dynamics
 from youbot_dynamics.model.robot import ROOTS, Robot
-from youbot_dynamics.model.screws import (fkin_space, jacobian_body, jacobian_space,
-                                          screw_chain)
+
+if TYPE_CHECKING:  # imported where used: `info` needs no compiled kernels (numba)
+    from youbot_dynamics.dynamics.friction import JointFriction
 
 TWIST_ROWS = ("wx", "wy", "wz", "vx", "vy", "vz")  # ours: (omega, v)
 PINOCCHIO_ROWS = ("vx", "vy", "vz", "wx", "wy", "wz")  # Pinocchio Motion: (v, omega)
@@ -157,6 +157,8 @@ def _reference_frame(robot: Robot) -> str:
 
 def run_fk(args: argparse.Namespace) -> int:
     """Pose of --frame in the root frame (the world with a movable root) at --q (PoE)."""
+    from youbot_dynamics.model.screws import fkin_space, screw_chain
+
     robot = robot_from(args, args.root)
     link = _frame(robot, args)
     q = joint_vector(robot, args.q, "--q", of="q")
@@ -175,6 +177,8 @@ def run_fk(args: argparse.Namespace) -> int:
 
 def run_screws(args: argparse.Namespace) -> int:
     """Space screw axes and home pose of the chain to --frame."""
+    from youbot_dynamics.model.screws import screw_chain
+
     robot = robot_from(args)
     chain = screw_chain(robot, _frame(robot, args))
     if args.json:
@@ -194,6 +198,8 @@ def run_screws(args: argparse.Namespace) -> int:
 
 def run_jacobian(args: argparse.Namespace) -> int:
     """The --kind Jacobian of --frame at --q."""
+    from youbot_dynamics.model.screws import jacobian_body, jacobian_space, screw_chain
+
     robot = robot_from(args, args.root)
     link = _frame(robot, args)
     q = joint_vector(robot, args.q, "--q", of="q")
@@ -220,6 +226,8 @@ def run_jacobian(args: argparse.Namespace) -> int:
 # ---- dynamics -----------------------------------------------------------------------------
 def _dynamics_inputs(args: argparse.Namespace, flag: str) -> tuple[Robot, np.ndarray, np.ndarray,
                                                                     np.ndarray, JointFriction | None]:
+    from youbot_dynamics.dynamics.friction import JointFriction
+
     robot = robot_from(args, args.root)
     q, v = joint_vector(robot, args.q, "--q", of="q"), joint_vector(robot, args.v, "--v")
     third = joint_vector(robot, getattr(args, flag.lstrip("-")), flag)
@@ -254,6 +262,8 @@ def _print_joint_values(args: argparse.Namespace, robot: Robot, key: str, values
 
 def run_inverse_dynamics(args: argparse.Namespace) -> int:
     """tau from --q, --v, --a (RNEA plus URDF friction unless --no-friction)."""
+    from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
+
     robot, q, v, a, friction = _dynamics_inputs(args, "--a")
     with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported, see _print_joint_values
         tau = inverse_dynamics(robot, robot.model.createData(), q, v, a, friction)
@@ -263,6 +273,8 @@ def run_inverse_dynamics(args: argparse.Namespace) -> int:
 
 def run_forward_dynamics(args: argparse.Namespace) -> int:
     """a from --q, --v, --tau (ABA, URDF friction unless --no-friction)."""
+    from youbot_dynamics.dynamics.rigid_body import forward_dynamics
+
     robot, q, v, tau, friction = _dynamics_inputs(args, "--tau")
     with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported, see _print_joint_values
         a = forward_dynamics(robot, robot.model.createData(), q, v, tau, friction)

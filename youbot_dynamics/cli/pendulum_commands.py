@@ -13,8 +13,8 @@ from youbot_dynamics.cli.common import (add_sweep_arguments, add_tolerance_argum
                                         markdown_table, tolerances)
 from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget, progress_bar
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, IntegrationError,
-                                             checked_output_spacing)
+from youbot_dynamics.sim.integrators import IntegrationError, checked_output_spacing
+from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, JACOBIANS,
                                                       SEED_STATE0,
                                                       SEED_T_END, STABLE_BOUND,

@@ -1,5 +1,6 @@
 """Sub-commands `simulate` (run a scene) and `work-precision` (speed versus accuracy on a
-scene, with an optional recommendation for a target error)."""
+scene, with an optional recommendation for a target error, which ``--write-back`` pins into
+the scene file)."""
 from __future__ import annotations
 
 import argparse
@@ -12,14 +13,15 @@ from typing import Callable, Iterator
 import numpy as np
 from tqdm import tqdm
 
-from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision
+from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision, write_back
 from youbot_dynamics.io.csv_table import write_csv
 from youbot_dynamics.cli.common import (CommandError, add_sweep_arguments, add_tolerance_arguments,
                                         finite_or_none, output_file, output_folder)
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
-from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, IntegrationError, StepBudgetError,
-                                             checked_fixed_step, fixed_step_count)
-from youbot_dynamics.sim.scene import Scene, load_scene
+from youbot_dynamics.sim.integrators import (IntegrationError, StepBudgetError, checked_fixed_step,
+                                             fixed_step_count)
+from youbot_dynamics.sim.registry import INTEGRATORS, REGISTRY, STEPPERS, integrator_names
+from youbot_dynamics.sim.scene import Scene, find_scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
 
@@ -61,7 +63,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                 "or a YAML path) and print the final state by joint name, the "
                                 "integrator statistics and the energy error.")
     run.add_argument("--scene", required=True, metavar="NAME_OR_PATH")
-    run.add_argument("--integrator", help=f"override: one of {', '.join(INTEGRATORS)}")
+    run.add_argument("--integrator", help=f"override: one of {', '.join(INTEGRATORS + STEPPERS)}, or auto (a sweep "
+                     "before the run; pin it with work-precision --write-back)")
     run.add_argument("--dt", type=float, help="step size of a fixed-step integrator, s")
     add_tolerance_arguments(run)
     run.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
@@ -72,9 +75,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study = subparsers.add_parser("work-precision", help="speed versus accuracy on a scene",
                                   description="Sweep every integrator over step sizes or "
                                   "tolerances against a tight reference; write CSV, markdown "
-                                  "and PNG; with --target-error recommend the cheapest setting.")
+                                  "and PNG; with --target-error recommend the setting of least "
+                                  "counted work (rhs evaluations + Jacobians x state dimension) "
+                                  "that meets it; with --write-back pin it into the scene file.")
     study.add_argument("--scene", required=True, metavar="NAME_OR_PATH")
-    study.add_argument("--target-error", type=float, help="final joint-space error to meet, rad")
+    study.add_argument("--target-error", type=float, help="final joint-space error to meet, rad "
+                       "(default with --write-back: the scene's integrator.target_error)")
+    study.add_argument("--write-back", action="store_true",
+                       help="pin the recommended method and tolerance (or dt) into the scene file's integrator "
+                       "block (its comments and other keys kept)")
     study.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
     study.add_argument("--out", default="out/work_precision", metavar="DIR", help="output folder")
     add_sweep_arguments(study)
@@ -90,10 +99,12 @@ def scene_from(args: argparse.Namespace) -> Scene:
     override = [getattr(args, name, None) for name in ("integrator", "dt", "tol", "rtol", "atol")]
     if any(value is not None for value in override):
         method = args.integrator or scene.integrator.method
-        if args.dt is not None and method not in FIXED_STEP:
-            raise CommandError(f"--dt applies to fixed-step integrators ({', '.join(FIXED_STEP)}), "
-                               f"not {method!r}; use --tol or --rtol/--atol")
-        if method in FIXED_STEP and any(value is not None for value in (args.tol, args.rtol, args.atol)):
+        fixed = method in REGISTRY and not REGISTRY[method].adaptive
+        if args.dt is not None and not fixed:
+            fixed_names = ", ".join(integrator_names(adaptive=False))
+            raise CommandError(f"--dt applies to fixed-step integrators ({fixed_names}), not {method!r}; "
+                               "use --tol or --rtol/--atol")
+        if fixed and any(value is not None for value in (args.tol, args.rtol, args.atol)):
             raise CommandError(f"--tol/--rtol/--atol apply to adaptive integrators, not {method!r}; use --dt")
         scene = scene.with_integrator(args.integrator, dt=args.dt, rtol=args.rtol, atol=args.atol,
                                       tol=args.tol)
@@ -106,7 +117,12 @@ def run_simulate(args: argparse.Namespace) -> int:
         output_file(args.output, "--output")  # before the run, not after it
     scene = scene_from(args)
     limits = DivergenceLimits(max_steps=args.max_steps)
-    simulator = Simulator(scene, resolve_integrator(scene, progress=not args.json), limits)
+    integrator = resolve_integrator(scene, progress=not args.json)
+    if integrator is not scene.integrator:
+        print(f"integrator auto: the sweep chose {integrator.describe()} for target error "
+              f"{scene.integrator.target_error:g} rad (pin it: youbot-dynamics work-precision --scene "
+              f"{args.scene} --write-back)", file=sys.stderr)
+    simulator = Simulator(scene, integrator, limits)
     times = scene.output_times
     steps = checked_step_budget(simulator.integrator.method, simulator.integrator.dt, times,
                                 args.max_steps)
@@ -153,17 +169,38 @@ def run_work_precision(args: argparse.Namespace) -> int:
     """Sweep, write the files, print where they are and the recommendation."""
     output_folder(args.out, "--out")
     scene = scene_from(args)
+    if args.write_back:
+        if args.duration is not None:
+            raise CommandError("--write-back pins a choice for the scene as its file states it: drop --duration")
+        if args.target_error is None:
+            args.target_error = scene.integrator.target_error
+        if args.target_error is None:
+            raise CommandError("--write-back needs --target-error (rad) or integrator.target_error in the scene")
     study = work_precision(scene, args.out, target_error=args.target_error, progress=not args.json,
                            workers=args.workers, scheduler=args.scheduler)
     best = study.best
+    pinned = None
+    if args.write_back:
+        if best is None:
+            print(f"youbot-dynamics work-precision: no swept setting reaches {args.target_error:g} rad: "
+                  f"{scene.source} left unchanged", file=sys.stderr)
+            return 1
+        pinned = dataclasses.replace(best.spec, energy_tolerance=scene.integrator.energy_tolerance,
+                                     target_error=args.target_error)
+        write_back(find_scene(args.scene), pinned,
+                   f"least counted work (rhs + Jacobians x {study.reference.state_dim}) {best.work:.6g} "
+                   f"for target_error {args.target_error:g} rad")
     if args.json:
         print(json.dumps({"scene": scene.name, "reference": study.reference.spec.describe(),
                           "reference_error_estimate": study.reference.error_estimate,
                           "files": [str(f) for f in study.files],
                           "recommendation": None if best is None else best.spec.describe(),
+                          "written_back": None if pinned is None else str(find_scene(args.scene)),
                           "points": [{k: finite_or_none(v) if isinstance(v, float) else v
                                       for k, v in dataclasses.asdict(p).items()} for p in study.points]}))
         return 0
     print(study.files[1].read_text(encoding="utf-8"))
     print("written: " + ", ".join(str(f) for f in study.files))
+    if pinned is not None:
+        print(f"pinned {pinned.describe()} into {find_scene(args.scene)}")
     return 0

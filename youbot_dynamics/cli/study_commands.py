@@ -13,7 +13,8 @@ from youbot_dynamics.cli.common import (add_tolerance_arguments, cell, markdown_
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import limits
 from youbot_dynamics.sim.events import HybridSolution
-from youbot_dynamics.sim.integrators import INTEGRATORS, FIXED_STEP, IntegratorStats
+from youbot_dynamics.sim.integrators import IntegratorStats
+from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
 
 #: Tolerances without --tol/--rtol: the woodpecker's (atol = rtol/100), lagrange's (atol = rtol).
 WOODPECKER_RTOL, LAGRANGE_RTOL = 1e-6, 1e-12

@@ -24,10 +24,12 @@ Formulations (names as on the command line):
 Error test. Higher-index variables must be kept out of IDA's local error test: lambda,
 w (and mu) for index 2 and GGL, and also v for index 3 (Hairer's choice; the seed's
 Assimulo run excluded only w and lambda, but then IDA's first step, sized from
-|y0'| = |w0| ~ 1.4e4 in v's weights, collapses at t = 0). scikit-sundae 1.2 does not expose
-IDASetSuppressAlg, so :attr:`DaeForm.excluded` is realised by an absolute tolerance of
-EXCLUDED_ATOL on those components (:func:`dae_tolerances`): that takes them out of the
-Newton convergence test as well, so their values are only as good as the converged q and v
+|y0'| = |w0| ~ 1.4e4 in v's weights, collapses at t = 0). Radau IIA (sim/radau_dae.py,
+``radau5``) realises the exclusion as Hairer does, by index-dependent weights. On IDA,
+whose suppress-alg (sim/sundials.py) still fails the squeezer's index 3 at t = 0 in its
+Newton test (``squeezer --table``), :attr:`DaeForm.excluded` is realised by an absolute
+tolerance of EXCLUDED_ATOL on those components (:func:`dae_tolerances`): that takes them
+out of the Newton convergence test as well, so their values are only as good as the converged q and v
 make them (the tests measure q against the reference and lambda against index 1). For
 index 3 it also leaves the tangential velocity without error control: on the squeezer
 q's error is 1e2 to 1e4 times rtol and not monotone in it, and below rtol ~ 1e-9 IDA's

@@ -30,8 +30,6 @@ from youbot_dynamics.dynamics.collision import BroadPhase
 from youbot_dynamics.dynamics.contact_model import ContactModel
 from youbot_dynamics.dynamics.rigid_body import symmetrised
 
-SOLVERS = ("pgs", "admm")
-
 
 @dataclass(frozen=True)
 class StepperSettings:
@@ -68,8 +66,6 @@ class ConstraintStepper:
     """One :meth:`step` of the constraint-based law on ``contact``'s model."""
 
     def __init__(self, contact: ContactModel, settings: StepperSettings) -> None:
-        if settings.solver not in SOLVERS:
-            raise ValueError(f"unknown constraint solver {settings.solver!r}; known: {', '.join(SOLVERS)}")
         self.contact, self.model, self.settings = contact, contact.model, settings
         self.broad = BroadPhase([g.shape for g in contact.geometries],
                                 [(p.first, p.second) for p in contact.pairs], settings.margin)

@@ -30,13 +30,21 @@ g(v) sign(v) + sigma2 v, the Stribeck curve without regularisation.
 
 Defaults come from the URDF's ``<dynamics damping friction>``: law ``coulomb`` with
 b = damping and F_c = friction on every joint.
+
+Speed: :class:`JointFriction` evaluates every joint in one compiled loop (numba) over a table
+of per-joint parameters built once, calling the same law functions as the numpy API (they are
+``register_jitable``: plain Python from Python, inlined in compiled code), so the torque of a
+robot costs one call whatever its laws: about 1 us against 2.9 us (URDF friction) and 21 us
+(LuGre and Stribeck mixed) for the per-law numpy groups it replaced (bench/bench_dynamics.py).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping
+from typing import Any, Mapping
 
 import numpy as np
+from numba import njit
+from numba.extending import register_jitable
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
@@ -50,33 +58,39 @@ Vector = np.ndarray
 # ---------------------------------------------------------------------------------------
 # The laws: each formula once. Arguments broadcast (scalars or arrays per joint).
 # ---------------------------------------------------------------------------------------
+@register_jitable
 def viscous(v: Vector, damping: Vector) -> Vector:
     """Viscous friction b v (N m)."""
     return damping * v
 
 
+@register_jitable
 def coulomb(v: Vector, level: Vector, velocity_scale: Vector) -> Vector:
     """Regularised Coulomb friction F_c tanh(v / v_s) (N m): odd in v, |F| < F_c."""
     return level * np.tanh(v / velocity_scale)
 
 
+@register_jitable
 def stribeck_curve(v: Vector, coulomb_level: Vector, static: Vector, stribeck_velocity: Vector) -> Vector:
     """Stribeck curve g(v) = F_c + (F_s - F_c) exp(-(v / v_st)^2) (N m), even in v."""
     return coulomb_level + (static - coulomb_level) * np.exp(-np.square(v / stribeck_velocity))
 
 
+@register_jitable
 def stribeck(v: Vector, coulomb_level: Vector, static: Vector, stribeck_velocity: Vector,
              velocity_scale: Vector) -> Vector:
     """Regularised Stribeck friction g(v) tanh(v / v_s) (N m), without its viscous part."""
     return coulomb(v, stribeck_curve(v, coulomb_level, static, stribeck_velocity), velocity_scale)
 
 
+@register_jitable
 def lugre_bristle_rate(v: Vector, z: Vector, sigma0: Vector, coulomb_level: Vector, static: Vector,
                        stribeck_velocity: Vector) -> Vector:
     """LuGre bristle dynamics dz/dt = v - sigma0 |v| z / g(v) (rad/s)."""
     return v - sigma0 * np.abs(v) * z / stribeck_curve(v, coulomb_level, static, stribeck_velocity)
 
 
+@register_jitable
 def lugre(v: Vector, z: Vector, sigma0: Vector, sigma1: Vector, sigma2: Vector, coulomb_level: Vector,
           static: Vector, stribeck_velocity: Vector) -> Vector:
     """LuGre friction sigma0 z + sigma1 dz/dt + sigma2 v (N m)."""
@@ -98,28 +112,101 @@ LAW_PARAMETERS: dict[str, tuple[str, ...]] = {
 _POSITIVE = ("velocity_scale", "stribeck_velocity", "sigma0")
 
 
-#: The function of each nonlinear law and the parameters it takes after v (and z), in order.
-LAW_FUNCTIONS: dict[str, tuple[Callable[..., Vector], tuple[str, ...]]] = {
-    "coulomb": (coulomb, ("coulomb", "velocity_scale")),
-    "stribeck": (stribeck, ("coulomb", "static", "stribeck_velocity", "velocity_scale")),
-    "lugre": (lugre, ("sigma0", "sigma1", "sigma2", "coulomb", "static", "stribeck_velocity")),
+#: The parameters each nonlinear law's function takes after v (and z), in order.
+LAW_ARGUMENTS: dict[str, tuple[str, ...]] = {
+    "coulomb": ("coulomb", "velocity_scale"),
+    "stribeck": ("coulomb", "static", "stribeck_velocity", "velocity_scale"),
+    "lugre": ("sigma0", "sigma1", "sigma2", "coulomb", "static", "stribeck_velocity"),
 }
+
+
+#: Law codes in row 0 of a JointFriction's parameter table (see :func:`parameter_table`).
+LAW_CODES = {"viscous": 0, "coulomb": 1, "stribeck": 2, "lugre": 3}
+_COULOMB, _STRIBECK, _LUGRE = LAW_CODES["coulomb"], LAW_CODES["stribeck"], LAW_CODES["lugre"]
+#: The bristle states of a robot without LuGre joints.
+_NO_STATES = np.zeros(0)
+_NO_STATES.setflags(write=False)
+
+
+@register_jitable
+def _accumulate(v: Vector, z: Vector, table: np.ndarray, sign: float, out: Vector) -> None:
+    """out += sign tau_friction(v, z), one joint at a time: the viscous term b v plus the
+    joint's law (``table`` rows: law code, b, then the law's parameters in LAW_ARGUMENTS
+    order); z holds the LuGre joints' bristle states in joint order."""
+    k = 0
+    for i in range(v.shape[0]):
+        law, vi = table[0, i], v[i]
+        tau = viscous(vi, table[1, i])
+        if law == _COULOMB:
+            tau += coulomb(vi, table[2, i], table[3, i])
+        elif law == _STRIBECK:
+            tau += stribeck(vi, table[2, i], table[3, i], table[4, i], table[5, i])
+        elif law == _LUGRE:
+            tau += lugre(vi, z[k], table[2, i], table[3, i], table[4, i], table[5, i], table[6, i], table[7, i])
+            k += 1
+        out[i] += sign * tau
+
+
+# One compiled entry per sign, and without z for robots without LuGre joints: each argument
+# costs the call ~0.1 us of type dispatch.
+@njit(cache=True)
+def _add_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
+    """out += tau_friction(v, z) (see :func:`_accumulate`)."""
+    _accumulate(v, z, table, 1.0, out)
+
+
+@njit(cache=True)
+def _subtract_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
+    """out -= tau_friction(v, z) (see :func:`_accumulate`)."""
+    _accumulate(v, z, table, -1.0, out)
+
+
+@njit(cache=True)
+def _add_memoryless(v: Vector, table: np.ndarray, out: Vector) -> None:
+    """out += tau_friction(v) of a robot without LuGre joints (see :func:`_accumulate`)."""
+    _accumulate(v, _NO_STATES, table, 1.0, out)
+
+
+@njit(cache=True)
+def _subtract_memoryless(v: Vector, table: np.ndarray, out: Vector) -> None:
+    """out -= tau_friction(v) of a robot without LuGre joints (see :func:`_accumulate`)."""
+    _accumulate(v, _NO_STATES, table, -1.0, out)
+
+
+@njit(cache=True)
+def _accumulate_rows(v: np.ndarray, z: np.ndarray, table: np.ndarray, sign: float, out: np.ndarray) -> None:
+    """:func:`_accumulate` on each row of v (N, n), z (N, n_states) and out (N, n)."""
+    for row in range(v.shape[0]):
+        _accumulate(v[row], z[row], table, sign, out[row])
+
+
+@njit(cache=True)
+def _bristle_rates(v: Vector, z: Vector, table: np.ndarray, joints: np.ndarray, out: Vector) -> None:
+    """out = dz/dt of the LuGre joints ``joints`` (bristle states z, in that order)."""
+    for k in range(joints.shape[0]):
+        i = joints[k]
+        out[k] = lugre_bristle_rate(v[i], z[k], table[2, i], table[5, i], table[6, i], table[7, i])
+
+
+def parameter_table(laws: tuple[str, ...], per_joint: list[Mapping[str, Any]]) -> np.ndarray:
+    """The (8, n) table of per-joint friction parameters the compiled loop reads: row 0 the
+    law code (LAW_CODES), row 1 the viscous coefficient b (zero for LuGre, whose sigma2 is its
+    own), rows 2.. the law's parameters in LAW_ARGUMENTS order (unused rows zero)."""
+    table = np.zeros((8, len(laws)))
+    for i, (law, entry) in enumerate(zip(laws, per_joint)):
+        keys = LAW_ARGUMENTS.get(law, ())
+        table[:2 + len(keys), i] = (LAW_CODES[law], entry.get("damping", 0.0), *(entry[key] for key in keys))
+    return _frozen(table)
 
 
 @dataclass(frozen=True)
 class LawGroup:
-    """The joints that use one nonlinear law and its parameters as arrays over those joints.
-
-    ``joints`` holds indices into the joint-coordinate vector, or is None when the group is
-    every joint in order (no indexing needed). ``arguments`` are the parameter arrays in the
-    order ``function`` takes them.
-    """
+    """The joints that use one law (indices into the joint-coordinate vector, in order) and
+    its parameters as arrays over those joints, by key."""
 
     law: str
-    function: Callable[..., Vector]
-    joints: np.ndarray | None
+    joints: np.ndarray
     parameters: Mapping[str, np.ndarray]
-    arguments: tuple[np.ndarray, ...]
 
 
 @dataclass(frozen=True)
@@ -130,14 +217,16 @@ class JointFriction:
     ``state_derivative(v, z)`` is dz/dt of the extra states z: one LuGre bristle deflection
     per LuGre joint, in joint order, named ``state_names``. Without LuGre joints there are
     no extra states and z may be None. ``damping`` (N m s/rad) is the viscous coefficient of
-    every joint (zero on LuGre joints); ``memoryless`` the Coulomb and Stribeck groups.
+    every joint (zero on LuGre joints); ``lugre`` the LuGre joints (None without any);
+    ``table`` every joint's parameters as the compiled loop reads them (:func:`parameter_table`).
+    v may be one velocity vector (n,) or a batch (N, n), z then (N, n_states).
     """
 
     joint_names: tuple[str, ...]
     laws: tuple[str, ...]
     damping: np.ndarray
-    memoryless: tuple[LawGroup, ...]
     lugre: LawGroup | None
+    table: np.ndarray
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -174,32 +263,47 @@ class JointFriction:
             per_joint[robot.joint_index(name)] = _checked_entry(entry, f"{where}: joint '{name}'",
                                                                 velocity_scale)
         laws = tuple(entry["law"] for entry in per_joint)
-        groups = {law: _group(law, laws, per_joint) for law in LAW_FUNCTIONS if law in laws}
         damping = _frozen(np.array([entry.get("damping", 0.0) for entry in per_joint]))
         return cls(joint_names=robot.joint_names, laws=laws, damping=damping,
-                   memoryless=tuple(g for law, g in groups.items() if law != "lugre"),
-                   lugre=groups.get("lugre"))
+                   lugre=_group("lugre", laws, per_joint) if "lugre" in laws else None, table=parameter_table(laws, per_joint))
 
     def torque(self, v: Vector, z: Vector | None = None) -> Vector:
         """tau_friction (N m or N) at joint velocities v, bristle states z (LuGre joints)."""
-        tau = viscous(v, self.damping)
-        for group in self.memoryless:
-            if group.joints is None:
-                tau += group.function(v, *group.arguments)
+        v = np.asarray(v, dtype=float)
+        out = np.zeros(v.shape)
+        self.add_torque(out, v, z)
+        return out
+
+    def add_torque(self, out: Vector, v: Vector, z: Vector | None = None, sign: float = 1.0) -> None:
+        """out += sign tau_friction(v, z), in place (out a float array shaped as v), sign
+        +1 or -1: -1 gives the torque left to accelerate the joints, tau - tau_friction."""
+        if type(v) is np.ndarray and v.shape == out.shape == self.damping.shape:
+            if self.lugre is None and (z is None or len(z) == 0):
+                (_add_memoryless if sign > 0.0 else _subtract_memoryless)(v, self.table, out)
             else:
-                tau[group.joints] += group.function(v[group.joints], *group.arguments)
-        if self.lugre is not None:
-            joints = self.lugre.joints
-            tau[joints] += lugre(v[joints], self._bristles(z), *self.lugre.arguments)
-        return tau
+                (_add_torque if sign > 0.0 else _subtract_torque)(v, self._bristles(z), self.table, out)
+            return
+        v = np.asarray(v, dtype=float)
+        if v.shape[-1:] != self.damping.shape or out.shape != v.shape or v.ndim > 2:
+            raise ValueError(f"friction: velocities of shape (n,) or (N, n) with n = {self.damping.size} "
+                             f"joints ({', '.join(self.joint_names)}) and an output of their shape; "
+                             f"got v {v.shape}, out {out.shape}")
+        z = self._bristles(z, v.shape[:-1])
+        if v.ndim == 1:
+            (_add_torque if sign > 0.0 else _subtract_torque)(v, z, self.table, out)
+        else:
+            _accumulate_rows(v, z, self.table, 1.0 if sign > 0.0 else -1.0, out)
 
     def state_derivative(self, v: Vector, z: Vector | None = None) -> Vector:
         """dz/dt of the LuGre bristle states (rad/s or m/s), ordered as ``state_names``."""
         if self.lugre is None:
             return np.zeros(0)
-        p = self.lugre.parameters
-        return lugre_bristle_rate(v[self.lugre.joints], self._bristles(z), p["sigma0"], p["coulomb"],
-                                  p["static"], p["stribeck_velocity"])
+        v = np.asarray(v, dtype=float)
+        if v.shape != self.damping.shape:
+            raise ValueError(f"friction: {self.damping.size} joint velocities expected, got shape {v.shape}")
+        out = np.empty(self.n_states)
+        _bristle_rates(v, self._bristles(z), self.table, self.lugre.joints, out)
+        return out
 
     def steady_state_bristles(self, v: Vector) -> Vector:
         """Bristle states with dz/dt = 0 at joint velocities v: g(v) sign(v) / sigma0."""
@@ -208,20 +312,24 @@ class JointFriction:
         p, vj = self.lugre.parameters, v[self.lugre.joints]
         return np.sign(vj) * stribeck_curve(vj, p["coulomb"], p["static"], p["stribeck_velocity"]) / p["sigma0"]
 
-    def _bristles(self, z: Vector | None) -> Vector:
-        if z is None or np.shape(z) != (self.n_states,):
+    def _bristles(self, z: Vector | None, batch: tuple[int, ...] = ()) -> Vector:
+        """z checked: n_states bristle states per velocity vector of the batch shape ``batch``."""
+        if not batch and type(z) is np.ndarray and self.lugre is not None and z.shape == self.lugre.joints.shape:
+            return z
+        if self.lugre is None and z is None:
+            return _NO_STATES if not batch else np.zeros((*batch, 0))
+        shape = (*batch, self.n_states)
+        if z is None or np.shape(z) != shape:
             raise UserInputError(f"friction: expected {self.n_states} LuGre bristle states "
-                                 f"({', '.join(self.state_names)}), got {None if z is None else np.shape(z)}")
-        return z
+                                 f"({', '.join(self.state_names)}) per velocity vector, shape {shape}, "
+                                 f"got {None if z is None else np.shape(z)}")
+        return np.asarray(z, dtype=float)
 
 
 def _group(law: str, laws: tuple[str, ...], per_joint: list[dict[str, Any]]) -> LawGroup:
     joints = np.array([i for i, name in enumerate(laws) if name == law], dtype=int)
-    function, keys = LAW_FUNCTIONS[law]
-    parameters = {key: _frozen(np.array([per_joint[i][key] for i in joints], dtype=float)) for key in keys}
-    everywhere = joints.size == len(laws) and law != "lugre"  # sorted indices: all joints in order
-    return LawGroup(law, function, None if everywhere else _frozen(joints), parameters,
-                    tuple(parameters[key] for key in keys))
+    return LawGroup(law, _frozen(joints), {key: _frozen(np.array([per_joint[i][key] for i in joints], dtype=float))
+                                           for key in LAW_ARGUMENTS[law]})
 
 
 def _checked_entry(entry: Mapping[str, Any], where: str, velocity_scale: float) -> dict[str, Any]:

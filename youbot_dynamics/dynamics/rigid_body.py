@@ -25,6 +25,12 @@ A wrong size is a UserInputError naming nq or nv.
 
 ``data`` is a Pinocchio Data of ``robot.model`` (``robot.model.createData()``), the caller's
 scratch space; each call overwrites it. Returned arrays are fresh (not views of ``data``).
+
+Batches: :func:`inverse_dynamics_batch` and :func:`forward_dynamics_batch` take N samples as
+rows (q (N, nq), v, a, tau (N, nv), z (N, n_states)) and run Pinocchio's C++ loops
+(``rneaInParallel`` / ``abaInParallel``) plus the friction of all rows in one compiled call:
+no Python per sample. ``pool`` is their scratch space (``pin.ModelPool(robot.model, threads)``,
+about 60 us to build: pass one to reuse it), ``threads`` the C++ threads (OpenMP) to use.
 """
 from __future__ import annotations
 
@@ -32,6 +38,7 @@ import numpy as np
 import pinocchio as pin
 
 from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import sized
 from youbot_dynamics.model.robot import Robot
 
@@ -45,7 +52,10 @@ def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vect
     try:
         tau = pin.rnea(robot.model, data, q, v, a)
         if friction is not None:
-            tau[robot.root_nv:] += friction.torque(v[robot.root_nv:], z)
+            if robot.root == "fixed":
+                friction.add_torque(tau, v, z)
+            else:
+                friction.add_torque(tau[robot.root_nv:], v[robot.root_nv:], z)
     except (ValueError, TypeError):
         _check_sizes(robot, q, v=v, a=a)
         raise
@@ -61,17 +71,79 @@ def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Ve
     joints) when the robot's mass matrix is singular, instead of returning inf or NaN. With
     mimic joints, a = M(q)^-1 (tau - C(q, v) v - g(q)): Pinocchio 4.1's aba refuses them.
     """
-    robot.require_regular_mass_matrix()
+    if robot.mass_matrix_defect:
+        robot.require_regular_mass_matrix()
     try:
         if friction is not None:
-            tau = np.array(tau, dtype=float)
-            tau[robot.root_nv:] -= friction.torque(v[robot.root_nv:], z)
+            tau = tau.astype(float) if type(tau) is np.ndarray else np.array(tau, dtype=float)  # a copy
+            if robot.root == "fixed":
+                friction.add_torque(tau, v, z, -1.0)
+            else:
+                friction.add_torque(tau[robot.root_nv:], v[robot.root_nv:], z, -1.0)
         if robot.mimic:
             return np.linalg.solve(mass_matrix(robot, data, q), tau - bias_torque(robot, data, q, v))
         return pin.aba(robot.model, data, q, v, tau)
     except (ValueError, TypeError):
         _check_sizes(robot, q, v=v, tau=tau)
         raise
+
+
+def inverse_dynamics_batch(robot: Robot, q: np.ndarray, v: np.ndarray, a: np.ndarray,
+                           friction: JointFriction | None = None, z: np.ndarray | None = None, *,
+                           pool: pin.ModelPool | None = None, threads: int = 1) -> np.ndarray:
+    """:func:`inverse_dynamics` of every row: tau (N, nv; N m, N) for q (N, nq), v and a
+    (N, nv; rad/s, rad/s^2), z (N, n_states) with LuGre joints."""
+    q, v, a = _batch(robot, q, "q", "nq"), _batch(robot, v, "v", "nv"), _batch(robot, a, "a", "nv")
+    _same_rows(q, v=v, a=a)
+    pool = pin.ModelPool(robot.model, threads) if pool is None else pool
+    tau = np.empty(v.shape)
+    if len(tau):
+        pin.rneaInParallel(threads, pool, q.T, v.T, a.T, tau.T)
+    if friction is not None:
+        root = robot.root_nv
+        friction.add_torque(tau[:, root:], v[:, root:], z)
+    return tau
+
+
+def forward_dynamics_batch(robot: Robot, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+                           friction: JointFriction | None = None, z: np.ndarray | None = None, *,
+                           pool: pin.ModelPool | None = None, threads: int = 1) -> np.ndarray:
+    """:func:`forward_dynamics` of every row: a (N, nv; rad/s^2, m/s^2) for q (N, nq), v and
+    tau (N, nv; rad/s, N m), z (N, n_states) with LuGre joints. With mimic joints (which
+    abaInParallel refuses) it is the per-sample function row by row."""
+    q, v, tau = _batch(robot, q, "q", "nq"), _batch(robot, v, "v", "nv"), _batch(robot, tau, "tau", "nv")
+    _same_rows(q, v=v, tau=tau)
+    robot.require_regular_mass_matrix()
+    if robot.mimic:
+        data = robot.model.createData()
+        return np.array([forward_dynamics(robot, data, q[k], v[k], tau[k], friction, None if z is None else z[k])
+                         for k in range(len(q))]).reshape(v.shape)
+    tau = tau.copy()
+    if friction is not None:
+        root = robot.root_nv
+        friction.add_torque(tau[:, root:], v[:, root:], z, -1.0)
+    pool = pin.ModelPool(robot.model, threads) if pool is None else pool
+    a = np.empty(v.shape)
+    if len(a):
+        pin.abaInParallel(threads, pool, q.T, v.T, tau.T, a.T)
+    return a
+
+
+def _batch(robot: Robot, x: np.ndarray, name: str, size: str) -> np.ndarray:
+    """x as a C-ordered float array of rows of ``size`` (nq or nv) values, or a UserInputError
+    naming it."""
+    x = np.ascontiguousarray(x, dtype=float)
+    n = getattr(robot, size)
+    if x.ndim != 2 or x.shape[1] != n:
+        raise UserInputError(f"{name}: a batch needs shape (N, {size} = {n}) (one sample per row); "
+                             f"got {x.shape}")
+    return x
+
+
+def _same_rows(q: np.ndarray, **others: np.ndarray) -> None:
+    for name, x in others.items():
+        if len(x) != len(q):
+            raise UserInputError(f"{name}: {len(x)} samples (rows) against {len(q)} in q")
 
 
 def _check_sizes(robot: Robot, q: Vector, **velocity_sized: Vector) -> None:

@@ -24,22 +24,24 @@ the columns ``chain.columns``. With the root's body twist V_r = P v_root (P pick
 (omega, v) out of v_root): V_s = [Ad_{T_root}] (V_r + J_s,chain dq) and
 V_b = [Ad_{T_chain^-1}] V_r + J_b,chain dq.
 
-Speed: a call costs a fixed number of numpy calls plus one 4x4 product per joint, which is
-what matters for one configuration (each numpy call costs ~0.3 us, the arithmetic far less).
-exp([S_i] theta) = I + theta A1 + sin(theta) A2 + (1 - cos(theta)) A3 with constant matrices
-A_k per joint (Rodrigues for a unit screw axis, Prop. 3.25 of the book), so the exponentials
-of all joints are one product of (theta, sin theta, cos theta) with a precomputed
-block-diagonal matrix (M folded into the last space / first body exponential); the pose then
-costs n - 1 4x4 products. The Jacobian columns [Ad_{T_i}] S_i = (R_i omega_i,
-p_i x R_i omega_i + R_i v_i) come from the running products T_i = (R_i, p_i) of the same
-pass, for all joints at once.
+Speed: what depends only on the chain is built once in the ScrewChain: per joint the constant
+4x4 matrices A_k of exp([S_i] theta) = A0 + theta A1 + sin(theta) A2 + (1 - cos(theta)) A3
+(Rodrigues for a unit screw axis, Prop. 3.25 of the book; M folded into the last space / first
+body exponential) and the map q -> theta. Forward kinematics and the Jacobians are then one
+compiled loop (numba) over the joints: per joint one exponential, one 3x4 product of the
+running transform T_i = (R_i, p_i) and, for the Jacobians, the column
+[Ad_{T_i}] S_i = (R_i omega_i, p_i x R_i omega_i + R_i v_i). A batch (..., nq) is the same
+loop over its rows, so the cost grows linearly with the number of joints and of
+configurations.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.lie import adjoint, inverse_transform, matrix_from_quaternion, skew
@@ -54,19 +56,6 @@ class MimicCoupling(NamedTuple):
     names: tuple[str, ...]
     index: np.ndarray
     multiplier: np.ndarray
-    offset: np.ndarray
-    matrix: np.ndarray
-
-
-class ExponentialMap(NamedTuple):
-    """exp([X_i] theta_i) for all joints of a chain as one affine map of the coefficients
-    c = (theta_1..theta_n, sin theta_1..sin theta_n, cos theta_1..cos theta_n) (rad or m).
-
-    ``offset + c.dot(matrix).reshape(..., n, 4, 4)`` is the stack of the n 4x4 exponentials;
-    ``offset`` is (n, 4, 4), ``matrix`` (3 n, 16 n) is block diagonal: joint i's coefficients
-    only reach its own 16 entries (row-major).
-    """
-
     offset: np.ndarray
     matrix: np.ndarray
 
@@ -92,12 +81,14 @@ class ScrewChain:
     coupling: MimicCoupling | None = None
     root: str = "fixed"
     B: np.ndarray = field(init=False)
-    _space_pose: ExponentialMap = field(init=False, repr=False)
-    _body_pose: ExponentialMap = field(init=False, repr=False)
-    _space_factors: ExponentialMap = field(init=False, repr=False)
-    _body_factors: ExponentialMap = field(init=False, repr=False)
+    _space_pose: np.ndarray = field(init=False, repr=False)
+    _body_pose: np.ndarray = field(init=False, repr=False)
+    _space_factors: np.ndarray = field(init=False, repr=False)
+    _body_factors: np.ndarray = field(init=False, repr=False)
     _space_axes: np.ndarray = field(init=False, repr=False)
     _body_axes: np.ndarray = field(init=False, repr=False)
+    _angles: np.ndarray = field(init=False, repr=False)
+    _reversed_angles: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         body = adjoint(inverse_transform(self.M)) @ self.S
@@ -109,18 +100,15 @@ class ScrewChain:
             space_pose_terms[-1] = space_terms[-1] @ self.M
             body_pose_terms[0] = self.M @ body_terms[0]
         # J_b is J_s's formula applied to the factors exp([-B_i] q_i) from the tip down (see
-        # jacobian_body), so the body factors and axes are in reverse joint order.
+        # jacobian_body), so the body factors, axes and angles are in reverse joint order.
         reversed_body = body[:, ::-1]
-        derived = {"B": body,
-                   "_space_pose": exponential_map(space_pose_terms),
-                   "_body_pose": exponential_map(body_pose_terms),
-                   "_space_factors": exponential_map(space_terms),
-                   "_body_factors": exponential_map(exponential_terms(-reversed_body)),
-                   "_space_axes": _axis_pairs(self.S),
-                   "_body_axes": _axis_pairs(reversed_body)}
+        angles = angle_map(self.joints, self.coupling)
+        derived = {"B": body, "_space_pose": space_pose_terms, "_body_pose": body_pose_terms,
+                   "_space_factors": space_terms, "_body_factors": exponential_terms(-reversed_body),
+                   "_space_axes": np.ascontiguousarray(self.S), "_body_axes": np.ascontiguousarray(reversed_body),
+                   "_angles": angles, "_reversed_angles": np.ascontiguousarray(angles[:, ::-1])}
         for name, value in derived.items():
-            for array in value if isinstance(value, ExponentialMap) else (value,):
-                array.setflags(write=False)
+            value.setflags(write=False)
             object.__setattr__(self, name, value)
         for array in (self.joints, self.S, self.M):
             array.setflags(write=False)
@@ -195,6 +183,15 @@ def mimic_coupling(robot: Robot, names: tuple[str, ...]) -> tuple[tuple[str, ...
     return columns, coupling
 
 
+def angle_map(joints: np.ndarray, coupling: MimicCoupling | None) -> np.ndarray:
+    """The (3, n) table theta_i = multiplier_i q[index_i] + offset_i of a chain's screw axes
+    (rows: index into q as a float, multiplier, offset): ``joints`` with multiplier 1 and
+    offset 0 without mimic joints (exactly theta = q[joints])."""
+    if coupling is None:
+        return np.array([joints, np.ones(len(joints)), np.zeros(len(joints))], dtype=float).reshape(3, -1)
+    return np.array([coupling.index, coupling.multiplier, coupling.offset], dtype=float)
+
+
 def exponential_terms(axes: np.ndarray) -> np.ndarray:
     """Constant 4x4 matrices (A0, A1, A2, A3) per unit screw axis (columns (omega, v) of
     ``axes``), shape (n, 4, 4, 4), such that
@@ -216,46 +213,78 @@ def exponential_terms(axes: np.ndarray) -> np.ndarray:
     return terms
 
 
-def exponential_map(terms: np.ndarray) -> ExponentialMap:
-    """The :class:`ExponentialMap` of per-joint terms (A0, A1, A2, A3) (shape (n, 4, 4, 4), from
-    :func:`exponential_terms`, possibly with constant transforms folded in):
-    (1 - cos) A3 = A3 - cos A3, so the offset is A0 + A3 and cos theta multiplies -A3."""
-    n = terms.shape[0]
-    flat = terms.reshape(n, 4, 16)
-    matrix = np.zeros((3, n, n, 16))
-    for i in range(n):
-        matrix[:, i, i] = flat[i, 1], flat[i, 2], -flat[i, 3]
-    return ExponentialMap(terms[:, 0] + terms[:, 3], matrix.reshape(3 * n, n * 16))
+@njit(cache=True)
+def _multiply_exponential(transform: np.ndarray, terms: np.ndarray, theta: float, out: np.ndarray) -> None:
+    """out = transform exp([X] theta) for rigid 4x4 transforms (last rows (0, 0, 0, 1)), the
+    exponential from its terms (A0, A1, A2, A3) (4, 4, 4): A0 + theta A1 + sin A2 + (1 - cos) A3."""
+    s, c = np.sin(theta), 1.0 - np.cos(theta)
+    for r in range(3):
+        for col in range(4):
+            total = transform[r, 3] if col == 3 else 0.0
+            for k in range(3):
+                factor = terms[0, k, col] + theta * terms[1, k, col] + s * terms[2, k, col] + c * terms[3, k, col]
+                total += transform[r, k] * factor
+            out[r, col] = total
+    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
-def _axis_pairs(axes: np.ndarray) -> np.ndarray:
-    """The columns (omega_i, v_i) of ``axes`` as 3x2 matrices [omega_i v_i], shape (n, 3, 2)."""
-    return np.ascontiguousarray(axes.reshape(2, 3, -1).transpose(2, 1, 0))
+@njit(cache=True)
+def _product_of_exponentials(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, out: np.ndarray) -> None:
+    """out = exp([X_1] theta_1) ... exp([X_n] theta_n) (4, 4), theta from q (nq) by the
+    angle map ``angles`` (3, n), the exponentials' terms (n, 4, 4, 4); n >= 1."""
+    running, scratch = np.eye(4), np.empty((4, 4))
+    for i in range(terms.shape[0]):
+        theta = angles[1, i] * q[int(angles[0, i])] + angles[2, i]
+        _multiply_exponential(running, terms[i], theta, scratch)
+        running, scratch = scratch, running
+    out[:, :] = running
 
 
-# (a x b)_k = sum over i, j of CROSS[3 i + j, k] a_i b_j (the Levi-Civita symbol).
-_CROSS = np.zeros((9, 3))
-_CROSS[[5, 6, 1], [0, 1, 2]] = 1.0
-_CROSS[[7, 2, 3], [0, 1, 2]] = -1.0
-_CROSS.setflags(write=False)
+@njit(cache=True)
+def _adjoint_columns(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, axes: np.ndarray,
+                     out: np.ndarray) -> None:
+    """out[:, i] = [Ad_{T_i}] X_i = (R_i omega_i, p_i x R_i omega_i + R_i v_i) (6, n) for
+    T_i = F_1 ... F_{i-1} = (R_i, p_i), the factors F_j = exp([X_j] theta_j) from their terms
+    (n, 4, 4, 4), the axes X_j = (omega_j, v_j) the columns of ``axes`` (6, n)."""
+    running, scratch = np.eye(4), np.empty((4, 4))
+    for i in range(terms.shape[0]):
+        for r in range(3):
+            omega = running[r, 0] * axes[0, i] + running[r, 1] * axes[1, i] + running[r, 2] * axes[2, i]
+            out[r, i] = omega
+            out[r + 3, i] = running[r, 0] * axes[3, i] + running[r, 1] * axes[4, i] + running[r, 2] * axes[5, i]
+        w0, w1, w2 = out[0, i], out[1, i], out[2, i]
+        p0, p1, p2 = running[0, 3], running[1, 3], running[2, 3]
+        out[3, i] += p1 * w2 - p2 * w1
+        out[4, i] += p2 * w0 - p0 * w2
+        out[5, i] += p0 * w1 - p1 * w0
+        if i + 1 < terms.shape[0]:
+            theta = angles[1, i] * q[int(angles[0, i])] + angles[2, i]
+            _multiply_exponential(running, terms[i], theta, scratch)
+            running, scratch = scratch, running
 
 
-def _exponentials(exponential: ExponentialMap, theta: np.ndarray) -> np.ndarray:
-    """exp([X_i] theta_i) (with the folded constants) at theta (..., n): shape (..., n, 4, 4)."""
-    coefficients = np.concatenate((theta, np.sin(theta), np.cos(theta)), axis=-1)
-    return coefficients.dot(exponential.matrix).reshape(theta.shape + (4, 4)) + exponential.offset
+@njit(cache=True)
+def _product_of_exponentials_rows(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, out: np.ndarray) -> None:
+    """:func:`_product_of_exponentials` of each row of q (N, nq) into out (N, 4, 4)."""
+    for row in range(q.shape[0]):
+        _product_of_exponentials(q[row], angles, terms, out[row])
 
 
-def _joint_values(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
-    """The screw axes' angles theta (..., n) (rad or m) from the robot's joint vector(s)."""
+@njit(cache=True)
+def _adjoint_columns_rows(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, axes: np.ndarray,
+                          out: np.ndarray) -> None:
+    """:func:`_adjoint_columns` of each row of q (N, nq) into out (N, 6, n)."""
+    for row in range(q.shape[0]):
+        _adjoint_columns(q[row], angles, terms, axes, out[row])
+
+
+def _configurations(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
+    """q as a float array of the robot's configuration(s) (..., nq), or a UserInputError."""
     q = np.asarray(q, dtype=float)
     if q.ndim == 0 or q.shape[-1] != chain.nq:
         raise UserInputError(f"chain to '{chain.link}' needs the robot's configuration q of "
                              f"nq = {chain.nq} values ({chain.root} root); got shape {q.shape}")
-    if chain.coupling is None:
-        return q.take(chain.joints, axis=-1)
-    coupling = chain.coupling
-    return q.take(coupling.index, axis=-1) * coupling.multiplier + coupling.offset
+    return q
 
 
 def _joint_columns(chain: ScrewChain, columns: np.ndarray) -> np.ndarray:
@@ -278,8 +307,7 @@ def root_pose(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     q of shape (..., nq). Floating: translation q[0:3], rotation of the quaternion q[3:7]
     (x, y, z, w); planar: translation (q[0], q[1], 0), rotation about z with cos q[2] and
     sin q[3]; fixed: the identity."""
-    q = np.asarray(q, dtype=float)
-    _joint_values(chain, q)  # size check
+    q = _configurations(chain, q)
     pose = np.broadcast_to(np.eye(4), (*q.shape[:-1], 4, 4)).copy()
     if chain.root == "floating":
         pose[..., :3, 3] = q[..., :3]
@@ -299,19 +327,33 @@ def _adjoint_apply(rotation: np.ndarray, position: np.ndarray, twists: np.ndarra
     return np.concatenate((omega, linear), axis=-2)
 
 
-def _running_products(factors: np.ndarray) -> list[np.ndarray]:
-    """[F_1, F_1 F_2, ..., F_1 ... F_n] for factors F_i = factors[..., i - 1, :, :] (n >= 1)."""
-    # One configuration: ndarray.dot, the 4x4 product with the least call overhead.
-    multiply = np.ndarray.dot if factors.ndim == 3 else np.matmul
-    products = [factors[..., 0, :, :]]
-    for i in range(1, factors.shape[-3]):
-        products.append(multiply(products[-1], factors[..., i, :, :]))
-    return products
+def _products(chain: ScrewChain, q: np.ndarray, terms: np.ndarray) -> np.ndarray:
+    """exp([X_1] theta_1) ... exp([X_n] theta_n) (..., 4, 4) at q (..., nq), the factors' terms
+    ``terms`` (the space or body pose terms, constants folded in); M without moving joints."""
+    if not chain.n:
+        return np.broadcast_to(chain.M, (*q.shape[:-1], 4, 4)).copy()
+    if q.ndim == 1:
+        out = np.empty((4, 4))
+        _product_of_exponentials(q, chain._angles, terms, out)
+        return out
+    rows = np.ascontiguousarray(q.reshape(math.prod(q.shape[:-1]), chain.nq))
+    out = np.empty((len(rows), 4, 4))
+    _product_of_exponentials_rows(rows, chain._angles, terms, out)
+    return out.reshape(*q.shape[:-1], 4, 4)
 
 
-def _home(chain: ScrewChain, theta: np.ndarray) -> np.ndarray:
-    """M for every configuration of a batch: the pose of a chain without moving joints."""
-    return np.broadcast_to(chain.M, (*theta.shape[:-1], 4, 4)).copy()
+def _columns(chain: ScrewChain, q: np.ndarray, angles: np.ndarray, terms: np.ndarray,
+             axes: np.ndarray) -> np.ndarray:
+    """[Ad_{F_1 ... F_{i-1}}] X_i (..., 6, n) at q (..., nq) for the factors' terms and axes
+    of the space Jacobian or (reversed) of the body one (see :func:`_adjoint_columns`)."""
+    if q.ndim == 1:
+        out = np.empty((6, chain.n))
+        _adjoint_columns(q, angles, terms, axes, out)
+        return out
+    rows = np.ascontiguousarray(q.reshape(math.prod(q.shape[:-1]), chain.nq))
+    out = np.empty((len(rows), 6, chain.n))
+    _adjoint_columns_rows(rows, angles, terms, axes, out)
+    return out.reshape(*q.shape[:-1], 6, chain.n)
 
 
 def _with_root(chain: ScrewChain, q: np.ndarray, pose: np.ndarray) -> np.ndarray:
@@ -319,42 +361,18 @@ def _with_root(chain: ScrewChain, q: np.ndarray, pose: np.ndarray) -> np.ndarray
     return pose if chain.root == "fixed" else np.matmul(root_pose(chain, q), pose)
 
 
-def _chain_pose(chain: ScrewChain, theta: np.ndarray) -> np.ndarray:
-    """exp([S_1] theta_1) ... exp([S_n] theta_n) M: the end link in the root link's frame."""
-    if not chain.n:
-        return _home(chain, theta)
-    return _running_products(_exponentials(chain._space_pose, theta))[-1]
-
-
 def fkin_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     """T_sb(q) = T_root(q) exp([S_1] q_1) ... exp([S_n] q_n) M, the pose of the chain's end
     link in the world (the root link's frame for a fixed root) (4x4, m) (FKinSpace).
     q: robot configuration(s), shape (nq,) or (..., nq)."""
-    return _with_root(chain, q, _chain_pose(chain, _joint_values(chain, q)))
+    q = _configurations(chain, q)
+    return _with_root(chain, q, _products(chain, q, chain._space_pose))
 
 
 def fkin_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     """T_sb(q) = T_root(q) M exp([B_1] q_1) ... exp([B_n] q_n) (4x4, m) (FKinBody)."""
-    theta = _joint_values(chain, q)
-    if not chain.n:
-        return _with_root(chain, q, _home(chain, theta))
-    return _with_root(chain, q, _running_products(_exponentials(chain._body_pose, theta))[-1])
-
-
-def _adjoint_columns(factors: np.ndarray, axes: np.ndarray) -> np.ndarray:
-    """[Ad_{T_i}] X_i = (R_i omega_i, p_i x R_i omega_i + R_i v_i) for T_i = F_1 ... F_i =
-    (R_i, p_i), shape (..., 6, n), from factors F_i = exp([X_i] theta_i) (..., n, 4, 4) and
-    axes [omega_i v_i] (n, 3, 2). F_i leaves X_i unchanged ([Ad_{exp([X] theta)}] X = X), so
-    this is [Ad_{F_1 ... F_{i-1}}] X_i; n = 0 gives shape (..., 6, 0)."""
-    n = axes.shape[0]
-    if not n:
-        return np.zeros((*factors.shape[:-3], 6, 0))
-    transforms = np.array(_running_products(factors))  # joint axis first: (n, ..., 4, 4)
-    moved = np.matmul(transforms[..., :3, :3], axes.reshape(n, *(1,) * (factors.ndim - 3), 3, 2))
-    omega, position = moved[..., 0], transforms[..., :3, 3]
-    outer = (position[..., :, None] * omega[..., None, :]).reshape(*omega.shape[:-1], 9)
-    columns = np.concatenate((omega, outer.dot(_CROSS) + moved[..., 1]), axis=-1)
-    return columns.transpose(*range(1, columns.ndim), 0)
+    q = _configurations(chain, q)
+    return _with_root(chain, q, _products(chain, q, chain._body_pose))
 
 
 def jacobian_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
@@ -363,13 +381,13 @@ def jacobian_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     root) (JacobianSpace); columns ``chain.columns`` of v. Chain column i is
     [Ad_{exp([S_1] q_1) ... exp([S_{i-1}] q_{i-1})}] S_i; with a movable root every column
     is carried by [Ad_{T_root}] and the root's columns P come first."""
-    theta = _joint_values(chain, q)
-    chain_columns = _joint_columns(chain, _adjoint_columns(_exponentials(chain._space_factors, theta),
-                                                           chain._space_axes))
+    q = _configurations(chain, q)
+    chain_columns = _joint_columns(chain, _columns(chain, q, chain._angles, chain._space_factors,
+                                                   chain._space_axes))
     if chain.root == "fixed":
         return chain_columns
     root = root_pose(chain, q)
-    twists = np.broadcast_to(ROOT_TWISTS[chain.root], (*theta.shape[:-1], *ROOT_TWISTS[chain.root].shape))
+    twists = np.broadcast_to(ROOT_TWISTS[chain.root], (*q.shape[:-1], *ROOT_TWISTS[chain.root].shape))
     return _adjoint_apply(root[..., :3, :3], root[..., :3, 3],
                           np.concatenate((twists, chain_columns), axis=-1))
 
@@ -381,13 +399,13 @@ def jacobian_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     for the factors exp([-B_j] q_j) from j = n down, columns reversed. With a movable root
     the root's columns [Ad_{T_chain^-1}] P come first (T_chain the end link's pose in the
     root link's frame)."""
-    theta = _joint_values(chain, q)
-    chain_columns = _joint_columns(chain, _adjoint_columns(_exponentials(chain._body_factors, theta[..., ::-1]),
-                                                           chain._body_axes)[..., ::-1])
+    q = _configurations(chain, q)
+    reversed_columns = _columns(chain, q, chain._reversed_angles, chain._body_factors, chain._body_axes)
+    chain_columns = _joint_columns(chain, reversed_columns[..., ::-1])
     if chain.root == "fixed":
         return chain_columns
-    pose = _chain_pose(chain, theta)
+    pose = _products(chain, q, chain._space_pose)
     rotation_t = pose[..., :3, :3].swapaxes(-1, -2)
     position = -(rotation_t @ pose[..., :3, 3:])[..., 0]
-    twists = np.broadcast_to(ROOT_TWISTS[chain.root], (*theta.shape[:-1], *ROOT_TWISTS[chain.root].shape))
+    twists = np.broadcast_to(ROOT_TWISTS[chain.root], (*q.shape[:-1], *ROOT_TWISTS[chain.root].shape))
     return np.concatenate((_adjoint_apply(rotation_t, position, twists), chain_columns), axis=-1)

@@ -55,7 +55,6 @@ from pathlib import Path
 
 import numpy as np
 
-from youbot_dynamics.analysis.work_precision import resolve_integrator
 from youbot_dynamics.dynamics.collision import Geometry
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.io import messages
@@ -73,7 +72,6 @@ from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, A
                                          implausible_joints)
 from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
 from youbot_dynamics.sim.scene import Scene
-from youbot_dynamics.sim.model import robot_with_gravity
 from youbot_dynamics.sim.simulator import Simulator, Snapshot
 
 Outputs = list[tuple[str, object]]
@@ -102,9 +100,7 @@ LATCHED_TOPICS = frozenset({"/tf_static", "/robot_description", "/scene_markers"
 
 def robot_description(scene: Scene) -> str:
     """The URDF XML of the scene's robot: its file's text, or the composed robot's text."""
-    if scene.robot_path.lstrip().startswith("<"):
-        return scene.robot_path
-    return Path(scene.robot_path).read_text(encoding="utf-8")
+    return scene.urdf
 
 FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)
 """Colour (r, g, b, a in 0..1) of the free bodies' markers (light wood)."""
@@ -114,15 +110,15 @@ GEOMETRY_RGBA = (0.55, 0.55, 0.60, 1.0)
 
 def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
     """The URDF file of the scene's robot for Rerun: None without a robot; the scene's file;
-    or, for a composed robot (``robot_path`` holds URDF text), that text written next to
-    the recording as ``<rrd name>.urdf``."""
+    or, for a composed robot (no file of its own), its URDF text written next to the
+    recording as ``<rrd name>.urdf``."""
     if not robot.tree:
         return None
-    if not scene.robot_path.lstrip().startswith("<"):
-        return Path(scene.robot_path)
+    if scene.urdf_path is not None:
+        return scene.urdf_path
     path = rrd_path.with_suffix(".urdf")
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(scene.robot_path, encoding="utf-8")
+    path.write_text(scene.urdf, encoding="utf-8")
     return path
 
 
@@ -397,7 +393,7 @@ class SimulationSession(_Session):
                  mcap_path: str | Path | None = None, rrd_path: str | Path | None = None,
                  default_effort_limit: float = DEFAULT_EFFORT_LIMIT, callback_budget: float = 0.05,
                  frame_prefix: str = "", node_name: str = "dynamics_node") -> None:
-        self.simulator = Simulator(scene, resolve_integrator(scene, progress=False))
+        self.simulator = Simulator(scene, scene.pinned_integrator())
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget,
                          frame_prefix, node_name)
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
@@ -582,7 +578,7 @@ class InverseSession(_Session):
                  frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
                  rrd_path: str | Path | None = None, callback_budget: float = 0.05, frame_prefix: str = "",
                  node_name: str = "dynamics_node") -> None:
-        robot = robot_with_gravity(scene.robot(), scene.gravity)
+        robot = scene.robot  # reduced, with the scene's gravity
         if not robot.tree:
             raise UserInputError(f"{scene.source}: inverse mode needs a robot; the scene has none")
         super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget, frame_prefix,

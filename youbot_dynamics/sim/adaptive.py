@@ -1,14 +1,17 @@
 """Adaptive and implicit integrators from scipy.integrate, driven one step at a time so that
-every step is counted: Dormand-Prince 5(4) (RK45), DOP853, Radau IIA (order 5) and BDF.
+every step is counted: Dormand-Prince 5(4) (RK45), DOP853, Radau IIA (order 5), BDF and
+LSODA (ODEPACK's Adams/BDF pair that switches to BDF where it detects stiffness).
 
 Counters: ``nfev``, ``njev``, ``nlu`` come from the solver. For the explicit Runge-Kutta
 pairs every attempted step costs ``n_stages`` evaluations, so rejected steps are counted
 exactly from the evaluations spent inside each ``step()`` call. scipy does not report
-rejected steps or Newton iterations for Radau and BDF: those counters are ``None``.
+rejected steps or Newton iterations for Radau, BDF and LSODA: those counters are ``None``.
 
 Non-finite values end the run with a DivergenceError: the right-hand side is wrapped by
 :func:`~youbot_dynamics.sim.integration.finite_rhs` (scipy's RK step loops for ever once
 its step size is NaN) and a Jacobian with inf/NaN entries is caught at its factorisation.
+A step that does not move the clock (LSODA's step size drops to 0 and it reports itself
+running for ever) is a collapsed step size.
 """
 from __future__ import annotations
 
@@ -16,11 +19,11 @@ import math
 from typing import Callable
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, RK45, Radau
+from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
 
 from youbot_dynamics.sim.integration import DivergenceError, IntegrationError, IntegratorStats
 
-SCIPY_SOLVERS = {"rk45": RK45, "dop853": DOP853, "radau": Radau, "bdf": BDF}
+SCIPY_SOLVERS = {"rk45": RK45, "dop853": DOP853, "radau": Radau, "bdf": BDF, "lsoda": LSODA}
 EXPLICIT = ("rk45", "dop853")
 
 #: scipy's message when the step size underflows: the step size has collapsed.
@@ -53,9 +56,10 @@ class ScipyStepper:
                 raise
             raise DivergenceError(solver.t, self.method, solver.step_size or math.nan,
                                   "non-finite Jacobian") from None
-        if solver.status == "failed":
+        stalled = solver.status == "running" and solver.step_size == 0
+        if solver.status == "failed" or stalled:
             reason = message or "solver failed"
-            if reason == STEP_COLLAPSE:
+            if stalled or reason == STEP_COLLAPSE:
                 raise DivergenceError(solver.t, self.method, solver.step_size or 0.0,
                                       "step size collapsed")
             raise IntegrationError(f"{self.method} failed at t={solver.t:.6g} s: {reason}")
@@ -76,7 +80,8 @@ class ScipyStepper:
 
     def finish(self, stats: IntegratorStats) -> None:
         solver = self.solver
-        stats.steps, stats.rhs_evals, stats.jac_evals = self.steps, solver.nfev, solver.njev
+        # int(): LSODA's counters are numpy integers from its Fortran work array
+        stats.steps, stats.rhs_evals, stats.jac_evals = self.steps, int(solver.nfev), int(solver.njev)
         if self.method in EXPLICIT:
             stats.rejected_steps = self.rejected
             stats.nonlinear_iterations = stats.nonlinear_convergence_failures = 0

@@ -3,8 +3,9 @@ in any of its formulations with the project's integrators.
 
 DAE formulations (``index2``, ``ggl``, ``index3``) go to integrate_dae (IDA) with the
 exact iteration matrix when the system has second derivatives (else IDA's finite
-differences) and the error-test exclusions of dynamics.constraints.dae_tolerances; the
-index-1 formulations go to integrate with any ODE integrator.
+differences) and the error-test exclusions of dynamics.constraints.dae_tolerances, or to
+sim.radau_dae (``radau5``) with Hairer's index-dependent error scaling; the index-1
+formulations go to integrate with any ODE integrator.
 """
 from __future__ import annotations
 
@@ -19,10 +20,14 @@ from youbot_dynamics.dynamics.constraints import (DAE_FORMULATIONS, FORMULATIONS
                                                   dae_tolerances, index1_rhs,
                                                   project_positions, project_velocities)
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import (INTEGRATORS, IntegratorStats, integrate,
-                                             integrate_dae)
+from youbot_dynamics.sim.integrators import IntegratorStats, integrate, integrate_dae
+from youbot_dynamics.sim.radau_dae import integrate_dae_form
+from youbot_dynamics.sim.registry import INTEGRATORS
 
-__all__ = ["ConstrainedRun", "checked_choice", "simulate_holonomic"]
+#: Integrators for the DAE formulations: IDA, and Radau IIA with index scaling.
+DAE_INTEGRATORS: tuple[str, ...] = ("ida", "radau5")
+
+__all__ = ["ConstrainedRun", "DAE_INTEGRATORS", "checked_choice", "simulate_holonomic"]
 
 
 @dataclass
@@ -52,15 +57,17 @@ class ConstrainedRun:
 
 
 def checked_choice(system: HolonomicSystem, formulation: str, integrator: str) -> None:
-    """Formulation and integrator must exist and fit (DAE forms need ida, ODE forms not)."""
+    """Formulation and integrator must exist and fit (DAE forms need ida or radau5, ODE
+    forms an ODE integrator)."""
     if formulation not in FORMULATIONS:
         raise UserInputError(f"unknown formulation {formulation!r}; valid: "
                              + ", ".join(FORMULATIONS))
-    if integrator not in INTEGRATORS:
+    if integrator not in INTEGRATORS + DAE_INTEGRATORS:
         raise UserInputError(f"unknown integrator {integrator!r}; valid: "
-                             + ", ".join(INTEGRATORS))
-    if (formulation in DAE_FORMULATIONS) != (integrator == "ida"):
-        need = "ida" if formulation in DAE_FORMULATIONS else "an ODE integrator (not ida)"
+                             + ", ".join(INTEGRATORS + DAE_INTEGRATORS[1:]))
+    if (formulation in DAE_FORMULATIONS) != (integrator in DAE_INTEGRATORS):
+        need = ("ida or radau5" if formulation in DAE_FORMULATIONS
+                else "an ODE integrator (not ida or radau5)")
         raise UserInputError(f"{system.name}: formulation {formulation!r} needs {need}, "
                              f"got integrator {integrator!r}")
 
@@ -92,12 +99,16 @@ def simulate_holonomic(system: HolonomicSystem, formulation: str, integrator: st
             raise UserInputError(f"{system.name}: an exact DAE Jacobian needs "
                                  "mass_derivative, force_derivatives and constraint_hessian")
         use_exact = form.residual_jacobian is not None and exact_jacobian is not False
-        solution = integrate_dae(form.residual, form.y0, form.yp0, t_eval,
-                                 algebraic=form.algebraic, rtol=rtol,
-                                 atol=dae_tolerances(form, atol),
-                                 state_names=form.state_names,
-                                 jac=form.residual_jacobian if use_exact else None,
-                                 ida_options=ida_options)
+        if integrator == "radau5":
+            solution, _ = integrate_dae_form(form, t_eval, rtol=rtol, atol=atol,
+                                             exact_jacobian=use_exact)
+        else:
+            solution = integrate_dae(form.residual, form.y0, form.yp0, t_eval,
+                                     algebraic=form.algebraic, rtol=rtol,
+                                     atol=dae_tolerances(form, atol),
+                                     state_names=form.state_names,
+                                     jac=form.residual_jacobian if use_exact else None,
+                                     ida_options=ida_options)
         q, v = form.positions(solution.x), form.velocities(solution.x)
         multipliers, stats = form.multipliers(solution.x), solution.stats
         t = solution.t

@@ -41,6 +41,7 @@ from youbot_dynamics.sim.integration import StateCheck, drive
 from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution, checked_fixed_step,
                                              checked_output_spacing, integrate, integrate_dae)
 from youbot_dynamics.sim.model import MIN_APPROACH_SPEED, SimModel
+from youbot_dynamics.sim.registry import integrator_kind
 from youbot_dynamics.sim.scene import IntegratorSpec
 from youbot_dynamics.sim.state import ContactEvent, SimState, StateLayout
 
@@ -328,7 +329,8 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
 def _integrate(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndarray, rhs, torque,
                monitor: Monitor | None, max_steps: int | None, progress: Progress | None) -> _Outcome:
     spec, names = model.integrator, model.layout.names
-    if model.stepper is not None:
+    kind = integrator_kind(spec.method)
+    if kind == "stepper":
         return _step_constraints(model, state, x0, t_eval, torque, monitor, max_steps, progress)
     options = {"rtol": spec.rtol, "atol": spec.absolute_tolerance(x0), "state_names": names,
                "bounds": model.bounds, "monitor": monitor, "max_steps": max_steps, "progress": progress}
@@ -343,7 +345,7 @@ def _integrate(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndar
         events, deepest = guards.contact_events(hybrid.switches)
         return _Outcome(Solution(hybrid.t[keep], hybrid.x[keep], hybrid.stats, hybrid.state_names), events,
                         deepest, state.touching)
-    if spec.method == "ida":
+    if kind == "dae":
         def residual(t: float, y: np.ndarray, yp: np.ndarray) -> np.ndarray:
             return yp - rhs(t, y)
 

@@ -1,9 +1,10 @@
 """Integrators behind one interface, each run returning its statistics.
 
-Names (command line and scenes): ``euler``, ``symplectic_euler``, ``rk4`` (fixed step,
-hand-written loops, sim/fixed_step.py); ``rk45`` (Dormand-Prince 5(4)), ``dop853``,
-``radau``, ``bdf`` (scipy.integrate, sim/adaptive.py); ``cvode_bdf``, ``cvode_adams`` and
-``ida`` (SUNDIALS through scikit-sundae, sim/sundials.py).
+The names, their kinds and their stepper factories are the table in sim/registry.py:
+``euler``, ``symplectic_euler``, ``rk4`` (fixed step, hand-written loops, sim/fixed_step.py);
+``rk45`` (Dormand-Prince 5(4)), ``dop853``, ``radau``, ``bdf``, ``lsoda`` (scipy.integrate,
+sim/adaptive.py); ``cvode_bdf``, ``cvode_adams`` and ``ida`` (SUNDIALS through
+scikit-sundae, sim/sundials.py).
 
 :func:`integrate` solves x' = rhs(t, x); :func:`integrate_dae` solves F(t, y, y') = 0 with
 IDA. Both return a :class:`Solution` with outputs at ``t_eval`` (which starts with t0 and
@@ -19,22 +20,17 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.adaptive import SCIPY_SOLVERS, ScipyStepper
-from youbot_dynamics.sim.fixed_step import FIXED_STEP_METHODS, FixedStepStepper
 from youbot_dynamics.sim.integration import (DivergenceError, Event, EventRecord,
                                              IntegrationError, IntegratorStats, Solution,
-                                             StateCheck, StepBudgetError, drive, finite_rhs,
+                                             StateCheck, StepBudgetError, drive,
                                              state_names_or_default)
-from youbot_dynamics.sim.sundials import CVODE_METHODS, CvodeStepper, IdaStepper
+from youbot_dynamics.sim.registry import REGISTRY, OdeProblem, integrator_names
+from youbot_dynamics.sim.sundials import CVODE_METHODS, IdaStepper
 
-__all__ = ["INTEGRATORS", "FIXED_STEP", "IntegratorStats", "Event", "EventRecord", "Solution",
-           "IntegrationError", "DivergenceError", "StepBudgetError", "integrate", "integrate_dae",
+__all__ = ["IntegratorStats", "Event", "EventRecord", "Solution", "IntegrationError",
+           "DivergenceError", "StepBudgetError", "integrate", "integrate_dae",
            "tolerances_from_tol", "fixed_step_count", "checked_fixed_step",
            "checked_output_spacing"]
-
-INTEGRATORS: tuple[str, ...] = ("euler", "symplectic_euler", "rk4", "rk45", "dop853", "radau",
-                                "bdf", "cvode_bdf", "cvode_adams", "ida")
-FIXED_STEP: tuple[str, ...] = tuple(FIXED_STEP_METHODS)
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
 
@@ -133,38 +129,36 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
     with the time reached (s) after each output. ``max_order`` caps CVODE's order.
     """
     start = time.perf_counter()
-    if integrator not in INTEGRATORS or integrator == "ida":
-        hint = " (use integrate_dae for ida)" if integrator == "ida" else ""
+    entry = REGISTRY.get(integrator)
+    if entry is None or entry.kind != "ode":
+        hint = {"dae": " (use integrate_dae for it)",
+                "stepper": " (a constraint-contact stepper)"}.get(getattr(entry, "kind", ""), "")
         raise UserInputError(f"unknown ODE integrator {integrator!r}{hint}; valid names: "
-                             + ", ".join(name for name in INTEGRATORS if name != "ida"))
+                             + ", ".join(integrator_names("ode")))
     times = checked_times(t_eval)
     x = checked_state("x0", x0)
     names = state_names_or_default(state_names, x.size)
     check = StateCheck(integrator, names, bounds, monitor)
-    if integrator in FIXED_STEP:
+    n = 0 if n_positions is None else int(n_positions)
+    if not entry.adaptive:
         if dt is None:
-            adaptive = [name for name in INTEGRATORS if name not in FIXED_STEP + ("ida",)]
             raise UserInputError(f"integrator {integrator!r} takes fixed steps: give dt (s), "
-                                 f"or use an adaptive one: {', '.join(adaptive)}")
+                                 "or use an adaptive one: "
+                                 + ", ".join(integrator_names("ode", adaptive=True)))
         checked_positive("dt", dt)
         checked_fixed_step(integrator, float(dt), times, max_steps)
-        n = 0 if n_positions is None else int(n_positions)
         if integrator == "symplectic_euler" and not 0 < 2 * n <= x.size:
             raise UserInputError("symplectic_euler needs n_positions with 0 < 2*n_positions "
                                  f"<= state size {x.size}, got {n_positions!r}")
-        stepper = FixedStepStepper(integrator, rhs, times[0], x, float(dt), n, bool(events),
-                                   check)
     else:
         checked_positive("rtol", rtol)
         checked_positive("atol", atol)
         checked_positive("max_step", max_step)
-        if integrator in SCIPY_SOLVERS:
-            stepper = ScipyStepper(integrator, finite_rhs(rhs, integrator), times[0], x,
-                                   times[-1], rtol, atol, jac, max_step, min_step)
-        else:
-            stepper = CvodeStepper(CVODE_METHODS[integrator], integrator, rhs, times[0], x,
-                                   times[-1], rtol, atol, jac, max_step, min_step,
-                                   tuple(events), max_order)
+    if max_order is not None and integrator not in CVODE_METHODS:
+        raise UserInputError(f"max_order applies to cvode_bdf and cvode_adams, not {integrator}")
+    problem = OdeProblem(rhs, times[0], x, times[-1], dt, rtol, atol, jac, max_step, min_step,
+                         n, tuple(events), check, max_order)
+    stepper = entry.factory(integrator, problem)
     solution = drive(stepper, integrator, times, events, check, names, max_steps=max_steps,
                      progress=progress)
     solution.stats.wall_time = time.perf_counter() - start
@@ -183,9 +177,9 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
     """Solve the DAE residual(t, y, y') = 0 with SUNDIALS IDA (integrator ``ida``).
 
     ``algebraic[i]`` marks y_i as algebraic (no y_i' in the equations). y0, yp0 must be
-    consistent. ``exclude_from_error_test`` (IDASetSuppressAlg, for index-3 forms) is not
-    available through scikit-sundae 1.2: any True entry raises NotImplementedError (see
-    sim/sundials.py); all-False or None is accepted. ``jac(t, y, yp, cj)``
+    consistent. ``exclude_from_error_test``: IDASetSuppressAlg (sim/sundials.py), which
+    takes every algebraic component out of IDA's error test, so its True entries must be
+    exactly the algebraic ones (or none). ``jac(t, y, yp, cj)``
     returns dF/dy + cj dF/dy' (IDA builds it by finite differences without it).
     ``ida_options``: further sksundae.ida.IDA options passed as they are (first_step,
     max_step, max_order, max_nonlin_iters, max_conv_fails, ...; times in s). Events see
@@ -203,15 +197,16 @@ def integrate_dae(residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray
         raise UserInputError(f"y0 has {y.size} components but yp0 has {yp.size} and "
                              f"algebraic/exclude_from_error_test have "
                              f"{[f.size for f in flags]}")
-    if len(flags) > 1 and flags[1].any():
-        raise NotImplementedError(
-            "exclude_from_error_test needs IDASetSuppressAlg, which scikit-sundae 1.2 does "
-            "not expose; use an index-2 (stabilised) or index-1 formulation instead")
+    suppress = len(flags) > 1 and bool(flags[1].any())
+    if suppress and not np.array_equal(flags[0], flags[1]):
+        raise UserInputError("exclude_from_error_test must mark exactly the algebraic "
+                             "components (IDA's suppress-alg excludes all of them), got "
+                             f"{flags[1].tolist()} for algebraic {flags[0].tolist()}")
     checked_positive("rtol", rtol)
     checked_positive("atol", atol)
     check = StateCheck("ida", names, bounds, monitor)
     stepper = IdaStepper(residual, times[0], y, yp, times[-1], flags[0], rtol, atol, jac,
-                         dict(ida_options or {}), tuple(events))
+                         dict(ida_options or {}), tuple(events), suppress)
     solution = drive(stepper, "ida", times, events, check, names,
                      derivative_at=stepper.derivative_at, max_steps=max_steps,
                      progress=progress)

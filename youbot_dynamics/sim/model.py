@@ -47,7 +47,8 @@ from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.controllers import Controller, Reference, make_controller
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
-from youbot_dynamics.sim.scene import STEPPERS, IntegratorSpec, Scene
+from youbot_dynamics.sim.registry import integrator_kind
+from youbot_dynamics.sim.scene import IntegratorSpec, Scene
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
@@ -224,16 +225,6 @@ class SimModel:
         return self.passive and self.callback is None and (command is None or not np.any(command))
 
 
-def robot_with_gravity(robot: Robot, gravity: np.ndarray) -> Robot:
-    """The same Robot with another gravity vector (m/s^2, root frame) on a model copy."""
-    gravity = np.asarray(gravity, dtype=float)
-    if np.array_equal(robot.model.gravity.linear, gravity):
-        return robot
-    model = pin.Model(robot.model)
-    model.gravity = pin.Motion(gravity, np.zeros(3))
-    return dataclasses.replace(robot, model=model)
-
-
 def _plant(robot: Robot, scene: Scene) -> tuple[Robot, list[int | None]]:
     """The plant (the robot's model with a free-flyer per body appended) and the frame id of
     each of the scene's geometries (None: world)."""
@@ -271,9 +262,8 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
     integrator = integrator or scene.integrator
     limits = limits or DivergenceLimits()
     if integrator.method == "auto":
-        raise UserInputError(f"{scene.source}: integrator.method: 'auto' must be resolved first "
-                             "(youbot-dynamics work-precision --write-back)")
-    robot = robot_with_gravity(scene.robot(), scene.gravity)
+        integrator = scene.pinned_integrator()   # a one-line error naming the command to run
+    robot = scene.robot
     require_fixed_root(robot, scene.source)
     friction = scene.joint_friction(robot)
     plant, frames = _plant(robot, scene)
@@ -297,7 +287,7 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
         if not math.isfinite(period) or period <= 0.0:
             raise UserInputError(f"{scene.source}: control_rate {control_rate!r} Hz must be positive")
     stepper = ConstraintStepper(contact, StepperSettings(solver=integrator.method)) \
-        if integrator.method in STEPPERS else None
+        if integrator_kind(integrator.method) == "stepper" else None
     return SimModel(
         scene=scene, integrator=integrator, limits=limits, robot=robot, plant=plant,
         body_names=tuple(s.body.name for s in scene.free_bodies), friction=friction,

@@ -1,12 +1,14 @@
-"""Scene files (config/scenes/*.yaml) -> validated, immutable :class:`Scene`.
+"""Scenes -> validated, immutable :class:`Scene`: :meth:`Scene.from_dict` is the one
+validator (a mapping from a notebook, a test or a YAML file); :func:`load_scene` reads a
+file (config/scenes/*.yaml or a path) with bounded work and hands its mapping to it.
 
 A scene says what a simulation contains and nothing more; the simulator builds only that.
 Keys (units SI, angles rad; joint values are mappings by joint name)::
 
-    name: arm_swing                 # default: the file's stem
+    name: arm_swing                 # default: the file's stem ("scene" for a mapping)
     description: text
-    robot: path/to/robot.urdf       # relative to the scene file, else to the package share;
-                                    # default: the packaged youBot
+    robot: path/to/robot.urdf       # relative to the scene file's folder (``base_dir``),
+                                    # else to the package share; default: the packaged youBot
     moving: [arm_joint_1, ...]      # joints that move; every other joint is locked
     locked: {joint: value}          # locked joints' values (default 0)
     initial: {q: {joint: rad}, v: {joint: rad/s}}     # default 0
@@ -25,30 +27,31 @@ Keys (units SI, angles rad; joint values are mappings by joint name)::
         a_max: value or {joint: rad/s^2}
         dwell: 0.0                        # s at each waypoint
     integrator:
-      method: rk45 | ... | auto     # see sim.integrators.INTEGRATORS
+      method: rk45 | ... | auto     # the names of sim/registry.py; auto: chosen offline by
+                                    # `work-precision --write-back`, which pins it here
       dt: s                         # fixed-step methods only
       tol: 1e-8                     # adaptive methods: the one accuracy knob, rtol = tol and
                                     # atol_i = tol * max(|x0_i|, 1e-3) per state component
       rtol: 1e-6                    # for experts: override tol's (default 1e-6 without tol)
       atol: 1e-8                    # (default 1e-8 without tol)
-      target_error: rad             # auto only: final joint-space error to meet
+      target_error: rad             # the final joint-space error auto (work-precision) meets
       energy_tolerance: J           # conservative scenes: allowed energy growth
     duration: s
     outputs: {rate: Hz, record: [q, v, z, tau, energy, ee_position]}
-    robot: none | {compose: [...]}  # no robot, or several composed into one (scene_contacts)
+    robot: none | {compose: [...]}  # no robot, or several composed into one (model/compose.py)
     free_bodies: [...]              # rigid objects (see sim/scene_contacts.py for these four)
     world: [...]                    # static geometry
     geometry: [...]                 # geometry on robot links
     contacts: [...]                 # pairs of geometry names, each with its contact law
     integrator: {method: pgs | admm, dt: s}   # constraint stepper (pairs with law constraint)
 
-Every mistake is a :class:`SceneError` naming the file, the key (dotted path) and the value.
-PyYAML reads ``1e-6`` (no dot) as a string: numbers given that way are accepted.
+Every mistake is a :class:`SceneError` naming the source (the file, or the label given to
+``from_dict``), the key (dotted path) and the value. PyYAML reads ``1e-6`` (no dot) as a
+string: numbers given that way are accepted.
 """
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -60,10 +63,12 @@ from youbot_dynamics import default_urdf, package_share
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import limits
+from youbot_dynamics.model.compose import EMPTY_ROBOT, robot_with_gravity
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
-from youbot_dynamics.sim.integrators import FIXED_STEP, INTEGRATORS, tolerances_from_tol
-from youbot_dynamics.sim.scene_contacts import (EMPTY_ROBOT, ContactPairSpec, FreeBodySpec, composed_urdf,
-                                                read_contacts, read_free_bodies, read_geometries)
+from youbot_dynamics.sim.integrators import tolerances_from_tol
+from youbot_dynamics.sim.registry import AUTO, REGISTRY, STEPPERS, integrator_names, is_fixed_step
+from youbot_dynamics.sim.scene_contacts import (ContactPairSpec, FreeBodySpec, read_composition, read_contacts,
+                                                read_free_bodies, read_geometries)
 from youbot_dynamics.sim.scene_reader import SceneError, SceneReader, read_yaml
 
 CONTROLLERS = ("none", "pd", "computed_torque")
@@ -72,8 +77,8 @@ FRICTION_DEFAULTS = ("urdf", "none")
 CONTACT_SECTIONS = ("free_bodies", "world", "geometry", "contacts")
 TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "gravity", "friction",
             "controller", "integrator", "duration", "outputs", *CONTACT_SECTIONS)
-#: Integrators of the constraint stepper (dynamics/contact_stepper.py), fixed step dt.
-STEPPERS = ("pgs", "admm")
+#: The source of a scene given as a mapping without a label.
+DICT_SOURCE = "<dict>"
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -104,7 +109,7 @@ class ControllerSpec:
 
 @dataclass(frozen=True)
 class IntegratorSpec:
-    """Integrator name (or ``auto``) and its accuracy settings."""
+    """Integrator name (one of sim/registry.py, or ``auto``) and its accuracy settings."""
 
     method: str
     dt: float | None = None
@@ -120,9 +125,9 @@ class IntegratorSpec:
 
     def describe(self) -> str:
         """``rk4 dt=0.001`` or ``rk45 rtol=1e-06 atol=1e-08`` or ``auto target_error=...``."""
-        if self.method == "auto":
+        if self.method == AUTO:
             return f"auto target_error={self.target_error:g}"
-        if self.method in FIXED_STEP + STEPPERS:
+        if is_fixed_step(self.method):
             return f"{self.method} dt={self.dt:g}"
         atol = f"{self.atol:g}" if self.atol is not None else f"{self.tol:g}*nominal"
         return f"{self.method} rtol={self.rtol:g} atol={atol}"
@@ -140,19 +145,22 @@ class OutputSpec:
 class Scene:
     """A validated scene. Joint arrays are in ``moving`` order (the reduced Robot's order).
 
+    ``robot`` is the Robot the scene simulates, loaded once: only the moving joints, the
+    others locked at their values, with the scene's gravity. ``urdf`` is the full robot's
+    URDF text (the file's, the composed one, or the empty robot's: /robot_description);
+    ``urdf_path`` the file it was read from (None for ``robot: none`` and composed robots).
     ``friction`` maps a moving joint to its spec (law and parameters) for the joints the
-    scene lists; the others follow ``friction_default``. ``content_hash`` is the SHA-256 of
-    the file's bytes (the key of per-scene caches). ``robot_path`` is a URDF path, or the
-    URDF text itself for ``robot: none`` and composed robots. ``free_bodies``,
-    ``geometries`` (free bodies' shapes first, then world and link geometry) and
-    ``contacts`` are empty in a scene without contact.
+    scene lists; the others follow ``friction_default``. ``free_bodies``, ``geometries``
+    (free bodies' shapes first, then world and link geometry) and ``contacts`` are empty in
+    a scene without contact.
     """
 
     name: str
     description: str
     source: str
-    content_hash: str
-    robot_path: str
+    robot: Robot
+    urdf: str
+    urdf_path: Path | None
     moving: tuple[str, ...]
     locked: Mapping[str, float]
     q0: np.ndarray
@@ -168,6 +176,14 @@ class Scene:
     geometries: tuple = ()
     contacts: tuple[ContactPairSpec, ...] = ()
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], source: str = DICT_SOURCE, base_dir: Path | None = None) -> Scene:
+        """The one validator: a scene's mapping (the keys of the module docstring, as a YAML
+        file holds them) -> a frozen Scene. ``source`` labels every error (the file name for
+        a file); relative file names (``robot``, ``compose[i].urdf``) are looked up in
+        ``base_dir``, then in the package share. The robot is loaded and reduced here, once."""
+        return _scene_from_dict(data, source, base_dir)
+
     @property
     def has_contact(self) -> bool:
         """Whether the scene has free bodies or contact pairs (the contact simulator)."""
@@ -179,10 +195,6 @@ class Scene:
         times = np.arange(0.0, self.duration, 1.0 / self.outputs.rate)
         keep = times < self.duration - 1e-9 / self.outputs.rate
         return np.append(times[keep], self.duration)
-
-    def robot(self) -> Robot:
-        """The reduced Robot: only the moving joints, the others locked at their values."""
-        return keep_joints(load_robot(self.robot_path), self.moving, self.locked)
 
     def joint_friction(self, robot: Robot) -> JointFriction | None:
         """The friction of the reduced Robot's joints, or None for a scene without any
@@ -204,14 +216,24 @@ class Scene:
         current = dataclasses.asdict(self.integrator)
         changes = {"method": method, "dt": dt, "rtol": rtol, "atol": atol, "target_error": target_error,
                    "tol": tol}
-        if method is not None and method not in FIXED_STEP + STEPPERS:
+        fixed = method is not None and method in REGISTRY and is_fixed_step(method)
+        if method is not None and not fixed:
             current["dt"] = None
-        if method in FIXED_STEP + STEPPERS:
+        if fixed:
             current["tol"] = None
         if tol is not None:
             current["rtol"] = current["atol"] = None
         current.update({k: v for k, v in changes.items() if v is not None})
         return dataclasses.replace(self, integrator=_integrator(SceneReader(self.source), current, "integrator"))
+
+    def pinned_integrator(self) -> IntegratorSpec:
+        """The integrator settings; ``auto`` is refused in one line: it is chosen offline
+        (by ``work-precision --write-back``), never by a sweep inside a node."""
+        if self.integrator.method == AUTO:
+            raise SceneError(self.source, "integrator.method", "'auto' is chosen offline: run `youbot-dynamics "
+                             f"work-precision --scene {self.source} --target-error "
+                             f"{self.integrator.target_error:g} --write-back` to pin a method into the file", AUTO)
+        return self.integrator
 
     def with_duration(self, duration: float) -> Scene:
         """The same scene over another duration (s)."""
@@ -243,17 +265,25 @@ def find_scene(name_or_path: str | Path) -> Path:
 
 
 def load_scene(name_or_path: str | Path) -> Scene:
-    """Read, validate and freeze a scene (see the module docstring for the keys)."""
+    """Read a scene file with bounded work (a path, or a packaged scene's name) and
+    validate it with :meth:`Scene.from_dict`; relative files are found next to it."""
     path = find_scene(name_or_path)
-    raw = path.read_bytes()
-    source = str(path)
+    return Scene.from_dict(read_yaml(path.read_bytes(), str(path)), str(path), path.parent)
+
+
+def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None) -> Scene:
+    """Validate and freeze a scene's mapping (see :meth:`Scene.from_dict`)."""
     reader = SceneReader(source)
-    data = reader.mapping(read_yaml(raw, source), "(top level)", TOP_KEYS)
-    robot_path = _robot_path(reader, path, data.get("robot"))
+    data = reader.mapping(data, "(top level)", TOP_KEYS)
+    urdf_source = _robot_source(reader, data.get("robot"), base_dir)
     try:
-        full = load_robot(robot_path)
+        full = load_robot(urdf_source)
     except UserInputError as error:
         raise SceneError(source, "robot", str(error), data.get("robot")) from None
+    # the text as the file holds it, for /robot_description (a byte that is no UTF-8 is
+    # replaced there, never in the model, which load_robot read by the file's encoding)
+    urdf, urdf_path = ((urdf_source, None) if isinstance(urdf_source, str) else
+                       (urdf_source.read_text(encoding="utf-8", errors="replace"), urdf_source))
 
     moving = reader.joint_list(data.get("moving", list(full.joint_names)), "moving", full) if full.nv else ()
     locked_raw = reader.joint_values(data.get("locked", {}), "locked", full)
@@ -263,14 +293,14 @@ def load_scene(name_or_path: str | Path) -> Scene:
     locked = {n: locked_raw.get(n, 0.0) for n in full.joint_names if n not in moving}
     for name, value in locked.items():
         reader.within_limits(full, name, value, f"locked.{name}")
-    robot = keep_joints(full, moving, locked)
+    gravity = reader.vector3(data.get("gravity", [0.0, 0.0, -9.81]), "gravity", limits.GRAVITY)
+    robot = robot_with_gravity(keep_joints(full, moving, locked), gravity)
 
     initial = reader.mapping(data.get("initial", {}), "initial", ("q", "v"))
     q0 = _moving_vector(reader, robot, initial.get("q", {}), "initial.q", 0.0)
     for name, value in zip(robot.joint_names, q0):
         reader.within_limits(robot, name, value, f"initial.q.{name}")
     v0 = _moving_vector(reader, robot, initial.get("v", {}), "initial.v", 0.0, limits.JOINT_SPEED)
-    gravity = reader.vector3(data.get("gravity", [0.0, 0.0, -9.81]), "gravity", limits.GRAVITY)
 
     friction = reader.mapping(data.get("friction", {}), "friction", ("default", "joints"))
     friction_default = friction.get("default", "urdf")
@@ -305,13 +335,13 @@ def load_scene(name_or_path: str | Path) -> Scene:
 
     rate = reader.positive(outputs.get("rate", 100.0), "outputs.rate", limits.RATE)
     _check_samples(reader, duration, rate)
+    default_name = Path(source).stem if Path(source).suffix in (".yaml", ".yml") else "scene"
     scene = Scene(
-        name=str(data.get("name", path.stem)), description=str(data.get("description", "")),
-        source=source, content_hash=hashlib.sha256(raw).hexdigest(), robot_path=str(robot_path),
-        moving=robot.joint_names, locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0),
-        gravity=_frozen(gravity), friction_default=friction_default,
-        friction=MappingProxyType(joint_friction), controller=controller, integrator=integrator,
-        duration=duration, outputs=OutputSpec(rate, record))
+        name=str(data.get("name", default_name)), description=str(data.get("description", "")),
+        source=source, robot=robot, urdf=urdf, urdf_path=urdf_path, moving=robot.joint_names,
+        locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0), gravity=_frozen(gravity),
+        friction_default=friction_default, friction=MappingProxyType(joint_friction), controller=controller,
+        integrator=integrator, duration=duration, outputs=OutputSpec(rate, record))
     try:
         scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
     except UserInputError as error:
@@ -334,14 +364,13 @@ def load_scene(name_or_path: str | Path) -> Scene:
     return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts)
 
 
-def _robot_path(reader: SceneReader, scene_path: Path, value: Any) -> Path | str:
-    if value is None:
-        return default_urdf()
+def _robot_source(reader: SceneReader, value: Any, base_dir: Path | None) -> str | Path:
+    """The full robot: its URDF file, or the URDF text of a composed robot or of none."""
+    if isinstance(value, Mapping):
+        return read_composition(reader, value, base_dir)
     if value == "none":
         return EMPTY_ROBOT
-    if isinstance(value, Mapping):
-        return composed_urdf(reader, reader.mapping(value, "robot", ("compose",)), scene_path)
-    return reader.file(value, "robot", scene_path)
+    return Path(default_urdf()) if value is None else reader.file(value, "robot", base_dir)
 
 
 def _check_samples(reader: SceneReader, duration: float, rate: float) -> None:
@@ -426,9 +455,9 @@ def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
     data = dict(reader.mapping(value, key, ("method", "dt", "tol", "rtol", "atol", "target_error",
                                             "energy_tolerance")))
     method = data.get("method", "rk45")
-    if method not in (*INTEGRATORS, *STEPPERS, "auto"):
-        raise SceneError(reader.source, f"{key}.method", f"expected auto or one of "
-                         f"{', '.join(INTEGRATORS + STEPPERS)}", method)
+    if method != AUTO and (not isinstance(method, str) or method not in REGISTRY):
+        raise SceneError(reader.source, f"{key}.method", f"expected auto or one of {', '.join(REGISTRY)}", method)
+    options = ("tol", "rtol", "atol") if method == AUTO else REGISTRY[method].options
     numbers = {name: reader.number(data[name], f"{key}.{name}") for name in
                ("dt", "tol", "rtol", "atol", "target_error", "energy_tolerance") if data.get(name) is not None}
     for name, number in numbers.items():
@@ -438,18 +467,18 @@ def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
             raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
         if name in ("tol", "rtol") and limits.tolerance_problem(number):
             raise SceneError(reader.source, f"{key}.{name}", limits.tolerance_problem(number))
-    if method in FIXED_STEP + STEPPERS and "dt" not in numbers:
+    if "dt" in options and "dt" not in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"missing: fixed-step method {method!r} needs dt (s)")
-    if method not in FIXED_STEP + STEPPERS and "dt" in numbers:
+    if "dt" not in options and "dt" in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"only for fixed-step methods "
-                         f"({', '.join(FIXED_STEP)}); {method!r} uses rtol/atol", numbers["dt"])
+                         f"({', '.join(integrator_names(adaptive=False))}); {method!r} uses rtol/atol", numbers["dt"])
     if "tol" in numbers:
-        if method in FIXED_STEP + STEPPERS:
+        if "tol" not in options:
             raise SceneError(reader.source, f"{key}.tol", f"only for adaptive methods; {method!r} uses dt",
                              numbers["tol"])
         numbers.setdefault("rtol", numbers["tol"])
         numbers.setdefault("atol", None)
-    if method == "auto" and "target_error" not in numbers:
+    if method == AUTO and "target_error" not in numbers:
         raise SceneError(reader.source, f"{key}.target_error", "missing: method 'auto' needs the target "
                          "final joint-space error (rad)")
     return IntegratorSpec(method, **numbers)

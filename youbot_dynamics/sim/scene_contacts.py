@@ -1,5 +1,6 @@
-"""The contact sections of a scene file: robot composition, free bodies, static world
-geometry, geometry on robot links and contact pairs (read by :mod:`youbot_dynamics.sim.scene`).
+"""The contact sections of a scene: robot composition (composed by model/compose.py), free
+bodies, static world geometry, geometry on robot links and contact pairs (read by
+:mod:`youbot_dynamics.sim.scene`).
 
 Keys (SI units; a pose is ``{xyz: [m, m, m], rpy: [rad, rad, rad]}``, default identity;
 a shape is ``{type: sphere|box|cylinder|capsule|halfspace, <dimensions>}``, see
@@ -30,27 +31,25 @@ a shape is ``{type: sphere|box|cylinder|capsule|halfspace, <dimensions>}``, see
       - {pair: [ball, floor], law: hunt_crossley, stiffness: 1e5, restitution: 0.8, friction: 0.3}
 
 A free body's name is also the name of its shape in ``contacts``. Every mistake is a
-SceneError naming the file, the key and the value.
+SceneError naming the source, the key and the value.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pinocchio as pin
-from lxml import etree
 
 from youbot_dynamics.dynamics.collision import SHAPES, Geometry, Shape
 from youbot_dynamics.dynamics.contact import ContactLaw, ContactLawError, contact_law_from_spec
 from youbot_dynamics.dynamics.free_body import FreeBody
 from youbot_dynamics.model import limits
+from youbot_dynamics.model.compose import CompositionError, InertialCorrection, Placement, composed_urdf
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.scene_reader import SceneError, SceneReader
 
-#: The URDF of ``robot: none``: one link, no joint.
-EMPTY_ROBOT = '<robot name="none"><link name="world"/></robot>'
 SHAPE_KEYS = ("type", "radius", "length", "size", "normal", "offset")
 
 
@@ -112,64 +111,43 @@ def read_shape(reader: SceneReader, value: Any, key: str) -> Shape:
     return Shape(kind, **values)
 
 
-def composed_urdf(reader: SceneReader, value: Mapping[str, Any], scene_path: Path) -> str:
-    """One URDF from several: every link and joint name prefixed, each robot's root link
-    fixed to a common ``world`` link at its pose."""
-    entries = value.get("compose")
+def read_composition(reader: SceneReader, value: Any, base_dir: Path | None) -> str:
+    """The URDF text of ``robot: {compose: [{urdf, prefix, pose, inertials}, ...]}``
+    (model/compose.py composes it); files relative to ``base_dir``, else the package share."""
+    entries = reader.mapping(value, "robot", ("compose",)).get("compose")
     if not isinstance(entries, list) or not entries:
         raise SceneError(reader.source, "robot.compose", "expected a non-empty list of {urdf, prefix, pose}", entries)
-    world = etree.Element("robot", name="composed")
-    etree.SubElement(world, "link", name="world")
+    placements = []
     for i, entry in enumerate(entries):
         key = f"robot.compose[{i}]"
         entry = reader.mapping(entry, key, ("urdf", "prefix", "pose", "inertials"))
-        path = reader.file(entry.get("urdf"), f"{key}.urdf", scene_path)
-        prefix = str(entry.get("prefix", ""))
-        pose = pose_matrix(reader, entry.get("pose"), f"{key}.pose")
-        try:
-            root = etree.parse(str(path)).getroot()
-        except etree.XMLSyntaxError as error:
-            raise SceneError(reader.source, f"{key}.urdf", f"{path} is not valid XML: {error}") from None
-        corrected_inertials(reader, root, entry.get("inertials", {}), f"{key}.inertials")
-        children = {j.find("child").get("link") for j in root.findall("joint")}
-        base = next(link.get("name") for link in root.findall("link") if link.get("name") not in children)
-        for element in list(root):
-            if element.tag in ("link", "joint"):
-                element.set("name", prefix + element.get("name"))
-                for role in ("parent", "child"):
-                    link = element.find(role)
-                    if link is not None:
-                        link.set("link", prefix + link.get("link"))
-                world.append(element)
-        joint = etree.SubElement(world, "joint", name=f"{prefix}world_joint", type="fixed")
-        etree.SubElement(joint, "parent", link="world")
-        etree.SubElement(joint, "child", link=prefix + base)
-        rpy = pin.rpy.matrixToRpy(pose[:3, :3])
-        etree.SubElement(joint, "origin", xyz=" ".join(repr(float(x)) for x in pose[:3, 3]),
-                         rpy=" ".join(repr(float(x)) for x in rpy))
-    return etree.tostring(world, encoding="unicode")
+        placements.append(Placement(reader.file(entry.get("urdf"), f"{key}.urdf", base_dir),
+                                    str(entry.get("prefix", "")), pose_matrix(reader, entry.get("pose"), f"{key}.pose"),
+                                    read_inertials(reader, entry.get("inertials", {}), f"{key}.inertials")))
+    try:
+        return composed_urdf(placements)
+    except CompositionError as error:
+        raise SceneError(reader.source, f"robot.compose[{error.index}].{error.part}", error.problem) from None
 
 
-def corrected_inertials(reader: SceneReader, root: etree._Element, value: Any, key: str) -> None:
-    """Replace, in the URDF tree ``root``, the mass and/or the inertia (principal moments,
-    products set to 0) of the links named in ``{link: {mass, inertia: [Ixx, Iyy, Izz]}}``."""
-    links = {link.get("name"): link for link in root.findall("link")}
+def read_inertials(reader: SceneReader, value: Any, key: str) -> dict[str, InertialCorrection]:
+    """``{link: {mass: kg, inertia: [Ixx, Iyy, Izz]}}``: positive masses, principal moments
+    that are positive and obey the triangle inequality."""
+    corrections = {}
     for name, correction in reader.mapping(value, key).items():
         where = f"{key}.{name}"
         correction = reader.mapping(correction, where, ("mass", "inertia"))
-        inertial = links[name].find("inertial") if name in links else None
-        if inertial is None:
-            raise SceneError(reader.source, where, "not a link with an <inertial> in the URDF", name)
+        mass = moments = None
         if "mass" in correction:
-            inertial.find("mass").set("value", repr(reader.positive(correction["mass"], f"{where}.mass", limits.MASS)))
+            mass = reader.positive(correction["mass"], f"{where}.mass", limits.MASS)
         if "inertia" in correction:
             moments = reader.vector3(correction["inertia"], f"{where}.inertia", limits.INERTIA)
             if np.any(moments <= 0) or 2 * moments.max() > moments.sum():
                 raise SceneError(reader.source, f"{where}.inertia", "principal moments must be positive and "
                                  "obey the triangle inequality", moments.tolist())
-            values = dict(zip(("ixx", "iyy", "izz"), moments), ixy=0.0, ixz=0.0, iyz=0.0)
-            for attribute, number in values.items():
-                inertial.find("inertia").set(attribute, repr(float(number)))
+            moments = tuple(float(m) for m in moments)
+        corrections[name] = InertialCorrection(mass, moments)
+    return corrections
 
 
 def read_free_bodies(reader: SceneReader, value: Any) -> tuple[FreeBodySpec, ...]:

@@ -1,7 +1,8 @@
-"""Reading a scene file: :func:`read_yaml` parses it with bounded work, and
-:class:`SceneReader` gives typed access to the parsed YAML whose every mistake is a
-:class:`SceneError` naming the file, the key (dotted path) and the value. Shared by
-:mod:`youbot_dynamics.sim.scene` and :mod:`youbot_dynamics.sim.scene_contacts`.
+"""Reading a scene: :func:`read_yaml` parses a scene file with bounded work, and
+:class:`SceneReader` gives typed access to the parsed data (from a file or a Python
+mapping) whose every mistake is a :class:`SceneError` naming the source, the key (dotted
+path) and the value. Shared by :mod:`youbot_dynamics.sim.scene` and
+:mod:`youbot_dynamics.sim.scene_contacts`.
 """
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ from youbot_dynamics.model.robot import Robot
 
 
 class SceneError(UserInputError):
-    """A scene file that cannot be used: names the file, the key and the value."""
+    """A scene that cannot be used: names its source (file or label), the key and the value."""
 
     def __init__(self, source: str, key: str, problem: str, value: Any = None) -> None:
         self.source, self.key, self.value = source, key, value
@@ -95,7 +96,7 @@ def read_yaml(raw: bytes, source: str) -> Any:
 
 
 class SceneReader:
-    """Typed access to parsed YAML with errors naming the file, the key and the value."""
+    """Typed access to a scene's parsed data with errors naming the source, the key and the value."""
 
     def __init__(self, source: str) -> None:
         self.source = source
@@ -170,14 +171,15 @@ class SceneReader:
             raise SceneError(self.source, key, f"not a moving joint of {robot.source} "
                              f"(joints: {', '.join(robot.joint_names)})", name)
 
-    def file(self, value: Any, key: str, scene_path: Path) -> Path:
-        """The file ``value`` names, relative to the scene file's folder, else to the
-        package share."""
+    def file(self, value: Any, key: str, base_dir: Path | None) -> Path:
+        """The file ``value`` names: absolute, else relative to ``base_dir`` (the scene
+        file's folder; None for a scene from a mapping), else to the package share."""
         if value is None or value == "":
             raise SceneError(self.source, key, "missing: give a file path")
-        for base in (scene_path.parent, package_share()):
+        bases = (package_share(),) if base_dir is None else (base_dir, package_share())
+        for base in bases:
             candidate = (base / str(value)).resolve()
             if candidate.is_file():
                 return candidate
-        raise SceneError(self.source, key, f"file not found next to the scene ({scene_path.parent}) "
-                         f"or in the package share ({package_share()})", value)
+        beside = "" if base_dir is None else f"in {base_dir} or "
+        raise SceneError(self.source, key, f"file not found {beside}in the package share ({package_share()})", value)

@@ -9,18 +9,28 @@ a step that holds a root returns at the root first (``roots`` names the events t
 A guard that reads exactly 0 at the start is inactive until it leaves 0 (SUNDIALS' rule),
 which is how a hybrid restart ignores the crossing it just handled.
 
-scikit-sundae 1.2 reports only right-hand-side (residual) and Jacobian evaluations, so
-rejected steps (error-test failures) and nonlinear iterations are ``None``. It does not
-expose IDASetSuppressAlg either, so components cannot be excluded from IDA's error test
-(a huge absolute tolerance is no substitute: it also disables the Newton convergence test
-on them, and a measured index-1 test problem then gave algebraic errors of 0.5).
+scikit-sundae 1.2 reports only residual and Jacobian evaluations and does not expose
+IDASetSuppressAlg. Both are reached through the SUNDIALS library that its wheel ships
+(``scikit_sundae.libs/libsundials_ida-*.so``, already loaded by its extension module):
+:func:`ida_memory` reads the solver's IDA memory pointer out of the extension object (its
+layout is that of scikit-sundae 1.2.0, the locked version; another version is refused, and
+every read is checked against what scikit-sundae itself reports), then
+:func:`ida_counters` reads the error-test failures, nonlinear iterations and nonlinear
+convergence failures, and :func:`suppress_algebraic_error` calls IDASetSuppressAlg, which
+takes the algebraic components (id 0) out of IDA's local error test. CVODE's counters stay
+``None``: its extension is not opened here.
 """
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
+import functools
 import os
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
+import sksundae
 from sksundae.cvode import CVODE
 from sksundae.ida import IDA
 
@@ -39,6 +49,75 @@ CVODE_METHODS = {"cvode_bdf": "BDF", "cvode_adams": "Adams"}
 COLLAPSE_FLAGS = (-2, -3, -4)
 #: SUNDIALS' flag for a return at a located root (CV_ROOT_RETURN, IDA_ROOT_RETURN).
 ROOT_RETURN = 2
+
+#: The scikit-sundae version whose extension-object layout :func:`ida_memory` reads.
+IDA_LAYOUT_VERSION = "1.2.0"
+#: Byte offset of ``void* mem`` in sksundae._cy_ida.IDA: after the object header (reference
+#: count and type, 16 bytes) and Cython's virtual-table pointer (8 bytes).
+IDA_MEMORY_OFFSET = 24
+#: IntegratorStats counters read from IDA (field -> IDAGetNum* function).
+IDA_COUNTERS = {"rejected_steps": "IDAGetNumErrTestFails",
+                "nonlinear_iterations": "IDAGetNumNonlinSolvIters",
+                "nonlinear_convergence_failures": "IDAGetNumNonlinSolvConvFails"}
+
+
+@functools.cache
+def ida_library() -> ctypes.CDLL | None:
+    """The SUNDIALS IDA library scikit-sundae's extension is linked against (the wheel's
+    copy, else the system's), or None if neither is found."""
+    shipped = sorted((Path(sksundae.__file__).parent.parent / "scikit_sundae.libs")
+                     .glob("libsundials_ida-*.so*"))
+    path = str(shipped[0]) if shipped else ctypes.util.find_library("sundials_ida")
+    if path is None:
+        return None
+    library = ctypes.CDLL(path)
+    for name in (*IDA_COUNTERS.values(), "IDAGetNumResEvals"):
+        getattr(library, name).argtypes = (ctypes.c_void_p, ctypes.POINTER(ctypes.c_long))
+    library.IDAGetCurrentTime.argtypes = (ctypes.c_void_p, ctypes.POINTER(ctypes.c_double))
+    library.IDASetSuppressAlg.argtypes = (ctypes.c_void_p, ctypes.c_int)
+    return library
+
+
+def ida_memory(solver: IDA) -> ctypes.c_void_p | None:
+    """IDA's memory pointer inside an initialised scikit-sundae IDA solver, or None when the
+    library or the known layout (scikit-sundae IDA_LAYOUT_VERSION) is not available."""
+    if sksundae.__version__ != IDA_LAYOUT_VERSION or ida_library() is None:
+        return None
+    extension = solver._IDA__IDA
+    return ctypes.c_void_p(ctypes.c_void_p.from_address(id(extension)
+                                                        + IDA_MEMORY_OFFSET).value)
+
+
+def ida_count(memory: ctypes.c_void_p, function: str) -> int:
+    """One IDAGetNum* counter; a failing call is an IntegrationError."""
+    value = ctypes.c_long()
+    flag = getattr(ida_library(), function)(memory, ctypes.byref(value))
+    if flag != 0:
+        raise IntegrationError(f"ida: {function} failed with flag {flag}")
+    return int(value.value)
+
+
+def checked_memory(memory: ctypes.c_void_p, result) -> None:
+    """The pointer must be the solver's own: IDA's time and residual count must be those
+    scikit-sundae reports in ``result``."""
+    now = ctypes.c_double()
+    flag = ida_library().IDAGetCurrentTime(memory, ctypes.byref(now))
+    if flag != 0 or ida_count(memory, "IDAGetNumResEvals") != int(result.nfev):
+        raise IntegrationError("ida: the IDA memory read from scikit-sundae's solver does "
+                               f"not match its results (flag {flag}); its layout differs "
+                               f"from scikit-sundae {IDA_LAYOUT_VERSION}'s")
+
+
+def ida_counters(memory: ctypes.c_void_p) -> dict[str, int]:
+    """Error-test failures, nonlinear iterations and convergence failures so far."""
+    return {field: ida_count(memory, function) for field, function in IDA_COUNTERS.items()}
+
+
+def suppress_algebraic_error(memory: ctypes.c_void_p) -> None:
+    """IDASetSuppressAlg(mem, true): the components with id 0 leave the error test."""
+    flag = ida_library().IDASetSuppressAlg(memory, 1)
+    if flag != 0:
+        raise IntegrationError(f"ida: IDASetSuppressAlg failed with flag {flag}")
 
 
 def events_options(events: tuple[Event, ...], with_yp: bool) -> dict:
@@ -147,11 +226,15 @@ class CvodeStepper(SundialsStepper):
 class IdaStepper(SundialsStepper):
     """IDA on residual(t, y, y') = 0; ``jac(t, y, yp, cj)`` = dF/dy + cj dF/dy' if given;
     ``extra`` holds further sksundae.ida.IDA options (e.g. first_step, max_step in s,
-    max_order, max_nonlin_iters), which take precedence over the defaults here."""
+    max_order, max_nonlin_iters), which take precedence over the defaults here.
+    ``suppress_alg``: the algebraic components leave the error test (IDASetSuppressAlg).
+    The statistics carry IDA's own error-test failures, nonlinear iterations and
+    convergence failures (None only if the IDA memory cannot be reached)."""
 
     def __init__(self, residual: Callable, t0: float, y0: np.ndarray, yp0: np.ndarray,
                  t_end: float, algebraic: np.ndarray, rtol: float, atol, jac,
-                 extra: dict | None = None, events: tuple[Event, ...] = ()) -> None:
+                 extra: dict | None = None, events: tuple[Event, ...] = (),
+                 suppress_alg: bool = False) -> None:
         def resfn(t, y, yp, res):
             res[:] = residual(t, y, yp)
 
@@ -165,6 +248,24 @@ class IdaStepper(SundialsStepper):
         options.update(extra or {})
         solver = IDA(resfn, **options)
         super().__init__("ida", solver, t0, t_end, solver.init_step(t0, y0, yp0))
+        self.memory = ida_memory(solver)
+        if self.memory is not None:
+            checked_memory(self.memory, self.last)
+        if suppress_alg:
+            if self.memory is None:
+                library = "missing" if ida_library() is None else "found"
+                raise NotImplementedError(
+                    "suppress_alg needs IDASetSuppressAlg through scikit-sundae "
+                    f"{IDA_LAYOUT_VERSION}'s SUNDIALS library, found version "
+                    f"{sksundae.__version__} (library {library})")
+            suppress_algebraic_error(self.memory)
+
+    def finish(self, stats: IntegratorStats) -> None:
+        super().finish(stats)
+        if self.memory is not None:
+            checked_memory(self.memory, self.last)
+            for field, value in ida_counters(self.memory).items():
+                setattr(stats, field, value)
 
     def derivative_at(self, t: float) -> np.ndarray:
         """y' at t: the last result's when it is at t, else IDA's interpolation."""

@@ -18,8 +18,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import (FIXED_STEP, INTEGRATORS, DivergenceError,
-                                             Solution, integrate)
+from youbot_dynamics.sim.integrators import DivergenceError, Solution, integrate
+from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
 
 STATE_NAMES = ("x", "y", "vx", "vy")
 #: The seed's initial state: spring stretched to r = 1.2 along x, at rest.

@@ -12,19 +12,26 @@ expressions (:func:`squeezer_equations`).
 
 :func:`simulate_squeezer` runs the squeezer from the test set's consistent initial values
 with sim.constrained.simulate_holonomic, in any formulation of dynamics.constraints.
+:func:`suppression_table` runs the tolerance-by-suppression grids (index 3 and index 2;
+IDA with and without its suppress-alg, Radau IIA with and without Hairer's index scaling).
 """
 from __future__ import annotations
 
+import contextlib
 import functools
+import io
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 import sympy as sp
 
-from youbot_dynamics.dynamics.constraints import DAE_FORMULATIONS, HolonomicSystem
+from youbot_dynamics.dynamics.constraints import DAE_FORMULATIONS, HolonomicSystem, dae_form
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.constrained import ConstrainedRun, simulate_holonomic
+from youbot_dynamics.sim.integration import IntegrationError
+from youbot_dynamics.sim.integrators import integrate_dae
+from youbot_dynamics.sim.radau_dae import integrate_dae_form
 
 POSITION_NAMES = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
 #: The unknown functions of t in :func:`squeezer_equations`, in the order q, v, lambda.
@@ -67,6 +74,27 @@ SEED_FIGURES = {
                              "nonlinear_convergence_failures": 261},
     "DOPRI5 index 1": {"steps": 85, "rhs_evals": 704},
     "Dymola": {"steps": 169, "rhs_evals": 421, "jac_evals": 30},
+}
+#: Tolerances (rtol = atol, as in the seed's Assimulo runs) of the suppression grids.
+SUPPRESSION_TOLERANCES = (1e-4, 1e-6, 1e-8)
+#: Columns of the suppression grids: name -> (integrator, higher-index variables out of
+#: the error test). IDA suppressed: IDASetSuppressAlg on the form's excluded components
+#: (v, w, lambda for index 3; w, lambda for index 2); radau5 suppressed: Hairer's
+#: index-dependent weights (sim/radau_dae.py), the rest: every component under rtol/atol.
+SUPPRESSION_COLUMNS = {"ida, all in error test": ("ida", False),
+                       "ida, suppressed": ("ida", True),
+                       "radau5, all in error test": ("radau5", False),
+                       "radau5, index-scaled": ("radau5", True)}
+#: Steps after which a grid run is given up (an error test that cannot pass at a
+#: collapsing step size would otherwise run for minutes).
+SUPPRESSION_STEP_BUDGET = 2500
+#: What benchmarks.md gives of the seed's runs behind its Tables 8 and 9 (Assimulo IDA at
+#: its defaults, rtol = atol = 1e-6, 500 outputs); the grids themselves are not there.
+SEED_SUPPRESSION = {
+    "index3": "seed, Assimulo IDA with v' and lambda out of the error test: ran, 843 steps, "
+              "1811 f-evals, 834 J-evals, 261 convergence failures",
+    "index2": "seed, Assimulo IDA: ran, 1603 steps, 2692 f-evals, 227 J-evals, "
+              "81 error-test failures",
 }
 
 
@@ -197,8 +225,9 @@ def simulate_squeezer(formulation: str, integrator: str | None = None, rtol: flo
                       baumgarte_rate: float = BAUMGARTE_RATE,
                       exact_jacobian: bool | None = None) -> ConstrainedRun:
     """The squeezer from the test set's consistent initial values over [0, t_end] s with
-    n_outputs equally spaced outputs. ``integrator`` defaults to ida for DAE
-    formulations and rk45 otherwise; atol defaults to rtol * 1e-3 (q is O(1) to O(10) rad,
+    n_outputs equally spaced outputs. ``integrator`` defaults to radau5 for index3 (the
+    index-scaled error test), ida for the other DAE formulations and rk45 otherwise; atol
+    defaults to rtol * 1e-3 (q is O(1) to O(10) rad,
     v up to O(1e3) rad/s). DAE forms use the exact Jacobian unless ``exact_jacobian`` is
     False (IDA's finite differences)."""
     if not t_end > 0:
@@ -206,12 +235,77 @@ def simulate_squeezer(formulation: str, integrator: str | None = None, rtol: flo
     if n_outputs < 2:
         raise UserInputError(f"n_outputs must be at least 2, got {n_outputs!r}")
     if integrator is None:
-        integrator = "ida" if formulation in DAE_FORMULATIONS else "rk45"
+        integrator = default_integrator(formulation)
     return simulate_holonomic(squeezer_system(), formulation, integrator, Q0, V0,
                               np.linspace(0.0, t_end, n_outputs), rtol=rtol,
                               atol=rtol * 1e-3 if atol is None else atol, dt=dt,
                               baumgarte_rate=baumgarte_rate,
                               exact_jacobian=exact_jacobian)
+
+
+def default_integrator(formulation: str) -> str:
+    """radau5 for index3, ida for the other DAE formulations, rk45 for the ODE ones."""
+    if formulation == "index3":
+        return "radau5"
+    return "ida" if formulation in DAE_FORMULATIONS else "rk45"
+
+
+@dataclass(frozen=True)
+class GridCell:
+    """One run of a suppression grid: the relative error of q at t_end against the
+    reference and the steps (None when it failed), or why and when it failed."""
+
+    error: float | None
+    steps: int | None
+    failure: str | None
+
+    def verdict(self) -> str:
+        """'q err 1.5e-07, 307 steps' or 'fails: <reason>'."""
+        if self.failure is not None:
+            return f"fails: {self.failure}"
+        return f"q err {self.error:.1e}, {self.steps} steps"
+
+
+def suppression_run(formulation: str, column: str, tol: float, n_outputs: int) -> GridCell:
+    """The squeezer in ``formulation`` (index3 or index2) on [0, 0.03] s with one
+    SUPPRESSION_COLUMNS entry at rtol = atol = tol, exact Jacobian, at most
+    SUPPRESSION_STEP_BUDGET steps. scikit-sundae prints SUNDIALS' failure messages to
+    stdout; they are kept off it here (the failure is in the returned cell)."""
+    integrator, suppressed = SUPPRESSION_COLUMNS[column]
+    form = dae_form(squeezer_system(), formulation, Q0, V0, W0, LAMBDA0)
+    times = np.linspace(0.0, T_REFERENCE, n_outputs)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            if integrator == "radau5":
+                solution, _ = integrate_dae_form(form, times, rtol=tol, atol=tol,
+                                                 index_scaling=suppressed,
+                                                 max_steps=SUPPRESSION_STEP_BUDGET)
+            else:
+                # IDA suppresses exactly its id-0 components: the excluded ones are marked
+                # so (v for index 3 too: the id vector is read only by the error test here).
+                marked = form.excluded if suppressed else form.algebraic
+                solution = integrate_dae(form.residual, form.y0, form.yp0, times,
+                                         algebraic=marked, rtol=tol, atol=tol,
+                                         exclude_from_error_test=marked if suppressed else None,
+                                         jac=form.residual_jacobian,
+                                         max_steps=SUPPRESSION_STEP_BUDGET)
+    except IntegrationError as error:
+        when = getattr(error, "time", None)
+        reason = getattr(error, "reason", None) or str(error)
+        return GridCell(None, None, reason if when is None else f"t = {when:.3g} s, {reason}")
+    return GridCell(float(np.max(reference_error(form.positions(solution.x[-1])))),
+                    solution.stats.steps, None)
+
+
+def suppression_table(formulation: str, tolerances=SUPPRESSION_TOLERANCES,
+                      n_outputs: int = 500) -> dict[float, dict[str, GridCell]]:
+    """The tolerance-by-suppression grid of one formulation (index3: the seed's Table 8,
+    index2: its Table 9): tolerance -> column -> :class:`GridCell`."""
+    if formulation not in ("index3", "index2"):
+        raise UserInputError(f"suppression grids exist for index3 and index2, got "
+                             f"{formulation!r}")
+    return {tol: {column: suppression_run(formulation, column, tol, n_outputs)
+                  for column in SUPPRESSION_COLUMNS} for tol in tolerances}
 
 
 def reference_error(q: np.ndarray) -> np.ndarray:

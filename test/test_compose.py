@@ -1,0 +1,65 @@
+"""Composition of several URDFs into one robot, checked through Pinocchio's forward
+kinematics and inertias of the composed model, and gravity on a model copy."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from youbot_dynamics import default_urdf
+from youbot_dynamics.model.compose import (CompositionError, InertialCorrection, Placement, composed_urdf,
+                                           robot_with_gravity)
+from youbot_dynamics.model.robot import load_robot
+
+URDF = Path(default_urdf())
+
+
+def pose(xyz, yaw) -> np.ndarray:
+    matrix = np.eye(4)
+    matrix[:3, :3] = pin.rpy.rpyToMatrix(0.0, 0.0, yaw)
+    matrix[:3, 3] = xyz
+    return matrix
+
+
+def test_two_robots_sit_at_their_poses_with_prefixed_names_and_corrected_inertials():
+    second = pose([0.0, 0.575, 0.084], -np.pi / 2)
+    finger = InertialCorrection(mass=0.02, moments=(5.4e-7, 7.1e-7, 2.1e-7))
+    robot = load_robot(composed_urdf([Placement(URDF, "yb1_", pose([-0.569, 0.0, 0.084], 0.0)),
+                                      Placement(URDF, "yb2_", second, {"gripper_finger_link_l": finger})]))
+    single = load_robot(URDF)
+    assert robot.nv == 2 * single.nv
+    assert set(robot.joint_names) == {p + n for p in ("yb1_", "yb2_") for n in single.joint_names}
+    model, data = robot.model, robot.model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    placed = data.oMf[model.getFrameId("yb2_base_footprint")]
+    assert np.allclose(placed.homogeneous, second, atol=1e-12)
+    # each arm's end effector is its own robot's, moved by the pose
+    one = single.model.createData()
+    pin.framesForwardKinematics(single.model, one, pin.neutral(single.model))
+    local = one.oMf[single.model.getFrameId("arm_link_5")].homogeneous
+    assert np.allclose(data.oMf[model.getFrameId("yb2_arm_link_5")].homogeneous, second @ local, atol=1e-12)
+    inertia = model.inertias[model.frames[model.getFrameId("yb2_gripper_finger_link_l")].parentJoint]
+    assert inertia.mass == pytest.approx(0.02)
+    untouched = model.inertias[model.frames[model.getFrameId("yb1_gripper_finger_link_l")].parentJoint]
+    assert untouched.mass == pytest.approx(0.01) and np.allclose(np.diag(untouched.inertia), 0.01)
+
+
+def test_errors_name_the_placement_and_its_part(tmp_path):
+    with pytest.raises(CompositionError) as caught:
+        composed_urdf([Placement(URDF), Placement(URDF, "b_", inertials={"no_link": InertialCorrection(1.0)})])
+    assert (caught.value.index, caught.value.part) == (1, "inertials.no_link")
+    broken = tmp_path / "broken.urdf"
+    broken.write_text("<robot name='x'><link", encoding="utf-8")
+    with pytest.raises(CompositionError, match="not valid XML") as caught:
+        composed_urdf([Placement(broken)])
+    assert (caught.value.index, caught.value.part) == (0, "urdf")
+
+
+def test_gravity_on_a_copy_leaves_the_loaded_model_alone():
+    robot = load_robot(URDF)
+    moon = robot_with_gravity(robot, [0.0, 0.0, -1.62])
+    assert moon.model.gravity.linear.tolist() == [0.0, 0.0, -1.62]
+    assert robot.model.gravity.linear.tolist() == [0.0, 0.0, -9.81]
+    assert robot_with_gravity(robot, [0.0, 0.0, -9.81]) is robot
