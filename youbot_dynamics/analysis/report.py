@@ -167,11 +167,13 @@ STUDY_NAMES = tuple(study.name for study in STUDIES)
 def missing_in_build(argv: Sequence[str]) -> str | None:
     """None if ``youbot-dynamics`` accepts ``argv``; else its one-line usage error (a
     command or option of another branch not merged here)."""
-    from youbot_dynamics.cli import build_parser
+    from youbot_dynamics.cli import COMMANDS, build_parser
+    if not argv or argv[0] not in COMMANDS:
+        return f"no command {argv[0] if argv else ''!r} in youbot-dynamics"
     errors = io.StringIO()
     try:
         with contextlib.redirect_stderr(errors):
-            build_parser().parse_args(list(argv))
+            build_parser((COMMANDS[argv[0]][0],)).parse_args(list(argv))
     except SystemExit:
         return errors.getvalue().strip() or "not accepted"
     return None

@@ -18,21 +18,6 @@ import sys
 
 from youbot_dynamics.errors import UserInputError
 
-<<<<<<< HEAD
-COMMAND_MODULES = (
-    "youbot_dynamics.cli.model_commands",
-    "youbot_dynamics.cli.sim_commands",
-    "youbot_dynamics.cli.contact_commands",
-    "youbot_dynamics.cli.pendulum_commands",
-    "youbot_dynamics.cli.mechanism_commands",
-    "youbot_dynamics.cli.study_commands",
-    "youbot_dynamics.cli.ros_commands",
-    "youbot_dynamics.cli.log_commands",
-    "youbot_dynamics.cli.identify_commands",
-    "youbot_dynamics.cli.mobile_commands",
-    "youbot_dynamics.cli.report_commands",
-)
-=======
 #: command -> (the module that registers it, its one-line summary in ``--help``), in the
 #: order ``--help`` lists them.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -65,9 +50,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
                                ("identify", "identify base parameters from a bag's /joint_states"))),
         ("mobile_commands", (("unicycle", "the differential drive against its closed forms"),
                              ("mecanum", "youBot base: wheel speeds of a twist, and its odometry"))),
+        ("report_commands", (("report", "run every study; write their PNGs and one Markdown page"),)),
     ) for name, summary in commands}
 COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
->>>>>>> main
 
 
 class OneLineParser(argparse.ArgumentParser):
