@@ -64,3 +64,14 @@ def test_short_report_writes_every_figure(tmp_path):
     page = assert_report(tmp_path, [s.name for s in STUDIES])
     assert status == 0, page
     assert "0 failed" in page
+
+
+def test_a_study_that_raises_is_reported_failed(tmp_path, monkeypatch):
+    from youbot_dynamics.cli import study_commands
+
+    def broken(args):
+        raise RuntimeError("a bug in the study")
+    monkeypatch.setattr(study_commands, "run_uncertainty", broken)
+    study = next(s for s in STUDIES if s.name == "uncertainty")
+    result = run_study(study, str(tmp_path), False)
+    assert result.status == 1 and "RuntimeError: a bug in the study" in result.errors
