@@ -50,8 +50,9 @@ def test_serial_boundaries_meet_the_root_locus(serial_boundaries):
         assert radius == pytest.approx(locus_radius_on_ray(order, 0.0), abs=0.05)
 
 
-def test_local_cluster_equals_serial(serial_boundaries):
-    assert map_cases(measured_boundary_radius, BOUNDARY_CASES, workers=2,
+@pytest.mark.parametrize("workers", [1, 2])
+def test_local_cluster_equals_serial(serial_boundaries, workers):
+    assert map_cases(measured_boundary_radius, BOUNDARY_CASES, workers=workers,
                      progress=False) == serial_boundaries
 
 

@@ -253,7 +253,8 @@ def section(study: Study, result: StudyResult, out_dir: Path) -> str:
     lines += [f"**Ours** ({result.wall_time:.1f} s).", "", output_block(result.output), ""]
     agreement = verdict_agreement(result.output)
     difference = "\n".join(part for part in (agreement, study.method) if part)
-    lines += [f"**Difference.** {difference or 'See the seed figures beside ours above.'}", ""]
+    lines += [f"**Difference.** {difference or 'Not computed: read ours against the seed line above.'}",
+              ""]
     lines += [f"![{name}]({name})" for name in study.figures]
     return "\n".join(lines + [""])
 
@@ -269,7 +270,8 @@ def report_page(studies: Sequence[Study], results: Sequence[StudyResult], out_di
             f"{len(failed)} failed{' (' + ', '.join(failed) + ')' if failed else ''}, "
             f"{len(missing)} not in this build"
             f"{' (' + ', '.join(missing) + ')' if missing else ''}; wall time "
-            f"{total_time:.0f} s.", "",
+            f"{total_time:.0f} s against {sum(r.wall_time for r in results):.0f} s of the "
+            f"studies' own run times added up.", "",
             *(f"- [{s.title}](#{s.name})" for s in studies), ""]
     body = [f'<a id="{s.name}"></a>\n\n' + section(s, r, out_dir)
             for s, r in zip(studies, results)]
