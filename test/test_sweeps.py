@@ -3,8 +3,8 @@ on an embedded local cluster and on a real one (a ``dask scheduler`` and two ``d
 processes on 127.0.0.1), in the cases' order; a failing case is named.
 
 The sweeps: the measured real-axis stability boundary of BDF1-4 (bisection on the solver's
-own growth, analysis/bdf.py), checked also against the analytic root locus; and
-work-precision points on a short youBot scene.
+own growth, analysis/bdf.py), checked also against the analytic root locus; work-precision
+points on a short youBot scene; the uncertainty study's Monte Carlo samples.
 """
 from __future__ import annotations
 
@@ -126,6 +126,18 @@ def test_work_precision_points_on_the_cluster_equal_serial(dask_cluster):
     assert [figures(p) for p in remote] == [figures(p) for p in serial]
     assert all(p.failure is None and math.isfinite(p.q_error) for p in serial)
     assert [(p.integrator, p.value) for p in remote] == [(m, v) for m, vs in grid.items() for v in vs]
+
+
+def test_monte_carlo_on_the_cluster_equals_serial(dask_cluster):
+    import numpy as np
+
+    from youbot_dynamics.systems.uncertain_pendulum import SAMPLES_PER_CASE, monte_carlo
+    n = 3 * SAMPLES_PER_CASE + 17  # four blocks, the last one short
+    serial, phi = monte_carlo(n, 2.0)
+    remote, phi_remote = monte_carlo(n, 2.0, scheduler=dask_cluster)
+    assert phi_remote.shape == phi.shape == (len(serial.t), n)
+    assert np.array_equal(phi_remote, phi)
+    assert np.array_equal(remote.mean, serial.mean) and np.array_equal(remote.sigma, serial.sigma)
 
 
 def square_root(x: float) -> float:

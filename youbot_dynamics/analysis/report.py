@@ -9,7 +9,7 @@ process with its stdout captured, and the page (``report.md``) is assembled from
 captured outputs in the order of :data:`STUDIES`, whatever order they finished in.
 
 Short forms (the default) keep the whole report to minutes on two cores; ``full`` runs the
-seed's sizes. Studies that sweep on Dask themselves (bdf-study, work-precision) run with
+seed's sizes. Studies that sweep on Dask themselves (bdf-study, uncertainty, work-precision) run with
 ``--workers 0`` here: each is already one case on a worker, and the report's cluster is
 the one that spreads the work. A study whose command or option is not in this build (the equation pipeline
 and the index-3 tables come from other branches) is listed as missing, not run.
@@ -142,8 +142,10 @@ STUDIES: tuple[Study, ...] = (
                "quaternions do not.",
           method="Every run is an axisymmetric top, judged against its closed form."),
     Study("uncertainty", "Uncertain damped pendulum: linear propagation vs Monte Carlo (seed "
-          "000 item 5)", ("uncertainty", "--samples", "200", "--plot", "{out}/uncertainty.png"),
-          full_argv=("uncertainty", "--samples", "1000", "--plot", "{out}/uncertainty.png"),
+          "000 item 5)", ("uncertainty", "--samples", "200", "--workers", "0",
+                                  "--plot", "{out}/uncertainty.png"),
+          full_argv=("uncertainty", "--samples", "1000", "--workers", "0",
+                     "--plot", "{out}/uncertainty.png"),
           figures=("uncertainty.png",),
           seed="Measurements.jl's band of phi(t) (linear propagation only, a figure).",
           method="We add Monte Carlo (200 samples in the short form, 1000 with --full) and "
