@@ -4,6 +4,7 @@ parameters of a 2-link planar arm)."""
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from youbot_dynamics import default_urdf
@@ -144,7 +145,6 @@ def test_pseudo_inertia_is_positive_definite_exactly_for_physical_bodies():
     """Independent reference: a body is physical when m > 0 and its central inertia has
     positive principal moments obeying the triangle inequality (Wensing et al. 2017)."""
     from youbot_dynamics.identification.consistency import pseudo_inertia
-    import pinocchio as pin
     box = pin.Inertia.FromBox(2.0, 0.1, 0.2, 0.3)           # physical
     box.lever = np.array([0.05, -0.02, 0.1])
     assert np.linalg.eigvalsh(pseudo_inertia(box.toDynamicParameters()))[0] > 0
@@ -167,3 +167,58 @@ def test_standard_from_base_reproduces_the_base_values(arm):
     change = theta - reference
     projected = np.linalg.pinv(base.matrix) @ base.matrix @ change   # measured 6.3e-17 off; bound 1e-12
     np.testing.assert_allclose(projected, change, atol=1e-12)
+
+
+# --------------------------------------------------------------------------------------
+# Log-Cholesky parametrisation and the links of each body
+# --------------------------------------------------------------------------------------
+def test_log_cholesky_factor_is_positive_definite_and_its_derivatives_match_differences():
+    from youbot_dynamics.identification import consistency
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        psi = rng.normal(0.0, 1.0, 10)
+        factor = consistency.log_cholesky_factor(psi)
+        assert np.allclose(factor, np.triu(factor)) and np.all(np.diag(factor) > 0)
+        assert np.linalg.eigvalsh(factor @ factor.T)[0] > 0
+        step = 1e-6
+        differences = np.array([(consistency.log_cholesky_factor(psi + e) - consistency.log_cholesky_factor(psi - e))
+                                / (2 * step) for e in np.eye(10) * step])
+        # measured 3e-10 (central differences, step 1e-6); bound 1e-7
+        np.testing.assert_allclose(consistency.log_cholesky_derivatives(psi, factor), differences, atol=1e-7)
+    np.testing.assert_array_equal(consistency.log_cholesky_factor(np.zeros(10)), np.eye(4))
+    pseudo = consistency.pseudo_inertia(pin.Inertia.FromBox(2.0, 0.3, 0.2, 0.1).toDynamicParameters())
+    upper = consistency.upper_cholesky(pseudo)
+    assert np.allclose(upper, np.triu(upper)) and np.all(np.diag(upper) > 0)
+    np.testing.assert_allclose(upper @ upper.T, pseudo, atol=1e-15)   # measured 3e-18
+
+
+def test_pseudo_inertia_map_inverts_pseudo_inertia():
+    from youbot_dynamics.identification.consistency import (PARAMETER_MAP, parameters_of_pseudo_inertia,
+                                                            pseudo_inertia)
+    parameters = pin.Inertia.Random().toDynamicParameters()
+    np.testing.assert_allclose(parameters_of_pseudo_inertia(pseudo_inertia(parameters)), parameters, atol=1e-14)
+    np.testing.assert_allclose(PARAMETER_MAP @ pseudo_inertia(parameters).ravel(), parameters, atol=1e-14)
+
+
+def test_body_links_sum_to_pinocchio_bodies_and_the_jacobian_matches_differences(arm):
+    """The youBot arm's bodies from their links (placements and URDF inertials read from the
+    file): at psi = 0 they are Pinocchio's own bodies; body 5 is arm_link_5, the palm and
+    both (locked) fingers."""
+    from youbot_dynamics.identification.consistency import inertial_parameters
+    from youbot_dynamics.identification.urdf_output import body_links
+    layout = RegressorLayout(arm)
+    links = body_links(default_urdf(), layout)
+    assert [(link.name, link.body) for link in links] == [
+        ("arm_link_1", 0), ("arm_link_2", 1), ("arm_link_3", 2), ("arm_link_4", 3), ("arm_link_5", 4),
+        ("gripper_palm_link", 4), ("gripper_finger_link_l", 4), ("gripper_finger_link_r", 4)]
+    theta, jacobian = inertial_parameters(links, np.zeros(10 * len(links)), layout.n_inertial)
+    # measured 2.2e-16 against model.inertias (Pinocchio's own composition of the URDF); bound 1e-12
+    np.testing.assert_allclose(theta, layout.standard_parameters()[:layout.n_inertial], atol=1e-12)
+    psi = np.random.default_rng(4).normal(0.0, 0.3, 10 * len(links))
+    _, jacobian = inertial_parameters(links, psi, layout.n_inertial)
+    step = 1e-7
+    differences = np.column_stack([(inertial_parameters(links, psi + e, layout.n_inertial)[0]
+                                    - inertial_parameters(links, psi - e, layout.n_inertial)[0]) / (2 * step)
+                                   for e in np.eye(psi.size) * step])
+    # measured 1.2e-9 (entries up to 3); bound 1e-6
+    np.testing.assert_allclose(jacobian, differences, atol=1e-6)

@@ -54,6 +54,13 @@ def test_preprocess_differentiates_a_slow_sine(tmp_path):
     assert motion.kept.step == 10 and motion.kept.start == 60      # to 2 x 5 Hz; three cut-off periods of edge
     # the filter passes a 0.16 Hz sine: measured 4.8e-6; bound 2e-5
     np.testing.assert_allclose(low_pass(samples.q, 100.0, 5.0)[inner], samples.q[inner], atol=2e-5)
+    # measured states: q and v exactly as recorded, a by central differences of the recorded v
+    measured = preprocess(samples, cutoff=5.0, states="measured")
+    np.testing.assert_array_equal(measured.q, samples.q)
+    np.testing.assert_array_equal(measured.a, np.gradient(samples.v, samples.t, axis=0))
+    np.testing.assert_allclose(measured.a[inner, 0], -np.sin(samples.t[inner]), atol=1e-3)   # measured 1.7e-5
+    with pytest.raises(UserInputError, match="states 'smoothed': choose from filtered, measured"):
+        preprocess(samples, states="smoothed")
 
 
 @pytest.mark.parametrize("defect, match", [

@@ -7,8 +7,10 @@
 - ``identify BAG``: base parameters from /joint_states of a bag (MCAP file or rosbag2
   folder): OLS and WLS estimates, standard deviations, relative deviations (flagged above
   10 %), condition number, residual RMS per joint, pseudo-inertia check; ``--plot`` a PNG;
-  ``--write-urdf OUT`` the URDF with the identified parameters, projected onto physically
-  consistent inertias, with a header comment recording the bag, the date and the fit.
+  ``--write-urdf OUT`` the URDF with identified parameters that are physically consistent
+  by construction (every link's pseudo-inertia in log-Cholesky coordinates, fitted to the
+  base parameters with ``--prior-weight`` toward the URDF's links), with a header comment
+  recording the bag, the date, the fit and how far it moved the base parameters.
 """
 from __future__ import annotations
 
@@ -21,14 +23,15 @@ import numpy as np
 from youbot_dynamics import default_urdf
 from youbot_dynamics.cli.common import CommandError, positive, print_json, robot_from, table
 from youbot_dynamics.identification.base_parameters import base_parameters
-from youbot_dynamics.identification.consistency import (nearest_consistent, pseudo_inertia_eigenvalues,
+from youbot_dynamics.identification.consistency import (PRIOR_WEIGHT, consistent_fit, pseudo_inertia_eigenvalues,
                                                         standard_from_base)
 from youbot_dynamics.identification.estimation import FLAG_PERCENT
 from youbot_dynamics.identification.excitation import (ExcitationLimits, condition_number, optimise_excitation,
                                                        random_fourier)
 from youbot_dynamics.identification.identify import ARM_JOINTS, identify_bag, layout_for
+from youbot_dynamics.identification.measurements import STATES
 from youbot_dynamics.identification.regressor import FRICTION_TERMS
-from youbot_dynamics.identification.urdf_output import identified_urdf
+from youbot_dynamics.identification.urdf_output import body_links, identified_urdf
 from youbot_dynamics.model.robot import load_robot
 
 
@@ -69,10 +72,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     _common(identify)
     identify.add_argument("--topic", default="/joint_states", help="JointState topic (default /joint_states)")
     identify.add_argument("--cutoff", type=positive, default=10.0, help="low-pass cut-off, Hz (default 10)")
+    identify.add_argument("--states", choices=STATES, default="filtered",
+                          help="evaluate the regressor at low-passed q, v (default) or at the recorded ones "
+                               "(exact states, e.g. a simulator's)")
     identify.add_argument("--decimation", type=int, help="keep every N-th sample (default: down to 2 x cut-off)")
     identify.add_argument("--plot", help="save measured vs predicted effort and residuals as this PNG")
-    identify.add_argument("--write-urdf", metavar="OUT", help="write the URDF with the identified inertials "
-                          "(projected onto physically consistent ones) and friction")
+    identify.add_argument("--write-urdf", metavar="OUT", help="write the URDF with identified inertials "
+                          "(physically consistent by construction) and friction")
+    identify.add_argument("--prior-weight", type=positive, default=PRIOR_WEIGHT,
+                          help=f"--write-urdf: weight of the squared log-Cholesky distance to the URDF's links "
+                               f"against the base parameters' chi^2/2 (default {PRIOR_WEIGHT:g})")
     identify.set_defaults(run=run_identify)
 
 
@@ -112,7 +121,8 @@ def run_identify(args: argparse.Namespace) -> int:
     robot = robot_from(args)
     result = identify_bag(args.bag, robot, _names(args.joints, "--joints"),
                           _names(args.friction, "--friction", FRICTION_TERMS), topic=args.topic,
-                          cutoff=args.cutoff, decimation=args.decimation, progress=not args.json)
+                          cutoff=args.cutoff, decimation=args.decimation, progress=not args.json,
+                          states=args.states)
     theta = standard_from_base(result.base, result.wls.values, result.layout.standard_parameters())
     eigenvalues = pseudo_inertia_eigenvalues(result.layout, theta)
     if args.plot:
@@ -142,31 +152,31 @@ def run_identify(args: argparse.Namespace) -> int:
 
 
 def _write_urdf(args: argparse.Namespace, result) -> None:
-    """Project onto consistent inertias, write the URDF, say how far it moved and what
-    the reloaded file warns about."""
-    projection = nearest_consistent(result.layout, result.base, result.wls.values,
-                                    result.layout.standard_parameters())
-    if not projection.success:
-        raise CommandError(f"--write-urdf: no physically consistent inertias reproduce the identified base "
-                           f"parameters ({projection.message}; base error {projection.base_error:.3g})")
-    offsets = {n: v for n, v in zip(result.layout.names, projection.theta) if n.endswith(".offset")}
-    moved = ", ".join(f"{body} {value:.3g}" for body, value in projection.moved.items())
+    """Fit consistent inertias to the base estimate, write the URDF, say how far the fit
+    moved the base parameters and what the reloaded file warns about."""
+    source = args.urdf if args.urdf else default_urdf()
+    fit = consistent_fit(result.layout, result.base, result.wls.values, result.wls.covariance,
+                         body_links(source, result.layout), weight=args.prior_weight)
+    if not fit.success:
+        raise CommandError(f"--write-urdf: the consistent fit did not converge ({fit.message})")
+    named = dict(zip(result.layout.names, fit.theta))
+    offsets = {n: v for n, v in named.items() if n.endswith(".offset")}
+    moved = (f"at most {np.abs(fit.moved_std).max():.3g} standard deviations "
+             f"(rms {np.sqrt(np.mean(fit.moved_std ** 2)):.3g})")
+    distances = ", ".join(f"{link} {value:.3g}" for link, value in fit.distance.items())
     header = (f"Inertials and friction of {', '.join(result.layout.robot.joint_names)} identified by "
               f"youbot-dynamics identify from {args.bag} on {date.today().isoformat()}: "
               f"{result.base.count} base parameters (WLS), cond(W) {result.wls.condition:.4g}, "
               f"{result.to_dict()['samples']} samples, residual RMS per joint (N m) "
-              f"{', '.join(f'{x:.3g}' for x in result.wls.residual_rms)}. Projected onto physically consistent "
-              f"inertias (pseudo-inertia eigenvalue >= 1e-6), moved per body: {moved}. "
+              f"{', '.join(f'{x:.3g}' for x in result.wls.residual_rms)}. Physically consistent by construction "
+              f"(every link's pseudo-inertia in log-Cholesky coordinates, least squares on the base parameters "
+              f"plus {fit.weight:g} x the squared log-Cholesky distance to the source URDF's links): the base "
+              f"parameters moved by {moved}; distance per link: {distances}. "
               + (f"Torque offsets (N m; no URDF field): "
                  f"{', '.join(f'{n} {v:.4g}' for n, v in offsets.items())}." if offsets else ""))
-    source = args.urdf if args.urdf else default_urdf()
-    text = identified_urdf(source, result.layout, projection.theta, header)
+    text = identified_urdf(source, result.layout, fit, header)
     Path(args.write_urdf).write_text(text)
-    print(f"wrote {args.write_urdf}: projection moved the standard parameters per body by {moved} "
-          f"(base parameters kept to {projection.base_error:.2g})")
-    warnings = load_robot(text).warnings
-    for warning in warnings:
+    print(f"wrote {args.write_urdf}: the consistent fit moved the base parameters by {moved}; log-Cholesky "
+          f"distance from the URDF per link: {distances}")
+    for warning in load_robot(text).warnings:
         print(f"  the written URDF: {warning}")
-    if warnings:
-        print("  (each identified body is consistent; a link that is not carries the body's identified inertia "
-              "minus the URDF inertials of the links welded or locked to it, which the data contradict)")

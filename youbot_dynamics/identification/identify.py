@@ -88,11 +88,13 @@ def _unseen(regressor: np.ndarray, base: BaseParameters) -> list[str]:
 
 def identify_bag(path: str | Path, robot: Robot, joints: Sequence[str] = ARM_JOINTS,
                  friction_terms: Sequence[str] = FRICTION_TERMS, *, topic: str = "/joint_states",
-                 cutoff: float = 10.0, decimation: int | None = None, progress: bool = False) -> Identification:
-    """Identify ``joints``' base parameters from the bag at ``path`` (see the module docstring)."""
+                 cutoff: float = 10.0, decimation: int | None = None, progress: bool = False,
+                 states: str = "filtered") -> Identification:
+    """Identify ``joints``' base parameters from the bag at ``path`` (see the module
+    docstring; ``states``: see :func:`~youbot_dynamics.identification.measurements.preprocess`)."""
     layout = layout_for(robot, joints, friction_terms)
     samples = read_joint_samples(path, layout.robot.joint_names, topic, progress=progress)
-    return identify_motion(layout, preprocess(samples, cutoff, decimation))
+    return identify_motion(layout, preprocess(samples, cutoff, decimation, states=states))
 
 
 def predicted_effort(layout: RegressorLayout, base: BaseParameters, values: np.ndarray, motion: Motion) -> np.ndarray:

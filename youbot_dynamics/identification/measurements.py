@@ -10,7 +10,14 @@ UserInputError naming the bag, the topic and the sample (index and stamp).
 Preprocessing (:func:`preprocess`): a zero-phase Butterworth low-pass (scipy.signal
 ``butter`` + ``filtfilt``, order 4, cut-off in Hz, :func:`low_pass`) on positions and
 velocities; accelerations by central differences of the filtered velocities
-(``np.gradient``). Efforts stay as measured: the estimator filters them together with the
+(``np.gradient``). With ``states="measured"`` positions and velocities stay as recorded and
+the accelerations are central differences of the recorded velocities: for bags whose q and v
+are exact (a simulator's state, as the dynamics node records) the regressor is then evaluated
+where the robot really was. The filter would otherwise round the velocity's kinks at each
+reversal, where the Coulomb column tanh(v / v_s) (v_s = 0.01 rad/s) changes sign within a
+millisecond, shifting each sign change by milliseconds (the node's bags: residuals of 0.1 to
+0.3 N m at the wrist's reversals). The parallel filtering below makes the result low-pass
+either way. Efforts stay as measured: the estimator filters them together with the
 regressor's columns (Gautier's parallel filtering: the same filter on both sides of
 tau = Y theta, so a sharp friction reversal is smeared alike in both), then drops ``edge``
 samples at each end (filtfilt's start-up transients) and keeps every ``decimation``-th one.
@@ -120,11 +127,17 @@ def low_pass(x: np.ndarray, rate: float, cutoff: float) -> np.ndarray:
     return scipy.signal.filtfilt(b, a, x, axis=0)
 
 
+#: What the regressor is evaluated at: low-passed q and v, or the recorded ones.
+STATES = ("filtered", "measured")
+
+
 def preprocess(samples: JointSamples, cutoff: float = 10.0, decimation: int | None = None,
-               edge: int | None = None) -> Motion:
-    """Low-pass q and v at ``cutoff`` Hz (zero phase) and differentiate v; the estimator
-    will drop ``edge`` samples per end (default three cut-off periods) and decimate (default:
-    to about twice the cut-off)."""
+               edge: int | None = None, states: str = "filtered") -> Motion:
+    """Low-pass q and v at ``cutoff`` Hz (zero phase; ``states="measured"``: keep them as
+    recorded) and differentiate v; the estimator will drop ``edge`` samples per end (default
+    three cut-off periods) and decimate (default: to about twice the cut-off)."""
+    if states not in STATES:
+        raise UserInputError(f"states '{states}': choose from {', '.join(STATES)}")
     rate = samples.rate
     if not 0.0 < cutoff < rate / 2:
         raise UserInputError(f"cut-off {cutoff} Hz must be positive and below the Nyquist frequency "
@@ -136,6 +149,7 @@ def preprocess(samples: JointSamples, cutoff: float = 10.0, decimation: int | No
     if count - 2 * edge < MIN_SAMPLES * decimation:
         raise UserInputError(f"{count} samples are too few to drop {edge} per end and decimate "
                              f"by {decimation} (need {MIN_SAMPLES * decimation + 2 * edge})")
-    q, v = low_pass(samples.q, rate, cutoff), low_pass(samples.v, rate, cutoff)
+    q, v = (low_pass(samples.q, rate, cutoff), low_pass(samples.v, rate, cutoff)) if states == "filtered" \
+        else (samples.q, samples.v)
     return Motion(samples.t, q, v, np.gradient(v, samples.t, axis=0), samples.effort, rate, cutoff,
                   slice(edge, count - edge, decimation))

@@ -1,10 +1,17 @@
-"""Synthetic data for identification round trips: a perturbed URDF and a bag of the
-/joint_states a robot would record along a trajectory.
+"""Synthetic data for identification round trips: a perturbed URDF and bags of the
+/joint_states a robot records along an excitation trajectory, made in one of two ways.
 
-"Recording" is the inverse dynamics of the robot (Pinocchio's RNEA plus the simulator's
-friction law, :func:`~youbot_dynamics.dynamics.rigid_body.inverse_dynamics`) along the
-trajectory's exact q, qd, qdd, with Gaussian noise added to every effort: the torques a
-perfectly tracking controller would apply, as a torque sensor with that noise would report.
+- Through the simulator (:func:`simulate_excitation`): the dynamics node's simulation
+  session runs the scene config/scenes/identification.yaml with the robot to identify
+  (:func:`excitation_scene`); the excitation arrives as a /joint_trajectory (its samples,
+  positions and velocities, the controller interpolating between them) and the
+  computed-torque controller tracks it; the node's own MCAP log is the bag. Its efforts are
+  the applied (clipped) torques, exact; :func:`add_effort_noise` then writes a copy of the
+  bag's /joint_states with Gaussian noise on the efforts, as a torque sensor would report.
+- By inverse dynamics (:func:`record_joint_states`): Pinocchio's RNEA plus the simulator's
+  friction law (:func:`~youbot_dynamics.dynamics.rigid_body.inverse_dynamics`) along the
+  trajectory's exact q, qd, qdd, with the noise added to every effort: the torques a
+  perfectly tracking controller would apply. Fast, and independent of the simulator.
 """
 from __future__ import annotations
 
@@ -14,12 +21,21 @@ from typing import Sequence
 import numpy as np
 from lxml import etree
 
+import yaml
+
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
 from youbot_dynamics.identification.excitation import FourierTrajectory
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.bag_reader import read_bag
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.model.robot import Robot, keep_joints
+from youbot_dynamics.sim.commands import NS_PER_S, MAX_TRAJECTORY_POINTS, stamp_ns_of
+from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir
+
+#: The scene that records an excitation (computed torque, URDF friction, at rest until a
+#: /joint_trajectory arrives).
+EXCITATION_SCENE = "identification"
 
 
 def perturbed_urdf(path: str | Path, joints: Sequence[str], rng: np.random.Generator, *,
@@ -66,3 +82,61 @@ def record_joint_states(path: str | Path, robot: Robot, trajectory: FourierTraje
             log.write("/joint_states", messages.joint_state(int(stamp), names, [*zeros, *q[k][::-1]],
                                                             [*zeros, *v[k][::-1]], [*zeros, *tau[::-1]]),
                       log_time_ns=int(stamp))
+
+
+def excitation_scene(robot_urdf: str | Path, trajectory: FourierTrajectory, duration: float,
+                     path: str | Path) -> Scene:
+    """The packaged identification scene with ``robot_urdf`` as its robot, starting at rest
+    at the trajectory's first point, running ``duration`` s; written to ``path`` (YAML) and
+    loaded from there."""
+    document = yaml.safe_load((scene_dir() / f"{EXCITATION_SCENE}.yaml").read_text())
+    q_start = trajectory.evaluate(np.zeros(1))[0][0]
+    document.update(robot=str(Path(robot_urdf).resolve()), duration=float(duration),
+                    initial={"q": dict(zip(trajectory.joint_names, q_start.tolist()))})
+    Path(path).write_text(yaml.safe_dump(document, sort_keys=False))
+    return load_scene(path)
+
+
+def trajectory_points(trajectory: FourierTrajectory, duration: float) -> list[tuple[int, list, list]]:
+    """The trajectory over [0, duration] s as /joint_trajectory points (time_from_start in
+    ns, positions, velocities), as densely as one message allows (at most
+    MAX_TRAJECTORY_POINTS, at most 100 Hz)."""
+    rate = min(100.0, (MAX_TRAJECTORY_POINTS - 1) / duration)
+    t_ns = np.rint(np.arange(int(duration * rate) + 1) * NS_PER_S / rate).astype(np.int64)
+    q, v, _ = trajectory.evaluate(t_ns / NS_PER_S)
+    return [(int(t), q[k].tolist(), v[k].tolist()) for k, t in enumerate(t_ns)]
+
+
+def simulate_excitation(scene: Scene, trajectory: FourierTrajectory, rate: float, bag: str | Path) -> dict:
+    """Run ``scene`` in the dynamics node's simulation session at ``rate`` Hz for its
+    duration, the trajectory sent at t = 0 as a /joint_trajectory (:func:`trajectory_points`),
+    the node logging to the MCAP ``bag``; returns the integrator statistics."""
+    from youbot_dynamics.ros.session import SimulationSession   # the node's session, no rclpy
+
+    with SimulationSession(scene, rate, mcap_path=bag) as session:
+        session.step()
+        session.trajectory(list(trajectory.joint_names), trajectory_points(trajectory, scene.duration), 0)
+        for _ in range(int(round(scene.duration * rate))):
+            session.step()
+        if session.failure:
+            raise RuntimeError(f"simulating {scene.source}: {session.failure}")
+        return session.simulator.stats.as_dict()
+
+
+def add_effort_noise(source: str | Path, destination: str | Path, joints: Sequence[str], noise: float,
+                     rng: np.random.Generator, topic: str = "/joint_states") -> None:
+    """Copy ``topic`` (sensor_msgs/JointState) of the bag ``source`` to the MCAP
+    ``destination`` with N(0, noise^2) (N m) added to the efforts of ``joints`` (the others
+    copied as they are): a torque sensor's noise on the node's exact applied torques."""
+    with McapLogger(destination) as log:
+        log.add_topic(topic, "sensor_msgs/msg/JointState")
+        for record in read_bag(source):
+            if record.topic != topic:
+                continue
+            message = record.message
+            names = list(message.name)
+            effort = np.array(message.effort, float)
+            noisy = np.isin(names, list(joints))
+            effort[noisy] += rng.normal(0.0, noise, int(noisy.sum()))
+            log.write(topic, messages.joint_state(stamp_ns_of(message.header.stamp), names, message.position,
+                                                  message.velocity, effort), log_time_ns=record.log_time_ns)

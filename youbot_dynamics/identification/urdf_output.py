@@ -1,14 +1,15 @@
-"""A URDF with identified parameters: the source file with each identified body's inertial
-and each identified joint's ``<dynamics damping friction>`` replaced, and a header comment.
+"""The URDF side of identification: the links that make up each identified body, and the
+URDF with identified parameters written in.
 
 A Pinocchio body is the joint's child link plus every link welded to it (and, with joints
-locked, their links too), expressed in the joint frame, which is the child link's frame. The
-identified body differs from the URDF's by delta (ten dynamic parameters, linear); that
-delta goes onto the child link's own inertial, so the welded links keep theirs and the
-reloaded robot has exactly the identified bodies. The link's ``<inertial>`` is rewritten
-with its centre of mass as origin, rpy 0, and the inertia about the centre of mass in the
-link frame. Viscous and Coulomb coefficients become damping and friction; a constant
-offset has no URDF field and is listed in the header only.
+locked, their links too), in the joint frame, which is the child link's frame.
+:func:`body_links` lists those links with their placement in the body frame and their URDF
+inertial (the prior of :func:`~youbot_dynamics.identification.consistency.consistent_fit`,
+which fits every link on its own). :func:`identified_urdf` writes the source file with each
+fitted link's ``<inertial>`` replaced (centre of mass as origin, rpy 0, the inertia about
+the centre of mass in the link frame) and each identified joint's ``<dynamics damping
+friction>``, and a header comment. A constant torque offset has no URDF field and is listed
+in the header only.
 """
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
+from youbot_dynamics.identification.consistency import BodyLink, ConsistentFit
 from youbot_dynamics.identification.regressor import RegressorLayout
 
 
@@ -49,20 +51,32 @@ def _write_inertial(link: etree._Element, inertia: pin.Inertia) -> None:
                                               "iyz": (1, 2), "izz": (2, 2)}.items()})
 
 
-def identified_urdf(source: str | Path, layout: RegressorLayout, theta: np.ndarray, header: str) -> str:
-    """The URDF at ``source`` with the standard parameters ``theta`` (layout's order) written
-    in (see the module docstring) and ``header`` as a comment before the first element."""
+def body_links(source: str | Path, layout: RegressorLayout) -> tuple[BodyLink, ...]:
+    """The links of every moving body of ``layout`` (the URDF at ``source``, a path or the
+    text), in Pinocchio's frame order, with their URDF inertials; links without mass carry
+    nothing and are left out."""
+    root = etree.fromstring(Path(source).read_bytes()) if not str(source).lstrip().startswith("<") \
+        else etree.fromstring(str(source).encode())
+    model, links = layout.robot.model, []
+    for frame in model.frames:
+        if frame.type != pin.FrameType.BODY or frame.parentJoint == 0:
+            continue
+        element = root.find(f"link[@name='{frame.name}']")
+        inertia = _link_inertia(element.find("inertial") if element is not None else None)
+        if inertia.mass > 0.0:
+            links.append(BodyLink(frame.name, frame.parentJoint - 1, frame.placement.homogeneous, inertia))
+    return tuple(links)
+
+
+def identified_urdf(source: str | Path, layout: RegressorLayout, fit: ConsistentFit, header: str) -> str:
+    """The URDF at ``source`` with the fit's link inertials and joint friction written in (see
+    the module docstring) and ``header`` as a comment before the first element."""
     tree = etree.parse(str(source))
     root = tree.getroot()
-    robot = layout.robot
-    children = {joint.name: joint.child for joint in robot.tree}
-    for i, body in enumerate(layout.body_names):
-        nominal = robot.model.inertias[i + 1].toDynamicParameters()
-        link = root.find(f"link[@name='{children[body]}']")
-        own = _link_inertia(link.find("inertial")).toDynamicParameters()
-        _write_inertial(link, pin.Inertia.FromDynamicParameters(own + theta[10 * i:10 * i + 10] - nominal))
-    named = dict(zip(layout.names, theta))
-    for joint_name in robot.joint_names:
+    for name, inertia in fit.inertias.items():
+        _write_inertial(root.find(f"link[@name='{name}']"), inertia)
+    named = dict(zip(layout.names, fit.theta))
+    for joint_name in layout.robot.joint_names:
         joint = root.find(f"joint[@name='{joint_name}']")
         dynamics = joint.find("dynamics")
         if dynamics is None:
