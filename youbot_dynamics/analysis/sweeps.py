@@ -16,7 +16,9 @@ the case. A case that raises is re-raised as :class:`CaseError` naming the case.
 """
 from __future__ import annotations
 
+import logging
 import os
+import reprlib
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator, Sequence
 
@@ -59,8 +61,8 @@ def dask_client(workers: int | None = None, scheduler: str | None = None,
             yield client
         return
     n = default_workers(n_cases) if workers is None else workers
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                      dashboard_address=":0") as cluster, Client(cluster) as client:
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
         yield client
 
 
@@ -98,5 +100,5 @@ def _run_case(function: Callable[..., Any], case: tuple) -> Any:
     try:
         return function(*case)
     except Exception as error:  # re-raised with the case named
-        raise CaseError(f"{getattr(function, '__qualname__', function)}{case!r} failed: "
-                        f"{type(error).__name__}: {error}") from error
+        raise CaseError(f"{getattr(function, '__qualname__', function)}"
+                        f"{reprlib.repr(case)} failed: {type(error).__name__}: {error}") from error
