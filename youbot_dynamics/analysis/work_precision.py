@@ -35,8 +35,8 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
-from tqdm import tqdm
 
+from youbot_dynamics.analysis.sweeps import map_cases
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import IntegrationError
 from youbot_dynamics.sim.registry import AUTO, FIXED_STEP, REGISTRY, integrator_names
@@ -154,14 +154,16 @@ def sweep_point(scene: Scene, method: str, value: float, reference: Reference) -
 
 
 def sweep(scene: Scene, reference: Reference, grid: dict[str, Sequence[float]] | None = None,
-          progress: bool = True) -> list[SweepPoint]:
-    """Every integrator over its grid (default :data:`DEFAULT_GRID`), with a progress bar."""
+          progress: bool = True, *, workers: int | None = 0,
+          scheduler: str | None = None) -> list[SweepPoint]:
+    """Every integrator over its grid (default :data:`DEFAULT_GRID`), with a progress bar;
+    the points are independent cases of :func:`~youbot_dynamics.analysis.sweeps.map_cases`
+    (serial with ``workers=0``, the default; a local cluster of ``workers`` processes, or
+    the Dask cluster at ``scheduler``)."""
     grid = DEFAULT_GRID if grid is None else grid
-    jobs = [(method, value) for method, values in grid.items() for value in values]
-    points = []
-    for method, value in tqdm(jobs, desc=f"work-precision {scene.name}", unit="run", disable=not progress):
-        points.append(sweep_point(scene, method, value, reference))
-    return points
+    jobs = [(scene, method, value, reference) for method, values in grid.items() for value in values]
+    return map_cases(sweep_point, jobs, workers=workers, scheduler=scheduler,
+                     desc=f"work-precision {scene.name}", progress=progress)
 
 
 def recommend(points: Iterable[SweepPoint], target_error: float) -> SweepPoint | None:
@@ -257,14 +259,16 @@ class WorkPrecision:
 
 
 def work_precision(scene: Scene, out_dir: str | Path, *, target_error: float | None = None,
-                   grid: dict[str, Sequence[float]] | None = None, progress: bool = True) -> WorkPrecision:
-    """Reference, sweep, CSV + markdown + PNG in ``out_dir``, and the recommendation."""
+                   grid: dict[str, Sequence[float]] | None = None, progress: bool = True,
+                   workers: int | None = 0, scheduler: str | None = None) -> WorkPrecision:
+    """Reference, sweep (``workers`` and ``scheduler`` as :func:`sweep`), CSV + markdown +
+    PNG in ``out_dir``, and the recommendation."""
     if target_error is not None and not target_error > 0:
         raise UserInputError(f"--target-error must be positive (rad), got {target_error!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     reference = reference_solution(scene)
-    points = sweep(scene, reference, grid, progress)
+    points = sweep(scene, reference, grid, progress, workers=workers, scheduler=scheduler)
     best = None if target_error is None else recommend(points, target_error)
     stem = out / f"work_precision_{scene.name}"
     files = (stem.with_suffix(".csv"), stem.with_suffix(".md"), stem.with_suffix(".png"))

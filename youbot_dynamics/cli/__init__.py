@@ -50,6 +50,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
                                ("identify", "identify base parameters from a bag's /joint_states"))),
         ("mobile_commands", (("unicycle", "the differential drive against its closed forms"),
                              ("mecanum", "youBot base: wheel speeds of a twist, and its odometry"))),
+        ("report_commands", (("report", "run every study; write their PNGs and one Markdown page"),)),
     ) for name, summary in commands}
 COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
 

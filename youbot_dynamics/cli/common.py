@@ -224,3 +224,13 @@ def markdown_table(header: Sequence[str], rows: Iterable[Sequence[Any]], digits:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(cell(value, digits) for value in row) + " |" for row in rows]
     return "\n".join(lines)
+
+
+def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
+    """--workers and --scheduler: where a sweep's independent cases run
+    (youbot_dynamics.analysis.sweeps)."""
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="processes of the embedded Dask cluster (default one per core; "
+                             "0: serial, no Dask)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="run on this Dask cluster instead (e.g. tcp://10.0.0.5:8786)")

@@ -9,7 +9,8 @@ import sys
 
 import numpy as np
 
-from youbot_dynamics.cli.common import add_tolerance_arguments, cell, markdown_table, tolerances
+from youbot_dynamics.cli.common import (add_sweep_arguments, add_tolerance_arguments, cell,
+                                        markdown_table, tolerances)
 from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget, progress_bar
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import IntegrationError, checked_output_spacing
@@ -84,6 +85,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     bdf.add_argument("--plot", metavar="PNG", help="write the stability-region plot")
     bdf.add_argument("--choppy", metavar="PNG", help="write the seed's loose-tolerance "
                      "traces: CVODE BDF and Adams at rtol = atol = 0.1, k = 10")
+    add_sweep_arguments(bdf)
     bdf.add_argument("--json", action="store_true", help="print JSON")
     bdf.set_defaults(run=run_bdf_study)
 
@@ -174,6 +176,7 @@ def run_bdf_study(args: argparse.Namespace) -> int:
     from youbot_dynamics.analysis.bdf import (alpha_angle, locus_radius_on_ray,
                                               measured_boundary_radius,
                                               plot_stability_regions)
+    from youbot_dynamics.analysis.sweeps import map_cases
     from youbot_dynamics.cli.common import output_file
     from youbot_dynamics.systems.bdf_study import (ENERGY_GROWTH, METHODS,
                                                    POSITION_TOLERANCE, REFERENCE_TOL,
@@ -184,10 +187,14 @@ def run_bdf_study(args: argparse.Namespace) -> int:
         if path:
             output_file(path, flag)
     rows = fixed_step_tables(seed_only=args.short)
+    measured = map_cases(measured_boundary_radius, [(order, 0.0, 1e-3, 20.0, 20) for order in
+                                                    (1, 2, 3, 4)], workers=args.workers,
+                         scheduler=args.scheduler, desc="stability boundaries",
+                         progress=not args.json)
     stability = [{"order": order, "alpha_deg": math.degrees(alpha_angle(order)),
                   "real_axis_boundary": locus_radius_on_ray(order, 0.0),
-                  "measured_by_solver": measured_boundary_radius(order, 0.0, iterations=20)}
-                 for order in (1, 2, 3, 4)]
+                  "measured_by_solver": radius}
+                 for order, radius in zip((1, 2, 3, 4), measured)]
     orders = measured_orders()
     cvode = cvode_order_rows((10,) if args.short else (10, 50))
     if args.plot:

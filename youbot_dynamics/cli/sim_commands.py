@@ -15,8 +15,8 @@ from tqdm import tqdm
 
 from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision, write_back
 from youbot_dynamics.io.csv_table import write_csv
-from youbot_dynamics.cli.common import (CommandError, add_tolerance_arguments, finite_or_none, output_file,
-                                        output_folder)
+from youbot_dynamics.cli.common import (CommandError, add_sweep_arguments, add_tolerance_arguments,
+                                        finite_or_none, output_file, output_folder)
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
 from youbot_dynamics.sim.integrators import (IntegrationError, StepBudgetError, checked_fixed_step,
                                              fixed_step_count)
@@ -86,6 +86,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                        "block (its comments and other keys kept)")
     study.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
     study.add_argument("--out", default="out/work_precision", metavar="DIR", help="output folder")
+    add_sweep_arguments(study)
     study.add_argument("--json", action="store_true", help="print JSON")
     study.set_defaults(run=run_work_precision)
 
@@ -175,7 +176,8 @@ def run_work_precision(args: argparse.Namespace) -> int:
             args.target_error = scene.integrator.target_error
         if args.target_error is None:
             raise CommandError("--write-back needs --target-error (rad) or integrator.target_error in the scene")
-    study = work_precision(scene, args.out, target_error=args.target_error, progress=not args.json)
+    study = work_precision(scene, args.out, target_error=args.target_error, progress=not args.json,
+                           workers=args.workers, scheduler=args.scheduler)
     best = study.best
     pinned = None
     if args.write_back:

@@ -7,9 +7,9 @@ from __future__ import annotations
 import argparse
 import json
 
-from youbot_dynamics.cli.common import (add_tolerance_arguments, cell, markdown_table,
-                                        output_file, positive, relative_tolerance,
-                                        tolerances)
+from youbot_dynamics.cli.common import (add_sweep_arguments, add_tolerance_arguments, cell,
+                                        markdown_table, output_file, positive,
+                                        relative_tolerance, tolerances)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import limits
 from youbot_dynamics.sim.events import HybridSolution
@@ -164,7 +164,8 @@ def run_uncertainty(args: argparse.Namespace) -> int:
     if args.samples < 2:
         raise UserInputError(f"--samples must be at least 2, got {args.samples}")
     linear = linear_propagation(args.t_end)
-    sampled, phi = monte_carlo(args.samples, args.t_end, args.seed)
+    sampled, phi = monte_carlo(args.samples, args.t_end, args.seed, workers=args.workers,
+                               scheduler=args.scheduler)
     figures = comparison(linear, sampled)
     if args.plot:
         plot_uncertainty(linear, sampled, phi, args.plot)
@@ -284,5 +285,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--seed", type=int, default=0, help="random seed of the samples")
     parser.add_argument("--t-end", type=positive, default=10.0, help="end time (s)")
     parser.add_argument("--plot", metavar="PNG", help="write the band plot")
+    add_sweep_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.set_defaults(run=run_uncertainty)

@@ -124,17 +124,37 @@ def parameter_samples(n: int, seed: int = 0, parameters=PARAMETERS) -> np.ndarra
         samples[bad] = rng.normal(means, sigmas, size=(int(bad.sum()), 3))
 
 
-def monte_carlo(n: int = 1000, t_end: float = T_END, seed: int = 0,
-                parameters=PARAMETERS) -> tuple[Propagation, np.ndarray]:
-    """Sample mean and standard deviation (ddof 1) of phi over n parameter samples, and
-    phi of every sample at the output times ((outputs, n))."""
-    import time
-    start = time.perf_counter()
-    samples = parameter_samples(n, seed, parameters)
-    times, every = output_times(t_end)
+def sample_traces(samples: np.ndarray, t_end: float) -> np.ndarray:
+    """phi (rad) of each parameter sample (rows L, m, d) at the output times, ((outputs,
+    n)): the samples integrated side by side as arrays."""
+    n = len(samples)
+    _, every = output_times(t_end)
     states = rk4(np.full(n, PHI0), np.full(n, W0), tuple(samples.T), np.sin, t_end, STEP,
                  every)
-    phi = np.array([state[0] for state in states])
+    return np.array([state[0] for state in states])
+
+
+#: Samples per case when the Monte Carlo runs on Dask (the split does not change phi).
+SAMPLES_PER_CASE = 250
+
+
+def monte_carlo(n: int = 1000, t_end: float = T_END, seed: int = 0,
+                parameters=PARAMETERS, *, workers: int | None = 0,
+                scheduler: str | None = None) -> tuple[Propagation, np.ndarray]:
+    """Sample mean and standard deviation (ddof 1) of phi over n parameter samples, and
+    phi of every sample at the output times ((outputs, n)). The samples run in blocks of
+    SAMPLES_PER_CASE as cases of youbot_dynamics.analysis.sweeps.map_cases (serial with
+    ``workers=0``, the default; a local Dask cluster or the one at ``scheduler``)."""
+    import time
+
+    from youbot_dynamics.analysis.sweeps import map_cases
+    start = time.perf_counter()
+    samples = parameter_samples(n, seed, parameters)
+    times, _ = output_times(t_end)
+    blocks = np.array_split(samples, max(1, -(-n // SAMPLES_PER_CASE)))
+    phi = np.hstack(map_cases(sample_traces, [(block, t_end) for block in blocks],
+                              workers=workers, scheduler=scheduler, desc="Monte Carlo",
+                              progress=False))
     return (Propagation("monte_carlo", times, phi.mean(axis=1), phi.std(axis=1, ddof=1),
                         time.perf_counter() - start), phi)
 

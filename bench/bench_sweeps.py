@@ -1,0 +1,44 @@
+"""Wall time of one sweep serially, on a local Dask cluster of 1 and of 2 worker processes
+(analysis/sweeps.py), and whether the results are identical. The sweep: the BDF1-4
+stability boundary measured by bisection on the solver's own growth along two rays
+(analysis/bdf.py), 8 independent cases. Cluster start-up is timed apart from the sweep.
+
+Run: python bench/bench_sweeps.py [--iterations N]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
+from youbot_dynamics.analysis.bdf import measured_boundary_radius  # noqa: E402
+from youbot_dynamics.analysis.sweeps import dask_client, map_cases  # noqa: E402
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--iterations", type=int, default=12, help="bisection steps per case")
+    args = parser.parse_args()
+    cases = [(order, angle, 1e-3, 20.0, args.iterations)
+             for order in (1, 2, 3, 4) for angle in (0.0, math.pi / 4)]
+    start = time.perf_counter()
+    serial = map_cases(measured_boundary_radius, cases, workers=0, progress=False)
+    times = {"serial": time.perf_counter() - start}
+    for workers in (1, 2):
+        start = time.perf_counter()
+        with dask_client(workers) as client:
+            started = time.perf_counter()
+            results = map_cases(measured_boundary_radius, cases, client=client, progress=False)
+            times[workers] = time.perf_counter() - started
+        print(f"{workers} worker(s): start-up {started - start:.2f} s, sweep "
+              f"{times[workers]:.2f} s, identical to serial: {results == serial}")
+    print(f"serial: {times['serial']:.2f} s for {len(cases)} cases")
+    print(f"wall-time ratio 1 worker / 2 workers: {times[1] / times[2]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
