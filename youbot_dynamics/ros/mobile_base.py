@@ -16,6 +16,11 @@ odom -> base_footprint transform and the ground-truth pose out.
 - ``/tf`` carries odom -> base_footprint with the /odom pose, every sample.
 - ``/base_pose_ground_truth`` (nav_msgs/Odometry, frame odom): the simulated pose and twist
   (zero covariance), so that odometry drift can be measured.
+
+:class:`WheelOdometry` is the odometry alone (/odom and its transform from wheel speeds):
+the simulate mode feeds it the simulated wheel speeds, the inverse mode those of the
+/joint_states it receives, so a recorded run replayed into an inverse-mode node gives the
+recorded /odom again.
 """
 from __future__ import annotations
 
@@ -23,7 +28,7 @@ import math
 
 import numpy as np
 
-from youbot_dynamics.dynamics.mobile.mecanum import base_twist
+from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase, base_twist
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.io import messages
 from youbot_dynamics.ros.commands import InputCounters, InputRejected
@@ -46,21 +51,49 @@ def _quaternion_of_yaw(yaw: float) -> tuple[float, float, float, float]:
     return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
 
 
+class WheelOdometry:
+    """Wheel odometry of a mecanum base from ``pose0`` (x, y, yaw in odom): each sample's
+    wheel speeds (rad/s, ``mecanum.names`` order) held over the increment to the next."""
+
+    def __init__(self, mecanum: MecanumBase, pose0, prefix: str = "") -> None:
+        self.mecanum, self.pose0 = mecanum, np.array(pose0, dtype=float)
+        self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + "base_footprint"
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the initial pose, no sample seen."""
+        self.pose = self.pose0.copy()
+        self.last: tuple[float, np.ndarray] | None = None
+
+    def outputs(self, stamp_ns: int, t: float, speeds: np.ndarray) -> tuple[object, object]:
+        """(/odom, the odom -> base_footprint transform) of a sample at time t (s) with wheel
+        speeds ``speeds``; advances the pose by the previous sample's speeds."""
+        if self.last is not None:
+            self.pose = odometry_step(self.mecanum, self.pose, self.last[1], t - self.last[0])
+        self.last = (t, np.array(speeds, dtype=float))
+        x, y, yaw = self.pose
+        twist = base_twist(self.mecanum, speeds)
+        odom = messages.odometry(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0), _quaternion_of_yaw(yaw),
+                                 (twist[0], twist[1], 0.0, 0.0, 0.0, twist[2]), POSE_COVARIANCE, TWIST_COVARIANCE)
+        transform = messages.transform_stamped(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0),
+                                               _quaternion_of_yaw(yaw))
+        return odom, transform
+
+
 class MobileBase:
     """/cmd_vel, wheel odometry and the base's outputs of a session whose scene has a moving
     ``base``; ``wheels`` are the wheel joints' indices in the snapshot's v."""
 
     def __init__(self, base: BaseModel, counters: InputCounters, timeout: float, prefix: str = "") -> None:
         self.base, self.counters, self.timeout = base, counters, float(timeout)
-        self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + "base_footprint"
+        self.odometry = WheelOdometry(base.mecanum, base.pose0, prefix)
         self.reset()
 
     def reset(self) -> None:
         """Forget the command; odometry back to the base's initial pose."""
         self.command: np.ndarray | None = None
         self.command_time = -math.inf
-        self.pose = np.array(self.base.pose0, dtype=float)
-        self.last: tuple[float, np.ndarray] | None = None
+        self.odometry.reset()
 
     # ---- /cmd_vel ---------------------------------------------------------------------------
     def accept(self, linear, angular, t: float) -> None:
@@ -95,17 +128,9 @@ class MobileBase:
         """(/odom and /base_pose_ground_truth, the odom -> base_footprint transform) of the
         sample at simulated time t (s); advances the odometry by the previous sample's wheel
         speeds."""
-        speeds = snapshot.v[self.base.wheels]
-        if self.last is not None:
-            self.pose = odometry_step(self.base.mecanum, self.pose, self.last[1], t - self.last[0])
-        self.last = (t, speeds.copy())
-        x, y, yaw = self.pose
-        twist = base_twist(self.base.mecanum, speeds)
-        odom = messages.odometry(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0), _quaternion_of_yaw(yaw),
-                                 (twist[0], twist[1], 0.0, 0.0, 0.0, twist[2]), POSE_COVARIANCE, TWIST_COVARIANCE)
+        odom, transform = self.odometry.outputs(stamp_ns, t, snapshot.v[self.base.wheels])
         tx, ty, tyaw, vx, vy, wz = snapshot.base
-        truth = messages.odometry(stamp_ns, self.odom_frame, self.child_frame, (tx, ty, 0.0), _quaternion_of_yaw(tyaw),
+        frames = self.odometry.odom_frame, self.odometry.child_frame
+        truth = messages.odometry(stamp_ns, *frames, (tx, ty, 0.0), _quaternion_of_yaw(tyaw),
                                   (vx, vy, 0.0, 0.0, 0.0, wz), np.zeros(36), np.zeros(36))
-        transform = messages.transform_stamped(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0),
-                                               _quaternion_of_yaw(yaw))
         return [("/odom", odom), ("/base_pose_ground_truth", truth)], transform

@@ -68,8 +68,9 @@ from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                           follow, joint_sample, joint_trajectory, node_time_of_stamp)
+from youbot_dynamics.dynamics.mobile.mecanum import mecanum_base_from_robot
 from youbot_dynamics.ros.mobile_base import TOPICS as MOBILE_BASE_TOPICS
-from youbot_dynamics.ros.mobile_base import MobileBase
+from youbot_dynamics.ros.mobile_base import MobileBase, WheelOdometry
 from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, body_transforms
 from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
                                          implausible_joints)
@@ -404,7 +405,7 @@ class SimulationSession(_Session):
         self.simulator = Simulator(scene, scene.pinned_integrator())
         if self.simulator.model.base is not None:
             self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix)
-            frame_id = frame_id or self.moving_base.odom_frame
+            frame_id = frame_id or self.moving_base.odometry.odom_frame
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget,
                          frame_prefix, node_name)
         if self.moving_base is not None:
@@ -603,8 +604,11 @@ class InverseSession(_Session):
     @property
     def topics(self) -> tuple[str, ...]:
         """/computed_torques, /ee_pose (and /ee_poses for several robots), /tf, /diagnostics
-        (the latched topics are in ``latched``)."""
-        return ("/computed_torques", *self.frames.ee_topics, "/tf", "/diagnostics")
+        (the latched topics are in ``latched``), and /odom for a scene with a moving base."""
+        odom = ("/odom",) if self.odometry is not None else ()
+        return ("/computed_torques", *self.frames.ee_topics, "/tf", *odom, "/diagnostics")
+
+    odometry: WheelOdometry | None = None
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS,
                  frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
@@ -613,6 +617,10 @@ class InverseSession(_Session):
         robot = scene.robot  # reduced, with the scene's gravity
         if not robot.tree:
             raise UserInputError(f"{scene.source}: inverse mode needs a robot; the scene has none")
+        if scene.base.mode != "fixed":  # /odom from the wheel speeds of the joint states
+            self.odometry = WheelOdometry(mecanum_base_from_robot(robot, scene.base.wheels), scene.base.pose0,
+                                          frame_prefix)
+            self.wheels = np.array([robot.joint_index(name) for name in scene.base.wheels])
         super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget, frame_prefix,
                          node_name)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
@@ -662,13 +670,18 @@ class InverseSession(_Session):
             self.estimator.clear()
             raise
         self.counters.accepted += 1
+        odom: Outputs = []
+        if self.odometry is not None:
+            odom = [("/odom", self.odometry.outputs(sample.stamp_ns, sample.stamp_ns / NS_PER_S,
+                                                    sample.v[self.wheels])[0])]
+            self.recorder.write(odom, sample.stamp_ns)
         try:
             estimate = self.estimator.push(sample)
         except InputRejected as error:     # a non-finite estimate: the estimator restarted
             self.counters.reject(error)
-            return []
+            return odom
         if estimate is None:
-            return []
+            return odom
         middle, a = estimate
         stamp = middle.stamp_ns
         tau = self.dynamics.torque(middle.q, middle.v, a)
@@ -680,21 +693,21 @@ class InverseSession(_Session):
                                                f"finite on {', '.join(implausible)}"))
             self.estimator.restart("implausible" if finite else "non_finite")
             return []
-        sample = self.frames.links.at(middle.q)
+        frames = self.frames.links.at(middle.q)
         try:
             outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
                                                                   middle.v, tau)),
-                       *self.frames.ee_outputs(stamp, sample), ("/tf", self.frames.tf(stamp, sample))]
+                       *self.frames.ee_outputs(stamp, frames), ("/tf", self.frames.tf(stamp, frames))]
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             self.estimator.restart("non_finite")
-            return []
+            return odom
         self.recorder.write(outputs, stamp)
         data = self.dynamics.data
         energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
-        self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, sample.ee_pose[0])
+        self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, frames.ee_pose[0])
         self.stamp_ns, self.samples = stamp, self.samples + 1
-        return outputs
+        return odom + outputs
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: samples processed, input counters and the estimator's restarts
