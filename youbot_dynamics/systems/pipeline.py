@@ -82,28 +82,29 @@ class PipelineResult:
 
 def lower_order(model: EquationModel) -> tuple[list[sp.Expr], list[str], list[str]]:
     """Stage 1: the equations with every derivative of order > 1 lowered (the new
-    equations first), the function order (declared variables, then new ones) and the
-    names of the new variables."""
+    equations first), the function order (declared variables, then new ones) and the new
+    variables described ("u = x'")."""
     highest: dict[str, int] = {}
     for equation in model.equations:
         for name, order in equation_variables(equation, T):
             highest[name] = max(order, highest.get(name, 0))
-    new_equations, replacements, new_names = [], {}, []
+    new_equations, replacements, new_names, described = [], {}, [], []
     for name, order in highest.items():
         if order < 2:
             continue
         chain = [name, model.derivative_names.get(name, f"{name}_t")]
-        for k in range(2, order):
+        while len(chain) < order:
             chain.append(f"{chain[-1]}_t")
         for k in range(1, order):
             new_equations.append(sp.diff(unknown(chain[k - 1]), T) - unknown(chain[k]))
             new_names.append(chain[k])
+            described.append(f"{chain[k]} = {chain[k - 1]}'")
         for k in range(order, 0, -1):
             replacements[sp.Derivative(unknown(name), (T, k))] = (
                 sp.Derivative(unknown(chain[k - 1]), (T, 1)) if k >= 2 else unknown(chain[1]))
     lowered = new_equations + [e.xreplace(replacements) for e in model.equations]
     order = list(model.variables) + [n for n in new_names if n not in model.variables]
-    return lowered, order, [n for n in new_names]
+    return lowered, order, described
 
 
 def eliminate_aliases(equations: list[sp.Expr], names: list[str], order: list[str]
@@ -125,7 +126,7 @@ def eliminate_aliases(equations: list[sp.Expr], names: list[str], order: list[st
                           and _signed_variable(t)[1].func.__name__ not in differentiated]
             if candidates:
                 term = max(candidates, key=lambda t: rank.get(_signed_variable(t)[1].func.__name__, 0))
-                sign, alias = _signed_variable(term)
+                alias = _signed_variable(term)[1]
                 found = i, alias, sp.solve(equation, alias)[0]
                 break
         if found is None:
@@ -177,7 +178,7 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
 
     result = PipelineResult(
         model, lowered, lowered_names, new_names,
-        [(a, str(_pretty(v))) for a, v in aliases], equations, order,
+        [(a, str(pretty_expression(v))) for a, v in aliases], equations, order,
         {variable_name(variables[j]): names[i] for j, i in sorted(matching.items())},
         [names[i] for i in range(len(names)) if i not in matching.values()],
         [variable_name(v) for v in variables], incidence_rows(equation_vars, len(variables)),
@@ -216,10 +217,10 @@ def _tearing_report(torn: Tearing) -> dict:
     """A torn block as plain data."""
     return {"tearing_variables": [str(v) for v in torn.tearing_variables],
             "residuals": torn.residuals,
-            "causal": [f"{name}: {v} := {_pretty(e)}" for name, v, e in torn.causal]}
+            "causal": [f"{name}: {v} := {pretty_expression(e)}" for name, v, e in torn.causal]}
 
 
-def _pretty(expression: sp.Expr) -> sp.Expr:
+def pretty_expression(expression: sp.Expr) -> sp.Expr:
     """An expression in functions of t printed with x, x', ... ."""
     replacements = {}
     for node in sp.preorder_traversal(expression):
@@ -272,11 +273,13 @@ def generate_ode(model: EquationModel, reduced: PantelidesResult, selection: Dum
 
 
 def simulate(result: PipelineResult, integrator: str = "cvode_bdf", rtol: float = 1e-6,
-             n_outputs: int = 201, t_end: float | None = None) -> Solution:
-    """Stage 9: integrate the generated ODE from the start values over [0, t_end] (the
-    model's by default) with youbot_dynamics.sim.integrators.integrate."""
+             n_outputs: int = 201, t_end: float | None = None,
+             dt: float | None = None) -> Solution:
+    """Stage 9: integrate the generated ODE from the start values over [0, t_end] (s, the
+    model's by default) with youbot_dynamics.sim.integrators.integrate (``dt``: the step
+    of a fixed-step integrator)."""
     ode = result.ode
     t_eval = np.linspace(0.0, result.model.t_end if t_end is None else t_end, n_outputs)
     atol = rtol * np.maximum(np.abs(ode.x0), 1e-3)
-    return integrate(ode.rhs, ode.x0, t_eval, integrator, rtol=rtol, atol=atol,
+    return integrate(ode.rhs, ode.x0, t_eval, integrator, dt=dt, rtol=rtol, atol=atol,
                      state_names=ode.state_names)
