@@ -187,7 +187,8 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
         incidence_rows([{selection.unknowns.index(j) for j in vs} for vs in restricted],
                        len(selection.unknowns)),
         [[reduced.equation_names[i] for i in block] for block in blocks],
-        [[variable_name(reduced.variables[matched[i]]) for i in block] for block in blocks])
+        [[variable_name(reduced.variables[j]) for j in sorted(matched[i] for i in block)]
+         for block in blocks])
 
     all_unknowns = {symbols[j] for j in selection.unknowns}
     algebraic = {symbols[j] for j in selection.unknowns if reduced.variables[j][1] == 0}
@@ -202,7 +203,8 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
                                               {**values, **parameters}))]
         else:
             torn = greedy_tearing(block_residuals, block_names,
-                                  [symbols[matched[i]] for i in block], all_unknowns, algebraic)
+                                  [symbols[j] for j in sorted(matched[i] for i in block)],
+                                  all_unknowns, algebraic)
             result.tearing.append(_tearing_report(torn))
             solved = solve_torn_block(block_residuals, block_names, torn)
         for variable, expression in solved:
