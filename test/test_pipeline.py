@@ -152,3 +152,14 @@ def test_negative_alias_is_substituted_with_its_sign():
     result = run_pipeline(model)
     assert result.aliases == [("z", "-x")]
     assert str(result.ode.derivatives["x"]) == "-x"
+
+
+def test_start_values_that_break_the_constraint_are_refused():
+    # x0 = sin(0.5), y0 = -cos(0.5) hold for L = 1 only
+    with pytest.raises(UserInputError, match="y = -1.33047.*start value is -0.87758"):
+        run_pipeline(cartesian_pendulum() | {"L": 2.0})
+    with pytest.raises(UserInputError, match="is not real"):
+        run_pipeline(cartesian_pendulum() | {"L": 0.01})
+    consistent = cartesian_pendulum() | {"L": 4.0, "x": 2 * math.sin(0.5),
+                                         "y": -2 * math.cos(0.5)}
+    assert run_pipeline(consistent).ode.state_names == ["x", "u"]

@@ -5,9 +5,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import sys
+
+import numpy as np
 
 from youbot_dynamics.cli.common import CommandError
-from youbot_dynamics.sim.integrators import INTEGRATORS
+from youbot_dynamics.sim.integrators import INTEGRATORS, IntegrationError
 from youbot_dynamics.systems.equations import EXAMPLE_MODELS
 from youbot_dynamics.systems.pipeline import run_pipeline, simulate
 from youbot_dynamics.systems.pipeline_report import pipeline_report, report_lines
@@ -36,7 +40,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def parse_merge(items: list[str]) -> dict[str, float]:
-    """NAME=VALUE pairs as a dict."""
+    """NAME=VALUE pairs (finite numbers) as a dict."""
     merge = {}
     for item in items:
         name, _, value = item.partition("=")
@@ -44,6 +48,8 @@ def parse_merge(items: list[str]) -> dict[str, float]:
             merge[name.strip()] = float(value)
         except ValueError:
             raise CommandError(f"--set {item!r}: expected NAME=VALUE with a number") from None
+        if not math.isfinite(merge[name.strip()]):
+            raise CommandError(f"--set {item!r}: the value must be finite")
     return merge
 
 
@@ -56,7 +62,12 @@ def run_pipeline_command(args: argparse.Namespace) -> int:
     runs = []
     for merge in merges:
         result = run_pipeline(model | merge)
-        solution = simulate(result, args.integrator, args.rtol, args.outputs, dt=args.dt)
+        try:
+            with np.errstate(all="ignore"):
+                solution = simulate(result, args.integrator, args.rtol, args.outputs, dt=args.dt)
+        except IntegrationError as error:
+            print(f"youbot-dynamics pipeline: {args.example} failed: {error}", file=sys.stderr)
+            return 1
         label = "model | " + ", ".join(f"{k} = {v:g}" for k, v in merge.items()) \
             if merge else "model (defaults)"
         runs.append((label, result, solution, args.rtol))

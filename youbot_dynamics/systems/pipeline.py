@@ -209,10 +209,32 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
             solved = solve_torn_block(block_residuals, block_names, torn)
         for variable, expression in solved:
             explicit.append((variable, expression))
-            values.setdefault(variable, complex(
-                expression.xreplace({**values, **parameters, T: 0.0})).real)
+            consistent_start(model, block_names, variable, expression, values, parameters)
     result.ode = generate_ode(model, reduced, selection, symbols, explicit, aliases)
     return result
+
+
+def consistent_start(model: EquationModel, equations: list[str], variable: sp.Symbol,
+                     expression: sp.Expr, values: dict[sp.Symbol, float],
+                     parameters: dict[sp.Symbol, float]) -> None:
+    """Evaluate a solved variable at t = 0 into ``values`` (the consistent initial values
+    that choose the branches of later nonlinear equations). A value that is not real, or
+    that contradicts the variable's declared start value (beyond 1e-9 relative), is a
+    UserInputError: the start values do not satisfy the equations."""
+    value = sp.sympify(expression.xreplace({**values, **parameters, T: 0.0}))
+    if not (value.is_number and value.is_finite):
+        return
+    number = complex(value)
+    where = f"model {model.name}, equations {', '.join(equations)}"
+    if abs(number.imag) > 1e-12 * max(1.0, abs(number)):
+        raise UserInputError(f"{where}: {variable} = {number:.6g} at the start is not real; "
+                             "the start values do not satisfy the constraints")
+    declared = values.get(variable)
+    if declared is not None and abs(number.real - declared) > 1e-9 * max(1.0, abs(declared)):
+        raise UserInputError(f"{where}: {variable} = {number.real:.10g} at the start, but its "
+                             f"start value is {declared:.10g}; make the start values "
+                             "consistent with the equations")
+    values[variable] = number.real
 
 
 def _tearing_report(torn: Tearing) -> dict:
