@@ -137,12 +137,11 @@ def test_third_order_lowering_and_a_negative_alias():
     assert result.ode.state_names == ["x", "x_t", "x_t_t"]
     solution = simulate(result, "dop853", rtol=1e-12, n_outputs=11, t_end=1.0)
     # the closed form of x''' = -x, x(0) = 1, x'(0) = 0, x''(0) = -1 by sympy's dsolve
-    t = sp.Symbol("t")
-    exact = sp.dsolve(sp.Derivative(sp.Function("x")(t), (t, 3)) + sp.Function("x")(t),
-                      ics={sp.Function("x")(0): 1,
-                           sp.Function("x")(t).diff(t).subs(t, 0): 0,
-                           sp.Function("x")(t).diff(t, 2).subs(t, 0): -1}).rhs
-    values = sp.lambdify(t, exact, "numpy")(solution.t)
+    x_exact = sp.Function("x")(T)
+    exact = sp.dsolve(x_exact.diff(T, 3) + x_exact,
+                      ics={x_exact.subs(T, 0): 1, x_exact.diff(T).subs(T, 0): 0,
+                           x_exact.diff(T, 2).subs(T, 0): -1}).rhs
+    values = sp.lambdify(T, exact, "numpy")(solution.t)
     assert np.max(np.abs(solution.x[:, 0] - values)) < 1e-9      # measured 1.7e-11
 
 

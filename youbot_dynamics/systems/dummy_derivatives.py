@@ -54,7 +54,8 @@ class DummySelection:
     unknowns: list[int]
 
 
-def full_pivot_columns(matrix: np.ndarray, preference: list[tuple]) -> tuple[list[int], list[float]]:
+def full_pivot_columns(matrix: np.ndarray, preference: list[tuple]
+                       ) -> tuple[list[int], list[float]]:
     """Columns of a full-row-rank choice by Gaussian elimination with full pivoting (largest
     |entry|, ties to the smallest ``preference`` key); returns the columns and pivots in
     the order chosen. A pivot below 1e-12 times the largest entry is a singular matrix."""

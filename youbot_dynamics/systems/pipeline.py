@@ -27,6 +27,7 @@ from typing import Callable
 
 import numpy as np
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import Solution, integrate
@@ -119,14 +120,13 @@ def eliminate_aliases(equations: list[sp.Expr], names: list[str], order: list[st
         differentiated = {n for e in equations for n, o in equation_variables(e, T) if o > 0}
         found = None
         for i, equation in enumerate(equations):
-            terms = sp.Add.make_args(sp.expand(equation))
-            if len(terms) != 2 or not all(_signed_variable(term) for term in terms):
+            terms = [unknown_term(term) for term in sp.Add.make_args(sp.expand(equation))]
+            if len(terms) != 2 or None in terms:
                 continue
-            candidates = [t for t in terms if isinstance(_signed_variable(t)[1], sp.Function)
-                          and _signed_variable(t)[1].func.__name__ not in differentiated]
+            candidates = [term for term in terms if isinstance(term, AppliedUndef)
+                          and term.func.__name__ not in differentiated]
             if candidates:
-                term = max(candidates, key=lambda t: rank.get(_signed_variable(t)[1].func.__name__, 0))
-                alias = _signed_variable(term)[1]
+                alias = max(candidates, key=lambda term: rank.get(term.func.__name__, 0))
                 found = i, alias, sp.solve(equation, alias)[0]
                 break
         if found is None:
@@ -137,13 +137,12 @@ def eliminate_aliases(equations: list[sp.Expr], names: list[str], order: list[st
         eliminated.append((alias.func.__name__, value))
 
 
-def _signed_variable(term: sp.Expr) -> tuple[int, sp.Expr] | None:
-    """(+-1, unknown or its derivative) when ``term`` is +-(one unknown), else None."""
-    sign, rest = (-1, -term) if term.could_extract_minus_sign() else (1, term)
-    if isinstance(rest, sp.Derivative) or (isinstance(rest, sp.Function)
-                                           and rest.args == (T,)
-                                           and isinstance(rest.func, sp.core.function.UndefinedFunction)):
-        return sign, rest
+def unknown_term(term: sp.Expr) -> sp.Expr | None:
+    """The unknown (a function of t or its derivative) when ``term`` is plus or minus one
+    unknown, else None."""
+    rest = -term if term.could_extract_minus_sign() else term
+    if isinstance(rest, sp.Derivative) or (isinstance(rest, AppliedUndef) and rest.args == (T,)):
+        return rest
     return None
 
 
