@@ -31,9 +31,9 @@ def test_lag_default_and_override_follow_the_closed_form():
     for model, tau in ((lag, 3.0), (faster, 1.0)):
         result = run_pipeline(model)
         assert result.aliases == [("RHS", "x'")]
-        solution = simulate(result, "dop853", rtol=1e-10, n_outputs=51)
+        solution = simulate(result, "dop853", tol=1e-10, n_outputs=51)
         exact = 1.0 - np.exp(-solution.t / tau)
-        # measured: 5.5e-11 (tau 3 and tau 1) with dop853 at rtol 1e-10; margin 18x
+        # measured: 5.5e-11 (tau 3 and tau 1) with dop853 at tol 1e-10; margin 18x
         assert np.max(np.abs(solution.x[:, 0] - exact)) < 1e-9
         observed = result.ode.observe(2.0, np.array([0.25]))
         assert observed["RHS"] == pytest.approx((1.0 - 0.25) / tau, rel=1e-15)
@@ -85,7 +85,7 @@ def angle_form_rhs(x: float, u: float, length: float, g: float) -> np.ndarray:
 
 
 def test_generated_pendulum_ode_matches_the_angle_form(pendulum):
-    solution = simulate(pendulum, "dop853", rtol=1e-10, n_outputs=101)
+    solution = simulate(pendulum, "dop853", tol=1e-10, n_outputs=101)
     length, g = 1.0, 9.81
     for t, state in zip(solution.t, solution.x):
         generated = pendulum.ode.rhs(t, state)
@@ -93,7 +93,7 @@ def test_generated_pendulum_ode_matches_the_angle_form(pendulum):
         assert np.max(np.abs(generated - angle_form_rhs(*state, length, g))) < 1e-10
     angle = integrate(lambda t, s: np.array([s[1], -g / length * math.sin(s[0])]),
                       [0.5, 0.0], solution.t, "dop853", rtol=1e-12, atol=1e-14)
-    # measured: 4.6e-11 between the two trajectories (rtol 1e-10 on the generated one)
+    # measured: 4.6e-11 between the two trajectories (tol 1e-10 on the generated one)
     assert np.max(np.abs(solution.x[:, 0] - length * np.sin(angle.x[:, 0]))) < 1e-9
 
 
@@ -107,7 +107,7 @@ def test_lowpass_blocks_and_incidence_are_structure_py_s():
     assert rows == [set(vs) for vs in LOWPASS_INCIDENCE]
     assert result.tearing[0]["tearing_variables"] == ["uR1"]
     assert result.tearing[0]["residuals"] == ["f4"]
-    solution = simulate(result, "dop853", rtol=1e-10, n_outputs=21)
+    solution = simulate(result, "dop853", tol=1e-10, n_outputs=21)
     exact = 1.0 - np.exp(-solution.t / (200.0 * 1e-3))
     assert np.max(np.abs(solution.x[:, 0] - exact)) < 1e-9      # measured 5.2e-11
 
@@ -116,7 +116,7 @@ def test_modia_pendulum_merge_matches_the_hand_written_pendulum():
     base = modia_pendulum()
     merged = run_pipeline(base | {"L": 0.5})
     assert base.parameters["L"] == 0.8
-    solution = simulate(merged, "dop853", rtol=1e-9, n_outputs=101)
+    solution = simulate(merged, "dop853", tol=1e-9, n_outputs=101)
     for t, (phi, w) in zip(solution.t, solution.x):
         reference = pendulum_rhs(phi, w, 0.5, 1.0, 0.5, np.sin)
         # measured: 0 (the same floating-point operations); 1e-12 leaves room for
@@ -135,7 +135,7 @@ def test_third_order_lowering_and_a_negative_alias():
     assert result.new_variables == ["x_t = x'", "x_t_t = x_t'"]
     assert result.aliases == [("z", "x")]
     assert result.ode.state_names == ["x", "x_t", "x_t_t"]
-    solution = simulate(result, "dop853", rtol=1e-12, n_outputs=11, t_end=1.0)
+    solution = simulate(result, "dop853", tol=1e-12, n_outputs=11, t_end=1.0)
     # the closed form of x''' = -x, x(0) = 1, x'(0) = 0, x''(0) = -1 by sympy's dsolve
     x_exact = sp.Function("x")(T)
     exact = sp.dsolve(x_exact.diff(T, 3) + x_exact,

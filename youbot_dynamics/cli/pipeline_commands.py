@@ -31,7 +31,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "--set is given")
     parser.add_argument("--integrator", choices=[n for n in INTEGRATORS if n != "ida"],
                         default="cvode_bdf", help="default cvode_bdf (Modia's CVODE_BDF)")
-    parser.add_argument("--rtol", type=float, default=1e-6)
+    parser.add_argument("--tol", type=float, default=1e-6,
+                        help="accuracy: rtol = TOL, atol_i = TOL max(|x0_i|, 1e-3)")
     parser.add_argument("--outputs", type=int, default=201, help="output times")
     parser.add_argument("--dt", type=float, default=None,
                         help="fixed step (s) for euler, symplectic_euler, rk4")
@@ -64,13 +65,13 @@ def run_pipeline_command(args: argparse.Namespace) -> int:
         result = run_pipeline(model | merge)
         try:
             with np.errstate(all="ignore"):
-                solution = simulate(result, args.integrator, args.rtol, args.outputs, dt=args.dt)
+                solution = simulate(result, args.integrator, args.tol, args.outputs, dt=args.dt)
         except IntegrationError as error:
             print(f"youbot-dynamics pipeline: {args.example} failed: {error}", file=sys.stderr)
             return 1
         label = "model | " + ", ".join(f"{k} = {v:g}" for k, v in merge.items()) \
             if merge else "model (defaults)"
-        runs.append((label, result, solution, args.rtol))
+        runs.append((label, result, solution, args.tol))
     report = pipeline_report(runs[0][1], runs)
     if args.json:
         print(json.dumps(report, indent=2, default=str))

@@ -30,7 +30,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import Solution, integrate
+from youbot_dynamics.sim.integrators import Solution, integrate, tolerances_from_tol
 from youbot_dynamics.systems.dummy_derivatives import DummySelection, select_dummy_derivatives
 from youbot_dynamics.systems.equations import T, EquationModel, unknown
 from youbot_dynamics.systems.structure import (PantelidesResult, block_lower_triangular,
@@ -295,14 +295,14 @@ def generate_ode(model: EquationModel, reduced: PantelidesResult, selection: Dum
                         derivatives, observed, rhs, observe)
 
 
-def simulate(result: PipelineResult, integrator: str = "cvode_bdf", rtol: float = 1e-6,
+def simulate(result: PipelineResult, integrator: str = "cvode_bdf", tol: float = 1e-6,
              n_outputs: int = 201, t_end: float | None = None,
              dt: float | None = None) -> Solution:
     """Stage 9: integrate the generated ODE from the start values over [0, t_end] (s, the
-    model's by default) with youbot_dynamics.sim.integrators.integrate (``dt``: the step
-    of a fixed-step integrator)."""
+    model's by default) with youbot_dynamics.sim.integrators.integrate; ``tol`` is the one
+    accuracy knob (tolerances_from_tol), ``dt`` the step of a fixed-step integrator."""
     ode = result.ode
     t_eval = np.linspace(0.0, result.model.t_end if t_end is None else t_end, n_outputs)
-    atol = rtol * np.maximum(np.abs(ode.x0), 1e-3)
+    rtol, atol = tolerances_from_tol(tol, ode.x0)
     return integrate(ode.rhs, ode.x0, t_eval, integrator, dt=dt, rtol=rtol, atol=atol,
                      state_names=ode.state_names)

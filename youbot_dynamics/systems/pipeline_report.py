@@ -57,7 +57,7 @@ def dummy_reasons(result: PipelineResult) -> list[str]:
     return reasons
 
 
-def modia_log(solution: Solution, n_states: int, rtol: float) -> dict:
+def modia_log(solution: Solution, n_states: int, tol: float) -> dict:
     """Our run's statistics under the keys of Modia's logStatistics output."""
     stats = solution.stats
     failures = stats.rejected_steps
@@ -66,7 +66,7 @@ def modia_log(solution: Solution, n_states: int, rtol: float) -> dict:
             "algorithm": stats.integrator,
             "FloatType": "Float64",
             "interval": f"{interval:.3g} s",
-            "tolerance": f"{rtol:g} (relative tolerance)",
+            "tolerance": f"{tol:g} (relative tolerance)",
             "nStates": n_states,
             "nResults": len(solution.t),
             "nf": stats.rhs_evals,
@@ -80,7 +80,7 @@ def modia_log(solution: Solution, n_states: int, rtol: float) -> dict:
 def pipeline_report(result: PipelineResult,
                     runs: Sequence[tuple[str, PipelineResult, Solution, float]] = ()) -> dict:
     """Every stage of ``result`` as plain data; ``runs``: (label, pipeline result,
-    solution, rtol) of the simulations to report (final state, observed variables at the
+    solution, tol) of the simulations to report (final state, observed variables at the
     end, Modia-form statistics)."""
     reduced = result.pantelides
     selection = result.dummies
@@ -128,7 +128,7 @@ def pipeline_report(result: PipelineResult,
             "observed": {k: str(e) for k, e in result.ode.observed.items()}},
         "simulation": [],
     }
-    for label, run_result, solution, rtol in runs:
+    for label, run_result, solution, tol in runs:
         ode = run_result.ode
         final = solution.x[-1]
         observed = ode.observe(float(solution.t[-1]), final)
@@ -138,7 +138,7 @@ def pipeline_report(result: PipelineResult,
             "t_end": float(solution.t[-1]),
             "final_state": dict(zip(ode.state_names, map(float, final))),
             "observed_at_end": {k: float(np.real(v)) for k, v in observed.items()},
-            "statistics": modia_log(solution, len(ode.state_names), rtol),
+            "statistics": modia_log(solution, len(ode.state_names), tol),
             "seed_statistics": SEED_LOG})
     return report
 
