@@ -192,7 +192,9 @@ def report_lines(report: dict) -> list[str]:
         lines.append(f"  selected: {', '.join(level['selected'])}")
     lines += dummy["why"]
     lines.append("dummy derivatives: " + (", ".join(dummy["dummies"]) or "none"))
-    lines.append("states: " + ", ".join(dummy["states"]))
+    lines.append("states: " + ", ".join(dummy["states"]) + "; every other variable is an "
+                 "unknown of the index-1 system (the selection is static: it holds while "
+                 "its pivots stay away from zero)")
 
     blt = report["blt"]
     lines.append("\n== 6. BLT of the index-1 system (states known)")
