@@ -49,7 +49,6 @@ class EquationModel:
     parameters: Mapping[str, float]
     equations: tuple[sp.Expr, ...]
     derivative_names: Mapping[str, str] = field(default_factory=dict)
-    outputs: tuple[str, ...] = ()
     t_end: float = 10.0
 
     def __post_init__(self) -> None:
@@ -134,7 +133,7 @@ def modia_pendulum() -> EquationModel:
         (w - der(phi), mass * length**2 * der(w) + damping * w
          + mass * gravity * length * sp.sin(phi),
          rx - length * sp.cos(phi), ry + length * sp.sin(phi)),
-        outputs=("rx", "ry"), t_end=10.0)
+        t_end=10.0)
 
 
 #: Example name -> its model builder, for the command line.

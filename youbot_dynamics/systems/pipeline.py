@@ -64,9 +64,8 @@ class PipelineResult:
     lowered: list[sp.Expr]
     lowered_names: list[str]
     new_variables: list[str]
-    aliases: list[tuple[str, str]]
+    aliases: list[tuple[str, str, str]]
     equations: list[sp.Expr]
-    function_order: list[str]
     initial_matching: dict[str, str]
     unmatched: list[str]
     incidence_variables: list[str]
@@ -112,9 +111,10 @@ def eliminate_aliases(equations: list[sp.Expr], names: list[str], order: list[st
                       ) -> tuple[list[sp.Expr], list[str], list[tuple[str, sp.Expr]]]:
     """Stage 2: remove equations a -+ b = 0 whose a (an unknown at order 0, the later
     declared of two candidates) never occurs differentiated; substitute a. Returns the
-    remaining equations, their names and the eliminated (a, expression) pairs in order."""
+    remaining equations, their names and the eliminated (a, expression, equation name)
+    triples in order."""
     equations, names = list(equations), list(names)
-    eliminated: list[tuple[str, sp.Expr]] = []
+    eliminated: list[tuple[str, sp.Expr, str]] = []
     rank = {n: k for k, n in enumerate(order)}
     while True:
         differentiated = {n for e in equations for n, o in equation_variables(e, T) if o > 0}
@@ -132,9 +132,9 @@ def eliminate_aliases(equations: list[sp.Expr], names: list[str], order: list[st
         if found is None:
             return equations, names, eliminated
         i, alias, value = found
+        eliminated.append((alias.func.__name__, value, names[i]))
         del equations[i], names[i]
         equations = [e.xreplace({alias: value}) for e in equations]
-        eliminated.append((alias.func.__name__, value))
 
 
 def unknown_term(term: sp.Expr) -> sp.Expr | None:
@@ -151,7 +151,7 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
     lowered, order, new_names = lower_order(model)
     lowered_names = [f"f{i + 1}" for i in range(len(lowered))]
     equations, _, aliases = eliminate_aliases(lowered, lowered_names, order)
-    alias_names = {a for a, _ in aliases}
+    alias_names = {a for a, _, _ in aliases}
     order = [n for n in order if n not in alias_names]
 
     variables, equation_vars = incidence(equations, T, order)
@@ -177,7 +177,7 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
 
     result = PipelineResult(
         model, lowered, lowered_names, new_names,
-        [(a, str(pretty_expression(v))) for a, v in aliases], equations, order,
+        [(a, str(pretty_expression(v)), where) for a, v, where in aliases], equations,
         {variable_name(variables[j]): names[i] for j, i in sorted(matching.items())},
         [names[i] for i in range(len(names)) if i not in matching.values()],
         [variable_name(v) for v in variables], incidence_rows(equation_vars, len(variables)),
@@ -257,7 +257,7 @@ def pretty_expression(expression: sp.Expr) -> sp.Expr:
 
 def generate_ode(model: EquationModel, reduced: PantelidesResult, selection: DummySelection,
                  symbols: dict[int, sp.Symbol], explicit: list[tuple[sp.Symbol, sp.Expr]],
-                 aliases: list[tuple[str, sp.Expr]]) -> GeneratedOde:
+                 aliases: list[tuple[str, sp.Expr, str]]) -> GeneratedOde:
     """Stage 8: closed expressions of the state derivatives and of every other variable
     (the explicit assignments substituted in order), lambdified with the parameters
     bound."""
@@ -272,7 +272,7 @@ def generate_ode(model: EquationModel, reduced: PantelidesResult, selection: Dum
     derivatives = {str(s): closed[symbols[reduced.variable_association[j]]]
                    for s, j in zip(states, selection.states)}
     observed = {str(v): e for v, e in closed.items()}
-    for alias, value in aliases:
+    for alias, value, _ in aliases:
         observed[alias] = symbolic_equation(value, reduced.variables, symbols).xreplace(closed)
     parameters = [sp.Symbol(k) for k in model.parameters]
     values = [model.parameters[k] for k in model.parameters]

@@ -91,7 +91,7 @@ def pipeline_report(result: PipelineResult,
             "equations": [f"{n}: {residual_text(e)}"
                           for n, e in zip(result.lowered_names, result.lowered)]},
         "alias_elimination": {
-            "aliases": [f"{a} = {v}" for a, v in result.aliases],
+            "aliases": [f"{a} = {v} (from {where})" for a, v, where in result.aliases],
             "equations": [f"f{i + 1}: {residual_text(e)}"
                           for i, e in enumerate(result.equations)]},
         "matching": {
