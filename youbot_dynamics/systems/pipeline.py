@@ -108,11 +108,11 @@ def lower_order(model: EquationModel) -> tuple[list[sp.Expr], list[str], list[st
 
 
 def eliminate_aliases(equations: list[sp.Expr], names: list[str], order: list[str]
-                      ) -> tuple[list[sp.Expr], list[str], list[tuple[str, sp.Expr]]]:
+                      ) -> tuple[list[sp.Expr], list[tuple[str, sp.Expr, str]]]:
     """Stage 2: remove equations a -+ b = 0 whose a (an unknown at order 0, the later
     declared of two candidates) never occurs differentiated; substitute a. Returns the
-    remaining equations, their names and the eliminated (a, expression, equation name)
-    triples in order."""
+    remaining equations and the eliminated (a, expression, name of the equation) triples
+    in order."""
     equations, names = list(equations), list(names)
     eliminated: list[tuple[str, sp.Expr, str]] = []
     rank = {n: k for k, n in enumerate(order)}
@@ -130,7 +130,7 @@ def eliminate_aliases(equations: list[sp.Expr], names: list[str], order: list[st
                 found = i, alias, sp.solve(equation, alias)[0]
                 break
         if found is None:
-            return equations, names, eliminated
+            return equations, eliminated
         i, alias, value = found
         eliminated.append((alias.func.__name__, value, names[i]))
         del equations[i], names[i]
@@ -150,7 +150,7 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
     """Stages 1-8 on ``model`` (its parameter values as merged)."""
     lowered, order, new_names = lower_order(model)
     lowered_names = [f"f{i + 1}" for i in range(len(lowered))]
-    equations, _, aliases = eliminate_aliases(lowered, lowered_names, order)
+    equations, aliases = eliminate_aliases(lowered, lowered_names, order)
     alias_names = {a for a, _, _ in aliases}
     order = [n for n in order if n not in alias_names]
 
@@ -189,12 +189,26 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
         [[variable_name(reduced.variables[j]) for j in sorted(matched[i] for i in block)]
          for block in blocks])
 
+    explicit = solve_blocks(model, result, residuals, symbols, matched, start, parameters)
+    result.ode = generate_ode(model, reduced, selection, symbols, explicit, aliases)
+    return result
+
+
+def solve_blocks(model: EquationModel, result: PipelineResult, residuals: list[sp.Expr],
+                 symbols: dict[int, sp.Symbol], matched: dict[int, int],
+                 start: dict[sp.Symbol, float], parameters: dict[sp.Symbol, float]
+                 ) -> list[tuple[sp.Symbol, sp.Expr]]:
+    """Stages 7-8a: each BLT block of ``result`` solved explicitly in solution order (one
+    equation by sympy, several after greedy tearing, recorded in ``result.tearing``), the
+    consistent initial values checked on the way. ``matched``: equation -> variable."""
+    reduced, selection = result.pantelides, result.dummies
     all_unknowns = {symbols[j] for j in selection.unknowns}
     algebraic = {symbols[j] for j in selection.unknowns if reduced.variables[j][1] == 0}
+    index = {name: i for i, name in enumerate(reduced.equation_names)}
     explicit: list[tuple[sp.Symbol, sp.Expr]] = []
     values = dict(start)
-    for block in blocks:
-        block_names = [reduced.equation_names[i] for i in block]
+    for block_names in result.blocks:
+        block = [index[name] for name in block_names]
         block_residuals = [residuals[i] for i in block]
         if len(block) == 1:
             variable = symbols[matched[block[0]]]
@@ -209,8 +223,7 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
         for variable, expression in solved:
             explicit.append((variable, expression))
             consistent_start(model, block_names, variable, expression, values, parameters)
-    result.ode = generate_ode(model, reduced, selection, symbols, explicit, aliases)
-    return result
+    return explicit
 
 
 def consistent_start(model: EquationModel, equations: list[str], variable: sp.Symbol,
