@@ -36,3 +36,13 @@ def test_set_overrides_and_rejects_bad_input(capsys):
     assert main(["pipeline", "lag", "--set", "T=1"]) == 2
     assert "no parameter or variable T" in capsys.readouterr().err
     assert main(["pipeline", "lag", "--set", "tau"]) == 2
+
+
+def test_fixed_step_budget_and_static_selection_failures_are_one_line(capsys):
+    assert main(["pipeline", "lag", "--integrator", "rk4", "--dt", "1e-9"]) == 2
+    assert "step budget" in capsys.readouterr().err
+    # gravity upwards: the pendulum falls through the horizontal, where y -> 0 makes the
+    # start's selection (y' dummy, states x, u) singular
+    assert main(["pipeline", "pendulum", "--set", "g=-9.81"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "state selection x, u is static" in err

@@ -10,7 +10,8 @@ import sys
 
 import numpy as np
 
-from youbot_dynamics.cli.common import CommandError
+from youbot_dynamics.cli.common import CommandError, relative_tolerance
+from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget
 from youbot_dynamics.sim.integrators import INTEGRATORS, IntegrationError
 from youbot_dynamics.systems.equations import EXAMPLE_MODELS
 from youbot_dynamics.systems.pipeline import run_pipeline, simulate
@@ -31,11 +32,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "--set is given")
     parser.add_argument("--integrator", choices=[n for n in INTEGRATORS if n != "ida"],
                         default="cvode_bdf", help="default cvode_bdf (Modia's CVODE_BDF)")
-    parser.add_argument("--tol", type=float, default=1e-6,
+    parser.add_argument("--tol", type=relative_tolerance, default=1e-6,
                         help="accuracy: rtol = TOL, atol_i = TOL max(|x0_i|, 1e-3)")
     parser.add_argument("--outputs", type=int, default=201, help="output times")
     parser.add_argument("--dt", type=float, default=None,
                         help="fixed step (s) for euler, symplectic_euler, rk4")
+    add_step_budget_argument(parser)
     parser.add_argument("--json", action="store_true")
     parser.set_defaults(run=run_pipeline_command)
 
@@ -54,6 +56,15 @@ def parse_merge(items: list[str]) -> dict[str, float]:
     return merge
 
 
+def static_selection_note(result) -> str:
+    """A reminder, after a failed run, that dummy derivatives were chosen once at the start
+    (empty when there are none)."""
+    if not result.dummies.dummies:
+        return ""
+    return (f" (the state selection {', '.join(result.ode.state_names)} is static: it fails "
+            "where its pivots pass zero)")
+
+
 def run_pipeline_command(args: argparse.Namespace) -> int:
     """Run the pipeline on the example and print each stage."""
     model = EXAMPLE_MODELS[args.example]()
@@ -63,11 +74,15 @@ def run_pipeline_command(args: argparse.Namespace) -> int:
     runs = []
     for merge in merges:
         result = run_pipeline(model | merge)
+        times = np.linspace(0.0, result.model.t_end, args.outputs)
+        checked_step_budget(args.integrator, args.dt, times, args.max_steps)
         try:
             with np.errstate(all="ignore"):
-                solution = simulate(result, args.integrator, args.tol, args.outputs, dt=args.dt)
+                solution = simulate(result, args.integrator, args.tol, args.outputs, dt=args.dt,
+                                    max_steps=args.max_steps)
         except IntegrationError as error:
-            print(f"youbot-dynamics pipeline: {args.example} failed: {error}", file=sys.stderr)
+            print(f"youbot-dynamics pipeline: {args.example} failed: {error}"
+                  + static_selection_note(result), file=sys.stderr)
             return 1
         label = "model | " + ", ".join(f"{k} = {v:g}" for k, v in merge.items()) \
             if merge else "model (defaults)"

@@ -310,12 +310,13 @@ def generate_ode(model: EquationModel, reduced: PantelidesResult, selection: Dum
 
 def simulate(result: PipelineResult, integrator: str = "cvode_bdf", tol: float = 1e-6,
              n_outputs: int = 201, t_end: float | None = None,
-             dt: float | None = None) -> Solution:
+             dt: float | None = None, max_steps: int | None = None) -> Solution:
     """Stage 9: integrate the generated ODE from the start values over [0, t_end] (s, the
     model's by default) with youbot_dynamics.sim.integrators.integrate; ``tol`` is the one
-    accuracy knob (tolerances_from_tol), ``dt`` the step of a fixed-step integrator."""
+    accuracy knob (tolerances_from_tol), ``dt`` the step of a fixed-step integrator,
+    ``max_steps`` its step budget."""
     ode = result.ode
     t_eval = np.linspace(0.0, result.model.t_end if t_end is None else t_end, n_outputs)
     rtol, atol = tolerances_from_tol(tol, ode.x0)
     return integrate(ode.rhs, ode.x0, t_eval, integrator, dt=dt, rtol=rtol, atol=atol,
-                     state_names=ode.state_names)
+                     state_names=ode.state_names, max_steps=max_steps)
