@@ -12,7 +12,8 @@ import numpy as np
 
 from youbot_dynamics.cli.common import CommandError, relative_tolerance
 from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget
-from youbot_dynamics.sim.integrators import INTEGRATORS, IntegrationError
+from youbot_dynamics.sim.integrators import IntegrationError
+from youbot_dynamics.sim.registry import integrator_names
 from youbot_dynamics.systems.equations import EXAMPLE_MODELS
 from youbot_dynamics.systems.pipeline import run_pipeline, simulate
 from youbot_dynamics.systems.pipeline_report import pipeline_report, report_lines
@@ -30,7 +31,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="parameter merge (model | {NAME: VALUE}); repeatable. "
                         "modia-pendulum runs its defaults and the seed's merge L=0.5 unless "
                         "--set is given")
-    parser.add_argument("--integrator", choices=[n for n in INTEGRATORS if n != "ida"],
+    parser.add_argument("--integrator", choices=integrator_names("ode"),
                         default="cvode_bdf", help="default cvode_bdf (Modia's CVODE_BDF)")
     parser.add_argument("--tol", type=relative_tolerance, default=1e-6,
                         help="accuracy: rtol = TOL, atol_i = TOL max(|x0_i|, 1e-3)")
