@@ -11,6 +11,7 @@ import sympy as sp
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.sim.integrators import integrate
+from youbot_dynamics.systems.dummy_derivatives import full_pivot_columns
 from youbot_dynamics.systems.equations import (T, EquationModel, cartesian_pendulum, der,
                                                first_order_lag, lowpass_filter,
                                                modia_pendulum, unknown)
@@ -162,3 +163,10 @@ def test_start_values_that_break_the_constraint_are_refused():
     consistent = cartesian_pendulum() | {"L": 4.0, "x": 2 * math.sin(0.5),
                                          "y": -2 * math.cos(0.5)}
     assert run_pipeline(consistent).ode.state_names == ["x", "u"]
+
+
+def test_full_pivoting_prefers_the_larger_pivot_and_refuses_a_singular_jacobian():
+    columns, pivots = full_pivot_columns(np.array([[0.3, -1.7]]), [(-1, 0), (-1, 1)])
+    assert (columns, pivots) == ([1], [-1.7])
+    with pytest.raises(UserInputError, match="singular at the start values"):
+        full_pivot_columns(np.array([[1.0, 2.0], [2.0, 4.0]]), [(-1, 0), (-1, 1)])
