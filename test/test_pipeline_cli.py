@@ -38,11 +38,14 @@ def test_set_overrides_and_rejects_bad_input(capsys):
     assert main(["pipeline", "lag", "--set", "tau"]) == 2
 
 
-def test_fixed_step_budget_and_static_selection_failures_are_one_line(capsys):
+def test_fixed_step_budget_and_the_static_selection(capsys):
     assert main(["pipeline", "lag", "--integrator", "rk4", "--dt", "1e-9"]) == 2
     assert "step budget" in capsys.readouterr().err
     # gravity upwards: the pendulum falls through the horizontal, where y -> 0 makes the
-    # start's selection (y' dummy, states x, u) singular
-    assert main(["pipeline", "pendulum", "--set", "g=-9.81"]) == 1
+    # start's selection (y' dummy, states x, u) fade: refused with the static selection,
+    # chosen again (states y, v) otherwise
+    assert main(["pipeline", "pendulum", "--set", "g=-9.81", "--static-selection"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "state selection x, u is static" in err
+    assert err.count("\n") == 1 and "the state selection (x, u) must change" in err
+    assert main(["pipeline", "pendulum", "--set", "g=-9.81"]) == 0
+    assert "state selection: t = " in capsys.readouterr().out

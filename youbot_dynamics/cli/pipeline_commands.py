@@ -15,7 +15,7 @@ from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_s
 from youbot_dynamics.sim.integrators import IntegrationError
 from youbot_dynamics.sim.registry import integrator_names
 from youbot_dynamics.systems.equations import EXAMPLE_MODELS
-from youbot_dynamics.systems.pipeline import run_pipeline, simulate
+from youbot_dynamics.systems.state_selection import simulate_with_reselection
 from youbot_dynamics.systems.pipeline_report import pipeline_report, report_lines
 
 #: The seed's parameter merge for the ModiaLang pendulum (``Pendulum | Map(L = 0.5)``).
@@ -38,6 +38,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--outputs", type=int, default=201, help="output times")
     parser.add_argument("--dt", type=float, default=None,
                         help="fixed step (s) for euler, symplectic_euler, rk4")
+    parser.add_argument("--static-selection", action="store_true",
+                        help="keep the start's state selection (fails where a pivot fades) "
+                        "instead of choosing the states again there")
     add_step_budget_argument(parser)
     parser.add_argument("--json", action="store_true")
     parser.set_defaults(run=run_pipeline_command)
@@ -57,15 +60,6 @@ def parse_merge(items: list[str]) -> dict[str, float]:
     return merge
 
 
-def static_selection_note(result) -> str:
-    """A reminder, after a failed run, that dummy derivatives were chosen once at the start
-    (empty when there are none)."""
-    if not result.dummies.dummies:
-        return ""
-    return (f" (the state selection {', '.join(result.ode.state_names)} is static: it fails "
-            "where its pivots pass zero)")
-
-
 def run_pipeline_command(args: argparse.Namespace) -> int:
     """Run the pipeline on the example and print each stage."""
     model = EXAMPLE_MODELS[args.example]()
@@ -74,21 +68,21 @@ def run_pipeline_command(args: argparse.Namespace) -> int:
         merges.append(MODIA_MERGE)
     runs = []
     for merge in merges:
-        result = run_pipeline(model | merge)
-        times = np.linspace(0.0, result.model.t_end, args.outputs)
+        current = model | merge
+        times = np.linspace(current.t0, current.t_end, args.outputs)
         checked_step_budget(args.integrator, args.dt, times, args.max_steps)
         try:
             with np.errstate(all="ignore"):
-                solution = simulate(result, args.integrator, args.tol, args.outputs, dt=args.dt,
-                                    max_steps=args.max_steps)
+                run = simulate_with_reselection(
+                    current, args.integrator, args.tol, args.outputs, dt=args.dt,
+                    max_steps=args.max_steps, max_segments=1 if args.static_selection else 100)
         except IntegrationError as error:
-            print(f"youbot-dynamics pipeline: {args.example} failed: {error}"
-                  + static_selection_note(result), file=sys.stderr)
+            print(f"youbot-dynamics pipeline: {args.example} failed: {error}", file=sys.stderr)
             return 1
         label = "model | " + ", ".join(f"{k} = {v:g}" for k, v in merge.items()) \
             if merge else "model (defaults)"
-        runs.append((label, result, solution, args.tol))
-    report = pipeline_report(runs[0][1], runs)
+        runs.append((label, run, args.tol))
+    report = pipeline_report(runs[0][1].segments[0].result, runs)
     if args.json:
         print(json.dumps(report, indent=2, default=str))
     else:

@@ -15,7 +15,8 @@ largest pivot first, on ties the candidate of higher derivative order, then the 
 variable. So a constraint x^2 + y^2 = L makes y' the dummy when |y| > |x| at the start
 (y is then computed from the constraint and x stays a state). A state is a variable whose
 derivative occurs and is not a dummy; all other variables are unknowns of the index-1
-system. The selection is static: it holds while its pivots stay away from zero.
+system. The selection is static: it holds while its pivots stay away from zero
+(state_selection.py chooses again where one fades).
 """
 from __future__ import annotations
 
@@ -37,7 +38,7 @@ class DummyLevel:
 
     equations: list[str]
     candidates: list[str]
-    jacobian: list[list[str]]
+    jacobian: list[list[sp.Expr]]
     jacobian_at_start: list[list[float]]
     selected: list[str]
     pivots: list[float]
@@ -115,7 +116,7 @@ def select_dummy_derivatives(result: PantelidesResult, symbols: Mapping[int, sp.
         levels.append(DummyLevel(
             [result.equation_names[i] for i in equations],
             [variable_name(result.variables[j]) for j in candidates],
-            [[str(entry) for entry in row] for row in jacobian], numeric,
+            jacobian, numeric,
             [variable_name(result.variables[j]) for j in selected], pivots))
         dummies += selected
         equations = [lower_equation[i] for i in equations

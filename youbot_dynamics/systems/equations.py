@@ -41,8 +41,9 @@ def der(expression: sp.Expr, order: int = 1) -> sp.Expr:
 @dataclass(frozen=True)
 class EquationModel:
     """Unknowns (name -> start value or None, in this order), parameters (name -> default,
-    SI), residuals (sympy, = 0) named f1, f2, ... in their order, and the names order
-    lowering gives to first derivatives."""
+    SI), residuals (sympy, = 0) named f1, f2, ... in their order, the names order
+    lowering gives to first derivatives, and the time span [t0, t_end] (s) the start
+    values hold at t0."""
 
     name: str
     variables: Mapping[str, float | None]
@@ -50,6 +51,7 @@ class EquationModel:
     equations: tuple[sp.Expr, ...]
     derivative_names: Mapping[str, str] = field(default_factory=dict)
     t_end: float = 10.0
+    t0: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "variables", MappingProxyType(dict(self.variables)))

@@ -18,19 +18,21 @@ and its simulation. Stages, in order:
    rhs(t, x);
 9. simulation with youbot_dynamics.sim.integrators.integrate.
 
-:func:`run_pipeline` runs stages 1-8, :func:`simulate` stage 9.
+:func:`run_pipeline` runs stages 1-8, :func:`simulate` stage 9;
+state_selection.simulate_with_reselection repeats both where the state selection must
+change.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import Solution, integrate, tolerances_from_tol
+from youbot_dynamics.sim.integrators import Event, Solution, integrate, tolerances_from_tol
 from youbot_dynamics.systems.dummy_derivatives import DummySelection, select_dummy_derivatives
 from youbot_dynamics.systems.equations import T, EquationModel, unknown
 from youbot_dynamics.systems.structure import (PantelidesResult, block_lower_triangular,
@@ -229,11 +231,11 @@ def solve_blocks(model: EquationModel, result: PipelineResult, residuals: list[s
 def consistent_start(model: EquationModel, equations: list[str], variable: sp.Symbol,
                      expression: sp.Expr, values: dict[sp.Symbol, float],
                      parameters: dict[sp.Symbol, float]) -> None:
-    """Evaluate a solved variable at t = 0 into ``values`` (the consistent initial values
+    """Evaluate a solved variable at t0 into ``values`` (the consistent initial values
     that choose the branches of later nonlinear equations). A value that is not real, or
     that contradicts the variable's declared start value (beyond 1e-9 relative), is a
     UserInputError: the start values do not satisfy the equations."""
-    value = sp.sympify(expression.xreplace({**values, **parameters, T: 0.0}))
+    value = sp.sympify(expression.xreplace({**values, **parameters, T: model.t0}))
     if not (value.is_number and value.is_finite):
         return
     number = complex(value)
@@ -310,13 +312,17 @@ def generate_ode(model: EquationModel, reduced: PantelidesResult, selection: Dum
 
 def simulate(result: PipelineResult, integrator: str = "cvode_bdf", tol: float = 1e-6,
              n_outputs: int = 201, t_end: float | None = None,
-             dt: float | None = None, max_steps: int | None = None) -> Solution:
-    """Stage 9: integrate the generated ODE from the start values over [0, t_end] (s, the
-    model's by default) with youbot_dynamics.sim.integrators.integrate; ``tol`` is the one
-    accuracy knob (tolerances_from_tol), ``dt`` the step of a fixed-step integrator,
-    ``max_steps`` its step budget."""
+             dt: float | None = None, max_steps: int | None = None,
+             t_eval: np.ndarray | None = None, events: Sequence[Event] = ()) -> Solution:
+    """Stage 9: integrate the generated ODE from the start values with
+    youbot_dynamics.sim.integrators.integrate, with outputs at ``t_eval`` (s; default
+    ``n_outputs`` equally spaced over [t0, t_end], the model's t_end by default). ``tol``
+    is the one accuracy knob (tolerances_from_tol), ``dt`` the step of a fixed-step
+    integrator, ``max_steps`` its step budget, ``events`` state events."""
     ode = result.ode
-    t_eval = np.linspace(0.0, result.model.t_end if t_end is None else t_end, n_outputs)
+    if t_eval is None:
+        t_eval = np.linspace(result.model.t0,
+                             result.model.t_end if t_end is None else t_end, n_outputs)
     rtol, atol = tolerances_from_tol(tol, ode.x0)
     return integrate(ode.rhs, ode.x0, t_eval, integrator, dt=dt, rtol=rtol, atol=atol,
-                     state_names=ode.state_names, max_steps=max_steps)
+                     state_names=ode.state_names, max_steps=max_steps, events=events)

@@ -12,9 +12,10 @@ from typing import Sequence
 import numpy as np
 import sympy as sp
 
-from youbot_dynamics.sim.integrators import Solution
+from youbot_dynamics.sim.integrators import IntegratorStats
 from youbot_dynamics.systems.equations import EquationModel
 from youbot_dynamics.systems.pipeline import PipelineResult, pretty_expression
+from youbot_dynamics.systems.state_selection import ReselectedRun
 from youbot_dynamics.systems.structure import variable_name
 
 #: What benchmarks.md gives of the seed's statistics log.
@@ -57,18 +58,17 @@ def dummy_reasons(result: PipelineResult) -> list[str]:
     return reasons
 
 
-def modia_log(solution: Solution, n_states: int, tol: float) -> dict:
-    """Our run's statistics under the keys of Modia's logStatistics output."""
-    stats = solution.stats
+def modia_log(stats: IntegratorStats, times: np.ndarray, n_states: int, tol: float) -> dict:
+    """A run's statistics (outputs at ``times``, s) under the keys of Modia's
+    logStatistics output."""
     failures = stats.rejected_steps
-    interval = float(solution.t[1] - solution.t[0]) if len(solution.t) > 1 else 0.0
     return {"cpuTime": f"{stats.wall_time:.3g} s",
             "algorithm": stats.integrator,
             "FloatType": "Float64",
-            "interval": f"{interval:.3g} s",
+            "interval": f"{float(times[1] - times[0]):.3g} s",
             "tolerance": f"{tol:g} (relative tolerance)",
             "nStates": n_states,
-            "nResults": len(solution.t),
+            "nResults": len(times),
             "nf": stats.rhs_evals,
             "nJac": "n/a" if stats.jac_evals is None else stats.jac_evals,
             "nAcceptedSteps": stats.steps,
@@ -78,10 +78,10 @@ def modia_log(solution: Solution, n_states: int, tol: float) -> dict:
 
 
 def pipeline_report(result: PipelineResult,
-                    runs: Sequence[tuple[str, PipelineResult, Solution, float]] = ()) -> dict:
-    """Every stage of ``result`` as plain data; ``runs``: (label, pipeline result,
-    solution, tol) of the simulations to report (final state, observed variables at the
-    end, Modia-form statistics)."""
+                    runs: Sequence[tuple[str, ReselectedRun, float]] = ()) -> dict:
+    """Every stage of ``result`` as plain data; ``runs``: (label, run, tol) of the
+    simulations to report (changes of state selection, final state, observed variables at
+    the end, Modia-form statistics)."""
     reduced = result.pantelides
     selection = result.dummies
     report = {
@@ -110,7 +110,9 @@ def pipeline_report(result: PipelineResult,
             "n_equations": len(reduced.equations), "n_variables": len(reduced.variables),
             "structural_index": reduced.structural_index},
         "dummy_derivatives": {
-            "levels": [vars(level) for level in selection.levels],
+            "levels": [{**vars(level), "jacobian": [[str(e) for e in row]
+                                                    for row in level.jacobian]}
+                       for level in selection.levels],
             "dummies": [variable_name(reduced.variables[j]) for j in selection.dummies],
             "states": [variable_name(reduced.variables[j]) for j in selection.states],
             "why": dummy_reasons(result)},
@@ -128,17 +130,20 @@ def pipeline_report(result: PipelineResult,
             "observed": {k: str(e) for k, e in result.ode.observed.items()}},
         "simulation": [],
     }
-    for label, run_result, solution, tol in runs:
-        ode = run_result.ode
+    for label, run, tol in runs:
+        last = run.segments[-1]
+        ode, solution = last.result.ode, last.solution
         final = solution.x[-1]
         observed = ode.observe(float(solution.t[-1]), final)
+        times, _ = run.values(ode.state_names[0])
         report["simulation"].append({
             "label": label,
-            "parameters": dict(run_result.model.parameters),
+            "parameters": dict(last.result.model.parameters),
             "t_end": float(solution.t[-1]),
+            "state_selections": run.switches(),
             "final_state": dict(zip(ode.state_names, map(float, final))),
             "observed_at_end": {k: float(np.real(v)) for k, v in observed.items()},
-            "statistics": modia_log(solution, len(ode.state_names), tol),
+            "statistics": modia_log(run.stats, times, len(ode.state_names), tol),
             "seed_statistics": SEED_LOG})
     return report
 
@@ -188,13 +193,13 @@ def report_lines(report: dict) -> list[str]:
         lines.append(f"level {k}: equations {', '.join(level['equations'])}; candidates "
                      f"{', '.join(level['candidates'])}")
         for name, row in zip(level["equations"], level["jacobian"]):
-            lines.append(f"  d{name}/d(...) = [{', '.join(row)}]")
+            lines.append(f"  d{name}/d(...) = [{', '.join(map(str, row))}]")
         lines.append(f"  selected: {', '.join(level['selected'])}")
     lines += dummy["why"]
     lines.append("dummy derivatives: " + (", ".join(dummy["dummies"]) or "none"))
     lines.append("states: " + ", ".join(dummy["states"]) + "; every other variable is an "
-                 "unknown of the index-1 system (the selection is static: it holds while "
-                 "its pivots stay away from zero)")
+                 "unknown of the index-1 system (chosen at the start values; chosen again "
+                 "during the run where a pivot fades)")
 
     blt = report["blt"]
     lines.append("\n== 6. BLT of the index-1 system (states known)")
@@ -222,6 +227,7 @@ def report_lines(report: dict) -> list[str]:
     for run in report["simulation"]:
         lines.append(f"{run['label']}: parameters " + ", ".join(
             f"{k} = {v:g}" for k, v in run["parameters"].items()))
+        lines += [f"  state selection: {switch}" for switch in run["state_selections"]]
         lines.append(f"  at t = {run['t_end']:g} s: " + ", ".join(
             f"{k} = {v:.6g}" for k, v in {**run["final_state"], **run["observed_at_end"]}.items()))
         lines.append("  statistics (Modia's log form):")
