@@ -47,5 +47,7 @@ def test_fixed_step_budget_and_the_static_selection(capsys):
     assert main(["pipeline", "pendulum", "--set", "g=-9.81", "--static-selection"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "the state selection (x, u) must change" in err
-    assert main(["pipeline", "pendulum", "--set", "g=-9.81"]) == 0
-    assert "state selection: t = " in capsys.readouterr().out
+    assert main(["pipeline", "pendulum", "--set", "g=-9.81", "--json"]) == 0
+    run = json.loads(capsys.readouterr().out)["simulation"][0]
+    assert run["state_selections"][0].endswith("states x, u -> y, v")
+    assert run["statistics"]["nRestartEvents"] == len(run["state_selections"])

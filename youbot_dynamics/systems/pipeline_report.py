@@ -58,9 +58,10 @@ def dummy_reasons(result: PipelineResult) -> list[str]:
     return reasons
 
 
-def modia_log(stats: IntegratorStats, times: np.ndarray, n_states: int, tol: float) -> dict:
-    """A run's statistics (outputs at ``times``, s) under the keys of Modia's
-    logStatistics output."""
+def modia_log(stats: IntegratorStats, times: np.ndarray, n_states: int, tol: float,
+              restarts: int) -> dict:
+    """A run's statistics (outputs at ``times``, s; ``restarts``: new state selections)
+    under the keys of Modia's logStatistics output."""
     failures = stats.rejected_steps
     return {"cpuTime": f"{stats.wall_time:.3g} s",
             "algorithm": stats.integrator,
@@ -74,7 +75,7 @@ def modia_log(stats: IntegratorStats, times: np.ndarray, n_states: int, tol: flo
             "nAcceptedSteps": stats.steps,
             "nRejectedSteps": "n/a" if failures is None else failures,
             "nErrTestFails": "n/a" if failures is None else failures,
-            "nTimeEvents": 0, "nStateEvents": stats.events, "nRestartEvents": 0}
+            "nTimeEvents": 0, "nStateEvents": stats.events, "nRestartEvents": restarts}
 
 
 def pipeline_report(result: PipelineResult,
@@ -143,7 +144,8 @@ def pipeline_report(result: PipelineResult,
             "state_selections": run.switches(),
             "final_state": dict(zip(ode.state_names, map(float, final))),
             "observed_at_end": {k: float(np.real(v)) for k, v in observed.items()},
-            "statistics": modia_log(run.stats, times, len(ode.state_names), tol),
+            "statistics": modia_log(run.stats, times, len(ode.state_names), tol,
+                                    len(run.segments) - 1),
             "seed_statistics": SEED_LOG})
     return report
 
