@@ -51,6 +51,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
         ("mobile_commands", (("unicycle", "the differential drive against its closed forms"),
                              ("mecanum", "youBot base: wheel speeds of a twist, and its odometry"))),
         ("report_commands", (("report", "run every study; write their PNGs and one Markdown page"),)),
+        ("pipeline_commands", (("pipeline", "equation pipeline on an example model: every stage "
+                                            "printed"),)),
     ) for name, summary in commands}
 COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
 

@@ -362,3 +362,22 @@ def structure_report(example: str) -> dict:
         "blocks": [[result.equation_names[active[i]] for i in block] for block in blocks],
         "structural_index": result.structural_index,
     }
+
+
+def variable_symbol(variable: Variable) -> sp.Symbol:
+    """The plain symbol standing for a variable once derivatives are replaced: named as
+    printed (x, x', lambda, ...)."""
+    return sp.Symbol(variable_name(variable))
+
+
+def symbolic_equation(expression: sp.Expr, variables: Sequence[Variable],
+                      symbols: dict[int, sp.Symbol] | Sequence[sp.Symbol],
+                      t: sp.Symbol = sp.Symbol("t")) -> sp.Expr:
+    """A residual in functions of t with every variable (function at a derivative order,
+    ``variables[j]``) replaced by ``symbols[j]``: an algebraic expression."""
+    replacements = {}
+    for j, (name, order) in enumerate(variables):
+        function = sp.Function(name)(t)
+        node = sp.Derivative(function, (t, order)) if order else function
+        replacements[node] = symbols[j]
+    return sp.sympify(expression).xreplace(replacements)

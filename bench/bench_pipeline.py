@@ -1,0 +1,66 @@
+"""The equation pipeline's cost (measured figures, not tests).
+
+1. Stages 1-8 (order lowering to code generation) per example model: wall time of
+   run_pipeline, best of REPEATS.
+2. The generated right-hand side against the hand-written one for the ModiaLang pendulum
+   (uncertain_pendulum.pendulum_rhs, L = 0.5 by the parameter merge): time per call,
+   best of REPEATS over CALLS calls, and a cvode_bdf run over 10 s with each (steps,
+   right-hand-side evaluations, wall time).
+
+Run: python bench/bench_pipeline.py      (about 15 s)
+"""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
+
+from youbot_dynamics.sim.integrators import integrate, tolerances_from_tol
+from youbot_dynamics.systems.equations import EXAMPLE_MODELS, modia_pendulum
+from youbot_dynamics.systems.pipeline import run_pipeline
+from youbot_dynamics.systems.uncertain_pendulum import pendulum_rhs
+
+REPEATS, CALLS = 3, 20000
+
+
+def best_time(function, repeats: int = REPEATS) -> float:
+    """The shortest wall time (s) of ``repeats`` calls of ``function()``."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main() -> None:
+    print("stages 1-8 (run_pipeline), best of", REPEATS)
+    for name, build in EXAMPLE_MODELS.items():
+        model = build()
+        print(f"  {name:<15s} {best_time(lambda: run_pipeline(model)) * 1e3:8.1f} ms")
+
+    generated = run_pipeline(modia_pendulum() | {"L": 0.5}).ode
+
+    def hand_written(t: float, x: np.ndarray) -> np.ndarray:
+        return np.array(pendulum_rhs(x[0], x[1], 0.5, 1.0, 0.5, np.sin))
+
+    state = generated.x0
+    print(f"right-hand side per call, best of {REPEATS} x {CALLS} calls")
+    for label, rhs in (("generated", generated.rhs), ("hand-written", hand_written)):
+        seconds = best_time(lambda: [rhs(0.0, state) for _ in range(CALLS)])
+        print(f"  {label:<13s} {seconds / CALLS * 1e6:6.2f} us")
+    print("cvode_bdf over 10 s at tol 1e-6")
+    t_eval = np.linspace(0.0, 10.0, 201)
+    rtol, atol = tolerances_from_tol(1e-6, state)
+    for label, rhs in (("generated", generated.rhs), ("hand-written", hand_written)):
+        stats = integrate(rhs, state, t_eval, "cvode_bdf", rtol=rtol, atol=atol).stats
+        print(f"  {label:<13s} {stats.steps} steps, {stats.rhs_evals} rhs evaluations, "
+              f"wall {stats.wall_time * 1e3:.1f} ms")
+
+
+if __name__ == "__main__":
+    main()
