@@ -1,4 +1,4 @@
-"""Driving base_square (issue 11): wheel odometry against the ground truth, and slip.
+"""Driving base_square: wheel odometry against the ground truth, and slip.
 
 - kinematic base: the odometry of the wheel speeds (the mobile module's SE(2) integration,
   sampled at the outputs) closes the 1 m square within 1e-6 m and meets every corner;

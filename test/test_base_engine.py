@@ -1,4 +1,4 @@
-"""The moving base in the engine (issue 11): a planar root under the arm.
+"""The moving base in the engine: a planar root under the arm.
 
 - dynamic base, wheels free, no friction across the rollers, arm swinging: the whole robot's
   planar linear momentum and angular momentum about z (Pinocchio's centroidal momentum, not

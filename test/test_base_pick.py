@@ -1,4 +1,4 @@
-"""mobile_pick: one youBot drives to the table, picks the sphere and drives back (issue 11).
+"""mobile_pick: one youBot drives to the table, picks the sphere and drives back.
 
 The short form (CI) checks that the base and the free sphere are separate degrees of freedom
 of the one plant: the sphere rests on the table while the base drives. The full run (slow)

@@ -166,7 +166,7 @@ def test_other_urdf(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     (["jacobian", "--kind", "world", "--frame", "moon"], ["unknown link 'moon'"]),
     (["screws", "--urdf", "/no/such/robot.urdf"], ["URDF file not found: /no/such/robot.urdf"]),
     (["info", "--urdf", "/no/such/robot.urdf"], ["URDF file not found"]),
-    # Overflow (issue 16): before, --json printed null torques and numpy's RuntimeWarnings.
+    # Overflow: --json must not print null torques nor numpy's RuntimeWarnings.
     (["id", "--json", "--v", "arm_joint_1=1e308,arm_joint_2=1e308"], ["tau overflows", "arm_joint_1"]),
     (["fd", "--json", "--tau", "arm_joint_1=1e308,arm_joint_2=-1e308"], ["a overflows", "arm_joint_2"]),
     (["fd", "--root", "floating", "--v", "root_vx=1e308"], ["a overflows", "root_vx"]),
@@ -240,7 +240,7 @@ def test_fd_refuses_a_singular_mass_matrix(capsys: pytest.CaptureFixture[str], t
 
 
 def test_info_refuses_magnitudes_beyond_the_bounds(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
-    # Before (issue 16): mass 1e308 passed `info`, then the node died on an infinite energy.
+    # A mass of 1e308 must not pass `info` (the node would die on an infinite energy).
     path = tmp_path / "heavy.urdf"
     path.write_text(_two_link(l1='<link name="l1"><inertial><mass value="1e308"/><inertia ixx="0.1" ixy="0" '
                                  'ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>'))

@@ -1,4 +1,4 @@
-"""Divergence is seen in every scene and no run hangs (issue 16): the energy ledger of
+"""Divergence is seen in every scene and no run hangs: the energy ledger of
 passive scenes (with contact and friction), free-body velocity and penetration bounds, a
 fixed step larger than the output spacing or too small to move the clock refused, step
 budgets (up front for fixed steps, when spent for adaptive ones), non-finite values inside

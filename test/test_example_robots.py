@@ -1,6 +1,6 @@
 """Acceptance: every non-empty URDF that the PyPI package example-robot-data ships loads, its
 PoE kinematics equal Pinocchio's, and its dynamics equal those of a Pinocchio model built
-straight from the same file (issue 9).
+straight from the same file.
 
 The reference model is ``pin.buildModelFromUrdf(path)``: continuous joints as Pinocchio's
 (cos, sin) joints, no mimic coupling and a free-flyer for a <floating> joint (locked at its

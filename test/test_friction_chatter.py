@@ -1,4 +1,4 @@
-"""Joint friction near zero velocity does not chatter (issue 3 §5).
+"""Joint friction near zero velocity does not chatter.
 
 A single revolute joint (axis along gravity, so gravity exerts no torque; inertia I about
 the axis) starts at rest under a constant torque tau below its Coulomb level F_c. With the

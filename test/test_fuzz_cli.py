@@ -1,4 +1,4 @@
-"""Fuzzing the command line's numeric arguments (issue 16): the model commands (fk, jacobian,
+"""Fuzzing the command line's numeric arguments: the model commands (fk, jacobian,
 id, fd) with random joint values (any float, NaN, infinities, 1e308, subnormals, text that is
 no number) and random vector lengths, and simulate with random --duration, --dt and --tol.
 
@@ -7,8 +7,8 @@ number is finite and nothing on stderr, or exit 2 with exactly one line on stder
 exception, no warning (a warning printed by a command is a line of stderr too).
 
 simulate's values are drawn so that an accepted run stays short (duration at most 0.05 s,
-fixed steps of at least 1 ms): hanging on a tiny step is the step budget's matter (issue 16,
-divergence part), not this invariant's. Examples per test: test/conftest.py's profile.
+fixed steps of at least 1 ms): hanging on a tiny step is the step budget's matter
+(test_divergence.py), not this invariant's. Examples per test: test/conftest.py's profile.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The gripping scene (issue 5 section 4): two youBots hand a wooden sphere from youBot 1's
+"""The gripping scene: two youBots hand a wooden sphere from youBot 1's
 plate to the table and on to youBot 2's plate. The whole 28 s run (about 10 s of wall time
 under the constraint stepper) must end with the sphere on youBot 2's plate, the grasps must
 hold it without slipping, and no contact may overlap by 1 mm or more. Also: the scene's

@@ -1,4 +1,4 @@
-"""A node on a scene whose integrator used to hang (issue 16): the arm_swing scene with a
+"""A node on a scene whose integrator used to hang: the arm_swing scene with a
 gravity of 1e308 m/s^2 made scipy's DOP853 step loop for ever on a NaN step size,
 inside the node's only callback thread, so SIGINT was never served and the MCAP stayed
 empty. Such a gravity is now refused when the scene loads (model/limits.py); the test runs

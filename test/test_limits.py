@@ -1,4 +1,4 @@
-"""Sanity bounds on magnitudes and sizes (youbot_dynamics.model.limits, issue 16): the URDF
+"""Sanity bounds on magnitudes and sizes (youbot_dynamics.model.limits): the URDF
 loader and the scene validator refuse values far beyond any real robot with one line naming
 file:line and element (URDF) or file and key (scene), and accept values at the bounds; scene
 YAML is read with bounded aliases and expanded size.

@@ -92,7 +92,7 @@ def test_index3_runs_with_the_exact_jacobian():
 
 
 def test_index3_with_the_higher_index_variables_out_of_the_error_test():
-    """Issue 13's acceptance: index 3 within 1e-6 (relative, on q) of the reference at
+    """Index 3 within 1e-6 (relative, on q) of the reference at
     t = 0.03 s at rtol no tighter than 1e-8. radau5 (the index3 default) scales the error
     weights of v by 1/h and of w, lambda by 1/h^2. Measured at rtol 1e-8 (atol 1e-11):
     2.9e-7 in 476 steps, max|g| 6e-16 m; bound 1e-6 (3.5x margin)."""

@@ -1,4 +1,4 @@
-"""The scene's ``base:`` section: how the youBot's base moves (issue 11).
+"""The scene's ``base:`` section: how the youBot's base moves.
 
     base:
       mode: fixed | kinematic | dynamic        # default fixed: the base welded to the world

@@ -44,7 +44,7 @@ REFERENCE_TOL = 1e-12
 #: Output times of the comparison: every 0.1 s.
 OUTPUTS = 201
 METHODS = ("euler", "bdf2", "bdf3", "bdf4")
-#: The seed's verdicts (benchmarks.md section 3; issue 13 for Euler k = 20, N = 10000).
+#: The seed's verdicts (benchmarks.md section 3).
 SEED_VERDICTS = {
     "euler": {(1, 1000): "stable, inaccurate", (1, 10000): "accurate",
               (20, 1000): "unstable", (20, 10000): "accurate"},
