@@ -70,7 +70,8 @@ def test_urdf_defaults(youbot):
 
 def test_mixed_laws_assemble_per_joint(youbot, mixed):
     """Each joint's torque is its own law with its own parameters."""
-    assert mixed.state_names == ("arm_joint_2/lugre_z", "arm_joint_4/lugre_z")
+    assert mixed.state_names == ("z[arm_joint_2]", "z[arm_joint_4]")
+    assert mixed.lugre_joints == ("arm_joint_2", "arm_joint_4")
     rng = np.random.default_rng(1)
     v, z = rng.normal(0, 0.3, youbot.nv), rng.normal(0, 1e-4, 2)
     tau, dz = mixed.torque(v, z), mixed.state_derivative(v, z)

@@ -229,10 +229,15 @@ class JointFriction:
     table: np.ndarray
 
     @property
+    def lugre_joints(self) -> tuple[str, ...]:
+        """The LuGre joints, in joint order: one bristle state each."""
+        return tuple(self.joint_names[i] for i in (() if self.lugre is None else self.lugre.joints))
+
+    @property
     def state_names(self) -> tuple[str, ...]:
-        """Names of the LuGre bristle states, ``<joint>/lugre_z``, in joint order."""
-        joints = () if self.lugre is None else self.lugre.joints
-        return tuple(f"{self.joint_names[i]}/lugre_z" for i in joints)
+        """Names of the LuGre bristle states, ``z[<joint>]`` as the simulation state names
+        them (:class:`~youbot_dynamics.sim.state.StateLayout`), in joint order."""
+        return tuple(f"z[{name}]" for name in self.lugre_joints)
 
     @property
     def n_states(self) -> int:

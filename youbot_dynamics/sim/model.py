@@ -300,7 +300,7 @@ def _plant(robot: Robot, scene: Scene) -> tuple[Robot, list[int | None]]:
 def _layout(robot: Robot, scene: Scene, friction: JointFriction | None, compliant: list[str],
             base: BaseModel | None) -> StateLayout:
     names = [spec.body.name for spec in scene.free_bodies]
-    lugre = [] if friction is None else [n for n, law in zip(friction.joint_names, friction.laws) if law == "lugre"]
+    lugre = [] if friction is None else list(friction.lugre_joints)
     moving = base is not None
     return StateLayout.for_joints(robot.joint_names, {
         "base": POSE_LABELS if moving else (),
