@@ -28,9 +28,10 @@ from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
 from youbot_dynamics.identification.excitation import FourierTrajectory
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import read_bag
+from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.model.robot import Robot, keep_joints
-from youbot_dynamics.sim.commands import NS_PER_S, MAX_TRAJECTORY_POINTS, stamp_ns_of
+from youbot_dynamics.ros.commands import MAX_TRAJECTORY_POINTS   # one /joint_trajectory's points
 from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir
 
 #: The scene that records an excitation (computed torque, URDF friction, at rest until a
