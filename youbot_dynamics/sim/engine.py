@@ -173,6 +173,8 @@ def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float =
                twist: np.ndarray | None = None) -> np.ndarray:
     """dx/dt at state x and time t (s) under robot joint torques tau (N m, N) and a moving
     base's held ``twist`` command (None: its path)."""
+    if model.robot_alone:
+        return model.robot_derivative(data, x, tau)
     motion = model.base_motion(t, twist)
     x = model.imposed(x, motion)
     dx = np.zeros_like(x)
@@ -332,6 +334,37 @@ class _Outcome:
     held: HeldTorque | None = None
 
 
+def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None = None,
+                    held: HeldTorque | None = None) -> tuple[Callable, Callable]:
+    """(torque(t, x), rhs(t, x)): the robot's applied torque (N m) and dx/dt, under a held
+    ``command``, a Python controller's ``held`` torque or the scene's controller tracking
+    ``reference``; each chosen once here, so the integrators' calls take the shortest path
+    (for a robot alone: the controller and one ABA with friction)."""
+    if held is not None:
+        def torque(t: float, x: np.ndarray) -> np.ndarray:
+            return held.value
+    elif command is not None:
+        def torque(t: float, x: np.ndarray) -> np.ndarray:
+            return command
+    elif model.base is None:
+        controller, q_block, v_block = model.controller, model.slices["q"], model.slices["v"]
+
+        def torque(t: float, x: np.ndarray) -> np.ndarray:
+            return controller.torque(t, x[q_block], x[v_block], reference)
+    else:
+        def torque(t: float, x: np.ndarray) -> np.ndarray:
+            return robot_torque(model, reference, t, x, None)
+    if model.robot_alone:
+        robot_derivative = model.robot_derivative
+
+        def rhs(t: float, x: np.ndarray) -> np.ndarray:
+            return robot_derivative(data, x, torque(t, x))
+    else:
+        def rhs(t: float, x: np.ndarray) -> np.ndarray:
+            return derivative(model, data, x, torque(t, x), t, reference.base_twist)
+    return torque, rhs
+
+
 def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.ndarray | None,
            max_steps: int | None, progress: Progress | None, energy0: float | None) -> _Outcome:
     """Integrate from the state over t_eval (its first time is the state's) with the checks."""
@@ -349,15 +382,7 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
             return chained(t, x) if chained is not None else None
 
     reference = state.reference
-
-    def torque(t: float, x: np.ndarray) -> np.ndarray:
-        if held is not None:
-            return held.value
-        return robot_torque(model, reference, t, x, command)
-
-    def rhs(t: float, x: np.ndarray) -> np.ndarray:
-        return derivative(model, data, x, torque(t, x), t, reference.base_twist)
-
+    torque, rhs = right_hand_side(model, data, reference, command, held)
     outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress)
     outcome.held = held
     s = outcome.solution

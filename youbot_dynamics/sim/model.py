@@ -36,6 +36,7 @@ it) and ``armed`` (0 or 1, held) whether its maximum-compression guard is armed.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -141,6 +142,28 @@ class SimModel:
     def body_offset(self) -> int:
         """Where the free bodies' coordinates start in the plant's configuration."""
         return self.plant.root_nq + self.robot.nq
+
+    @functools.cached_property
+    def robot_alone(self) -> bool:
+        """Whether the plant is the robot alone: no free body, no moving base, no contact
+        (the most common scene: its rhs takes the shortest path, :meth:`robot_derivative`)."""
+        return self.plant is self.robot and self.base is None and self.contact is None
+
+    def robot_derivative(self, data: pin.Data, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """dx/dt of a robot alone (``robot_alone``): x = [q, v, z], one ABA with friction and
+        the LuGre bristles' rates."""
+        slices = self.slices
+        q_block, v_block, z_block = slices["q"], slices["v"], slices["z"]
+        q, v = x[q_block], x[v_block]
+        dx = np.empty_like(x)
+        dx[q_block] = v
+        if z_block.stop > z_block.start:
+            z = x[z_block]
+            dx[v_block] = forward_dynamics(self.robot, data, q, v, tau, self.friction, z)
+            dx[z_block] = self.friction.state_derivative(v, z)
+        else:
+            dx[v_block] = forward_dynamics(self.robot, data, q, v, tau, self.friction)
+        return dx
 
     # ---- state -> plant ---------------------------------------------------------------------
     def configuration(self, x: np.ndarray) -> np.ndarray:

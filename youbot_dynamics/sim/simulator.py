@@ -41,6 +41,7 @@ class Simulator:
                  control_rate: float | None = None) -> None:
         self.model: SimModel = compile(scene, integrator, limits, controller, control_rate)
         self.state: SimState = engine.initial_state(self.model)
+        self._rhs: tuple[SimState, object, Callable] | None = None
 
     # ---- the model ----------------------------------------------------------------------
     @property
@@ -91,9 +92,13 @@ class Simulator:
         return engine.initial_state(self.model).x
 
     def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
-        """dx/dt with the scene's controller (what the integrators call)."""
-        tau = engine.robot_torque(self.model, self.state.reference, t, x, None)
-        return engine.derivative(self.model, self.state.data, x, tau, t, self.state.reference.base_twist)
+        """dx/dt with the scene's controller: what the integrators call (the engine's
+        :func:`~youbot_dynamics.sim.engine.right_hand_side`, built once per state)."""
+        state = self.state
+        if self._rhs is None or self._rhs[0] is not state or self._rhs[1] is not state.reference:
+            self._rhs = (state, state.reference,
+                         engine.right_hand_side(self.model, state.data, state.reference)[1])
+        return self._rhs[2](t, x)
 
     def rhs_cost(self) -> dict[str, int | str]:
         """What one rhs evaluation computes, by count: the state dimension, the plant's
