@@ -207,20 +207,23 @@ class HeldTorque:
         self.model, self.period = model, model.control_period
         self.value = self._ask(t, x)
         self.next = (math.floor(t / self.period + 1e-9) + 1) * self.period
+        self.applied: dict[float, np.ndarray] = {t: self.value}
 
     def _ask(self, t: float, x: np.ndarray) -> np.ndarray:
         tau = self.model.callback(t, x[self.model.block("q")].copy(), x[self.model.block("v")].copy())
         return self.model.clipped(tau)
 
-    def ticks(self, t0: float, t1: float) -> np.ndarray:
-        """The control ticks strictly between t0 and t1 (s)."""
-        return np.arange(self.next, t1 - 1e-9 * self.period, self.period)
+    def ticks(self, t_end: float) -> np.ndarray:
+        """The control ticks from the next one to before ``t_end`` (s)."""
+        return np.arange(self.next, t_end - 1e-9 * self.period, self.period)
 
     def at_output(self, t: float, x: np.ndarray) -> None:
-        """At an output time: a new torque if a tick has come."""
+        """At an output time: a new torque if a tick has come; the torque applied from
+        there on is recorded (``applied``, by time)."""
         if t >= self.next - 1e-9 * self.period:
             self.value = self._ask(t, x)
             self.next = (math.floor(t / self.period + 1e-9) + 1) * self.period
+        self.applied[t] = self.value
 
 
 # ---- the constraint stepper as a Stepper -------------------------------------------------------
@@ -374,7 +377,7 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
     held = HeldTorque(model, state.t, x0) if model.callback is not None and command is None else None
     grid = t_eval
     if held is not None:
-        grid = np.union1d(t_eval, held.ticks(t_eval[0], t_eval[-1]))
+        grid = np.union1d(t_eval, held.ticks(t_eval[-1]))
         chained = monitor
 
         def monitor(t: float, x: np.ndarray) -> str | None:
@@ -501,7 +504,7 @@ def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | No
     outcome = _solve(model, state, times, None, model.limits.max_steps, progress, None)
     solution = outcome.solution
     wanted = set(scene.outputs.record) | ({"energy"} if model.conservative else set())
-    series = _series(model, state, solution, wanted)
+    series = _series(model, state, solution, wanted, outcome.held)
     energy_error = float(np.max(np.abs(series["energy"] - series["energy"][0]))) if model.conservative else None
     dissipated = None
     if model.passive and model.callback is None:
@@ -511,11 +514,15 @@ def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | No
                             outcome.deepest if model.contact else None, dissipated)
 
 
-def _series(model: SimModel, state: SimState, solution: Solution, wanted: set[str]) -> dict[str, np.ndarray]:
+def _series(model: SimModel, state: SimState, solution: Solution, wanted: set[str],
+            held: HeldTorque | None) -> dict[str, np.ndarray]:
+    """The recorded extras at the outputs: ``tau`` (the Python controller's held torque, or
+    the scene controller's), ``energy``, ``ee_position``."""
     series, data = {}, state.data
     if "tau" in wanted:
-        series["tau"] = np.array([robot_torque(model, state.reference, t, x, None)
-                                  for t, x in zip(solution.t, solution.x)])
+        series["tau"] = np.array([held.applied[t] if held is not None else
+                                  robot_torque(model, state.reference, t, x, None)
+                                  for t, x in zip(solution.t.tolist(), solution.x)])
     if "energy" in wanted:
         series["energy"] = np.array([model.energy(data, x) for x in solution.x])
     if "ee_position" in wanted:
