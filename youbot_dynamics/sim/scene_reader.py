@@ -24,6 +24,8 @@ class SceneError(UserInputError):
 
     def __init__(self, source: str, key: str, problem: str, value: Any = None) -> None:
         self.source, self.key, self.value = source, key, value
+        if isinstance(value, np.generic):   # a numpy scalar reads as the plain number
+            value = value.item()
         shown = "" if value is None else f" (got {value!r})"
         super().__init__(f"{source}: {key}: {problem}{shown}")
 
