@@ -57,23 +57,23 @@ from pathlib import Path
 import numpy as np
 
 from youbot_dynamics.dynamics.collision import Geometry
+from youbot_dynamics.dynamics.mobile.mecanum import mecanum_base_from_robot
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
-from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                           follow, joint_sample, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.dynamics.mobile.mecanum import mecanum_base_from_robot
-from youbot_dynamics.ros.mobile_base import TOPICS as MOBILE_BASE_TOPICS
-from youbot_dynamics.ros.mobile_base import MobileBase, WheelOdometry
 from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, body_transforms
 from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
                                          implausible_joints)
+from youbot_dynamics.ros.mobile_base import MobileBase, WheelOdometry
+from youbot_dynamics.ros.mobile_base import TOPICS as MOBILE_BASE_TOPICS
 from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
 from youbot_dynamics.sim.scene import Scene
 from youbot_dynamics.sim.simulator import Simulator, Snapshot
@@ -600,6 +600,8 @@ class InverseSession(_Session):
     :mod:`youbot_dynamics.ros.inverse`), tau = RNEA + friction of the scene's robot."""
 
     mode = "inverse"
+    odometry: WheelOdometry | None = None
+    """Wheel odometry of a scene with a moving base (/odom from the joint states' wheel speeds)."""
 
     @property
     def topics(self) -> tuple[str, ...]:
@@ -607,8 +609,6 @@ class InverseSession(_Session):
         (the latched topics are in ``latched``), and /odom for a scene with a moving base."""
         odom = ("/odom",) if self.odometry is not None else ()
         return ("/computed_torques", *self.frames.ee_topics, "/tf", *odom, "/diagnostics")
-
-    odometry: WheelOdometry | None = None
 
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS,
                  frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
