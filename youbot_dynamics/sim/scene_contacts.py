@@ -59,7 +59,7 @@ from youbot_dynamics.dynamics.free_body import FreeBody
 from youbot_dynamics.model import limits
 from youbot_dynamics.model.compose import CompositionError, InertialCorrection, Placement, composed_urdf
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.scene_reader import SceneError, SceneReader
+from youbot_dynamics.sim.scene_reader import SceneError, SceneReader, is_uncertain
 
 SHAPE_KEYS = ("type", "radius", "length", "size", "normal", "offset")
 #: A free body's attitude coordinates (``rotation_coordinates``), the default first.
@@ -263,6 +263,9 @@ def read_contacts(reader: SceneReader, value: Any, geometries: Sequence[Geometry
             raise SceneError(reader.source, f"{key}.pair", "expected two geometry or free-body names "
                              f"(known: {', '.join(by_name)})", pair)
         name = f"{pair[0]}/{pair[1]}"
+        for parameter, number in data.items():   # "v ± s" read here; the law checks the rest
+            if is_uncertain(number):
+                data[parameter] = reader.number(number, f"{key}.{parameter}")
         if by_name[pair[0]].owner != "body" and by_name[pair[1]].owner != "body":
             raise SceneError(reader.source, f"{key}.pair", "one side must be a free body", name)
         try:
