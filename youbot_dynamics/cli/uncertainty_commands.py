@@ -16,7 +16,7 @@ def run_scene_uncertainty(args: argparse.Namespace) -> int:
     from youbot_dynamics.systems.uncertain_pendulum import comparison, plot_uncertainty
     if args.plot:
         output_file(args.plot, "--plot")
-    where = {"workers": args.workers, "scheduler": args.scheduler}
+    where = {"workers": args.workers, "scheduler": args.scheduler, "progress": True}
     linear, sensitivities = linear_propagation(args.scene, args.output, args.duration, **where)
     sampled, keys, _, traces = monte_carlo(args.scene, args.output, args.samples, args.seed, args.duration,
                                            **where)
