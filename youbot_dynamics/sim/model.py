@@ -81,8 +81,8 @@ from youbot_dynamics.sim.scene import IntegratorSpec, Scene
 from youbot_dynamics.sim.scene_contacts import ROTATION_COORDINATES
 from youbot_dynamics.sim.scene_reader import SceneError
 from youbot_dynamics.sim.state import StateLayout
-from youbot_dynamics.systems.rotations import SEQUENCES, cardan_angle_rates, cardan_matrix, quaternion_rate
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+from youbot_dynamics.systems.rotations import SEQUENCES, cardan_angle_rates, cardan_matrix, quaternion_rate
 
 #: A joint velocity beyond this multiple of its URDF limit is divergence.
 VELOCITY_LIMIT_FACTOR = 100.0
