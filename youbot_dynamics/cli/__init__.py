@@ -53,6 +53,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
         ("report_commands", (("report", "run every study; write their PNGs and one Markdown page"),)),
         ("pipeline_commands", (("pipeline", "equation pipeline on an example model: every stage "
                                             "printed"),)),
+        ("uncertainty_commands", (("scene-uncertainty", "propagate a scene's value ± sigma parameters to an "
+                                                        "output: linear band against Monte Carlo"),)),
     ) for name, summary in commands}
 COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
 

@@ -5,8 +5,10 @@ Guards (per compliant pair): ``touch`` (gap falling through 0: the approach spee
 the pair's ``s`` and arms its compression guard), ``compression`` (armed, normal relative
 velocity rising through 0: maximum compression; disarms) and ``separation`` (gap rising
 through 0; disarms); per impulsive pair ``impact`` (gap falling through 0: Newton's impulse
-on the plant's velocity); per free body ``recentre`` (chart rotation reaching
-``RECENTRE_ANGLE``: the chart folds into the reference pose). Every reset map is a pure
+on the plant's velocity); per free body in a chart ``recentre`` (chart rotation reaching
+``RECENTRE_ANGLE``: the chart folds into the reference pose), per body in adaptive Cardan
+angles ``sequence`` (|middle angle| rising through SWITCH_ANGLE: the same attitude in the
+other sequence, systems/rotations.py). Every reset map is a pure
 function of (t, x) returning the new x: the flags, speeds and charts are part of x, so
 nothing outside the state changes. The events (:class:`~youbot_dynamics.sim.state
 .ContactEvent`) are derived afterwards from the states on both sides of each switch
@@ -14,6 +16,7 @@ nothing outside the state changes. The events (:class:`~youbot_dynamics.sim.stat
 """
 from __future__ import annotations
 
+from collections import Counter
 from typing import Sequence
 
 import numpy as np
@@ -22,14 +25,17 @@ import pinocchio as pin
 from youbot_dynamics.dynamics.contact import HuntCrossley, NewtonImpact, hunt_crossley_force
 from youbot_dynamics.sim.events import Switch, Transition
 from youbot_dynamics.sim.integrators import IntegrationError
-from youbot_dynamics.sim.model import MIN_APPROACH_SPEED, RECENTRE_ANGLE, SimModel
+from youbot_dynamics.sim.model import CARDAN_SEQUENCES, MIN_APPROACH_SPEED, RECENTRE_ANGLE, SimModel
 from youbot_dynamics.sim.state import ContactEvent
+from youbot_dynamics.systems.rotations import SWITCH_ANGLE, switched_angles
 
 #: Guard values below this magnitude (m, m/s) read 0: a pair resting exactly at contact
 #: would otherwise flicker across 0 at round-off level between a step's end and the
 #: interpolated state there, and the root finder would see no sign change.
 GUARD_RESOLUTION = 1e-12
 MODE = "contact"
+#: The guards that change coordinates, not contact: no contact event comes of them.
+ATTITUDE_GUARDS = ("recentre", "sequence")
 
 
 def snapped(value: float) -> float:
@@ -85,6 +91,11 @@ class ContactGuards:
             return float(np.linalg.norm(x[chart.start + 6 * b + 3:chart.start + 6 * b + 6])) - RECENTRE_ANGLE
         return function
 
+    def _middle_angle(self, k: int):
+        def function(t: float, x: np.ndarray) -> float:
+            return abs(float(self.model.cardan(x, k)[1][1])) - SWITCH_ANGLE
+        return function
+
     # ---- resets (pure: a new x) ----------------------------------------------------------
     def _touch(self, j: int, k: int):
         def reset(t: float, x: np.ndarray):
@@ -124,6 +135,18 @@ class ContactGuards:
             return MODE, self.model.recentred(x)
         return reset
 
+    def _switch_sequence(self, k: int):
+        j = self.model.block("cardan").start + 4 * self.model.bodies_in["cardan_adaptive"].index(k)
+
+        def reset(t: float, x: np.ndarray):
+            sequence, angles = self.model.cardan(x, k)
+            target = CARDAN_SEQUENCES[1 - CARDAN_SEQUENCES.index(sequence)]
+            x = x.copy()
+            x[j:j + 3] = switched_angles(target, angles)
+            x[j + 3] = CARDAN_SEQUENCES.index(target)
+            return MODE, x
+        return reset
+
     def transitions(self) -> tuple[Transition, ...]:
         """Every guard of the scene with its reset map."""
         names = [p.name for p in self.model.contact.pairs]
@@ -134,9 +157,19 @@ class ContactGuards:
             out.append(Transition(f"separation:{names[k]}", self._gap(k), self._disarm(j), +1))
         for k in self.model.impulsive:
             out.append(Transition(f"impact:{names[k]}", self._gap(k), self._impact(k), -1))
-        for b, name in enumerate(self.model.body_names):
-            out.append(Transition(f"recentre:{name}", self._chart_rotation(b), self._recentre(), +1))
+        for b, (name, coordinates) in enumerate(zip(self.model.body_names, self.model.coordinates)):
+            if coordinates == "chart":
+                out.append(Transition(f"recentre:{name}", self._chart_rotation(b), self._recentre(), +1))
+            elif coordinates == "cardan_adaptive":
+                out.append(Transition(f"sequence:{name}", self._middle_angle(b), self._switch_sequence(b), +1))
         return tuple(out)
+
+    @staticmethod
+    def attitude_events(switches: Sequence[Switch]) -> dict[str, int]:
+        """How many of a run's switches were chart folds (``recentre``) and Cardan sequence
+        switches (``sequence``)."""
+        counts = Counter(switch.kind.partition(":")[0] for switch in switches)
+        return {kind: counts[kind] for kind in ATTITUDE_GUARDS}
 
     # ---- the record --------------------------------------------------------------------------
     def contact_events(self, switches: Sequence[Switch]) -> tuple[list[ContactEvent], float]:
@@ -147,7 +180,7 @@ class ContactGuards:
         index = {p.name: k for k, p in enumerate(model.contact.pairs)}
         for switch in switches:
             kind, _, name = switch.kind.partition(":")
-            if kind == "recentre":
+            if kind in ATTITUDE_GUARDS:
                 continue
             k = index[name]
             if kind == "touch":

@@ -44,10 +44,11 @@ from youbot_dynamics.sim.events import Mode, simulate_hybrid
 from youbot_dynamics.sim.integration import StateCheck, drive
 from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution, checked_fixed_step,
                                              checked_output_spacing, integrate, integrate_dae)
-from youbot_dynamics.sim.model import MIN_APPROACH_SPEED, SimModel
+from youbot_dynamics.sim.model import CARDAN_SEQUENCES, MIN_APPROACH_SPEED, SimModel
 from youbot_dynamics.sim.registry import integrator_kind
 from youbot_dynamics.sim.scene import IntegratorSpec
 from youbot_dynamics.sim.state import ContactEvent, SimState, StateLayout
+from youbot_dynamics.systems.rotations import adaptive_angles
 
 Progress = Callable[[float], None]
 
@@ -84,7 +85,11 @@ class SimulationResult:
     potential, contact springs): what friction, damping and contact hysteresis took, >= 0
     up to the tolerance; None when a controller acts. A contact scene adds its
     ``contact_events`` and ``max_penetration`` (m: the deepest overlap at the located
-    maximum compressions of the compliant law, or over the constraint stepper's steps)."""
+    maximum compressions of the compliant law, or over the constraint stepper's steps).
+    Free bodies add ``attitude_events`` (how many chart folds, ``recentre``, and Cardan
+    sequence switches, ``sequence``, the run took) and, for bodies in quaternion
+    coordinates, ``quaternion_drift`` (max ||q| - 1| at the outputs before their
+    renormalisation)."""
 
     scene: str
     integrator: IntegratorSpec
@@ -98,6 +103,8 @@ class SimulationResult:
     contact_events: list[ContactEvent] = dataclasses.field(default_factory=list)
     max_penetration: float | None = None
     energy_dissipated: float | None = None
+    attitude_events: dict[str, int] = dataclasses.field(default_factory=dict)
+    quaternion_drift: float | None = None
 
     @property
     def final_state(self) -> dict[str, float]:
@@ -136,12 +143,17 @@ def initial_state(model: SimModel, q: np.ndarray | None = None, v: np.ndarray | 
     if model.friction is not None and model.layout.slice("z").stop > model.layout.slice("z").start:
         blocks["z"] = model.friction.steady_state_bristles(v)
     if model.body_names:
-        twist, pose = [], []
+        twist, pose, cardan = [], [], []
         for spec in scene.free_bodies:
             rotation = matrix_from_quaternion(spec.orientation)
             twist += [rotation.T @ spec.velocity, rotation.T @ spec.angular_velocity]
             pose += [spec.position, np.asarray(spec.orientation) / np.linalg.norm(spec.orientation)]
+            if spec.rotation_coordinates == "cardan_adaptive":
+                sequence, angles = adaptive_angles(rotation)
+                cardan += [angles, [CARDAN_SEQUENCES.index(sequence)]]
         blocks.update(twist=np.concatenate(twist), pose=np.concatenate(pose))
+        if cardan:
+            blocks["cardan"] = np.concatenate(cardan)
     if model.compliant:
         blocks["s"] = np.full(len(model.compliant), MIN_APPROACH_SPEED)
     if model.base is not None:
@@ -188,7 +200,7 @@ def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float =
     if z.stop > z.start:
         dx[z] = model.friction.state_derivative(x[model.block("v")], x[z])
     if model.body_names:
-        dx[model.block("chart")] = model.chart_rate(x)
+        model.body_rates(x, dx)
     if model.base is not None:
         base = model.base
         dx[model.block("base")] = base.pose_rate(x[model.block("base")], x[model.block("base_v")])
@@ -335,6 +347,8 @@ class _Outcome:
     deepest: float
     touching: frozenset[str]
     held: HeldTorque | None = None
+    attitude_events: dict[str, int] = dataclasses.field(default_factory=dict)
+    quaternion_drift: float | None = None
 
 
 def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None = None,
@@ -390,6 +404,7 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
     outcome.held = held
     s = outcome.solution
     keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
+    outcome.quaternion_drift = model.quaternion_drift(s.x[keep])
     # outputs with every chart folded into its pose: the pose block is the body's pose
     outcome.solution = Solution(s.t[keep], np.array([model.imposed(model.recentred(x), model.base_motion(t, reference.base_twist))
                                                      for t, x in zip(s.t[keep], s.x[keep])]), s.stats,
@@ -415,7 +430,7 @@ def _integrate(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndar
         keep = np.searchsorted(hybrid.t, t_eval, side="right") - 1  # the last sample at each t
         events, deepest = guards.contact_events(hybrid.switches)
         return _Outcome(Solution(hybrid.t[keep], hybrid.x[keep], hybrid.stats, hybrid.state_names), events,
-                        deepest, state.touching)
+                        deepest, state.touching, attitude_events=guards.attitude_events(hybrid.switches))
     if kind == "dae":
         def residual(t: float, y: np.ndarray, yp: np.ndarray) -> np.ndarray:
             return yp - rhs(t, y)
@@ -511,7 +526,8 @@ def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | No
         dissipated = model.stored_energy(state.data, x0) - model.stored_energy(state.data, solution.x[-1])
     return SimulationResult(scene.name, model.integrator, model.layout, solution.t, solution.x, series,
                             solution.stats, model.conservative, energy_error, outcome.events,
-                            outcome.deepest if model.contact else None, dissipated)
+                            outcome.deepest if model.contact else None, dissipated, outcome.attitude_events,
+                            outcome.quaternion_drift)
 
 
 def _series(model: SimModel, state: SimState, solution: Solution, wanted: set[str],

@@ -13,7 +13,8 @@ The continuous state x (see :mod:`youbot_dynamics.sim.state`) is
 
     x = [q (robot joints), v (robot joints), base (x, y, yaw), base_v (vx, vy, wz),
          wheel_i (PI integrals, 1 per wheel), twist (6 per body), z (LuGre bristles),
-         pose (7 per body), chart (6 per body), s (compliant pairs), armed (compliant pairs)]
+         pose (7 per body), chart (6 per body), cardan (4 per Cardan body), s (compliant
+         pairs), armed (compliant pairs)]
 
 ``base`` and ``base_v`` exist with a moving base only (scene ``base: kinematic | dynamic``;
 :mod:`youbot_dynamics.sim.base`): the plant then starts with a planar root joint, its
@@ -32,6 +33,22 @@ body-frame (linear, angular) velocity, Pinocchio's free-flyer velocity, so the p
 generalised velocity is the contiguous block [v, twist]. ``s`` is each compliant pair's
 approach speed at its last touch (m/s, held; the Hunt-Crossley hysteresis factor comes from
 it) and ``armed`` (0 or 1, held) whether its maximum-compression guard is armed.
+
+That is a body in the default ``rotation_coordinates: chart``. The scene may choose other
+coordinates per body (``SimModel.coordinates``), the chart block then held at 0:
+
+- ``quaternion``: ``pose`` itself moves, p' = R v and q' = q (x) (w, 0) / 2 (quaternion x,
+  y, z, w; body-frame twist (v, w)), integrated unprojected; the plant and the kinematics
+  read the attitude as q / |q|, and the outputs (and the start of each run or advance, and
+  the fold of another body's chart) carry q / |q| in ``pose`` (a projection, at outputs);
+  ``SimulationResult.quaternion_drift`` is the largest ||q| - 1| seen at the outputs
+  before it.
+- ``cardan_adaptive``: ``pose``'s position moves (p' = R v); ``cardan`` holds the Cardan
+  angles (a1, a2, a3; a' = B(a)^-1 w) and the sequence (0: x-y-z, 1: x-z-y), switched
+  by a state event (contact_events.py) when |a2| passes SWITCH_ANGLE (1.5 rad) to the
+  other sequence with the same attitude (Modia3D's remedy for gimbal lock; the formulas
+  are systems/rotations.py's). ``pose``'s quaternion is written from the angles at the
+  outputs.
 """
 from __future__ import annotations
 
@@ -54,15 +71,18 @@ from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.compose import robot_with_gravity
 from youbot_dynamics.model.configuration import require_fixed_root
-from youbot_dynamics.model.lie import matrix_from_quaternion
+from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.base import POSE_LABELS, TWIST_LABELS, BaseModel, BaseMotion, planar_robot
 from youbot_dynamics.sim.controllers import Controller, Reference, make_controller
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
 from youbot_dynamics.sim.registry import integrator_kind
 from youbot_dynamics.sim.scene import IntegratorSpec, Scene
+from youbot_dynamics.sim.scene_contacts import ROTATION_COORDINATES
+from youbot_dynamics.sim.scene_reader import SceneError
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+from youbot_dynamics.systems.rotations import SEQUENCES, cardan_angle_rates, cardan_matrix, quaternion_rate
 
 #: A joint velocity beyond this multiple of its URDF limit is divergence.
 VELOCITY_LIMIT_FACTOR = 100.0
@@ -75,9 +95,12 @@ MIN_APPROACH_SPEED = 1e-2
 ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
 #: Every block a state may hold (see the module docstring), in state order.
-BLOCKS = ("q", "v", "base", "base_v", "wheel_i", "twist", "z", "pose", "chart", "s", "armed")
+BLOCKS = ("q", "v", "base", "base_v", "wheel_i", "twist", "z", "pose", "chart", "cardan", "s", "armed")
 _POSE = ("x", "y", "z", "qx", "qy", "qz", "qw")
 _TWIST = ("vx", "vy", "vz", "wx", "wy", "wz")
+_CARDAN = ("a1", "a2", "a3", "sequence")
+#: The Cardan sequences by their number in the ``cardan`` block.
+CARDAN_SEQUENCES = tuple(SEQUENCES)
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,6 +133,7 @@ class SimModel:
     velocity_index: slice | np.ndarray | None = None
     slices: Mapping[str, slice] = dataclasses.field(default_factory=dict)
     base: BaseModel | None = None
+    coordinates: tuple[str, ...] = ()
 
     # ---- sizes and slices ----------------------------------------------------------------
     @property
@@ -165,6 +189,23 @@ class SimModel:
             dx[v_block] = forward_dynamics(self.robot, data, q, v, tau, self.friction)
         return dx
 
+    @functools.cached_property
+    def bodies_in(self) -> Mapping[str, tuple[int, ...]]:
+        """The free bodies' indices by their rotation coordinates."""
+        return MappingProxyType({name: tuple(k for k, c in enumerate(self.coordinates) if c == name)
+                                 for name in ROTATION_COORDINATES})
+
+    @property
+    def all_charts(self) -> bool:
+        """Whether every free body moves in a chart (the default)."""
+        return len(self.bodies_in["chart"]) == len(self.body_names)
+
+    def cardan(self, x: np.ndarray, k: int) -> tuple[str, np.ndarray]:
+        """(sequence, angles (rad)) of Cardan body k (an index of body_names) at state x."""
+        j = 4 * self.bodies_in["cardan_adaptive"].index(k)
+        block = x[self.block("cardan")]
+        return CARDAN_SEQUENCES[int(round(block[j + 3]))], block[j:j + 3]
+
     # ---- state -> plant ---------------------------------------------------------------------
     def configuration(self, x: np.ndarray) -> np.ndarray:
         """The plant's configuration (nq) at state x: the planar root (x, y, cos, sin) of a
@@ -178,20 +219,59 @@ class SimModel:
         model = self.plant.model
         reference = np.concatenate([q, x[self.block("pose")]])
         tangent = np.concatenate([np.zeros(self.plant.root_nv + self.nv), x[self.block("chart")]])
-        return pin.integrate(model, reference, tangent)
+        q = pin.integrate(model, reference, tangent)
+        if self.all_charts:
+            return q
+        start = self.body_offset
+        for k in self.bodies_in["quaternion"]:
+            quaternion = x[self.block("pose")][7 * k + 3:7 * k + 7]
+            q[start + 7 * k + 3:start + 7 * k + 7] = quaternion / np.linalg.norm(quaternion)
+        for k in self.bodies_in["cardan_adaptive"]:
+            q[start + 7 * k + 3:start + 7 * k + 7] = quaternion_from_matrix(cardan_matrix(*self.cardan(x, k)))
+        return q
 
     def velocity(self, x: np.ndarray) -> np.ndarray:
         """The plant's generalised velocity (nv): robot v, then each body's twist."""
         return x[self.velocity_block]
 
     def chart_rate(self, x: np.ndarray) -> np.ndarray:
-        """d chart/dt = Jlog6(exp6(chart)) twist per body (the chart's kinematics)."""
+        """d chart/dt = Jlog6(exp6(chart)) twist per body in a chart (the chart's
+        kinematics); 0 for the bodies in other coordinates."""
         chart = x[self.block("chart")].reshape(-1, 6)
         twist = x[self.block("twist")].reshape(-1, 6)
-        return np.concatenate([pin.Jlog6(pin.exp6(c)) @ w for c, w in zip(chart, twist)])
+        return np.concatenate([pin.Jlog6(pin.exp6(c)) @ w if kind == "chart" else np.zeros(6)
+                               for c, w, kind in zip(chart, twist, self.coordinates)])
+
+    def body_rates(self, x: np.ndarray, dx: np.ndarray) -> None:
+        """Write the free bodies' coordinate rates into dx: the charts' (chart_rate); for a
+        quaternion body p' = R v (m/s, world) and q' = q (x) (w, 0) / 2; for a Cardan body
+        p' = R v and a' = B(a)^-1 w (rad/s). The reference poses and sequences are held."""
+        dx[self.block("chart")] = self.chart_rate(x)
+        if self.all_charts:
+            return
+        twist = x[self.block("twist")].reshape(-1, 6)
+        pose, pose_rate = x[self.block("pose")], dx[self.block("pose")]
+        cardan_rate = dx[self.block("cardan")]
+        attitudes = self.configuration(x)[self.body_offset:].reshape(-1, 7)[:, 3:]
+        for k in self.bodies_in["quaternion"] + self.bodies_in["cardan_adaptive"]:
+            pose_rate[7 * k:7 * k + 3] = matrix_from_quaternion(attitudes[k]) @ twist[k, :3]
+        for k in self.bodies_in["quaternion"]:
+            pose_rate[7 * k + 3:7 * k + 7] = quaternion_rate(pose[7 * k + 3:7 * k + 7], twist[k, 3:])
+        for j, k in enumerate(self.bodies_in["cardan_adaptive"]):
+            cardan_rate[4 * j:4 * j + 3] = cardan_angle_rates(*self.cardan(x, k), twist[k, 3:])
+
+    def quaternion_drift(self, xs: np.ndarray) -> float | None:
+        """max ||q| - 1| of the quaternion bodies over states xs (k, n); None without any."""
+        if not self.bodies_in["quaternion"]:
+            return None
+        pose = np.atleast_2d(xs)[:, self.block("pose")].reshape(len(np.atleast_2d(xs)), -1, 7)
+        quaternions = pose[:, list(self.bodies_in["quaternion"]), 3:]
+        return float(np.max(np.abs(np.linalg.norm(quaternions, axis=-1) - 1.0)))
 
     def recentred(self, x: np.ndarray) -> np.ndarray:
-        """The same state with every body's chart folded into its reference pose (chart 0)."""
+        """The same state with every body's chart folded into its reference pose (chart 0)
+        and every ``pose`` block at its body's pose (a quaternion body's q / |q|, a Cardan
+        body's attitude from its angles)."""
         if not self.body_names:
             return x
         x = x.copy()
@@ -323,6 +403,7 @@ def _plant(robot: Robot, scene: Scene) -> tuple[Robot, list[int | None]]:
 def _layout(robot: Robot, scene: Scene, friction: JointFriction | None, compliant: list[str],
             base: BaseModel | None) -> StateLayout:
     names = [spec.body.name for spec in scene.free_bodies]
+    cardan = [spec.body.name for spec in scene.free_bodies if spec.rotation_coordinates == "cardan_adaptive"]
     lugre = [] if friction is None else list(friction.lugre_joints)
     moving = base is not None
     return StateLayout.for_joints(robot.joint_names, {
@@ -333,6 +414,7 @@ def _layout(robot: Robot, scene: Scene, friction: JointFriction | None, complian
         "z": lugre,
         "pose": [f"{n}.{a}" for n in names for a in _POSE],
         "chart": [f"{n}.d{a}" for n in names for a in _TWIST],
+        "cardan": [f"{n}.{a}" for n in cardan for a in _CARDAN],
         "s": compliant,
         "armed": compliant})
 
@@ -383,6 +465,11 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
             raise UserInputError(f"{scene.source}: control_rate {control_rate!r} Hz must be positive")
     stepper = ConstraintStepper(contact, StepperSettings(solver=integrator.method)) \
         if integrator_kind(integrator.method) == "stepper" else None
+    for i, body in enumerate(scene.free_bodies):
+        if stepper is not None and body.rotation_coordinates != "chart":
+            raise SceneError(scene.source, f"free_bodies[{i}].rotation_coordinates", "the constraint stepper "
+                             f"({integrator.method}) moves free bodies on SE(3) with pin.integrate: give chart "
+                             "(the default) or an ODE integrator", body.rotation_coordinates)
     velocity = layout.slice("v")
     velocity_index = slice(velocity.start, velocity.stop + 6 * len(scene.free_bodies))  # [v, twist]
     if base is not None:  # [base_v, v, twist], with base, base_v and wheel_i between v and twist
@@ -400,4 +487,5 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
         conservative=(passive and friction is None and not scene.contacts and controller is None
                       and (base is None or base.mu == 0.0)),
         passive=passive, ee_frame=plant.frame_id(robot.end_effectors[0]), velocity_index=velocity_index, base=base,
-        slices=MappingProxyType({symbol: layout.slice(symbol) for symbol in BLOCKS}))
+        slices=MappingProxyType({symbol: layout.slice(symbol) for symbol in BLOCKS}),
+        coordinates=tuple(spec.rotation_coordinates for spec in scene.free_bodies))

@@ -46,6 +46,11 @@ Keys (units SI, angles rad; joint values are mappings by joint name)::
     contacts: [...]                 # pairs of geometry names, each with its contact law
     integrator: {method: pgs | admm, dt: s}   # constraint stepper (pairs with law constraint)
 
+A number may be uncertain, ``"0.8 ± 0.2"`` or ``"0.8 +- 0.2"`` (value and one standard
+deviation, sim/scene_reader.py): the scene runs with the value and lists the parameter in
+``Scene.uncertain`` (key -> (value, sigma)); ``youbot-dynamics scene-uncertainty``
+propagates them to an output.
+
 Every mistake is a :class:`SceneError` naming the source (the file, or the label given to
 ``from_dict``), the key (dotted path) and the value. PyYAML reads ``1e-6`` (no dot) as a
 string: numbers given that way are accepted.
@@ -178,14 +183,18 @@ class Scene:
     geometries: tuple = ()
     contacts: tuple[ContactPairSpec, ...] = ()
     base: BaseSpec = BaseSpec()
+    uncertain: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any], source: str = DICT_SOURCE, base_dir: Path | None = None) -> Scene:
+    def from_dict(cls, data: Mapping[str, Any], source: str = DICT_SOURCE, base_dir: Path | None = None,
+                  values: Mapping[str, float] | None = None) -> Scene:
         """The one validator: a scene's mapping (the keys of the module docstring, as a YAML
         file holds them) -> a frozen Scene. ``source`` labels every error (the file name for
         a file); relative file names (``robot``, ``compose[i].urdf``) are looked up in
-        ``base_dir``, then in the package share. The robot is loaded and reduced here, once."""
-        return _scene_from_dict(data, source, base_dir)
+        ``base_dir``, then in the package share. The robot is loaded and reduced here, once.
+        ``values`` (key -> number) replaces the nominal values of uncertain parameters
+        (a key that holds none is an error)."""
+        return _scene_from_dict(data, source, base_dir, values)
 
     @property
     def has_contact(self) -> bool:
@@ -267,16 +276,18 @@ def find_scene(name_or_path: str | Path) -> Path:
                          f"scene (packaged: {available or 'none'})")
 
 
-def load_scene(name_or_path: str | Path) -> Scene:
+def load_scene(name_or_path: str | Path, values: Mapping[str, float] | None = None) -> Scene:
     """Read a scene file with bounded work (a path, or a packaged scene's name) and
-    validate it with :meth:`Scene.from_dict`; relative files are found next to it."""
+    validate it with :meth:`Scene.from_dict` (``values``: of uncertain parameters);
+    relative files are found next to it."""
     path = find_scene(name_or_path)
-    return Scene.from_dict(read_yaml(path.read_bytes(), str(path)), str(path), path.parent)
+    return Scene.from_dict(read_yaml(path.read_bytes(), str(path)), str(path), path.parent, values)
 
 
-def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None) -> Scene:
+def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None,
+                     values: Mapping[str, float] | None = None) -> Scene:
     """Validate and freeze a scene's mapping (see :meth:`Scene.from_dict`)."""
-    reader = SceneReader(source)
+    reader = SceneReader(source, values)
     data = reader.mapping(data, "(top level)", TOP_KEYS)
     urdf_source = _robot_source(reader, data.get("robot"), base_dir)
     try:
@@ -365,7 +376,9 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     if stepper and integrator.method not in STEPPERS:
         raise SceneError(source, "integrator.method", f"pairs with law 'constraint' ({', '.join(stepper)}) need "
                          f"the constraint stepper: one of {', '.join(STEPPERS)}", integrator.method)
-    return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts)
+    reader.unused_values()
+    return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts,
+                               uncertain=MappingProxyType(dict(reader.uncertain)))
 
 
 def _robot_source(reader: SceneReader, value: Any, base_dir: Path | None) -> str | Path:

@@ -23,12 +23,23 @@ a shape is ``{type: sphere|box|cylinder|capsule|halfspace, <dimensions>}``, see
         orientation: [0, 0, 0, 1]     # quaternion x, y, z, w
         velocity: [0, 0, 0]           # m/s, world frame
         angular_velocity: [0, 0, 0]   # rad/s, world frame
+        rotation_coordinates: chart   # chart | quaternion | cardan_adaptive (issue 13's
+                                      # ``orientation: quaternion | cardan_adaptive``; the
+                                      # key ``orientation`` is the initial quaternion)
     world:
       - {name: floor, shape: {type: halfspace, normal: [0, 0, 1], offset: 0}, pose: ...}
     geometry:
       - {name: finger, link: gripper_finger_link_l, shape: {...}, pose: ...}
     contacts:
       - {pair: [ball, floor], law: hunt_crossley, stiffness: 1e5, restitution: 0.8, friction: 0.3}
+
+``rotation_coordinates`` chooses the coordinates an ODE integrator moves the body's attitude
+in (sim/model.py): ``chart`` (default) a tangent chart of SE(3) folded into a reference pose
+at 1 rad; ``quaternion`` position and quaternion (x, y, z, w) integrated directly,
+p' = R v, q' = q (x) (w, 0) / 2, read as q / |q| and renormalised at the outputs;
+``cardan_adaptive`` position and Cardan angles switching x-y-z <-> x-z-y (Modia3D) by a
+state event when the middle angle passes 1.5 rad. The constraint stepper (pgs, admm)
+integrates on SE(3) with ``pin.integrate`` and takes ``chart`` only.
 
 A free body's name is also the name of its shape in ``contacts``. Every mistake is a
 SceneError naming the source, the key and the value.
@@ -48,14 +59,17 @@ from youbot_dynamics.dynamics.free_body import FreeBody
 from youbot_dynamics.model import limits
 from youbot_dynamics.model.compose import CompositionError, InertialCorrection, Placement, composed_urdf
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.scene_reader import SceneError, SceneReader
+from youbot_dynamics.sim.scene_reader import SceneError, SceneReader, is_uncertain
 
 SHAPE_KEYS = ("type", "radius", "length", "size", "normal", "offset")
+#: A free body's attitude coordinates (``rotation_coordinates``), the default first.
+ROTATION_COORDINATES = ("chart", "quaternion", "cardan_adaptive")
 
 
 @dataclass(frozen=True)
 class FreeBodySpec:
-    """A free body and its initial state (world frame; quaternion x, y, z, w)."""
+    """A free body and its initial state (world frame; quaternion x, y, z, w) and the
+    coordinates its attitude is integrated in (one of ROTATION_COORDINATES)."""
 
     body: FreeBody
     shape: Shape
@@ -63,6 +77,7 @@ class FreeBodySpec:
     orientation: np.ndarray
     velocity: np.ndarray
     angular_velocity: np.ndarray
+    rotation_coordinates: str = "chart"
 
 
 @dataclass(frozen=True)
@@ -158,7 +173,8 @@ def read_free_bodies(reader: SceneReader, value: Any) -> tuple[FreeBodySpec, ...
     for i, entry in enumerate(value):
         key = f"free_bodies[{i}]"
         data = reader.mapping(entry, key, ("name", "shape", "density", "mass", "inertia", "position",
-                                           "orientation", "velocity", "angular_velocity"))
+                                           "orientation", "velocity", "angular_velocity",
+                                           "rotation_coordinates"))
         name = data.get("name")
         if not isinstance(name, str) or not name:
             raise SceneError(reader.source, f"{key}.name", "missing: give the body a name", name)
@@ -185,12 +201,16 @@ def read_free_bodies(reader: SceneReader, value: Any) -> tuple[FreeBodySpec, ...
         if not np.any(quaternion):
             raise SceneError(reader.source, f"{key}.orientation", "must not be zero", quaternion.tolist())
         quaternion = quaternion / np.abs(quaternion).max()  # its norm cannot overflow (1e200 components)
+        coordinates = data.get("rotation_coordinates", ROTATION_COORDINATES[0])
+        if coordinates not in ROTATION_COORDINATES:
+            raise SceneError(reader.source, f"{key}.rotation_coordinates",
+                             f"expected one of {', '.join(ROTATION_COORDINATES)}", coordinates)
         specs.append(FreeBodySpec(
             body, shape, reader.vector3(data.get("position", [0, 0, 0]), f"{key}.position", limits.LENGTH),
             quaternion / np.linalg.norm(quaternion),
             reader.vector3(data.get("velocity", [0, 0, 0]), f"{key}.velocity", limits.SPEED),
             reader.vector3(data.get("angular_velocity", [0, 0, 0]), f"{key}.angular_velocity",
-                           limits.ANGULAR_SPEED)))
+                           limits.ANGULAR_SPEED), coordinates))
     return tuple(specs)
 
 
@@ -243,6 +263,9 @@ def read_contacts(reader: SceneReader, value: Any, geometries: Sequence[Geometry
             raise SceneError(reader.source, f"{key}.pair", "expected two geometry or free-body names "
                              f"(known: {', '.join(by_name)})", pair)
         name = f"{pair[0]}/{pair[1]}"
+        for parameter, number in data.items():   # "v ± s" read here; the law checks the rest
+            if is_uncertain(number):
+                data[parameter] = reader.number(number, f"{key}.{parameter}")
         if by_name[pair[0]].owner != "body" and by_name[pair[1]].owner != "body":
             raise SceneError(reader.source, f"{key}.pair", "one side must be a free body", name)
         try:

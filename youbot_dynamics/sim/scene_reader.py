@@ -3,10 +3,18 @@
 mapping) whose every mistake is a :class:`SceneError` naming the source, the key (dotted
 path) and the value. Shared by :mod:`youbot_dynamics.sim.scene` and
 :mod:`youbot_dynamics.sim.scene_contacts`.
+
+Uncertain parameters: a number may be written ``"0.8 ± 0.2"`` (or ``"0.8 +- 0.2"``), a
+nominal value and one standard deviation (sigma > 0). The reader returns the nominal value
+(the simulation runs with it) and records the parameter in ``uncertain`` under its key
+(``friction.joints.pivot.damping``); ``values`` (key -> number) replaces the nominal
+value of such keys, which is how a sample of the parameters is read
+(analysis/scene_uncertainty.py).
 """
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -28,6 +36,15 @@ class SceneError(UserInputError):
             value = value.item()
         shown = "" if value is None else f" (got {value!r})"
         super().__init__(f"{source}: {key}: {problem}{shown}")
+
+
+#: ``value ± sigma`` (also ``+-``): the two numbers, each as float() reads it.
+UNCERTAIN_NUMBER = re.compile(r"^\s*(\S+)\s*(?:±|\+-)\s*(\S+)\s*$")
+
+
+def is_uncertain(value: Any) -> bool:
+    """Whether ``value`` is written as an uncertain number (a string with ± or +-)."""
+    return isinstance(value, str) and ("±" in value or "+-" in value)
 
 
 class _YAMLTooLarge(Exception):
@@ -100,8 +117,11 @@ def read_yaml(raw: bytes, source: str) -> Any:
 class SceneReader:
     """Typed access to a scene's parsed data with errors naming the source, the key and the value."""
 
-    def __init__(self, source: str) -> None:
+    def __init__(self, source: str, values: Mapping[str, float] | None = None) -> None:
         self.source = source
+        self.values = dict(values or {})
+        #: key -> (nominal value, sigma) of every uncertain number read, in reading order.
+        self.uncertain: dict[str, tuple[float, float]] = {}
 
     def mapping(self, value: Any, key: str, allowed: tuple[str, ...] | None = None) -> Mapping[str, Any]:
         if not isinstance(value, Mapping):
@@ -115,7 +135,10 @@ class SceneReader:
         return value
 
     def number(self, value: Any, key: str, bound: limits.Bound | None = None) -> float:
-        """A finite number (a YAML number or a string such as ``1e-6``), within ``bound``."""
+        """A finite number (a YAML number or a string such as ``1e-6``), within ``bound``;
+        an uncertain number ``"v ± s"`` reads as v (or as ``values[key]``)."""
+        if is_uncertain(value):
+            value = self.uncertain_number(value, key)
         if isinstance(value, bool):
             raise SceneError(self.source, key, "expected a number", value)
         try:
@@ -125,6 +148,29 @@ class SceneReader:
         if not math.isfinite(number):
             raise SceneError(self.source, key, "expected a finite number", value)
         return self.bounded(number, key, bound)
+
+    def uncertain_number(self, value: str, key: str) -> float:
+        """The value of ``"v ± s"`` at ``key``: v, or ``values[key]`` if given; (v, s) is
+        recorded in ``uncertain``."""
+        match = UNCERTAIN_NUMBER.match(value)
+        problem = "expected 'value ± sigma' (or 'value +- sigma'): two finite numbers, sigma > 0"
+        if match is None:
+            raise SceneError(self.source, key, problem, value)
+        try:
+            nominal, sigma = float(match.group(1)), float(match.group(2))
+        except ValueError:
+            raise SceneError(self.source, key, problem, value) from None
+        if not (math.isfinite(nominal) and math.isfinite(sigma) and sigma > 0):
+            raise SceneError(self.source, key, problem, value)
+        self.uncertain[key] = (nominal, sigma)
+        return self.values.get(key, nominal)
+
+    def unused_values(self) -> None:
+        """Refuse a value given for a key that holds no uncertain number."""
+        for key in self.values:
+            if key not in self.uncertain:
+                known = ", ".join(self.uncertain) or "none"
+                raise SceneError(self.source, key, f"not an uncertain parameter of the scene (uncertain: {known})")
 
     def positive(self, value: Any, key: str, bound: limits.Bound | None = None) -> float:
         number = self.number(value, key, bound)

@@ -71,6 +71,17 @@ def cardan_rate_matrix(sequence: str, angles: np.ndarray) -> np.ndarray:
     return np.column_stack((last_t @ middle_t @ AXES[i], last_t @ AXES[j], AXES[k]))
 
 
+def cardan_angle_rates(sequence: str, angles: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """a' = B(a)^-1 w: the angle rates (rad/s) of the body rate w (rad/s, body frame)."""
+    return np.linalg.solve(cardan_rate_matrix(sequence, angles), w)
+
+
+def switched_angles(target: str, angles: np.ndarray) -> np.ndarray:
+    """The attitude of ``angles`` (in the other sequence) as angles of ``target``."""
+    source = "xzy" if target == "xyz" else "xyz"
+    return cardan_angles(target, cardan_matrix(source, angles))
+
+
 def euler_equations(inertia: np.ndarray, w: np.ndarray) -> np.ndarray:
     """w' = J^-1 ((J w) x w): torque-free Euler equations, J = diag(inertia) (kg m^2)."""
     return np.cross(inertia * w, w) / inertia
@@ -82,12 +93,20 @@ def quaternion_rate(q: np.ndarray, w: np.ndarray) -> np.ndarray:
     return 0.5 * np.concatenate((s * w + np.cross(v, w), [-v @ w]))
 
 
+def adaptive_angles(rotation: np.ndarray) -> tuple[str, np.ndarray]:
+    """The start of the adaptive formulation: (sequence, angles) of ``rotation``, x-y-z
+    unless its middle angle is beyond SWITCH_ANGLE (then x-z-y)."""
+    angles = cardan_angles("xyz", rotation)
+    if abs(angles[1]) <= SWITCH_ANGLE:
+        return "xyz", angles
+    return "xzy", cardan_angles("xzy", rotation)
+
+
 def cardan_rhs(sequence: str, inertia: np.ndarray) -> Callable[[float, np.ndarray], np.ndarray]:
     """x' for x = (a1, a2, a3, w1, w2, w3): a' = B(a)^-1 w, Euler's equations."""
     def rhs(t: float, x: np.ndarray) -> np.ndarray:
         w = x[3:]
-        return np.concatenate((np.linalg.solve(cardan_rate_matrix(sequence, x[:3]), w),
-                               euler_equations(inertia, w)))
+        return np.concatenate((cardan_angle_rates(sequence, x[:3], w), euler_equations(inertia, w)))
     return rhs
 
 
@@ -195,11 +214,8 @@ def simulate_cardan(inertia: np.ndarray, rotation0: np.ndarray, w0: np.ndarray,
 
 def sequence_switch(target: str) -> Callable[[float, np.ndarray], tuple[str, np.ndarray]]:
     """Reset map: the same attitude in the ``target`` sequence, rates unchanged."""
-    source = "xzy" if target == "xyz" else "xyz"
-
     def reset(t: float, x: np.ndarray) -> tuple[str, np.ndarray]:
-        angles = cardan_angles(target, cardan_matrix(source, x[:3]))
-        return target, np.concatenate((angles, x[3:]))
+        return target, np.concatenate((switched_angles(target, x[:3]), x[3:]))
     return reset
 
 
@@ -213,8 +229,9 @@ def simulate_cardan_adaptive(inertia: np.ndarray, rotation0: np.ndarray, w0: np.
     modes = [Mode(name, cardan_rhs(name, inertia),
                   (Transition("switch", guard, sequence_switch(other), 1),))
              for name, other in (("xyz", "xzy"), ("xzy", "xyz"))]
-    x0 = np.concatenate((cardan_angles("xyz", rotation0), w0))
-    solution = simulate_hybrid(modes, "xyz", x0, t_eval, integrator, **options)
+    sequence, angles = adaptive_angles(rotation0)
+    solution = simulate_hybrid(modes, sequence, np.concatenate((angles, w0)), t_eval, integrator,
+                               **options)
     rotations = np.array([cardan_matrix(mode, x[:3])
                           for mode, x in zip(solution.mode, solution.x)])
     return RotationResult("", "cardan_adaptive", solution.t, rotations, solution.x[:, 3:],

@@ -179,10 +179,13 @@ def comparison(linear: Propagation, sampled: Propagation) -> dict:
             "wall_time_monte_carlo": sampled.wall_time}
 
 
+PENDULUM_TITLE = "Damped pendulum, L = 0.8 +- 0.2, m = 1 +- 0.2, d = 0.5 +- 0.2"
+
+
 def plot_uncertainty(linear: Propagation, sampled: Propagation, phi_samples: np.ndarray,
-                     path: str) -> None:
-    """PNG: phi with the +-sigma bands of both propagations and 30 sample traces; below,
-    the two sigmas over time."""
+                     path: str, title: str = PENDULUM_TITLE, quantity: str = "phi (rad)") -> None:
+    """PNG: the quantity (default the pendulum's phi) with the +-sigma bands of both
+    propagations and 30 sample traces; below, the two sigmas over time."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -194,10 +197,9 @@ def plot_uncertainty(linear: Propagation, sampled: Propagation, phi_samples: np.
         top.fill_between(result.t, result.mean - result.sigma, result.mean + result.sigma,
                          color=color, alpha=0.25, label=f"{result.method} +-1 sigma")
         bottom.plot(result.t, result.sigma, color=color, label=result.method)
-    top.set_ylabel("phi (rad)")
-    top.set_title(f"Damped pendulum, L = 0.8 +- 0.2, m = 1 +- 0.2, d = 0.5 +- 0.2; "
-                  f"{phi_samples.shape[1]} samples", fontsize=10)
-    bottom.set_ylabel("sigma(phi) (rad)")
+    top.set_ylabel(quantity)
+    top.set_title(f"{title}; {phi_samples.shape[1]} samples", fontsize=10)
+    bottom.set_ylabel(f"sigma of {quantity}")
     bottom.set_xlabel("t (s)")
     for axis in (top, bottom):
         axis.grid(True, alpha=0.3)
