@@ -6,7 +6,7 @@
    contact only where it declares it.
 2. ball_drop against MuJoCo: the first hop's apex error against e^2 H0 versus wall time,
    ours and MuJoCo's at several steps and tolerances, and the wall time each needs for a
-   1 % error (bench/contact_vs_mujoco.py says how, and compares a closed grasp too).
+   1 % error (bench/bench_contact_mujoco.py says how, and compares a closed grasp too).
 3. gripping (28 s, two youBots, 7 pairs, constraint stepper PGS at 1 ms): one run of the
    simulator (outputs at the scene's 50 Hz), then the dynamics node's session without ROS
    (ros/session.py: the simulator advanced sample by sample, solve horizon 0.02 s, the
@@ -30,8 +30,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a sourc
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_base import session_wall  # noqa: E402
-from contact_vs_mujoco import (E, H0, ball_drop_mujoco, ball_drop_ours, equal_accuracy, mujoco_module,  # noqa: E402
-                               summary_line, table)
+from bench_contact_mujoco import (E, H0, ball_drop_mujoco, ball_drop_ours, equal_accuracy,  # noqa: E402
+                                  mujoco_module, summary_line, table)
 from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
@@ -63,7 +63,7 @@ def contact_cost() -> None:
 
 
 def accuracy() -> None:
-    """ball_drop's apex error against wall time, ours and MuJoCo's (bench/contact_vs_mujoco.py)."""
+    """ball_drop's apex error against wall time, ours and MuJoCo's (bench/bench_contact_mujoco.py)."""
     print(f"## 2. ball_drop: apex of the first hop (target e^2 H0 = {E * E * H0:.4f} m) vs wall time\n")
     runs = ball_drop_ours(quick=False)
     mujoco = mujoco_module()

@@ -13,7 +13,7 @@
 - inverse mode: ``InverseSession.joint_state`` per sample (logs off) against
   ``inverse_dynamics_batch`` per sample on the same INVERSE_SAMPLES samples of arm_ptp's
   robot (a smooth motion at 500 Hz);
-- contact against MuJoCo at equal accuracy (bench/contact_vs_mujoco.py, --quick sweeps).
+- contact against MuJoCo at equal accuracy (bench/bench_contact_mujoco.py, --quick sweeps).
 
 Each row: figure, ours, peer (None: no peer), unit, ratio, goal, met (None: not measured).
 """
@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_base import session_wall  # noqa: E402
 from bench_simulation import rhs_pair  # noqa: E402
-from contact_vs_mujoco import TARGETS, UNITS, comparisons, equal_accuracy  # noqa: E402
+from bench_contact_mujoco import TARGETS, UNITS, comparisons, equal_accuracy  # noqa: E402
 from timing import best_per_call  # noqa: E402
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch  # noqa: E402
 from youbot_dynamics.ros.session import InverseSession  # noqa: E402
@@ -73,15 +73,16 @@ def gripping_rows() -> list[dict]:
     ]
 
 
-def session_rows() -> list[dict]:
+def session_rows(repeat: int) -> list[dict]:
+    """The main job's real-time factor, logs on and off: the best of ``repeat`` runs each."""
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         for logs in (Path(folder), None):
-            factor = SESSION_RUN / min(session_wall("gripping", logs, SESSION_RUN, SESSION_RATE) for _ in range(2))
+            factor = SESSION_RUN / min(session_wall("gripping", logs, SESSION_RUN, SESSION_RATE) for _ in range(repeat))
             label = "MCAP + Rerun" if logs else "logs off"
-            rows.append(row(f"main job: gripping session at {SESSION_RATE:g} Hz, {label} (no ROS, 0-{SESSION_RUN:g} s): "
-                            "real-time factor", factor, None, "x real time", "ours >= 3" if logs else "-",
-                            factor >= 3.0 if logs else None))
+            figure = f"main job: gripping session at {SESSION_RATE:g} Hz, {label} (no ROS, 0-{SESSION_RUN:g} s)"
+            rows.append(row(f"{figure}: real-time factor", factor, None, "x real time",
+                            "ours >= 3" if logs else "-", factor >= 3.0 if logs else None))
     return rows
 
 

@@ -138,7 +138,7 @@ def main() -> None:
         ("right-hand side", lambda: rhs_rows(2000, repeat)),
         ("inverse mode", lambda: inverse_rows(3 if args.quick else 5)),
         ("gripping", gripping_rows),
-        ("main job", session_rows),
+        ("main job", lambda: session_rows(1 if args.quick else 2)),
         ("contact vs MuJoCo", mujoco_rows),
     ]
     rows: list[dict] = []

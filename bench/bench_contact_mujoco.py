@@ -29,7 +29,7 @@ the TARGETS error (:func:`wall_at_error`: log-log interpolation between the chea
 that meets the target and the next cheaper run of the same method, if their errors have the
 same sign); ratio = ours / MuJoCo's; goal (issue 14) <= 3.
 
-Run: python bench/contact_vs_mujoco.py [--quick]     (needs ``pip install mujoco``)
+Run: python bench/bench_contact_mujoco.py [--quick]     (needs ``pip install mujoco``)
 """
 from __future__ import annotations
 
@@ -242,7 +242,8 @@ def grasp_mujoco(mujoco: ModuleType, quick: bool) -> list[Run]:
                 xl=-RADIUS - PAD / 2, xr=RADIUS + PAD / 2, r=RADIUS, mass=MASS, kp=KP, kd=KD))
             data = mujoco.MjData(model)
             data.ctrl[:] = SQUEEZE
-            z, wall = mujoco_samples(mujoco, model, data, GRASP_DURATION, [model.jnt_qposadr[model.body("sphere").jntadr[0]] + 2])
+            sphere_z = model.jnt_qposadr[model.body("sphere").jntadr[0]] + 2
+            z, wall = mujoco_samples(mujoco, model, data, GRASP_DURATION, [sphere_z])
             t = np.arange(1, len(z) + 1) / OUTPUT_RATE
             method = integrator + (f" noslip {noslip}" if noslip else "")
             runs.append(Run("MuJoCo", method, f"dt={dt:g}", slip(t, z[:, 0]), wall))
@@ -254,18 +255,18 @@ def wall_at_error(runs: list[Run], target: float) -> float | None:
     """Least wall time (s) at which one of the runs' methods reaches |error| <= target: per
     method, the cheapest run meeting it, moved by log-log interpolation towards the next
     cheaper run of that method when that one misses with an error of the same sign; None
-    when no run reaches the target."""
+    when no run reaches the target. Diverged runs (infinite error) are left out."""
     best = None
     for method in dict.fromkeys(r.method for r in runs):
-        ordered = sorted((r for r in runs if r.method == method), key=lambda r: r.wall)
+        ordered = sorted((r for r in runs if r.method == method and math.isfinite(r.error)), key=lambda r: r.wall)
         for k, run in enumerate(ordered):
             if abs(run.error) > target:
                 continue
             wall = run.wall
             if k > 0 and run.error != 0.0 and ordered[k - 1].error * run.error > 0:
                 low = ordered[k - 1]
-                x = (math.log(target) - math.log(abs(low.error))) / (math.log(abs(run.error)) - math.log(abs(low.error)))
-                wall = math.exp(math.log(low.wall) + x * (math.log(run.wall) - math.log(low.wall)))
+                x = math.log(target / abs(low.error)) / math.log(run.error / low.error)
+                wall = low.wall * (run.wall / low.wall) ** x
             best = wall if best is None else min(best, wall)
             break
     return best
@@ -286,7 +287,8 @@ def comparisons(quick: bool) -> tuple[dict[str, list[Run]], str | None]:
     """Every run of both scenes, and MuJoCo's version (None when it is not installed: then
     only our runs)."""
     mujoco = mujoco_module()
-    warm_up = ball_drop_data({"law": "constraint", "restitution": E, "friction": FRICTION}, {"method": "pgs", "dt": 2e-3}, 1.1)
+    warm_up = ball_drop_data({"law": "constraint", "restitution": E, "friction": FRICTION},
+                             {"method": "pgs", "dt": 2e-3}, 1.1)
     our_run("", "", warm_up, ball_drop_apex_error)  # imports and first builds, not timed below
     runs = {"ball_drop": ball_drop_ours(quick), "grasp": grasp_ours(quick)}
     if mujoco is not None:
