@@ -3,13 +3,14 @@ the step it needs for the same error, on two scenes (measured figures, not tests
 
 1. ball_drop: the 5 cm, 45.8 g sphere dropped from 1 m onto a plane with restitution
    e = 0.8. Error: the first hop's apex against e^2 H0 = 0.64 m, in % (apex = max of
-   z + vz^2 / 2g over the rising samples). Ours: the constraint stepper (PGS) at several
-   steps, Hunt-Crossley (k = 1e7) with rk45 at several tolerances. MuJoCo: soft contact with
-   the direct solref = (-k, -b) of a linear spring-damper whose restitution is e
-   (zeta = -ln e / sqrt(pi^2 + ln^2 e), contact lasting 10 steps: omega = pi / (10 dt),
-   k = omega^2, b = 2 zeta omega; solimp 0.99; MuJoCo's default time-constant form with
-   dampratio = zeta bounces far lower, about 0.07 m), Euler, implicitfast and RK4 at
-   several dt.
+   z + vz^2 / 2g over the rising samples). Ours: the constraint stepper (PGS, ADMM) at
+   several steps, Hunt-Crossley (k = 1e7) with rk45 at several tolerances. MuJoCo: soft
+   contact with the direct solref = (-k, -b) of a linear spring-damper whose restitution is
+   e (zeta = -ln e / sqrt(pi^2 + ln^2 e), k = omega^2, b = 2 zeta omega, solimp 0.99;
+   MuJoCo's default time-constant form with dampratio = zeta bounces far lower, about
+   0.07 m), the contact lasting CONTACT_STEPS steps (omega = pi / (10 dt): its error does
+   not shrink with dt) or CONTACT_TIME (omega = pi / 2 ms: it levels off near +1.5 % with
+   RK4), Euler, implicitfast and RK4 at several dt.
 2. grasp: the same sphere squeezed under gravity (-z) between two 50 g pads (boxes 5 x 30
    x 40 mm) on prismatic joints along x (bench/grasp_pads.urdf; MuJoCo: slide joints),
    each pushed by a PD servo (kp = 1500 N/m, kd = 17 N s/m; ours the scene's pd
@@ -17,13 +18,14 @@ the step it needs for the same error, on two scenes (measured figures, not tests
    sphere: 1.5 N per pad, friction 0.3, so the pads hold 2 mu F = 0.9 N against the
    sphere's 0.449 N weight (margin 2): the exact motion is at rest. Error: the sphere's
    slip |z(1 s) - z(0.25 s)| (m), after the squeeze has built up. Ours: the constraint
-   stepper at several steps (and, not in --quick, Hunt-Crossley with rk45, whose
-   regularised Coulomb friction creeps by design). MuJoCo: solref = (2 dt, 1) (its
+   stepper with PGS and with ADMM at several steps (and, not in --quick, Hunt-Crossley with
+   rk45, whose regularised Coulomb friction creeps by design). MuJoCo: solref = (2 dt, 1) (its
    stiffest stable contact, so its creep shrinks with dt like our error), default solimp,
    pyramidal cone, Euler, implicitfast and RK4, and Euler with noslip_iterations = 10.
 
 Both engines sample the state at OUTPUT_RATE (ours: the scene's outputs; MuJoCo:
-``mj_step(..., nstep)`` between samples). Wall time: one run, the model built beforehand.
+``mj_step(..., nstep)`` between samples). Wall time: the best of two runs (ours on the
+grasp: one run), the model built beforehand.
 Equal accuracy: for each engine, the least wall time at which some of its methods reaches
 the TARGETS error (:func:`wall_at_error`: log-log interpolation between the cheapest run
 that meets the target and the next cheaper run of the same method, if their errors have the
@@ -61,7 +63,7 @@ OUTPUT_RATE = 100.0  # Hz, both engines
 KP, KD, SQUEEZE, PAD = 1500.0, 17.0, 1e-3, 0.005
 GRASP_DURATION, SLIP_FROM = 1.0, 0.25
 #: the error each engine must reach: apex error (%) and slip (m)
-TARGETS = {"ball_drop": 1.0, "grasp": 1e-3}
+TARGETS = {"ball_drop": 1.0, "grasp": 1e-4}
 UNITS = {"ball_drop": "% apex error", "grasp": "m slip"}
 GRASP_URDF = Path(__file__).resolve().parent / "grasp_pads.urdf"
 
@@ -124,6 +126,7 @@ def ball_drop_ours(quick: bool) -> list[Run]:
             "hunt_crossley": {"law": "hunt_crossley", "stiffness": 1e7, "restitution": E, "friction": FRICTION}}
     cases = [("constraint", {"method": "pgs", "dt": dt}, f"dt={dt:g}")
              for dt in ((2e-3, 1e-3, 5e-4) if quick else (2e-3, 1e-3, 5e-4, 2e-4, 1e-4))]
+    cases += [("constraint", {"method": "admm", "dt": dt}, f"dt={dt:g}") for dt in (2e-3,) + (() if quick else (1e-3,))]
     cases += [("hunt_crossley", {"method": "rk45", "rtol": rtol, "atol": rtol * 1e-2}, f"rtol={rtol:g}")
               for rtol in ((1e-5, 1e-6) if quick else (1e-5, 1e-6, 1e-8))]
     for law, integrator, setting in cases:
@@ -207,8 +210,10 @@ def grasp_slip(simulator: Simulator, result) -> float:
 
 
 def grasp_ours(quick: bool) -> list[Run]:
-    cases = [({"law": "constraint", "restitution": 0.0, "friction": FRICTION}, {"method": "pgs", "dt": dt},
-              f"dt={dt:g}") for dt in (2e-3, 1e-3, 5e-4, 2.5e-4) + (() if quick else (1e-4,))]
+    constraint = {"law": "constraint", "restitution": 0.0, "friction": FRICTION}
+    steps = {"pgs": (2e-3, 1e-3, 5e-4) + (() if quick else (2.5e-4, 1e-4)),
+             "admm": (5e-3, 2e-3) + (() if quick else (1e-3,))}
+    cases = [(constraint, {"method": method, "dt": dt}, f"dt={dt:g}") for method in steps for dt in steps[method]]
     if not quick:  # about 10 s per run: a stiff regularised friction for rk45
         hunt = {"law": "hunt_crossley", "stiffness": 1e7, "restitution": 0.5, "friction": FRICTION,
                 "velocity_scale": 1e-3}
