@@ -9,8 +9,8 @@ the step it needs for the same error, on two scenes (measured figures, not tests
    e (zeta = -ln e / sqrt(pi^2 + ln^2 e), k = omega^2, b = 2 zeta omega, solimp 0.99;
    MuJoCo's default time-constant form with dampratio = zeta bounces far lower, about
    0.07 m), the contact lasting CONTACT_STEPS steps (omega = pi / (10 dt): its error does
-   not shrink with dt) or CONTACT_TIME (omega = pi / 2 ms: it levels off near +1.5 % with
-   RK4), Euler, implicitfast and RK4 at several dt.
+   not shrink with dt) or CONTACT_TIME (omega = pi / 2 ms: it levels off at +1 to +2 % as
+   dt shrinks), Euler, implicitfast and RK4 at several dt.
 2. grasp: the same sphere squeezed under gravity (-z) between two 50 g pads (boxes 5 x 30
    x 40 mm) on prismatic joints along x (bench/grasp_pads.urdf; MuJoCo: slide joints),
    each pushed by a PD servo (kp = 1500 N/m, kd = 17 N s/m; ours the scene's pd
