@@ -46,8 +46,10 @@ test-all: PYTEST_ARGS =
 test-all: export HYPOTHESIS_PROFILE = thorough
 test-all: test
 
-# The summary table of the speed figures (bench/results.json); bench-all runs every script.
+# The summary table of the speed figures (bench/results.json, MuJoCo's rows included);
+# bench-all runs every script.
 bench: $(STAMP)
+	$(PY) -m pip install --quiet -r requirements-bench.txt -c $(LOCK)
 	$(PY) bench/summary.py
 
 bench-all: $(STAMP)

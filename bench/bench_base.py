@@ -21,27 +21,31 @@ from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
 from youbot_dynamics.sim.scene import load_scene  # noqa: E402
 
 RATE, REPEATS = 500.0, 2
-DURATION = float(sys.argv[1]) if len(sys.argv) > 1 else 9.0
+DURATION = 9.0  # s, unless given
 
 
-def session_wall(name: str, logs: Path | None) -> float:
-    """Wall time (s) of the session over the first DURATION s of scene ``name``."""
+def session_wall(name: str, logs: Path | None, duration: float | None = None, rate: float = RATE) -> float:
+    """Wall time (s) of the dynamics node's session without ROS over the first ``duration``
+    s (default: all) of scene ``name`` at ``rate`` Hz, solve horizon 0.02 s; with ``logs``
+    (a folder), MCAP and Rerun logs written there."""
     paths = {} if logs is None else {"mcap_path": logs / f"{name}.mcap", "rrd_path": logs / f"{name}.rrd"}
-    scene = load_scene(name).with_duration(DURATION)
-    session = SimulationSession(scene, RATE, samples_per_solve=round(0.02 * RATE), **paths)
+    scene = load_scene(name)
+    scene = scene if duration is None else scene.with_duration(duration)
+    session = SimulationSession(scene, rate, samples_per_solve=max(1, round(0.02 * rate)), **paths)
     start = time.perf_counter()
-    while session.t < DURATION:
+    while session.t < scene.duration:
         session.step()
     session.close()
     return time.perf_counter() - start
 
 
 if __name__ == "__main__":
+    DURATION = float(sys.argv[1]) if len(sys.argv) > 1 else DURATION
     print(f"| scene | rate Hz | logs | wall s ({DURATION:g} s simulated) | real-time factor |")
     print("|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as folder:
         for name in ("mobile_pick", "gripping"):
             for logs in (None, Path(folder)):
-                best = min(session_wall(name, logs) for _ in range(REPEATS))
+                best = min(session_wall(name, logs, DURATION) for _ in range(REPEATS))
                 print(f"| {name} | {RATE:g} | {'MCAP + Rerun' if logs else 'off'} | {best:.2f} | "
                       f"{DURATION / best:.2f} |", flush=True)

@@ -2,7 +2,7 @@
 
 1. Per scene: the state dimension, our forward-dynamics right-hand side (ABA + friction +
    controller, as the integrators call it) versus a bare ``pin.aba`` call on the same
-   reduced model, in microseconds per call (best of ``--repeat`` loops of ``--calls``).
+   reduced model, in microseconds per call (best of ``--repeat`` alternating loops of ``--calls``).
 2. arm_swing against MuJoCo loading the same URDF (wheels and fingers made fixed at 0, as
    the scene locks them; no damping or friction; contacts and joint limits disabled; same
    initial state and gravity). The models are checked first: mass matrix and bias forces
@@ -22,13 +22,16 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import pinocchio as pin
 from lxml import etree
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from timing import best_per_call  # noqa: E402
 from youbot_dynamics.analysis.work_precision import recommend, reference_solution, sweep  # noqa: E402
 from youbot_dynamics.sim.scene import Scene, load_scene  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
@@ -46,26 +49,24 @@ def best_seconds(call, repeat: int) -> float:
     return best
 
 
+def rhs_pair(name: str) -> tuple[Callable[[], object], Callable[[], object], dict[str, int | str]]:
+    """One call of scene ``name``'s right-hand side at its initial state (t = 0.1 s), one
+    bare ``pin.aba`` on the same reduced model at (q, v, 0), and the rhs's cost summary."""
+    simulator = Simulator(load_scene(name))
+    x = simulator.initial_state()
+    model, data = simulator.robot.model, simulator.robot.model.createData()
+    q, v, tau = x[:model.nv], x[model.nv:2 * model.nv], np.zeros(model.nv)
+    return (lambda: simulator.rhs(0.1, x)), (lambda: pin.aba(model, data, q, v, tau)), simulator.rhs_cost()
+
+
 def rhs_table(calls: int, repeat: int) -> None:
-    print(f"1. right-hand side cost (us per call, best of {repeat} x {calls} calls)\n")
+    print(f"1. right-hand side cost (us per call, best of {repeat} alternating loops of {calls} calls)\n")
     print("| scene | state dim | nv | friction | controller | our rhs | bare pin.aba | ratio |")
     print("|---|---|---|---|---|---|---|---|")
     for name in SCENES:
-        simulator = Simulator(load_scene(name))
-        x = simulator.initial_state()
-        model, data = simulator.robot.model, simulator.robot.model.createData()
-        q, v, tau = x[:model.nv], x[model.nv:2 * model.nv], np.zeros(model.nv)
-
-        def ours() -> None:
-            for _ in range(calls):
-                simulator.rhs(0.1, x)
-
-        def bare() -> None:
-            for _ in range(calls):
-                pin.aba(model, data, q, v, tau)
-
-        cost = simulator.rhs_cost()
-        mine, theirs = (best_seconds(f, repeat) / calls * 1e6 for f in (ours, bare))
+        ours, bare, cost = rhs_pair(name)
+        ours(), bare()  # warm up
+        mine, theirs = (t * 1e6 for t in best_per_call([ours, bare], calls, repeat))
         print(f"| {name} | {cost['state_dim']} | {cost['nv']} | {cost['friction_laws']} | {cost['controller']} "
               f"| {mine:.1f} | {theirs:.1f} | {mine / theirs:.1f}x |")
 

@@ -3,9 +3,13 @@ printed as Markdown and written as JSON (bench/results.json), with the machine s
 
 Run: python bench/summary.py [--quick] [--json bench/results.json] (``make bench``). It
 takes the figures of bench_kinematics, bench_dynamics, bench_batch and bench_scaling (each
-checked against Pinocchio or the per-sample functions before it is timed) and times the
-command line's start-up. Per-call figures are the best of alternating loops (see
-bench/timing.py), so ours and the peer see the same machine load; ratios are ours / peer.
+checked against Pinocchio or the per-sample functions before it is timed), times the
+command line's start-up, and adds the rows of bench/goal_rows.py: the right-hand sides of
+arm_friction and arm_ptp, inverse mode per sample, gripping's real-time factor and step
+cost, the main job's real-time factor with logs, and contact against MuJoCo at equal
+accuracy (rows say "MuJoCo not installed" without it). Per-call figures are the best of
+alternating loops (see bench/timing.py), so ours and the peer see the same machine load;
+ratios are ours / peer; "-" where a row has no peer or no goal.
 """
 from __future__ import annotations
 
@@ -25,6 +29,7 @@ from bench_batch import batch_calls  # noqa: E402
 from bench_dynamics import arm, dynamics_pairs  # noqa: E402
 from bench_kinematics import kinematics_pairs  # noqa: E402
 from bench_scaling import scaling  # noqa: E402
+from goal_rows import gripping_rows, inverse_rows, mujoco_rows, rhs_rows, row, session_rows  # noqa: E402
 from timing import best_per_call, machine  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -42,11 +47,6 @@ PER_CALL_GOALS = {
 #: Growth in the number of joints: linear like Pinocchio's when ours is at most 1.1 or at most
 #: Pinocchio's own exponent + 0.1 (both fits see the same caches and the same load).
 LINEAR, SLACK = 1.1, 0.1
-
-
-def row(figure: str, ours: float, peer: float, unit: str, goal: str, met: bool, ratio: float | None = None) -> dict:
-    return {"figure": figure, "ours": ours, "peer": peer, "unit": unit,
-            "ratio": ours / peer if ratio is None else ratio, "goal": goal, "met": bool(met)}
 
 
 def per_call_rows(calls: int, repeat: int) -> list[dict]:
@@ -113,12 +113,12 @@ def scaling_rows(results: dict[str, dict]) -> list[dict]:
 
 
 def markdown(rows: list[dict]) -> str:
-    def number(x: float) -> str:
-        return f"{x:.3g}" if abs(x) < 100 else f"{x:.0f}"
+    def number(x: float | None) -> str:
+        return "-" if x is None else f"{x:.3g}" if abs(x) < 100 else f"{x:.0f}"
 
     lines = ["| figure | ours | peer | unit | ratio | goal | met |", "|---|---|---|---|---|---|---|"]
     for r in rows:
-        met = "-" if r["goal"] == "-" else ("yes" if r["met"] else "**no**")
+        met = "-" if r["goal"] == "-" or r["met"] is None else ("yes" if r["met"] else "**no**")
         lines.append(f"| {r['figure']} | {number(r['ours'])} | {number(r['peer'])} | {r['unit']} | "
                      f"{number(r['ratio'])} | {r['goal']} | {met} |")
     return "\n".join(lines)
@@ -135,10 +135,17 @@ def main() -> None:
         ("per call", lambda: per_call_rows(300, repeat)),
         ("batch", lambda: batch_rows(2000, max(3, repeat // 2))),
         ("start-up", lambda: startup_rows(3 if args.quick else 5)),
+        ("right-hand side", lambda: rhs_rows(2000, repeat)),
+        ("inverse mode", lambda: inverse_rows(3 if args.quick else 5)),
+        ("gripping", gripping_rows),
+        ("main job", lambda: session_rows(1 if args.quick else 2)),
+        ("contact vs MuJoCo", mujoco_rows),
     ]
     rows: list[dict] = []
-    for _, part in parts:
+    for name, part in parts:
+        began = time.perf_counter()
         rows += part()
+        print(f"{name}: {time.perf_counter() - began:.0f} s", file=sys.stderr, flush=True)
     scaled = scaling(calls=300, repeat=repeat)
     rows += scaling_rows(scaled)
     described = machine()

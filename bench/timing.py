@@ -29,7 +29,8 @@ def growth_exponent(sizes: Sequence[float], costs: Sequence[float]) -> float:
 
 
 def machine() -> str:
-    """CPU model, logical cores, load average, Python and library versions."""
+    """CPU model, logical cores, load average, Python and library versions (MuJoCo's, the
+    peer of bench/bench_contact_mujoco.py, if installed)."""
     model = platform.processor() or platform.machine()
     try:
         with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
@@ -39,6 +40,11 @@ def machine() -> str:
     import numba
     import pinocchio
 
+    try:
+        import mujoco
+        peer = f"MuJoCo {mujoco.__version__}"
+    except ImportError:
+        peer = "MuJoCo not installed"
     load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
     return (f"{model}, {os.cpu_count()} logical cores, load average {load}; Python {platform.python_version()}, "
-            f"numpy {np.__version__}, Pinocchio {pinocchio.__version__}, numba {numba.__version__}")
+            f"numpy {np.__version__}, Pinocchio {pinocchio.__version__}, numba {numba.__version__}, {peer}")

@@ -1,0 +1,141 @@
+"""The summary table's rows for the issue-14 goals measured on whole scenes and sessions
+(bench/summary.py holds the per-call, batch, start-up and scaling rows):
+
+- gripping through the engine: real-time factor of the integrator alone
+  (``Simulator.run`` over the first GRIP_RUN s, outputs at the scene's 50 Hz; the grasp
+  closes at 4.9 s) and the cost per step over the next GRIP_STEPS steps of 1 ms
+  (``engine.advance`` from that run's end, the sphere held in youBot 1's grasp);
+- the main job: the dynamics node's session without ROS (bench/bench_base.py) at 500 Hz
+  over gripping's first SESSION_RUN s, MCAP + Rerun logs on (and off, for the outputs'
+  cost): real-time factor = simulated / wall time;
+- the right-hand side of arm_friction and arm_ptp against a bare pin.aba (bench/
+  bench_simulation.py), best of alternating loops;
+- inverse mode: ``InverseSession.joint_state`` per sample (logs off) against
+  ``inverse_dynamics_batch`` per sample on the same INVERSE_SAMPLES samples of arm_ptp's
+  robot (a smooth motion at 500 Hz);
+- contact against MuJoCo at equal accuracy (bench/bench_contact_mujoco.py, --quick sweeps).
+
+Each row: figure, ours, peer (None: no peer), unit, ratio, goal, met (None: not measured).
+"""
+from __future__ import annotations
+
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_base import session_wall  # noqa: E402
+from bench_simulation import rhs_pair  # noqa: E402
+from bench_contact_mujoco import TARGETS, UNITS, comparisons, equal_accuracy  # noqa: E402
+from timing import best_per_call  # noqa: E402
+from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch  # noqa: E402
+from youbot_dynamics.ros.session import InverseSession  # noqa: E402
+from youbot_dynamics.sim import engine  # noqa: E402
+from youbot_dynamics.sim.scene import load_scene  # noqa: E402
+from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
+
+GRIP_RUN, GRIP_STEPS = 6.0, 2000  # s simulated, then steps of the scene's 1 ms
+SESSION_RUN, SESSION_RATE = 3.0, 500.0  # s simulated, Hz
+INVERSE_SAMPLES, INVERSE_RATE = 1000, 500.0  # samples, Hz
+
+
+def row(figure: str, ours: float | None, peer: float | None, unit: str, goal: str, met: bool | None,
+        ratio: float | None = None) -> dict:
+    """A summary-table row; ratio defaults to ours / peer (None without both)."""
+    if ratio is None and ours is not None and peer is not None:
+        ratio = ours / peer
+    return {"figure": figure, "ours": ours, "peer": peer, "unit": unit, "ratio": ratio, "goal": goal,
+            "met": None if met is None else bool(met)}
+
+
+def gripping_rows() -> list[dict]:
+    simulator = Simulator(load_scene("gripping").with_duration(GRIP_RUN))
+    start = time.perf_counter()
+    simulator.run()
+    factor = GRIP_RUN / (time.perf_counter() - start)
+    state = simulator.get_state()
+    steps = state.stats.steps
+    start = time.perf_counter()
+    engine.advance(simulator.model, state, [state.t + GRIP_STEPS * simulator.integrator.dt])
+    per_step = (time.perf_counter() - start) / (state.stats.steps - steps) * 1e6
+    return [
+        row(f"gripping: real-time factor of the integrator alone (Simulator.run, 0-{GRIP_RUN:g} s)", factor, None,
+            "x real time", "ours >= 6", factor >= 6.0),
+        row(f"gripping: cost per 1 ms step in the grasp ({state.stats.steps - steps} steps through the engine)",
+            per_step, None, "us", "ours <= 150 us", per_step <= 150.0),
+    ]
+
+
+def session_rows(repeat: int) -> list[dict]:
+    """The main job's real-time factor, logs on and off: the best of ``repeat`` runs each."""
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for logs in (Path(folder), None):
+            factor = SESSION_RUN / min(session_wall("gripping", logs, SESSION_RUN, SESSION_RATE) for _ in range(repeat))
+            label = "MCAP + Rerun" if logs else "logs off"
+            figure = f"main job: gripping session at {SESSION_RATE:g} Hz, {label} (no ROS, 0-{SESSION_RUN:g} s)"
+            rows.append(row(f"{figure}: real-time factor", factor, None, "x real time",
+                            "ours >= 3" if logs else "-", factor >= 3.0 if logs else None))
+    return rows
+
+
+def rhs_rows(calls: int, repeat: int) -> list[dict]:
+    rows = []
+    for name in ("arm_friction", "arm_ptp"):
+        ours, bare, _ = rhs_pair(name)
+        ours(), bare()  # warm up
+        t_ours, t_peer = (t * 1e6 for t in best_per_call([ours, bare], calls, repeat))
+        rows.append(row(f"{name} right-hand side vs bare pin.aba", t_ours, t_peer, "us", "ratio <= 3",
+                        t_ours / t_peer <= 3.0))
+    return rows
+
+
+def inverse_rows(repeat: int) -> list[dict]:
+    """Inverse mode against the batch function, per sample (arm_ptp's robot and friction)."""
+    scene = load_scene("arm_ptp")
+    robot, friction = scene.robot, scene.joint_friction(scene.robot)
+    t = np.arange(1, INVERSE_SAMPLES + 1) / INVERSE_RATE
+    omega = 2 * math.pi * 0.5  # rad/s: every joint swings 0.3 rad at 0.5 Hz about the initial pose
+    q = scene.q0 + 0.3 * np.sin(omega * t)[:, None]
+    v = 0.3 * omega * np.cos(omega * t)[:, None] * np.ones(robot.nv)
+    a = -0.3 * omega ** 2 * np.sin(omega * t)[:, None] * np.ones(robot.nv)
+    stamps = (t * 1e9).round().astype(int)
+    names = list(robot.joint_names)
+    pool = pin.ModelPool(robot.model, 1)
+
+    best_session = best_batch = math.inf
+    for _ in range(repeat + 1):  # alternating; the first round warms up
+        session = InverseSession(scene)
+        start = time.perf_counter()
+        for k in range(INVERSE_SAMPLES):
+            session.joint_state(names, q[k], v[k], int(stamps[k]))
+        best_session = min(best_session, time.perf_counter() - start)
+        assert session.samples == INVERSE_SAMPLES - 2, f"{session.samples} torques of {INVERSE_SAMPLES} samples"
+        start = time.perf_counter()
+        inverse_dynamics_batch(robot, q, v, a, friction, pool=pool)
+        best_batch = min(best_batch, time.perf_counter() - start)
+    ours, peer = best_session / INVERSE_SAMPLES * 1e6, best_batch / INVERSE_SAMPLES * 1e6
+    return [row(f"inverse mode (InverseSession.joint_state, logs off) vs inverse_dynamics_batch, per sample "
+                f"(arm_ptp, {INVERSE_SAMPLES} samples)", ours, peer, "us", "ratio <= 3", ours / peer <= 3.0)]
+
+
+def mujoco_rows() -> list[dict]:
+    """Both equal-accuracy ratios (--quick sweeps); without MuJoCo, rows saying so."""
+    runs, version = comparisons(quick=True)
+    rows = []
+    for scene, result in ((scene, equal_accuracy(scene, runs[scene])) for scene in runs):
+        figure = f"{scene}: wall time at equal accuracy ({TARGETS[scene]:g} {UNITS[scene]})"
+        if version is None:
+            rows.append(row(f"{figure}: MuJoCo not installed", result["ours_s"], None, "s", "ratio <= 3", None))
+            continue
+        met = result["ours_s"] is not None and (result["ratio"] is None or result["ratio"] <= 3.0)
+        rows.append(row(f"{figure} vs MuJoCo {version}", result["ours_s"], result["mujoco_s"], "s", "ratio <= 3",
+                        met, result["ratio"]))
+    return rows
