@@ -126,6 +126,8 @@ _COULOMB, _STRIBECK, _LUGRE = LAW_CODES["coulomb"], LAW_CODES["stribeck"], LAW_C
 #: The bristle states of a robot without LuGre joints.
 NO_BRISTLES = np.zeros(0)
 NO_BRISTLES.setflags(write=False)
+_NO_JOINTS = np.zeros(0, dtype=np.int64)
+_NO_JOINTS.setflags(write=False)
 
 
 @register_jitable
@@ -178,9 +180,20 @@ def subtract_friction_torque(v: Vector, z: Vector, table: np.ndarray, out: Vecto
 #: The same two without numba's type dispatch (about 0.3 us of a 0.6 us call): the compiled
 #: code itself, which trusts its arguments. Only for float64 vectors (``dtype is FLOAT``,
 #: ``ndim == 1``) and the table of a JointFriction; the sizes are still checked.
-add_friction_torque_unchecked = add_friction_torque.overloads[_SIGNATURE.args].entry_point
-subtract_friction_torque_unchecked = subtract_friction_torque.overloads[_SIGNATURE.args].entry_point
+def unchecked(compiled: Any) -> Any:
+    """The compiled code of a numba function compiled for ONE explicit signature, callable
+    without numba's type dispatch (its entry point): about 0.3 us less per call, and no
+    check that the arguments are of the signature's types (callers check dtype and ndim)."""
+    (result,) = compiled.overloads.values()
+    return result.entry_point
+
+
+add_friction_torque_unchecked = unchecked(add_friction_torque)
+subtract_friction_torque_unchecked = unchecked(subtract_friction_torque)
+#: The dtype the compiled loops are compiled for (``x.dtype is FLOAT`` checks it).
 FLOAT = np.dtype(np.float64)
+#: numba types of the float64 vectors the compiled loops read (any stride) and write.
+READ_VECTOR, WRITTEN_VECTOR = _READ, _WRITTEN
 
 
 @njit(cache=True)
@@ -190,12 +203,43 @@ def _accumulate_rows(v: np.ndarray, z: np.ndarray, table: np.ndarray, sign: floa
         _accumulate(v[row], z[row], table, sign, out[row])
 
 
-@njit(cache=True)
-def _bristle_rates(v: Vector, z: Vector, table: np.ndarray, joints: np.ndarray, out: Vector) -> None:
-    """out = dz/dt of the LuGre joints ``joints`` (bristle states z, in that order)."""
+@register_jitable
+def _rates(v: Vector, z: Vector, table: np.ndarray, joints: np.ndarray, out: Vector) -> None:
+    """out = dz/dt of the LuGre joints ``joints`` (bristle states z, in that order); v one
+    value per joint (checked by the caller), z and out one per LuGre joint (checked here)."""
+    if z.shape[0] != joints.shape[0] or out.shape[0] != joints.shape[0]:
+        raise ValueError("friction: z and dz/dt need one value per LuGre joint")
     for k in range(joints.shape[0]):
         i = joints[k]
         out[k] = lugre_bristle_rate(v[i], z[k], table[2, i], table[5, i], table[6, i], table[7, i])
+
+
+@njit(cache=True)
+def _bristle_rates(v: Vector, z: Vector, table: np.ndarray, joints: np.ndarray, out: Vector) -> None:
+    """out = dz/dt of the LuGre joints ``joints`` (see :func:`_rates`)."""
+    _rates(v, z, table, joints, out)
+
+
+@njit(types.void(_READ, _READ, _READ, types.Array(types.float64, 2, "C", readonly=True),
+                 types.Array(types.int64, 1, "C", readonly=True), _WRITTEN, _WRITTEN), cache=True)
+def friction_left_and_rates(v: Vector, z: Vector, tau: Vector, table: np.ndarray, joints: np.ndarray,
+                            left: Vector, rates: Vector) -> None:
+    """The friction's share of a robot's state derivative in one call: left = tau -
+    tau_friction(v, z) (the torque left to accelerate the joints) and rates = dz/dt of the
+    LuGre joints ``joints`` (``JointFriction.lugre_indices``); sizes checked (ValueError)
+    before anything is written."""
+    if tau.shape[0] != left.shape[0] or v.shape[0] != table.shape[1]:
+        raise ValueError("friction: tau and left need one value per joint")
+    if z.shape[0] != joints.shape[0] or rates.shape[0] != joints.shape[0]:
+        raise ValueError("friction: z and dz/dt need one value per LuGre joint")
+    for i in range(left.shape[0]):
+        left[i] = tau[i]
+    _accumulate(v, z, table, -1.0, left)
+    _rates(v, z, table, joints, rates)
+
+
+#: :func:`friction_left_and_rates` without numba's type dispatch (as the two above).
+friction_left_and_rates_unchecked = unchecked(friction_left_and_rates)
 
 
 def parameter_table(laws: tuple[str, ...], per_joint: list[Mapping[str, Any]]) -> np.ndarray:
@@ -250,6 +294,11 @@ class JointFriction:
     def lugre_joints(self) -> tuple[str, ...]:
         """The LuGre joints, in joint order: one bristle state each."""
         return tuple(self.joint_names[i] for i in (() if self.lugre is None else self.lugre.joints))
+
+    @property
+    def lugre_indices(self) -> np.ndarray:
+        """Indices of the LuGre joints in the joint vector (int64, read-only; empty without)."""
+        return _NO_JOINTS if self.lugre is None else self.lugre.joints
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -351,7 +400,7 @@ class JointFriction:
 
 
 def _group(law: str, laws: tuple[str, ...], per_joint: list[dict[str, Any]]) -> LawGroup:
-    joints = np.array([i for i, name in enumerate(laws) if name == law], dtype=int)
+    joints = np.array([i for i, name in enumerate(laws) if name == law], dtype=np.int64)
     return LawGroup(law, _frozen(joints), {key: _frozen(np.array([per_joint[i][key] for i in joints], dtype=float))
                                            for key in LAW_ARGUMENTS[law]})
 
