@@ -13,7 +13,7 @@ import pytest
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import (bias_torque, forward_dynamics, forward_dynamics_batch,
                                                  gravity_torque, inverse_dynamics, inverse_dynamics_batch,
-                                                 kinetic_energy, mass_matrix, potential_energy)
+                                                 kinetic_energy, mass_matrix, potential_energy, symmetrised)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import random_configuration
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
@@ -97,6 +97,19 @@ def test_the_unchecked_friction_path_equals_the_checked_one_and_refuses_bad_stat
                 inverse_dynamics(arm, data, q, v, a, friction, wrong)
         with pytest.raises(UserInputError, match="v: expected 5 values"):
             forward_dynamics(arm, data, q, np.zeros(4), tau, friction, z)
+
+
+def test_symmetrised_is_the_upper_triangle_mirrored_to_the_bit():
+    """Against triu(M) + triu(M, 1)^T, signed zeros included; the input is not modified."""
+    rng = np.random.default_rng(2)
+    for n in (1, 2, 5, 20):
+        upper = rng.normal(size=(n, n))
+        upper[rng.random((n, n)) < 0.3] = -0.0
+        before = upper.copy()
+        full = symmetrised(upper)
+        assert full.tobytes() == (np.triu(upper) + np.triu(upper, 1).T).tobytes()
+        np.testing.assert_array_equal(full, full.T)
+        assert upper.tobytes() == before.tobytes()
 
 
 @pytest.mark.parametrize("which", ["youbot", "arm", "floating"])
