@@ -41,6 +41,7 @@ class SupportRule:
     positions: np.ndarray
     pseudo_inverse: np.ndarray = field(init=False, repr=False)
     free: np.ndarray | None = field(init=False, repr=False)
+    _free_steps: tuple[float, ...] = field(init=False, repr=False)  # free as Python floats (fast scalar loop)
 
     def __post_init__(self) -> None:
         points = np.array(self.positions, dtype=float)
@@ -58,15 +59,16 @@ class SupportRule:
         object.__setattr__(self, "positions", points)
         object.__setattr__(self, "pseudo_inverse", pseudo_inverse)
         object.__setattr__(self, "free", free[0] if len(free) else None)
+        object.__setattr__(self, "_free_steps", tuple(free[0].tolist()) if len(free) else ())
 
     def loads(self, centre: np.ndarray, weight: float) -> np.ndarray:
         """Vertical loads (N, ``positions`` order) carrying ``weight`` (N) applied at
         ``centre`` (x, y) (m). Raises :class:`TipOverError` outside the support polygon."""
-        target = weight * np.array([1.0, *np.asarray(centre, dtype=float).ravel()])
+        target = weight * np.array([1.0, *np.asarray(centre, dtype=float).ravel().tolist()])
         loads = self.pseudo_inverse @ target
         low, high = -math.inf, math.inf
-        if self.free is not None:
-            for load, step in zip(loads, self.free):  # keep load + s step >= 0
+        if self.free is not None:  # Python floats: the same arithmetic as numpy's scalars, faster
+            for load, step in zip(loads.tolist(), self._free_steps):  # keep load + s step >= 0
                 if step > 0.0:
                     low = max(low, -load / step)
                 elif step < 0.0:
@@ -74,7 +76,7 @@ class SupportRule:
             scale = min(max(0.0, low), high)
             loads = loads + scale * self.free
         tolerance = 1e-12 * max(abs(weight), 1.0)
-        if low > high + 1e-15 or np.any(loads < -tolerance):
+        if low > high + 1e-15 or any(load < -tolerance for load in loads.tolist()):
             raise TipOverError(f"centre of mass at ({centre[0]:.4g}, {centre[1]:.4g}) m lies outside the support "
                                f"polygon of the wheels at {np.round(self.positions, 4).tolist()} m: the base tips over")
         return np.maximum(loads, 0.0)

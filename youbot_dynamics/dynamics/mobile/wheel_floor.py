@@ -42,6 +42,8 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
 
 STANDARD_GRAVITY = 9.81  # m/s^2, the project's scenes' value
+_AT_REST = np.zeros(2)  # horizontal acceleration (m/s^2) of a centre of mass at rest
+_AT_REST.setflags(write=False)
 
 
 def support_loads(positions: np.ndarray, centre: np.ndarray, weight: float) -> np.ndarray:
@@ -54,7 +56,7 @@ def support_loads(positions: np.ndarray, centre: np.ndarray, weight: float) -> n
 
 def wheel_normal_forces(base: MecanumBase, mass: float, centre_of_mass: np.ndarray, *,
                         gravity: float = STANDARD_GRAVITY, com_height: float = 0.0,
-                        com_acceleration: np.ndarray = (0.0, 0.0)) -> np.ndarray:
+                        com_acceleration: np.ndarray = _AT_REST) -> np.ndarray:
     """Normal force on each wheel (N, ``base.names`` order) of a robot of ``mass`` (kg) whose
     centre of mass is at (x_c, y_c) (m, base_footprint; a z component is ignored), ``com_height``
     (m) above the floor, accelerating horizontally at ``com_acceleration`` (m/s^2, base frame).
