@@ -66,6 +66,7 @@ INERTIA_ATOL = 1e-12
 #: is below this fraction of the largest one (example-robot-data: the singular ones have 0 and
 #: round-off -1e-17, the regular ones 2.2e-7 (tiago_no_hand) and more).
 MASS_MATRIX_RTOL = 1e-12
+GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))  # rad, for the sample configuration of that test
 WARNING = "warning: "  # prefix of the fidelity notes that strict loading turns into errors
 INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 #: Numeric attributes urdfdom reads, by element, with how many numbers each holds.
@@ -795,7 +796,9 @@ def _mass_matrix_defect(model: pin.Model, source: str) -> str:
     no mass (or no inertia about their axis) in their subtree."""
     if model.nv == 0:
         return ""
-    q = pin.integrate(model, pin.neutral(model), np.random.default_rng(0).uniform(-1.0, 1.0, model.nv))
+    # A fixed displacement spread over [-1, 1] (sines of multiples of the golden angle, rad):
+    # generic like a random one, without importing numpy.random (start-up of `info`).
+    q = pin.integrate(model, pin.neutral(model), np.sin(1.0 + GOLDEN_ANGLE * np.arange(model.nv)))
     upper = pin.crba(model, model.createData(), q)
     mass = np.triu(upper) + np.triu(upper, 1).T
     diagonal = np.diag(mass)
