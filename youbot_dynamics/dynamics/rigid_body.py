@@ -26,11 +26,11 @@ A wrong size is a UserInputError naming nq or nv.
 ``data`` is a Pinocchio Data of ``robot.model`` (``robot.model.createData()``), the caller's
 scratch space; each call overwrites it. Returned arrays are fresh (not views of ``data``).
 
-Speed: on the hot path (fixed root, float64 vectors) the friction is the compiled loop
-called without numba's type dispatch (:data:`~youbot_dynamics.dynamics.friction
-.add_friction_torque_unchecked`), the only Python between the two Pinocchio-sized costs
-being a few type checks: about 1.1 us over pin.aba and 0.9 us over pin.rnea on the youBot arm
-(bench/bench_dynamics.py).
+Speed: with a fixed root and float64 vectors the friction is the compiled loop called
+without numba's type dispatch (its entry point: :func:`~youbot_dynamics.dynamics.friction
+.unchecked`; :func:`_float_vectors` checks the types, the loop the sizes); anything else
+takes JointFriction.add_torque, which converts or names what is wrong. About 1.1 us over
+pin.aba and 0.7 us over pin.rnea on the youBot arm (bench/bench_dynamics.py).
 
 Batches: :func:`inverse_dynamics_batch` and :func:`forward_dynamics_batch` take N samples as
 rows (q (N, nq), v, a, tau (N, nv), z (N, n_states)) and run Pinocchio's C++ loops
@@ -59,12 +59,11 @@ def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vect
     """tau = RNEA(q, v, a) + tau_friction(v, z) (nv): joint torques (N m) or forces (N)
     giving accelerations a (nv; rad/s^2, m/s^2) at positions q (nq) and velocities v (nv)."""
     try:
-        tau = pin.rnea(robot.model, data, q, v, a)  # v: a vector of nv from here on
+        tau = pin.rnea(robot.model, data, q, v, a)
         if friction is not None:
             states = NO_BRISTLES if z is None else z
-            if (robot.root == "fixed" and v.dtype is FLOAT and type(states) is np.ndarray and states.dtype is FLOAT
-                    and states.ndim == 1):
-                add_friction_torque_unchecked(v, states, friction.table, tau)  # the hot path, see the docstring
+            if robot.root == "fixed" and _float_vectors(v, states, tau):
+                add_friction_torque_unchecked(v, states, friction.table, tau)
             else:
                 friction.add_torque(tau[robot.root_nv:], v[robot.root_nv:], z)
     except (ValueError, TypeError):
@@ -87,12 +86,12 @@ def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Ve
         robot.require_regular_mass_matrix()
     try:
         if friction is not None:
-            tau = tau.astype(float) if type(tau) is np.ndarray else np.array(tau, dtype=float)  # a copy
             states = NO_BRISTLES if z is None else z
-            if (robot.root == "fixed" and type(v) is np.ndarray and v.dtype is FLOAT and v.ndim == 1
-                    and type(states) is np.ndarray and states.dtype is FLOAT and states.ndim == 1):
-                subtract_friction_torque_unchecked(v, states, friction.table, tau)  # the hot path, see the docstring
+            if robot.root == "fixed" and _float_vectors(v, states, tau):
+                tau = tau.copy()
+                subtract_friction_torque_unchecked(v, states, friction.table, tau)
             else:
+                tau = tau.astype(float) if type(tau) is np.ndarray else np.array(tau, dtype=float)  # a copy
                 friction.add_torque(tau[robot.root_nv:], v[robot.root_nv:], z, -1.0)
         if robot.mimic:
             return np.linalg.solve(mass_matrix(robot, data, q), tau - bias_torque(robot, data, q, v))
@@ -159,6 +158,15 @@ def _same_rows(q: np.ndarray, **others: np.ndarray) -> None:
     for name, x in others.items():
         if len(x) != len(q):
             raise UserInputError(f"{name}: {len(x)} samples (rows) against {len(q)} in q")
+
+
+def _float_vectors(v: object, z: object, tau: object) -> bool:
+    """Whether v, z and tau are float64 vectors (what the unchecked friction loop may take;
+    written out, not looped: this is on the hot path)."""
+    try:
+        return v.dtype is FLOAT is z.dtype is tau.dtype and v.ndim == z.ndim == tau.ndim == 1
+    except AttributeError:  # not an array
+        return False
 
 
 def _check_friction(robot: Robot, friction: JointFriction | None, v: Vector, z: Vector | None) -> None:
