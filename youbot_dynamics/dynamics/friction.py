@@ -177,9 +177,6 @@ def subtract_friction_torque(v: Vector, z: Vector, table: np.ndarray, out: Vecto
     _accumulate(v, z, table, -1.0, out)
 
 
-#: The same two without numba's type dispatch (about 0.3 us of a 0.6 us call): the compiled
-#: code itself, which trusts its arguments. Only for float64 vectors (``dtype is FLOAT``,
-#: ``ndim == 1``) and the table of a JointFriction; the sizes are still checked.
 def unchecked(compiled: Any) -> Any:
     """The compiled code of a numba function compiled for ONE explicit signature, callable
     without numba's type dispatch (its entry point): about 0.3 us less per call, and no
@@ -188,6 +185,9 @@ def unchecked(compiled: Any) -> Any:
     return result.entry_point
 
 
+#: The same two without numba's type dispatch (about 0.3 us of a 0.6 us call): the compiled
+#: code itself, which trusts its arguments. Only for float64 vectors (``dtype is FLOAT``,
+#: ``ndim == 1``) and the table of a JointFriction; the sizes are still checked.
 add_friction_torque_unchecked = unchecked(add_friction_torque)
 subtract_friction_torque_unchecked = unchecked(subtract_friction_torque)
 #: The dtype the compiled loops are compiled for (``x.dtype is FLOAT`` checks it).
