@@ -13,7 +13,7 @@ import pytest
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import (bias_torque, forward_dynamics, forward_dynamics_batch,
                                                  gravity_torque, inverse_dynamics, inverse_dynamics_batch,
-                                                 kinetic_energy, mass_matrix, potential_energy)
+                                                 kinetic_energy, mass_matrix, potential_energy, symmetrised)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import random_configuration
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
@@ -70,6 +70,46 @@ def test_aba_and_rnea_invert_each_other_with_friction(which, request):
             np.testing.assert_allclose(forward_dynamics(robot, data, q, v, tau, friction, z), a, rtol=0, atol=1e-9)
             np.testing.assert_allclose(tau - friction.torque(v, z), pin.rnea(robot.model, data, q, v, a),
                                        rtol=0, atol=1e-12)
+
+
+def test_the_unchecked_friction_path_equals_the_checked_one_and_refuses_bad_states(arm):
+    """forward/inverse dynamics call the compiled friction loop without numba's type checks
+    for float64 vectors: equal (bit for bit) to Pinocchio plus JointFriction.torque (the
+    checked call of the same loop) for contiguous, strided and float32 inputs, and a wrong
+    bristle state is still the friction's UserInputError, never a wrong read."""
+    data = arm.model.createData()
+    rng = np.random.default_rng(8)
+    for friction in frictions(arm):
+        q, v, a, z = random_state(arm, friction, rng)
+        tau = pin.rnea(arm.model, data, q, v, a) + friction.torque(v, z)
+        np.testing.assert_array_equal(inverse_dynamics(arm, data, q, v, a, friction, z), tau)
+        expected = pin.aba(arm.model, data, q, v, tau - friction.torque(v, z))
+        strided = np.repeat(v, 2)[::2]
+        for velocity in (v, strided):
+            np.testing.assert_array_equal(forward_dynamics(arm, data, q, velocity, tau, friction, z), expected)
+        v32 = v.astype(np.float32)
+        np.testing.assert_array_equal(forward_dynamics(arm, data, q, v32, tau, friction, z),
+                                      pin.aba(arm.model, data, q, v32, tau - friction.torque(v32.astype(float), z)))
+        for wrong in (np.zeros(friction.n_states + 1), np.zeros((1, friction.n_states)), *([None] if friction.n_states else [])):
+            with pytest.raises(UserInputError, match="LuGre bristle states"):
+                forward_dynamics(arm, data, q, v, tau, friction, wrong)
+            with pytest.raises(UserInputError, match="LuGre bristle states"):
+                inverse_dynamics(arm, data, q, v, a, friction, wrong)
+        with pytest.raises(UserInputError, match="v: expected 5 values"):
+            forward_dynamics(arm, data, q, np.zeros(4), tau, friction, z)
+
+
+def test_symmetrised_is_the_upper_triangle_mirrored_to_the_bit():
+    """Against triu(M) + triu(M, 1)^T, signed zeros included; the input is not modified."""
+    rng = np.random.default_rng(2)
+    for n in (1, 2, 5, 20):
+        upper = rng.normal(size=(n, n))
+        upper[rng.random((n, n)) < 0.3] = -0.0
+        before = upper.copy()
+        full = symmetrised(upper)
+        assert full.tobytes() == (np.triu(upper) + np.triu(upper, 1).T).tobytes()
+        np.testing.assert_array_equal(full, full.T)
+        assert upper.tobytes() == before.tobytes()
 
 
 @pytest.mark.parametrize("which", ["youbot", "arm", "floating"])

@@ -22,7 +22,7 @@ from youbot_dynamics import default_urdf
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model import lie, limits
 
-if TYPE_CHECKING:  # the robot loader (yourdfpy, trimesh, Pinocchio) only for commands that load one
+if TYPE_CHECKING:  # the robot loader (lxml, Pinocchio) only for commands that load one
     from youbot_dynamics.model.robot import Robot
 
 

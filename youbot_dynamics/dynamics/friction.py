@@ -43,7 +43,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 from numba.extending import register_jitable
 
 from youbot_dynamics.errors import UserInputError
@@ -124,17 +124,27 @@ LAW_ARGUMENTS: dict[str, tuple[str, ...]] = {
 LAW_CODES = {"viscous": 0, "coulomb": 1, "stribeck": 2, "lugre": 3}
 _COULOMB, _STRIBECK, _LUGRE = LAW_CODES["coulomb"], LAW_CODES["stribeck"], LAW_CODES["lugre"]
 #: The bristle states of a robot without LuGre joints.
-_NO_STATES = np.zeros(0)
-_NO_STATES.setflags(write=False)
+NO_BRISTLES = np.zeros(0)
+NO_BRISTLES.setflags(write=False)
+_NO_JOINTS = np.zeros(0, dtype=np.int64)
+_NO_JOINTS.setflags(write=False)
 
 
 @register_jitable
 def _accumulate(v: Vector, z: Vector, table: np.ndarray, sign: float, out: Vector) -> None:
     """out += sign tau_friction(v, z), one joint at a time: the viscous term b v plus the
     joint's law (``table`` rows: law code, b, then the law's parameters in LAW_ARGUMENTS
-    order); z holds the LuGre joints' bristle states in joint order."""
+    order); z holds the LuGre joints' bristle states in joint order. A v or out that is not
+    one value per joint, or a z that is not one state per LuGre joint, is a ValueError
+    raised before anything is written (so callers need no checks of their own)."""
+    n, lugre_joints = table.shape[1], 0
+    for i in range(n):
+        if table[0, i] == _LUGRE:
+            lugre_joints += 1
+    if v.shape[0] != n or out.shape[0] != n or z.shape[0] != lugre_joints:
+        raise ValueError("friction: v and out need one value per joint, z one per LuGre joint")
     k = 0
-    for i in range(v.shape[0]):
+    for i in range(n):
         law, vi = table[0, i], v[i]
         tau = viscous(vi, table[1, i])
         if law == _COULOMB:
@@ -147,30 +157,43 @@ def _accumulate(v: Vector, z: Vector, table: np.ndarray, sign: float, out: Vecto
         out[i] += sign * tau
 
 
-# One compiled entry per sign, and without z for robots without LuGre joints: each argument
-# costs the call ~0.1 us of type dispatch.
-@njit(cache=True)
-def _add_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
+# The compiled entry points, one per sign (a sign argument would cost the call ~0.05 us of
+# type dispatch, as each argument does), compiled once for float64 vectors of any stride:
+# v (n,) and z (n_states,) (NO_BRISTLES without LuGre joints) read, table (8, n) as
+# :func:`_accumulate` reads it, out (n,) written.
+_READ, _WRITTEN = types.Array(types.float64, 1, "A", readonly=True), types.Array(types.float64, 1, "A")
+_SIGNATURE = types.void(_READ, _READ, types.Array(types.float64, 2, "C", readonly=True), _WRITTEN)
+
+
+@njit(_SIGNATURE, cache=True)
+def add_friction_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
     """out += tau_friction(v, z) (see :func:`_accumulate`)."""
     _accumulate(v, z, table, 1.0, out)
 
 
-@njit(cache=True)
-def _subtract_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
+@njit(_SIGNATURE, cache=True)
+def subtract_friction_torque(v: Vector, z: Vector, table: np.ndarray, out: Vector) -> None:
     """out -= tau_friction(v, z) (see :func:`_accumulate`)."""
     _accumulate(v, z, table, -1.0, out)
 
 
-@njit(cache=True)
-def _add_memoryless(v: Vector, table: np.ndarray, out: Vector) -> None:
-    """out += tau_friction(v) of a robot without LuGre joints (see :func:`_accumulate`)."""
-    _accumulate(v, _NO_STATES, table, 1.0, out)
+def unchecked(compiled: Any) -> Any:
+    """The compiled code of a numba function compiled for ONE explicit signature, callable
+    without numba's type dispatch (its entry point): about 0.3 us less per call, and no
+    check that the arguments are of the signature's types (callers check dtype and ndim)."""
+    (result,) = compiled.overloads.values()
+    return result.entry_point
 
 
-@njit(cache=True)
-def _subtract_memoryless(v: Vector, table: np.ndarray, out: Vector) -> None:
-    """out -= tau_friction(v) of a robot without LuGre joints (see :func:`_accumulate`)."""
-    _accumulate(v, _NO_STATES, table, -1.0, out)
+#: The same two without numba's type dispatch (about 0.3 us of a 0.6 us call): the compiled
+#: code itself, which trusts its arguments. Only for float64 vectors (``dtype is FLOAT``,
+#: ``ndim == 1``) and the table of a JointFriction; the sizes are still checked.
+add_friction_torque_unchecked = unchecked(add_friction_torque)
+subtract_friction_torque_unchecked = unchecked(subtract_friction_torque)
+#: The dtype the compiled loops are compiled for (``x.dtype is FLOAT`` checks it).
+FLOAT = np.dtype(np.float64)
+#: numba types of the float64 vectors the compiled loops read (any stride) and write.
+READ_VECTOR, WRITTEN_VECTOR = _READ, _WRITTEN
 
 
 @njit(cache=True)
@@ -180,12 +203,43 @@ def _accumulate_rows(v: np.ndarray, z: np.ndarray, table: np.ndarray, sign: floa
         _accumulate(v[row], z[row], table, sign, out[row])
 
 
-@njit(cache=True)
-def _bristle_rates(v: Vector, z: Vector, table: np.ndarray, joints: np.ndarray, out: Vector) -> None:
-    """out = dz/dt of the LuGre joints ``joints`` (bristle states z, in that order)."""
+@register_jitable
+def _rates(v: Vector, z: Vector, table: np.ndarray, joints: np.ndarray, out: Vector) -> None:
+    """out = dz/dt of the LuGre joints ``joints`` (bristle states z, in that order); v one
+    value per joint (checked by the caller), z and out one per LuGre joint (checked here)."""
+    if z.shape[0] != joints.shape[0] or out.shape[0] != joints.shape[0]:
+        raise ValueError("friction: z and dz/dt need one value per LuGre joint")
     for k in range(joints.shape[0]):
         i = joints[k]
         out[k] = lugre_bristle_rate(v[i], z[k], table[2, i], table[5, i], table[6, i], table[7, i])
+
+
+@njit(cache=True)
+def _bristle_rates(v: Vector, z: Vector, table: np.ndarray, joints: np.ndarray, out: Vector) -> None:
+    """out = dz/dt of the LuGre joints ``joints`` (see :func:`_rates`)."""
+    _rates(v, z, table, joints, out)
+
+
+@njit(types.void(_READ, _READ, _READ, types.Array(types.float64, 2, "C", readonly=True),
+                 types.Array(types.int64, 1, "C", readonly=True), _WRITTEN, _WRITTEN), cache=True)
+def friction_left_and_rates(v: Vector, z: Vector, tau: Vector, table: np.ndarray, joints: np.ndarray,
+                            left: Vector, rates: Vector) -> None:
+    """The friction's share of a robot's state derivative in one call: left = tau -
+    tau_friction(v, z) (the torque left to accelerate the joints) and rates = dz/dt of the
+    LuGre joints ``joints`` (``JointFriction.lugre_indices``); sizes checked (ValueError)
+    before anything is written."""
+    if tau.shape[0] != left.shape[0] or v.shape[0] != table.shape[1]:
+        raise ValueError("friction: tau and left need one value per joint")
+    if z.shape[0] != joints.shape[0] or rates.shape[0] != joints.shape[0]:
+        raise ValueError("friction: z and dz/dt need one value per LuGre joint")
+    for i in range(left.shape[0]):
+        left[i] = tau[i]
+    _accumulate(v, z, table, -1.0, left)
+    _rates(v, z, table, joints, rates)
+
+
+#: :func:`friction_left_and_rates` without numba's type dispatch (as the two above).
+friction_left_and_rates_unchecked = unchecked(friction_left_and_rates)
 
 
 def parameter_table(laws: tuple[str, ...], per_joint: list[Mapping[str, Any]]) -> np.ndarray:
@@ -228,10 +282,23 @@ class JointFriction:
     lugre: LawGroup | None
     table: np.ndarray
 
+    def __post_init__(self) -> None:
+        table = self.table  # the compiled loops trust its layout (see add_friction_torque_unchecked)
+        if not (type(table) is np.ndarray and table.dtype is FLOAT and table.shape == (8, len(self.laws))
+                and table.flags.c_contiguous):
+            raise ValueError(f"friction: the parameter table must be a C-ordered float64 array of shape "
+                             f"(8, {len(self.laws)}) (parameter_table); got {type(table).__name__} "
+                             f"{getattr(table, 'dtype', '')} {np.shape(table)}")
+
     @property
     def lugre_joints(self) -> tuple[str, ...]:
         """The LuGre joints, in joint order: one bristle state each."""
         return tuple(self.joint_names[i] for i in (() if self.lugre is None else self.lugre.joints))
+
+    @property
+    def lugre_indices(self) -> np.ndarray:
+        """Indices of the LuGre joints in the joint vector (int64, read-only; empty without)."""
+        return _NO_JOINTS if self.lugre is None else self.lugre.joints
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -282,12 +349,13 @@ class JointFriction:
     def add_torque(self, out: Vector, v: Vector, z: Vector | None = None, sign: float = 1.0) -> None:
         """out += sign tau_friction(v, z), in place (out a float array shaped as v), sign
         +1 or -1: -1 gives the torque left to accelerate the joints, tau - tau_friction."""
-        if type(v) is np.ndarray and v.shape == out.shape == self.damping.shape:
-            if self.lugre is None and (z is None or len(z) == 0):
-                (_add_memoryless if sign > 0.0 else _subtract_memoryless)(v, self.table, out)
-            else:
-                (_add_torque if sign > 0.0 else _subtract_torque)(v, self._bristles(z), self.table, out)
-            return
+        states = NO_BRISTLES if z is None else z
+        if type(v) is np.ndarray and v.ndim == 1 and type(states) is np.ndarray:
+            try:  # one velocity vector: the compiled loop checks the sizes
+                (add_friction_torque if sign > 0.0 else subtract_friction_torque)(v, states, self.table, out)
+                return
+            except (ValueError, TypeError):
+                pass  # a size or type the loop refuses (nothing written): converted or named below
         v = np.asarray(v, dtype=float)
         if v.shape[-1:] != self.damping.shape or out.shape != v.shape or v.ndim > 2:
             raise ValueError(f"friction: velocities of shape (n,) or (N, n) with n = {self.damping.size} "
@@ -295,7 +363,7 @@ class JointFriction:
                              f"got v {v.shape}, out {out.shape}")
         z = self._bristles(z, v.shape[:-1])
         if v.ndim == 1:
-            (_add_torque if sign > 0.0 else _subtract_torque)(v, z, self.table, out)
+            (add_friction_torque if sign > 0.0 else subtract_friction_torque)(v, z, self.table, out)
         else:
             _accumulate_rows(v, z, self.table, 1.0 if sign > 0.0 else -1.0, out)
 
@@ -322,7 +390,7 @@ class JointFriction:
         if not batch and type(z) is np.ndarray and self.lugre is not None and z.shape == self.lugre.joints.shape:
             return z
         if self.lugre is None and z is None:
-            return _NO_STATES if not batch else np.zeros((*batch, 0))
+            return NO_BRISTLES if not batch else np.zeros((*batch, 0))
         shape = (*batch, self.n_states)
         if z is None or np.shape(z) != shape:
             raise UserInputError(f"friction: expected {self.n_states} LuGre bristle states "
@@ -332,7 +400,7 @@ class JointFriction:
 
 
 def _group(law: str, laws: tuple[str, ...], per_joint: list[dict[str, Any]]) -> LawGroup:
-    joints = np.array([i for i, name in enumerate(laws) if name == law], dtype=int)
+    joints = np.array([i for i, name in enumerate(laws) if name == law], dtype=np.int64)
     return LawGroup(law, _frozen(joints), {key: _frozen(np.array([per_joint[i][key] for i in joints], dtype=float))
                                            for key in LAW_ARGUMENTS[law]})
 

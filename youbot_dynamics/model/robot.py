@@ -38,7 +38,6 @@ offending link named); ``strict=True`` makes warnings errors. A malformed file i
 """
 from __future__ import annotations
 
-import io
 import math
 import re
 from collections import Counter
@@ -48,7 +47,6 @@ from typing import Iterator, Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin
-import yourdfpy
 from lxml import etree
 
 from youbot_dynamics.errors import SingularMassMatrixError, URDFError, UserInputError
@@ -68,6 +66,7 @@ INERTIA_ATOL = 1e-12
 #: is below this fraction of the largest one (example-robot-data: the singular ones have 0 and
 #: round-off -1e-17, the regular ones 2.2e-7 (tiago_no_hand) and more).
 MASS_MATRIX_RTOL = 1e-12
+GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))  # rad, for the sample configuration of that test
 WARNING = "warning: "  # prefix of the fidelity notes that strict loading turns into errors
 INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 #: Numeric attributes urdfdom reads, by element, with how many numbers each holds.
@@ -438,12 +437,12 @@ def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False)
         if root != "fixed" and joint is not None:
             raise URDFError(f"{_where(label, joint)}: the name is reserved for the {root} root joint; "
                             "rename the joint or load with root 'fixed'")
-        urdf = yourdfpy.URDF.load(io.BytesIO(etree.tostring(element)), build_scene_graph=False, load_meshes=False)
-        tree, root_link = _kinematic_tree(urdf)
+        tree, root_link = _kinematic_tree(element)
         relations, mimic_warnings = _mimic_relations(element, label)
         model, mimic, mimic_notes = _pinocchio_model(element, relations, root)
         first = 1 if root == "fixed" else 2  # Pinocchio joint 0 is the universe, 1 the root joint
-        joints = tuple(_joint_of(urdf.joint_map[model.names[i]]) for i in range(first, model.njoints)
+        by_name = {joint.get("name"): joint for joint in element.findall("joint")}
+        joints = tuple(_joint_of(by_name[model.names[i]]) for i in range(first, model.njoints)
                        if model.names[i] not in mimic)
         robot = Robot(name=element.get("name"), source=label, model=model, joints=joints, tree=tree,
                       root_link=root_link,
@@ -797,7 +796,9 @@ def _mass_matrix_defect(model: pin.Model, source: str) -> str:
     no mass (or no inertia about their axis) in their subtree."""
     if model.nv == 0:
         return ""
-    q = pin.integrate(model, pin.neutral(model), np.random.default_rng(0).uniform(-1.0, 1.0, model.nv))
+    # A fixed displacement spread over [-1, 1] (sines of multiples of the golden angle, rad):
+    # generic like a random one, without importing numpy.random (start-up of `info`).
+    q = pin.integrate(model, pin.neutral(model), np.sin(1.0 + GOLDEN_ANGLE * np.arange(model.nv)))
     upper = pin.crba(model, model.createData(), q)
     mass = np.triu(upper) + np.triu(upper, 1).T
     diagonal = np.diag(mass)
@@ -815,30 +816,42 @@ def _mass_matrix_defect(model: pin.Model, source: str) -> str:
             f"{eigenvalues[-1]:.3g}), so forward dynamics is undefined; see the inertia warnings")
 
 
-def _kinematic_tree(urdf: yourdfpy.URDF) -> tuple[tuple[TreeJoint, ...], str]:
-    """URDF joints ordered root first (parents before children)."""
-    joints = {j.name: j for j in urdf.robot.joints}
-    children: dict[str, list[str]] = {}
-    for j in urdf.robot.joints:
-        children.setdefault(j.parent, []).append(j.name)
-    root_link = next(l.name for l in urdf.robot.links if l.name not in {j.child for j in urdf.robot.joints})
+def _kinematic_tree(root: etree._Element) -> tuple[tuple[TreeJoint, ...], str]:
+    """URDF joints ordered root first (parents before children), children in file order;
+    read from the checked XML (:func:`_check_urdf`): one root link, no loop."""
+    joints = root.findall("joint")
+    children: dict[str, list[etree._Element]] = {}
+    for j in joints:
+        children.setdefault(j.find("parent").get("link"), []).append(j)
+    child_links = {j.find("child").get("link") for j in joints}
+    root_link = next(l.get("name") for l in root.findall("link") if l.get("name") not in child_links)
     ordered, stack = [], [root_link]
     while stack:
         link = stack.pop()
-        for name in reversed(children.get(link, [])):
-            j = joints[name]
-            origin = np.eye(4) if j.origin is None else np.array(j.origin, dtype=float)
-            axis = np.array([1.0, 0.0, 0.0]) if j.axis is None else np.array(j.axis, dtype=float)
-            kind = "fixed" if j.type in ("floating", "planar") else j.type
+        for j in reversed(children.get(link, [])):
+            kind, child = j.get("type"), j.find("child").get("link")
+            origin = _origin(j.find("origin"))
             origin.setflags(write=False)
             # Moving joints have a non-zero axis (checked); a fixed joint's axis is unused and
             # may be zero in the file (tiago_pro, Talos): it stays the URDF default x.
+            axis = _floats(j.find("axis"), "xyz", "1 0 0")
             norm = np.linalg.norm(axis)
             axis = axis / norm if norm > 0.0 else np.array([1.0, 0.0, 0.0])
             axis.setflags(write=False)
-            ordered.append(TreeJoint(j.name, kind, j.parent, j.child, origin, axis))
-            stack.append(j.child)
+            ordered.append(TreeJoint(j.get("name"), "fixed" if kind in ("floating", "planar") else kind,
+                                     link, child, origin, axis))
+            stack.append(child)
     return tuple(ordered), root_link
+
+
+def _origin(element: etree._Element | None) -> np.ndarray:
+    """The 4x4 pose of an ``<origin xyz rpy>`` (identity without one): translation xyz (m),
+    rotation Rz(yaw) Ry(pitch) Rx(roll) (URDF's fixed-axis roll, pitch, yaw; rad)."""
+    pose = np.eye(4)
+    if element is not None:
+        pose[:3, :3] = pin.rpy.rpyToMatrix(_floats(element, "rpy", "0 0 0"))
+        pose[:3, 3] = _floats(element, "xyz", "0 0 0")
+    return pose
 
 
 def _pinocchio_xml(root: etree._Element, mimic: Mapping[str, Mimic]) -> str:
@@ -865,16 +878,22 @@ def _pinocchio_xml(root: etree._Element, mimic: Mapping[str, Mimic]) -> str:
     return etree.tostring(root, encoding="unicode")
 
 
-def _joint_of(j: yourdfpy.Joint) -> Joint:
-    limit, dynamics = j.limit, j.dynamics
-    unbounded = j.type == "continuous"
-    lower = -math.inf if unbounded or limit is None or limit.lower is None else float(limit.lower)
-    upper = math.inf if unbounded or limit is None or limit.upper is None else float(limit.upper)
-    velocity = math.inf if limit is None or limit.velocity is None else float(limit.velocity)
-    effort = math.inf if limit is None or limit.effort is None else float(limit.effort)
-    damping = 0.0 if dynamics is None or dynamics.damping is None else float(dynamics.damping)
-    friction = 0.0 if dynamics is None or dynamics.friction is None else float(dynamics.friction)
-    return Joint(j.name, j.type, lower, upper, velocity, effort, damping, friction)
+def _joint_of(joint: etree._Element) -> Joint:
+    """A moving joint's limits and dynamics from its checked XML; a bound the file leaves
+    out is infinite (a continuous joint has no position limits), damping and friction 0."""
+    limit, dynamics = joint.find("limit"), joint.find("dynamics")
+    kind = joint.get("type")
+
+    def value(element: etree._Element | None, attribute: str, default: float) -> float:
+        text = None if element is None else element.get(attribute)
+        return default if text is None else float(text)
+
+    unbounded = kind == "continuous"
+    lower = -math.inf if unbounded else value(limit, "lower", -math.inf)
+    upper = math.inf if unbounded else value(limit, "upper", math.inf)
+    return Joint(joint.get("name"), kind, lower, upper, value(limit, "velocity", math.inf),
+                 value(limit, "effort", math.inf), value(dynamics, "damping", 0.0),
+                 value(dynamics, "friction", 0.0))
 
 
 def _locked(joint: TreeJoint, value: float) -> TreeJoint:

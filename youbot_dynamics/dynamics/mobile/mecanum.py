@@ -45,6 +45,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from youbot_dynamics.dynamics.mobile.support import SupportRule
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
 
@@ -67,7 +68,10 @@ class MecanumBase:
     ``positions`` (n, 2): hub positions (x, y) in base_footprint (m); ``drive_directions``
     (n, 2): unit direction the hub moves for a positive wheel speed; ``roller_axes`` (n, 2):
     unit axis of the contact roller; ``radius`` (m). ``jacobian`` H maps the base twist
-    (vx, vy, wz) to the wheel speeds (rad/s); ``pseudo_inverse`` H^+ maps them back.
+    (vx, vy, wz) to the wheel speeds (rad/s); ``pseudo_inverse`` H^+ maps them back. Built
+    once with the geometry: ``hub_maps`` (:func:`hub_velocity_maps`), ``across`` (n, 2) the
+    unit floor-plane directions across the contact rollers (z x e / |e|) and ``support`` the
+    wheels' load rule (:class:`~youbot_dynamics.dynamics.mobile.support.SupportRule`).
     """
 
     names: tuple[str, ...]
@@ -77,6 +81,9 @@ class MecanumBase:
     radius: float
     jacobian: np.ndarray = field(init=False, repr=False)
     pseudo_inverse: np.ndarray = field(init=False, repr=False)
+    hub_maps: np.ndarray = field(init=False, repr=False)
+    across: np.ndarray = field(init=False, repr=False)
+    support: SupportRule = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         n = len(self.names)
@@ -94,15 +101,20 @@ class MecanumBase:
             raise UserInputError(f"mecanum base with wheels {', '.join(self.names)}: the wheel speeds do not "
                                  "determine the base twist (rank of H below 3); check the roller axes")
         pseudo = np.linalg.pinv(jacobian)
-        for array in (jacobian, pseudo):
+        maps = hub_velocity_maps(self.positions)
+        across = np.array([normal / math.hypot(*normal) for normal in roller_normals(self.roller_axes)])
+        for array in (jacobian, pseudo, maps, across):
             array.setflags(write=False)
         object.__setattr__(self, "jacobian", jacobian)
         object.__setattr__(self, "pseudo_inverse", pseudo)
+        object.__setattr__(self, "hub_maps", maps)
+        object.__setattr__(self, "across", across)
+        object.__setattr__(self, "support", SupportRule(self.positions))
 
     def hub_velocities(self, twist: np.ndarray) -> np.ndarray:
         """(n, 2) velocities (m/s, base frame) of the wheel hubs for the base twist
         (vx, vy, wz): v_i = (vx - wz y_i, vy + wz x_i)."""
-        return hub_velocity_maps(self.positions) @ _twist(twist)
+        return self.hub_maps @ _twist(twist)
 
 
 def hub_velocity_maps(positions: np.ndarray) -> np.ndarray:

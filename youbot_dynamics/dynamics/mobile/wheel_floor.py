@@ -37,61 +37,36 @@ import pinocchio as pin
 
 from youbot_dynamics.dynamics.contact import regularised_coulomb
 from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase, roller_normals
+from youbot_dynamics.dynamics.mobile.support import SupportRule, TipOverError  # noqa: F401 (raised here)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
 
 STANDARD_GRAVITY = 9.81  # m/s^2, the project's scenes' value
-
-
-class TipOverError(ValueError):
-    """The centre of mass (shifted by the acceleration) lies outside the wheels' support
-    polygon: no non-negative wheel loads balance the robot."""
+_AT_REST = np.zeros(2)  # horizontal acceleration (m/s^2) of a centre of mass at rest
+_AT_REST.setflags(write=False)
 
 
 def support_loads(positions: np.ndarray, centre: np.ndarray, weight: float) -> np.ndarray:
     """Least-norm non-negative vertical loads (N) at the support points ``positions`` (n, 2)
     (m) carrying ``weight`` (N) applied at ``centre`` (x, y) (m): the rule of the module
-    docstring. Supports must span the plane (not all on one line); with more than four, the
-    solution may hold more than one free direction, which this rule does not handle."""
-    points = np.asarray(positions, dtype=float)
-    equations = np.vstack([np.ones(len(points)), points.T])
-    target = weight * np.array([1.0, *np.asarray(centre, dtype=float).ravel()])
-    _, singular, rows = np.linalg.svd(equations)
-    if singular[-1] < 1e-9 * singular[0]:
-        raise UserInputError(f"support loads: the {len(points)} supports lie on one line")
-    loads = np.linalg.pinv(equations) @ target
-    free = rows[3:]
-    if len(free) > 1:
-        raise UserInputError(f"support loads: {len(points)} supports leave {len(free)} free directions; "
-                             "the least-norm rule here handles at most four supports")
-    low, high = -math.inf, math.inf
-    if len(free) == 1:
-        for load, step in zip(loads, free[0]):  # keep load + s step >= 0
-            if step > 0.0:
-                low = max(low, -load / step)
-            elif step < 0.0:
-                high = min(high, -load / step)
-        scale = min(max(0.0, low), high)
-        loads = loads + scale * free[0]
-    tolerance = 1e-12 * max(abs(weight), 1.0)
-    if low > high + 1e-15 or np.any(loads < -tolerance):
-        raise TipOverError(f"centre of mass at ({centre[0]:.4g}, {centre[1]:.4g}) m lies outside the support "
-                           f"polygon of the wheels at {np.round(points, 4).tolist()} m: the base tips over")
-    return np.maximum(loads, 0.0)
+    docstring (:class:`~youbot_dynamics.dynamics.mobile.support.SupportRule`, prepared per
+    call: a base keeps its own, ``MecanumBase.support``)."""
+    return SupportRule(positions).loads(centre, weight)
 
 
 def wheel_normal_forces(base: MecanumBase, mass: float, centre_of_mass: np.ndarray, *,
                         gravity: float = STANDARD_GRAVITY, com_height: float = 0.0,
-                        com_acceleration: np.ndarray = (0.0, 0.0)) -> np.ndarray:
+                        com_acceleration: np.ndarray = _AT_REST) -> np.ndarray:
     """Normal force on each wheel (N, ``base.names`` order) of a robot of ``mass`` (kg) whose
     centre of mass is at (x_c, y_c) (m, base_footprint; a z component is ignored), ``com_height``
-    (m) above the floor, accelerating horizontally at ``com_acceleration`` (m/s^2, base frame)."""
+    (m) above the floor, accelerating horizontally at ``com_acceleration`` (m/s^2, base frame).
+    Raises :class:`TipOverError` when the shifted centre leaves the wheels' support polygon."""
     if not (math.isfinite(mass) and mass > 0.0 and math.isfinite(gravity) and gravity > 0.0):
         raise UserInputError(f"wheel normal forces: mass (kg) and gravity (m/s^2) must be positive, "
                              f"got {mass}, {gravity}")
     centre = np.asarray(centre_of_mass, dtype=float).ravel()[:2]
     shifted = centre - (com_height / gravity) * np.asarray(com_acceleration, dtype=float).ravel()[:2]
-    return support_loads(base.positions, shifted, mass * gravity)
+    return base.support.loads(shifted, mass * gravity)
 
 
 def centre_of_mass_in_base(robot: Robot, data: pin.Data, q: np.ndarray) -> tuple[float, np.ndarray]:
@@ -114,15 +89,20 @@ def roller_friction(slip: np.ndarray, roller_axis: np.ndarray, normal_force: flo
     """Planar floor force (N, base frame) on a wheel at its contact point: free along the
     roller axis e, regularised Coulomb (mu, v_s m/s) on the slip across it."""
     across = roller_normals(roller_axis)
-    across = across / math.hypot(*across)
-    return regularised_coulomb(float(np.asarray(slip) @ across) * across, normal_force, mu, velocity_scale)
+    return _across_friction(slip, across / math.hypot(*across), normal_force, mu, velocity_scale)
 
 
 def roller_forces(base: MecanumBase, slips: np.ndarray, normal_forces: np.ndarray, mu: float,
                   velocity_scale: float) -> np.ndarray:
     """(n, 2) :func:`roller_friction` of every wheel, ``base.names`` order."""
-    return np.array([roller_friction(slip, axis, load, mu, velocity_scale)
-                     for slip, axis, load in zip(slips, base.roller_axes, normal_forces)])
+    return np.array([_across_friction(slip, across, load, mu, velocity_scale)
+                     for slip, across, load in zip(slips, base.across, normal_forces)])
+
+
+def _across_friction(slip: np.ndarray, across: np.ndarray, normal_force: float, mu: float,
+                     velocity_scale: float) -> np.ndarray:
+    """:func:`roller_friction` with the unit direction across the roller given."""
+    return regularised_coulomb(float(np.asarray(slip) @ across) * across, normal_force, mu, velocity_scale)
 
 
 def wheel_spin_torques(base: MecanumBase, forces: np.ndarray) -> np.ndarray:

@@ -1,0 +1,82 @@
+"""Vertical loads on point supports (wheels on a flat floor): the least-norm non-negative
+loads that balance a weight, with what depends only on where the supports are (the
+pseudo-inverse of the equilibrium equations and their free direction) prepared once.
+
+Equilibrium of n supports at (x_i, y_i) (m) carrying a weight W (N) applied at (x_c, y_c):
+
+    sum N_i = W,   sum N_i x_i = W x_c,   sum N_i y_i = W y_c,
+
+three equations for n loads. Of the solutions, take the least-norm one (A^+ b); while every
+load is positive that is the distribution of a rigid body on equally stiff supports. Four
+supports leave one free direction f (the null space of A): when the least-norm loads hold a
+negative one, move along f by the least step that makes every load non-negative (a wheel
+lifts, the others carry the statically determinate loads). No step does it when (x_c, y_c)
+lies outside the supports' polygon: :class:`TipOverError`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from youbot_dynamics.errors import UserInputError
+
+
+class TipOverError(ValueError):
+    """The centre of mass (shifted by the acceleration) lies outside the wheels' support
+    polygon: no non-negative wheel loads balance the robot."""
+
+
+@dataclass(frozen=True, eq=False)
+class SupportRule:
+    """The least-norm load rule of supports at ``positions`` (n, 2) (m, x-y plane): their
+    equilibrium equations' pseudo-inverse ``pseudo_inverse`` (n, 3) and the free direction
+    ``free`` ((n,) unit vector; None with three supports), from one SVD.
+
+    Raises UserInputError when the supports lie on one line, or (more than four) leave more
+    than one free direction, which this rule does not handle.
+    """
+
+    positions: np.ndarray
+    pseudo_inverse: np.ndarray = field(init=False, repr=False)
+    free: np.ndarray | None = field(init=False, repr=False)
+    _free_steps: tuple[float, ...] = field(init=False, repr=False)  # free as Python floats (fast scalar loop)
+
+    def __post_init__(self) -> None:
+        points = np.array(self.positions, dtype=float)
+        equations = np.vstack([np.ones(len(points)), points.T])
+        _, singular, rows = np.linalg.svd(equations)
+        if singular[-1] < 1e-9 * singular[0]:
+            raise UserInputError(f"support loads: the {len(points)} supports lie on one line")
+        free = rows[3:]
+        if len(free) > 1:
+            raise UserInputError(f"support loads: {len(points)} supports leave {len(free)} free directions; "
+                                 "the least-norm rule here handles at most four supports")
+        pseudo_inverse = np.linalg.pinv(equations)
+        for array in (points, pseudo_inverse, free):
+            array.setflags(write=False)
+        object.__setattr__(self, "positions", points)
+        object.__setattr__(self, "pseudo_inverse", pseudo_inverse)
+        object.__setattr__(self, "free", free[0] if len(free) else None)
+        object.__setattr__(self, "_free_steps", tuple(free[0].tolist()) if len(free) else ())
+
+    def loads(self, centre: np.ndarray, weight: float) -> np.ndarray:
+        """Vertical loads (N, ``positions`` order) carrying ``weight`` (N) applied at
+        ``centre`` (x, y) (m). Raises :class:`TipOverError` outside the support polygon."""
+        target = weight * np.array([1.0, *np.asarray(centre, dtype=float).ravel().tolist()])
+        loads = self.pseudo_inverse @ target
+        low, high = -math.inf, math.inf
+        if self.free is not None:  # Python floats: the same arithmetic as numpy's scalars, faster
+            for load, step in zip(loads.tolist(), self._free_steps):  # keep load + s step >= 0
+                if step > 0.0:
+                    low = max(low, -load / step)
+                elif step < 0.0:
+                    high = min(high, -load / step)
+            scale = min(max(0.0, low), high)
+            loads = loads + scale * self.free
+        tolerance = 1e-12 * max(abs(weight), 1.0)
+        if low > high + 1e-15 or any(load < -tolerance for load in loads.tolist()):
+            raise TipOverError(f"centre of mass at ({centre[0]:.4g}, {centre[1]:.4g}) m lies outside the support "
+                               f"polygon of the wheels at {np.round(self.positions, 4).tolist()} m: the base tips over")
+        return np.maximum(loads, 0.0)
