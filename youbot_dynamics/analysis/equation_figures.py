@@ -6,6 +6,7 @@ hand-written pendulum, with the ModiaLang damped pendulum and its L = 0.5 merge.
 """
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -47,45 +48,46 @@ def incidence_plot(path: Path, matrix: np.ndarray, row_names, column_names, titl
     save(figure, path, title)
 
 
-def draw_structure(out: Path, full: bool) -> dict[str, tuple[str, str]]:
-    """The figures of STRUCTURE_SET."""
+def draw_structure(example: str, out: Path, full: bool) -> dict[str, tuple[str, str]]:
+    """The figures of one structure set: the example's incidence matrix with its
+    matching and its BLT-permuted matrix (and the low-pass filter's bipartite graph)."""
     from youbot_dynamics.systems.structure import structure_report
-    drawn = {}
-    for example, title in STRUCTURE_TITLES.items():
-        report = structure_report(example)
-        variables, equations = report["variables"], report["equations"]
-        index = {name: j for j, name in enumerate(variables)}
-        if "assign" in report:
-            matching = {(i - 1, j) for j, i in enumerate(report["assign"]) if i}
-        else:
-            matching = {(equations.index(e), index[v])
-                        for v, e in report["initial_matching"].items()}
-        matrix = matrix_of(report["incidence"])
-        incidence_plot(out / f"structure_{example}_incidence.png", matrix, equations,
-                       variables, f"{title}: incidence matrix, matching in red", matching)
-        blt = report["blt"]
-        permuted = matrix_of(blt["incidence"])
-        diagonal = {(k, k) for k in range(min(permuted.shape))}
-        incidence_plot(out / f"structure_{example}_blt.png", permuted, blt["rows"],
-                       blt["columns"], f"{title}: BLT-permuted incidence matrix",
-                       diagonal, tuple(blt["block_sizes"]))
-        unmatched = report.get("unmatched_equations", [])
-        drawn[f"structure_{example}_incidence.png"] = (
+    title = STRUCTURE_TITLES[example]
+    report = structure_report(example)
+    variables, equations = report["variables"], report["equations"]
+    index = {name: j for j, name in enumerate(variables)}
+    if "assign" in report:
+        matching = {(i - 1, j) for j, i in enumerate(report["assign"]) if i}
+    else:
+        matching = {(equations.index(e), index[v])
+                    for v, e in report["initial_matching"].items()}
+    incidence_plot(out / f"structure_{example}_incidence.png", matrix_of(report["incidence"]),
+                   equations, variables, f"{title}: incidence matrix, matching in red",
+                   matching)
+    blt = report["blt"]
+    permuted = matrix_of(blt["incidence"])
+    incidence_plot(out / f"structure_{example}_blt.png", permuted, blt["rows"],
+                   blt["columns"], f"{title}: BLT-permuted incidence matrix",
+                   {(k, k) for k in range(min(permuted.shape))}, tuple(blt["block_sizes"]))
+    unmatched = report.get("unmatched_equations", [])
+    drawn = {
+        f"structure_{example}_incidence.png": (
             f"{len(equations)} equations, {len(variables)} variables, {len(matching)} "
             "matched" + (f"; unmatched: {', '.join(unmatched)}" if unmatched else
                          "; a perfect matching"),
-            seed_difference(example, report, "incidence"))
-        drawn[f"structure_{example}_blt.png"] = (
+            seed_difference(example, report, "incidence")),
+        f"structure_{example}_blt.png": (
             f"blocks of sizes {blt['block_sizes']}: " + " ".join(
                 "[" + ", ".join(map(str, block)) + "]" for block in report["blocks"]),
-            seed_difference(example, report, "blt"))
-    report = structure_report("lowpass")
-    lowpass_graph(out / "structure_lowpass_graph.png", report)
-    drawn["structure_lowpass_graph.png"] = (
-        f"assign = {report['assign']}",
-        "The seed's graph G = [[1, 2, 4], [1, 7], [3, 4], [3, 7], [6, 7], [2]] drawn; "
-        + ("our matching is the seed's assign list." if report["assign"] == LOWPASS_SEED_ASSIGN
-           else f"the seed's assign is {LOWPASS_SEED_ASSIGN}, ours another maximum matching."))
+            seed_difference(example, report, "blt"))}
+    if example == "lowpass":
+        lowpass_graph(out / "structure_lowpass_graph.png", report)
+        drawn["structure_lowpass_graph.png"] = (
+            f"assign = {report['assign']}",
+            "The seed's graph G = [[1, 2, 4], [1, 7], [3, 4], [3, 7], [6, 7], [2]] drawn; "
+            + ("our matching is the seed's assign list." if report["assign"] ==
+               LOWPASS_SEED_ASSIGN else f"the seed's assign is {LOWPASS_SEED_ASSIGN}, ours "
+               "another maximum matching."))
     return drawn
 
 
@@ -169,11 +171,9 @@ def hand_written_pendulum(model, t: np.ndarray) -> np.ndarray:
     return np.c_[length * np.sin(theta), -length * np.cos(theta)]
 
 
-def draw_pipeline(out: Path, full: bool) -> dict[str, tuple[str, str]]:
-    """The figures of PIPELINE_SET."""
-    from youbot_dynamics.cli.pipeline_commands import MODIA_MERGE
-    from youbot_dynamics.systems.equations import (cartesian_pendulum, first_order_lag,
-                                                   lowpass_filter, modia_pendulum)
+def draw_lag(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+    """The figure of the first-order lag."""
+    from youbot_dynamics.systems.equations import first_order_lag
     drawn = {}
     lag = first_order_lag()
     figure, axis = panels(size=(7.0, 3.4))
@@ -192,7 +192,13 @@ def draw_pipeline(out: Path, full: bool) -> dict[str, tuple[str, str]]:
         f"max |x - (1 - exp(-t / tau))|: {errors[0]:.2g} (defaults), {errors[1]:.2g} (tau => 1)",
         "As ModelingToolkit's tutorial: the override is honoured (the faster curve); RHS "
         "is eliminated as an alias of x'.")
+    return drawn
 
+
+def draw_lowpass(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+    """The figure of the low-pass filter's simulation."""
+    from youbot_dynamics.systems.equations import lowpass_filter
+    drawn = {}
     filter_model = lowpass_filter()
     filter_run = run_model(filter_model)
     t, voltage = filter_run.values("vC")
@@ -212,7 +218,13 @@ def draw_pipeline(out: Path, full: bool) -> dict[str, tuple[str, str]]:
         "of four equations torn and solved",
         "The seed shows the structure only; the simulation is ours, checked against the "
         "closed form.")
+    return drawn
 
+
+def draw_cartesian_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+    """The Cartesian pendulum's figures: generated against hand-written."""
+    from youbot_dynamics.systems.equations import cartesian_pendulum
+    drawn = {}
     pendulum = cartesian_pendulum()
     run = run_model(pendulum, tol=1e-10, outputs=501)
     t, x = run.values("x")
@@ -245,7 +257,14 @@ def draw_pipeline(out: Path, full: bool) -> dict[str, tuple[str, str]]:
         f"max distance {np.max(gap):.2g} m over {t[-1]:g} s",
         "Not in the seed: the generated ODE agrees with the hand-written pendulum to the "
         "integrators' tolerances.")
+    return drawn
 
+
+def draw_modia_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+    """The ModiaLang damped pendulum's figures, with the seed's L = 0.5 merge."""
+    from youbot_dynamics.cli.pipeline_commands import MODIA_MERGE
+    from youbot_dynamics.systems.equations import modia_pendulum
+    drawn = {}
     modia = modia_pendulum()
     runs = {"L = 0.8 (defaults)": run_model(modia, tol=1e-8),
             "| Map(L = 0.5)": run_model(modia | MODIA_MERGE, tol=1e-8)}
@@ -280,30 +299,36 @@ def draw_pipeline(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     return drawn
 
 
-STRUCTURE_SET = FigureSet("structure", specs(
+STRUCTURE_SETS = tuple(FigureSet(f"structure-{example}", specs(
     *((f"structure_{example}_{view}.png",
        f"{title}: " + ("bipartite incidence matrix with the matching"
                        if view == "incidence" else "BLT-permuted incidence matrix, blocks "
                        "outlined"),
        ("The seed's " + ("incidence / matching (assign list)" if view == "incidence"
                          else "BLT blocks") + f" of the {title}."))
-      for example, title in STRUCTURE_TITLES.items() for view in ("incidence", "blt")),
-    ("structure_lowpass_graph.png", "Low-pass filter: the bipartite graph with the matching",
-     "The seed's bipartite graph G and its maximum matching."),
-), draw_structure)
+      for view in ("incidence", "blt")),
+    *((("structure_lowpass_graph.png", "Low-pass filter: the bipartite graph with the "
+        "matching", "The seed's bipartite graph G and its maximum matching."),)
+      if example == "lowpass" else ())), partial(draw_structure, example))
+    for example, title in STRUCTURE_TITLES.items())
 
-PIPELINE_SET = FigureSet("pipeline", specs(
-    ("pipeline_lag.png", "First-order lag: x(t) with the defaults and with tau => 1 s",
-     "ModelingToolkit's first-order lag with defaults and overrides."),
-    ("pipeline_lowpass.png", "Low-pass filter: vC(t) and i(t) from the generated ODE",
-     "The seed's low-pass filter (structure only)."),
-    ("pipeline_pendulum.png", "Cartesian pendulum: x, y from the generated ODE and the "
-     "hand-written one", "The seed's Cartesian pendulum DAE, simulated after index "
-     "reduction."),
-    ("pipeline_pendulum_difference.png", "Cartesian pendulum: distance between generated "
-     "and hand-written solutions", "No seed figure."),
-    ("modia_pendulum_phi.png", "ModiaLang damped pendulum: phi(t) for L = 0.8 and the "
-     "merge L = 0.5", "The seed's damped pendulum with the | Map(L = 0.5) merge."),
-    ("modia_pendulum_position.png", "ModiaLang damped pendulum: the path r for both L",
-     "The model's output r = (L cos phi, -L sin phi)."),
-), draw_pipeline)
+PIPELINE_SETS = (
+    FigureSet("pipeline-lag", specs(
+        ("pipeline_lag.png", "First-order lag: x(t) with the defaults and with tau => 1 s",
+         "ModelingToolkit's first-order lag with defaults and overrides.")), draw_lag),
+    FigureSet("pipeline-pendulum", specs(
+        ("pipeline_pendulum.png", "Cartesian pendulum: x, y from the generated ODE and the "
+         "hand-written one", "The seed's Cartesian pendulum DAE, simulated after index "
+         "reduction."),
+        ("pipeline_pendulum_difference.png", "Cartesian pendulum: distance between "
+         "generated and hand-written solutions", "No seed figure.")),
+        draw_cartesian_pendulum),
+    FigureSet("pipeline-lowpass", specs(
+        ("pipeline_lowpass.png", "Low-pass filter: vC(t) and i(t) from the generated ODE",
+         "The seed's low-pass filter (structure only).")), draw_lowpass),
+    FigureSet("pipeline-modia-pendulum", specs(
+        ("modia_pendulum_phi.png", "ModiaLang damped pendulum: phi(t) for L = 0.8 and the "
+         "merge L = 0.5", "The seed's damped pendulum with the | Map(L = 0.5) merge."),
+        ("modia_pendulum_position.png", "ModiaLang damped pendulum: the path r for both L",
+         "The model's output r = (L cos phi, -L sin phi).")), draw_modia_pendulum),
+)

@@ -116,6 +116,6 @@ def figure_sets() -> dict[str, FigureSet]:
     sets = [pendulum_figures.PENDULUM_SET, pendulum_figures.BDF_SET,
             mechanism_figures.SQUEEZER_SET, mechanism_figures.WOODPECKER_SET,
             lagrange_figures.LAGRANGE_2D_SET, lagrange_figures.LAGRANGE_3D_SET,
-            equation_figures.STRUCTURE_SET, equation_figures.PIPELINE_SET,
+            *equation_figures.STRUCTURE_SETS, *equation_figures.PIPELINE_SETS,
             seed000_figures.ROTATIONS_SET, seed000_figures.UNCERTAINTY_SET]
     return {figure_set.name: figure_set for figure_set in sets}

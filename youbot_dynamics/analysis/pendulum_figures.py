@@ -10,7 +10,6 @@ within 1 cm of the reference at the outputs every 0.1 s.
 """
 from __future__ import annotations
 
-import functools
 import re
 from functools import partial
 from pathlib import Path
@@ -19,8 +18,6 @@ import numpy as np
 
 from youbot_dynamics.analysis.figures import FigureSet, panels, save, specs
 
-#: Dense outputs of the reference and the adaptive runs over [0, 20] s (every 0.01 s).
-DENSE = 2001
 #: Fixed-step cells with a seed verdict: (method, k, N) -> file.
 FIXED_STEP_FILES = {("euler", 1, 1000): "pendulum_euler_k1_n1000.png",
                     ("euler", 1, 10000): "pendulum_euler_k1_n10000.png",
@@ -73,19 +70,6 @@ def adaptive_spec(integrator: str, k: int, file: str):
 def seed_counts(text: str) -> dict[str, int]:
     """{'steps': 536, 'f-evals': 580, ...} from the seed's words."""
     return {key: int(value) for value, key in re.findall(r"(\d+) (steps|f-evals|J-evals)", text)}
-
-
-@functools.cache
-def dense_reference(k: float):
-    """DOP853 at bdf-study's reference tolerance over [0, 20] s at DENSE outputs (cached
-    per process: several figures share it)."""
-    from youbot_dynamics.systems.bdf_study import REFERENCE_TOL
-    from youbot_dynamics.systems.elastic_pendulum import (SEED_STATE0, SEED_T_END,
-                                                          simulate_elastic_pendulum)
-    solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, "dop853",
-                                            rtol=REFERENCE_TOL, atol=REFERENCE_TOL,
-                                            n_out=DENSE)
-    return solution
 
 
 def fixed_step_trajectory(method: str, k: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
@@ -153,10 +137,10 @@ def agreement(seed: str, ours: str) -> str:
 def draw_fixed_step(out: Path, method: str, k: int, n: int) -> tuple[tuple[str, str], object]:
     """One fixed-step cell's figure; (our verdict, the difference from the seed's) and
     the cell's FixedStepRow."""
-    from youbot_dynamics.systems.bdf_study import OUTPUTS, fixed_step_row
-    reference = dense_reference(float(k))
-    stride = (DENSE - 1) // (OUTPUTS - 1)
-    row = fixed_step_row(method, k, n, reference.x[::stride, :2])
+    from youbot_dynamics.systems.bdf_study import (fixed_step_row, reference_positions,
+                                                   reference_solution)
+    reference = reference_solution(float(k))
+    row = fixed_step_row(method, k, n, reference_positions(k))
     t, x = fixed_step_trajectory(method, k, n)
     every = max(1, len(t) // 4000)
     trajectory_plot(out / FIXED_STEP_FILES[(method, k, n)], t[::every], x[::every], reference,
@@ -172,13 +156,14 @@ def draw_fixed_step(out: Path, method: str, k: int, n: int) -> tuple[tuple[str, 
 def draw_adaptive(out: Path, integrator: str, k: int) -> tuple[tuple[str, str], object]:
     """One adaptive run at tol 1e-6 (difference-quotient Jacobian, as the seed's), its
     figure, and (ours, difference) against the seed's counts; also the solution."""
+    from youbot_dynamics.systems.bdf_study import DENSE_OUTPUTS, reference_solution
     from youbot_dynamics.systems.elastic_pendulum import (SEED_CVODE, SEED_STATE0,
                                                           SEED_T_END,
                                                           simulate_elastic_pendulum)
     solution, energy_error = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, integrator,
-                                                       rtol=1e-6, atol=1e-6, n_out=DENSE,
+                                                       rtol=1e-6, atol=1e-6, n_out=DENSE_OUTPUTS,
                                                        jacobian="difference")
-    reference = dense_reference(float(k))
+    reference = reference_solution(float(k))
     error = float(np.max(np.linalg.norm(solution.x[:, :2] - reference.x[:, :2], axis=1)))
     stats = solution.stats
     trajectory_plot(out / ADAPTIVE_FILES[(integrator, k)], solution.t, solution.x, reference,
@@ -263,9 +248,10 @@ def draw_bdf(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of BDF_SET."""
     from youbot_dynamics.analysis.bdf import (alpha_angle, amplification,
                                               plot_stability_regions)
-    from youbot_dynamics.systems.bdf_study import (CHOPPY_K, SEED_CVODE_ORDER,
-                                                   measured_orders,
-                                                   plot_choppy_traces, stability_points)
+    from youbot_dynamics.systems.bdf_study import (CHOPPY_K, DENSE_OUTPUTS,
+                                                   SEED_CVODE_ORDER, measured_orders,
+                                                   plot_choppy_traces, reference_solution,
+                                                   stability_points)
     from youbot_dynamics.systems.elastic_pendulum import (SEED_STATE0, SEED_T_END,
                                                           simulate_elastic_pendulum)
     drawn, rows = {}, []
@@ -311,12 +297,12 @@ def draw_bdf(out: Path, full: bool) -> dict[str, tuple[str, str]]:
                        f"{CHOPPY_K:g}); the seed's traces are not in benchmarks.md, so the "
                        "comparison is by eye.")
 
-    reference = dense_reference(10.0)
+    reference = reference_solution(10.0)
     figure, axis = panels(size=(7.5, 3.8))
     counts = {}
     for order in ((1, 2, 3, 4, 5) if full else (1, 2, 5)):
         solution, _ = simulate_elastic_pendulum(10.0, SEED_STATE0, SEED_T_END, "cvode_bdf",
-                                                rtol=1e-6, atol=1e-6, n_out=DENSE,
+                                                rtol=1e-6, atol=1e-6, n_out=DENSE_OUTPUTS,
                                                 max_order=order, jacobian="difference")
         error = np.linalg.norm(solution.x[:, :2] - reference.x[:, :2], axis=1)
         counts[order] = solution.stats.steps

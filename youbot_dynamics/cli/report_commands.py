@@ -34,6 +34,10 @@ def run_report(args: argparse.Namespace) -> int:
         status = ("not in this build" if result.status is None else
                   f"ok, {result.wall_time:.1f} s" if result.status == 0 else
                   f"FAILED (exit status {result.status})")
-        print(f"{result.name:<20} {status}")
+        if result.figure_error is not None:
+            status += "; figures FAILED"
+        elif result.figures:
+            status += f"; {len(result.figures)} figures, {result.figure_time:.1f} s"
+        print(f"{result.name:<24} {status}")
     print(f"report written to {page}")
-    return int(any(result.status not in (0, None) for result in results))
+    return int(any(result.failed for result in results))

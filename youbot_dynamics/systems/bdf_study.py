@@ -18,6 +18,7 @@ where a small energy error hides a phase error.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import asdict, dataclass
 from functools import partial
 from typing import Sequence
@@ -25,7 +26,7 @@ from typing import Sequence
 import numpy as np
 
 from youbot_dynamics.analysis.bdf import bdf_fixed_step
-from youbot_dynamics.sim.integrators import DivergenceError
+from youbot_dynamics.sim.integrators import DivergenceError, Solution
 from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, SEED_STATE0,
                                                       SEED_T_END, STABLE_BOUND,
                                                       STABLE_ENERGY_ERROR,
@@ -41,8 +42,8 @@ POSITION_TOLERANCE = 1e-2
 #: Tolerance of the DOP853 reference (its outputs agree with rtol 1e-10's to 3e-9 m at
 #: k = 2000, measured).
 REFERENCE_TOL = 1e-12
-#: Output times of the comparison: every 0.1 s.
-OUTPUTS = 201
+#: Output times of the comparison: every 0.1 s; of the reference run: every 0.01 s.
+OUTPUTS, DENSE_OUTPUTS = 201, 2001
 METHODS = ("euler", "bdf2", "bdf3", "bdf4")
 #: The seed's verdicts (benchmarks.md section 3).
 SEED_VERDICTS = {
@@ -86,11 +87,19 @@ class FixedStepRow:
         return asdict(self)
 
 
+@functools.cache
+def reference_solution(k: float, tol: float = REFERENCE_TOL) -> Solution:
+    """The DOP853 reference run at rtol = atol = tol, outputs every 0.01 s (DENSE_OUTPUTS
+    over [0, 20] s); cached per process (the tables and the figures share it)."""
+    solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, "dop853", rtol=tol,
+                                            atol=tol, n_out=DENSE_OUTPUTS)
+    return solution
+
+
 def reference_positions(k: float, tol: float = REFERENCE_TOL) -> np.ndarray:
     """(x, y) of the DOP853 reference at the OUTPUTS times (OUTPUTS, 2)."""
-    solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, "dop853", rtol=tol,
-                                            atol=tol, n_out=OUTPUTS)
-    return solution.x[:, :2]
+    stride = (DENSE_OUTPUTS - 1) // (OUTPUTS - 1)
+    return reference_solution(float(k), tol).x[::stride, :2]
 
 
 def energy_verdict(energy_error: float | None) -> str:
@@ -195,23 +204,22 @@ def stability_points(rows: Sequence[FixedStepRow]) -> dict[str, complex]:
 CHOPPY_TOL, CHOPPY_K = 0.1, 10.0
 
 
-def plot_choppy_traces(path: str, t_end: float = SEED_T_END, n_out: int = 2001,
+def plot_choppy_traces(path: str,
                        integrators: Sequence[str] = ("cvode_bdf", "cvode_adams")) -> dict:
     """PNG of x(t) and y(t) from CVODE (BDF and Adams, or the ``integrators`` given) at
     rtol = atol = CHOPPY_TOL (k = CHOPPY_K, CVODE's difference-quotient Jacobian) against
-    DOP853 at 1e-12, outputs by CVODE's interpolation every t_end / (n_out - 1) s.
+    the DOP853 reference, outputs by CVODE's interpolation every 0.01 s over [0, 20] s.
     Returns each run's steps and max position error (m)."""
     from youbot_dynamics.analysis.figures import pyplot, save
     plt = pyplot()
 
-    reference, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, t_end, "dop853",
-                                             rtol=1e-12, atol=1e-12, n_out=n_out)
+    reference = reference_solution(CHOPPY_K)
     figure, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
     figures = {}
     for integrator in integrators:
-        solution, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, t_end, integrator,
-                                                rtol=CHOPPY_TOL, atol=CHOPPY_TOL,
-                                                n_out=n_out, jacobian="difference")
+        solution, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, SEED_T_END,
+                                                integrator, rtol=CHOPPY_TOL, atol=CHOPPY_TOL,
+                                                n_out=DENSE_OUTPUTS, jacobian="difference")
         error = float(np.max(np.linalg.norm(solution.x[:, :2] - reference.x[:, :2], axis=1)))
         figures[integrator] = {"steps": solution.stats.steps, "position_error": error}
         for axis, column in zip(axes, (0, 1)):
@@ -219,7 +227,7 @@ def plot_choppy_traces(path: str, t_end: float = SEED_T_END, n_out: int = 2001,
                       label=f"{integrator} ({solution.stats.steps} steps)")
     for axis, column, label in zip(axes, (0, 1), ("x (m)", "y (m)")):
         axis.plot(reference.t, reference.x[:, column], "k--", linewidth=0.6,
-                  label="DOP853 1e-12")
+                  label=f"DOP853 {REFERENCE_TOL:g}")
         axis.set_ylabel(label)
         axis.grid(True, alpha=0.3)
         axis.legend(fontsize=8, loc="upper right")
