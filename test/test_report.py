@@ -131,6 +131,13 @@ def test_a_figure_set_that_raises_is_reported_failed(tmp_path, monkeypatch):
     assert "RuntimeError: a bug in the figures" in result.figure_error
 
 
+def test_list_figures_names_every_figure_without_running(capsys):
+    assert main(["report", "--list-figures"]) == 0
+    rows = markdown_rows(capsys.readouterr().out)
+    commands = [file for study in STUDIES for file in study.figures]
+    assert [row["file"] for row in rows] == [spec.file for spec in all_specs()] + commands
+
+
 def test_a_figure_set_must_write_what_it_declares(tmp_path):
     from youbot_dynamics.analysis.figures import FigureSet, FigureSpec, draw_set
     spec = FigureSpec("a.png", "A", "seed")

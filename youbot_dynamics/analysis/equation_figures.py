@@ -29,7 +29,7 @@ def incidence_plot(path: Path, matrix: np.ndarray, row_names, column_names, titl
     cells (the matching) in red; the diagonal blocks outlined."""
     from matplotlib.patches import Rectangle
     n_rows, n_columns = matrix.shape
-    scale = 0.32 if n_columns > 20 else 0.5
+    scale = 0.26 if n_columns > 20 else 0.5
     figure, axis = panels(size=(max(4.0, scale * n_columns + 2), max(3.0, scale * n_rows + 1.5)))
     axis.grid(False)
     rows, columns = np.nonzero(matrix)

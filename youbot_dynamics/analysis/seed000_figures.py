@@ -33,7 +33,7 @@ def draw_rotations(out: Path, full: bool) -> dict[str, tuple[str, str]]:
                                              f"{r.errors['attitude']:.2g} rad")
                       for r in mine),
             ROTATION_DIFFERENCE[name](mine))
-    wobbles = SPIN_WOBBLES if full else (0.0, 1e-2, 1.0)
+    wobbles = SPIN_WOBBLES if full else (0.0, 1.0)
     sweep = spin_wobble_sweep(wobbles=wobbles)
     figure, axis = panels(size=(6.5, 3.8))
     shown = [max(row["wobble"], 1e-4) for row in sweep]
