@@ -46,8 +46,8 @@ def assert_report(out: Path, names) -> str:
     page = (out / PAGE).read_text(encoding="utf-8")
     studies = [s for s in STUDIES if s.name in names]
     assert len(studies) == len(names)
-    declared = [spec.file for name in names if name in figure_sets()
-                for spec in figure_sets()[name].specs]
+    declared = [spec.file for study in studies if study.name in figure_sets()
+                for spec in figure_sets()[study.name].specs]
     for study in studies:
         assert f"## {study.title}" in page and f'<a id="{study.name}"></a>' in page
         if missing_in_build(study.arguments(out, False)) is None:
@@ -83,9 +83,10 @@ def test_smoke_report_on_a_local_cluster(tmp_path, capsys):
     assert all(f"{name} " in printed and "FAILED" not in printed for name in SMOKE)
     page = assert_report(tmp_path, SMOKE)
     assert "4 studies ran, 0 failed" in page
-    # the figures' own measurements reached the page: the beak hits, the seed's matching
+    # the figures' own measurements reached the page: the beak hits, the seed's BLT blocks
     assert "Seed: 22 beak hits over 2 s, ours 22." in page
-    assert "Seed assign = [2, 6, 3, 1, 0, 5, 4]; ours the same." in page
+    assert "Seed blocks [[6], [1, 2, 3, 4], [5]] (an algebraic loop of four); ours the " \
+           "same." in page
     # the studies' own figures reached the page: the seed's 22 beak hits beside ours
     assert "beak hits (seed over 2 s: 22)" in page and "structural index 3" in page
     assert page.index("Woodpecker") < page.index("Uncertain")  # the order of STUDIES

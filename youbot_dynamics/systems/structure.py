@@ -92,11 +92,17 @@ def maximum_matching(equation_vars: Sequence[Iterable[int]],
     """A maximum matching variable -> equation (Hopcroft-Karp), using only the variables
     in ``unknowns`` (all if None). Perfect when every equation is matched."""
     allowed = None if unknowns is None else set(unknowns)
-    restricted = [{j for j in vs if allowed is None or j in allowed} for vs in equation_vars]
-    graph = incidence_graph(restricted)
-    equations = [("e", i) for i in range(len(restricted))]
-    matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=equations)
-    return {node[1]: partner[1] for node, partner in matching.items() if node[0] == "v"}
+    restricted = [sorted(j for j in vs if allowed is None or j in allowed)
+                  for vs in equation_vars]
+    # Integer nodes (equation i, variable m + j): networkx keeps the two sides in sets,
+    # and sets of ints iterate in the same order in every process; ("e", i) tuples hash
+    # their strings, so the matching changed with PYTHONHASHSEED.
+    m = len(restricted)
+    graph = nx.Graph()
+    graph.add_nodes_from(range(m))
+    graph.add_edges_from((i, m + j) for i, vs in enumerate(restricted) for j in vs)
+    matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=range(m))
+    return {node - m: partner for node, partner in matching.items() if node >= m}
 
 
 def block_lower_triangular(equation_vars: Sequence[Iterable[int]],
