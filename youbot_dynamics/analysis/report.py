@@ -271,6 +271,12 @@ def figure_anchor(spec: FigureSpec) -> str:
     return "figure-" + spec.file.rsplit(".", 1)[0].replace("/", "-").replace("_", "-")
 
 
+def alt_text(caption: str) -> str:
+    """A caption as an image's alt text: square brackets (which end the alt text in
+    Markdown) written as parentheses."""
+    return caption.replace("[", "(").replace("]", ")")
+
+
 def figure_section(number: int, figure: Figure) -> str:
     """One figure's subsection: caption, the seed's figure or verdict, ours (what the run
     measured, and the PNG), the difference."""
@@ -278,7 +284,7 @@ def figure_section(number: int, figure: Figure) -> str:
     return "\n".join([f'<a id="{figure_anchor(spec)}"></a>', "",
                       f"### Figure {number}: {spec.caption}", "",
                       f"**Seed.** {spec.seed}", "", f"**Ours.** {figure.ours}", "",
-                      f"![{spec.caption}]({spec.file})", "",
+                      f"![{alt_text(spec.caption)}]({spec.file})", "",
                       f"**Difference.** {figure.difference}", ""])
 
 
