@@ -289,7 +289,8 @@ def draw_modia_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
          "ModiaLang damped pendulum: r = (L cos phi, -L sin phi)")
     ends = {label: float(each.values("phi")[1][-1]) for label, each in runs.items()}
     drawn["modia_pendulum_phi.png"] = (
-        "phi at t = 10 s: " + ", ".join(f"{label} {value:.4g} rad" for label, value in ends.items()),
+        "phi at t = 10 s: " + ", ".join(f"{label} {value:.4g} rad"
+                                        for label, value in ends.items()),
         "The seed plots phi for L = 0.8 and after the merge L = 0.5 (a faster, more damped "
         "swing: the damping d / (m L^2) grows as L shrinks); its log is not in "
         "benchmarks.md.")

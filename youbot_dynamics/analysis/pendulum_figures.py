@@ -27,16 +27,14 @@ FIXED_STEP_FILES = {("euler", 1, 1000): "pendulum_euler_k1_n1000.png",
                     ("bdf2", 2000, 1000): "bdf2_k2000_n1000.png",
                     ("bdf3", 500, 1000): "bdf3_k500_n1000.png",
                     ("bdf4", 400, 1000): "bdf4_k400_n1000.png"}
-#: Adaptive runs at rtol = atol = 1e-6 with the seed's figures (Tables 5-7): (integrator,
-#: k) -> (file, the seed's words).
+#: Adaptive runs at rtol = atol = 1e-6 with the seed's figures (Tables 5-7, the keys of
+#: elastic_pendulum.SEED_CVODE): (integrator, k) -> file.
 ADAPTIVE_FILES = {("cvode_bdf", 10): "pendulum_cvode_bdf_k10.png",
                   ("cvode_adams", 10): "pendulum_cvode_adams_k10.png",
                   ("cvode_bdf", 50): "pendulum_cvode_bdf_k50.png",
                   ("cvode_adams", 50): "pendulum_cvode_adams_k50.png",
                   ("rk45", 10): "pendulum_dopri45_k10.png",
                   ("lsoda", 10): "pendulum_lsoda_k10.png"}
-#: The seed's LSODAR row of Table 6 (k = 10, tol 1e-6).
-SEED_LSODAR = "LSODAR: 362 steps, 747 f-evals"
 #: Integrators and tolerances (short form, full form) of the energy work-precision figure.
 PRECISION_INTEGRATORS = ("cvode_bdf", "cvode_adams", "rk45", "dop853", "lsoda")
 PRECISION_TOLERANCES = {False: (1e-4, 1e-7), True: (1e-4, 1e-6, 1e-8, 1e-10)}
@@ -60,7 +58,7 @@ def fixed_step_spec(method: str, k: int, n: int, file: str):
 def adaptive_spec(integrator: str, k: int, file: str):
     """(file, caption, seed) of one adaptive run at tol 1e-6."""
     from youbot_dynamics.systems.elastic_pendulum import SEED_CVODE
-    seed = SEED_LSODAR if integrator == "lsoda" else SEED_CVODE[(integrator, k)]
+    seed = SEED_CVODE[(integrator, k)]
     name = {"rk45": "Dormand-Prince 4(5) (Dopri45)", "lsoda": "LSODA (scipy)"}.get(
         integrator, integrator.replace("cvode_", "CVODE ").replace("bdf", "BDF")
         .replace("adams", "Adams"))
@@ -170,7 +168,7 @@ def draw_adaptive(out: Path, integrator: str, k: int) -> tuple[tuple[str, str], 
     trajectory_plot(out / ADAPTIVE_FILES[(integrator, k)], solution.t, solution.x, reference,
                     f"{integrator}, k = {k}, tol 1e-6: {stats.steps} steps, "
                     f"{stats.rhs_evals} f-evals")
-    seed = seed_counts(SEED_LSODAR if integrator == "lsoda" else SEED_CVODE[(integrator, k)])
+    seed = seed_counts(SEED_CVODE[(integrator, k)])
     ours = (f"{stats.steps} steps, {stats.rhs_evals} f-evals"
             + (f", {stats.jac_evals} J-evals" if stats.jac_evals else "")
             + f"; position error up to {error:.3g} m, energy error {energy_error:.3g}")
