@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from youbot_dynamics.analysis.figures import FigureSet, panels, save, specs
+from youbot_dynamics.analysis.figures import FigureSet, heading, panels, save, specs
 
 STRUCTURE_TITLES = {"lowpass": "low-pass filter", "pendulum": "Cartesian pendulum",
                     "squeezer": "Andrew's squeezer (index 3)"}
@@ -62,12 +62,12 @@ def draw_structure(example: str, out: Path, full: bool) -> dict[str, tuple[str, 
         matching = {(equations.index(e), index[v])
                     for v, e in report["initial_matching"].items()}
     incidence_plot(out / f"structure_{example}_incidence.png", matrix_of(report["incidence"]),
-                   equations, variables, f"{title}: incidence matrix, matching in red",
+                   equations, variables, f"{heading(title)}: incidence matrix, matching in red",
                    matching)
     blt = report["blt"]
     permuted = matrix_of(blt["incidence"])
     incidence_plot(out / f"structure_{example}_blt.png", permuted, blt["rows"],
-                   blt["columns"], f"{title}: BLT-permuted incidence matrix",
+                   blt["columns"], f"{heading(title)}: BLT-permuted incidence matrix",
                    {(k, k) for k in range(min(permuted.shape))}, tuple(blt["block_sizes"]))
     unmatched = report.get("unmatched_equations", [])
     drawn = {
@@ -302,7 +302,7 @@ def draw_modia_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
 
 STRUCTURE_SETS = tuple(FigureSet(f"structure-{example}", specs(
     *((f"structure_{example}_{view}.png",
-       f"{title}: " + ("bipartite incidence matrix with the matching"
+       f"{heading(title)}: " + ("bipartite incidence matrix with the matching"
                        if view == "incidence" else "BLT-permuted incidence matrix, blocks "
                        "outlined"),
        ("The seed's " + ("incidence / matching (assign list)" if view == "incidence"

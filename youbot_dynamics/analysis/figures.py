@@ -58,6 +58,11 @@ def specs(*rows: tuple[str, str, str]) -> tuple[FigureSpec, ...]:
     return tuple(FigureSpec(*row) for row in rows)
 
 
+def heading(text: str) -> str:
+    """``text`` with its first letter upper case (the rest as it is), for captions."""
+    return text[:1].upper() + text[1:]
+
+
 def pyplot():
     """matplotlib.pyplot on the Agg backend (no display needed)."""
     import matplotlib

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from youbot_dynamics.analysis.figures import FigureSet, panels, save, specs
+from youbot_dynamics.analysis.figures import FigureSet, heading, panels, save, specs
 
 #: Fixed-step cells with a seed verdict: (method, k, N) -> file.
 FIXED_STEP_FILES = {("euler", 1, 1000): "pendulum_euler_k1_n1000.png",
@@ -49,9 +49,8 @@ def fixed_step_spec(method: str, k: int, n: int, file: str):
     """(file, caption, seed) of one fixed-step cell."""
     from youbot_dynamics.systems.bdf_study import SEED_VERDICTS
     table = {"euler": 1, "bdf2": 2, "bdf3": 3, "bdf4": 4}[method]
-    label = method_label(method)
-    return (file, f"{label[0].upper()}{label[1:]}, k = {k}, N = {n} steps on [0, 20] s: x(t), y(t) "
-                  f"against the DOP853 reference",
+    return (file, f"{heading(method_label(method))}, k = {k}, N = {n} steps on [0, 20] s: "
+                  "x(t), y(t) against the DOP853 reference",
             f"Table {table}: {SEED_VERDICTS[method][(k, n)]}.")
 
 
