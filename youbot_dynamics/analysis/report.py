@@ -218,13 +218,13 @@ def run_study(study: Study, out_dir: str, full: bool) -> StudyResult:
             status = 1
     wall_time = time.perf_counter() - start
     figures, figure_error, start = (), None, time.perf_counter()
-    figure_set = figure_sets().get(study.name)
-    if figure_set is not None:
-        try:
+    try:
+        figure_set = figure_sets().get(study.name)
+        if figure_set is not None:
             with contextlib.redirect_stdout(io.StringIO()):
                 figures = tuple(draw_set(figure_set, out_dir, full))
-        except Exception:  # a bug in one set: reported on its section
-            figure_error = traceback.format_exc()
+    except Exception:  # a bug in one set: reported on its section
+        figure_error = traceback.format_exc()
     return StudyResult(study.name, argv, status, output.getvalue(), errors.getvalue(),
                        wall_time, figures, figure_error, time.perf_counter() - start)
 
