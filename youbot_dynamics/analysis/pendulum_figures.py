@@ -142,7 +142,7 @@ def draw_fixed_step(out: Path, method: str, k: int, n: int) -> tuple[tuple[str, 
     t, x = fixed_step_trajectory(method, k, n)
     every = max(1, len(t) // 4000)
     trajectory_plot(out / FIXED_STEP_FILES[(method, k, n)], t[::every], x[::every], reference,
-                    f"{method_label(method)}, k = {k}, N = {n}: {row.verdict}",
+                    f"{heading(method_label(method))}, k = {k}, N = {n}: {row.verdict}",
                     row.diverged_at)
     difference = agreement(row.seed, row.verdict)
     if row.energy_verdict != row.verdict:
