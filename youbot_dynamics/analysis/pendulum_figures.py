@@ -298,7 +298,7 @@ def draw_bdf(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     reference = reference_solution(10.0)
     figure, axis = panels(size=(7.5, 3.8))
     counts = {}
-    for order in ((1, 2, 3, 4, 5) if full else (1, 2, 5)):
+    for order in ((1, 2, 3, 4, 5) if full else (1, 5)):
         solution, _ = simulate_elastic_pendulum(10.0, SEED_STATE0, SEED_T_END, "cvode_bdf",
                                                 rtol=1e-6, atol=1e-6, n_out=DENSE_OUTPUTS,
                                                 max_order=order, jacobian="difference")
@@ -341,6 +341,6 @@ BDF_SET = FigureSet("bdf-study", specs(
      "trace", "The choppy rtol 0.1 trace of CVODE BDF."),
     ("bdf_choppy_cvode_adams.png", "CVODE Adams at rtol = atol = 0.1, k = 10: the 'choppy' "
      "trace", "The choppy rtol 0.1 trace of CVODE Adams."),
-    ("bdf_cvode_max_order_k10.png", "CVODE BDF capped at order 1, 2, 5 (full: 1-5): "
+    ("bdf_cvode_max_order_k10.png", "CVODE BDF capped at order 1 and 5 (full: 1-5): "
      "position error and steps", "38 501 steps at order 1 against 536 at order 5 (k = 10)."),
 ), draw_bdf)

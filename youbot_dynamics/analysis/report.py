@@ -156,7 +156,8 @@ STUDIES: tuple[Study, ...] = (
                "quaternions do not.",
           method="Every run is an axisymmetric top, judged against its closed form. The "
                  "short form's table leaves out the spin run and its wobble sweep: the "
-                 "figures below run them (two wobbles; five with --full)."),
+                 "figures below run them (the pure spin beside the spin run; five "
+                 "wobbles with --full)."),
     Study("uncertainty", "Uncertain damped pendulum: linear propagation vs Monte Carlo (seed "
           "000 item 5)", ("uncertainty", "--samples", "200", "--workers", "0"),
           full_argv=("uncertainty", "--samples", "1000", "--workers", "0"),

@@ -20,8 +20,8 @@ ROTATION_RUNS = ("spin", "tumble", "top")
 
 def draw_rotations(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of ROTATIONS_SET."""
-    from youbot_dynamics.systems.rotations import (RUNS, SPIN_WOBBLES, plot_rotations,
-                                                   rotations_study, spin_wobble_sweep)
+    from youbot_dynamics.systems.rotations import (RUNS, plot_rotations, rotations_study,
+                                                   spin_wobble_sweep)
     results = rotations_study()
     drawn = {}
     for name in ROTATION_RUNS:
@@ -33,8 +33,13 @@ def draw_rotations(out: Path, full: bool) -> dict[str, tuple[str, str]]:
                                              f"{r.errors['attitude']:.2g} rad")
                       for r in mine),
             ROTATION_DIFFERENCE[name](mine))
-    wobbles = SPIN_WOBBLES if full else (0.0, 1.0)
-    sweep = spin_wobble_sweep(wobbles=wobbles)
+    if full:
+        sweep = spin_wobble_sweep()
+    else:  # the pure spin, and the spin run itself (its wobble) from the study above
+        by = {r.formulation: r for r in results if r.run == "spin"}
+        sweep = spin_wobble_sweep(wobbles=(0.0,)) + [
+            {"wobble": RUNS["spin"].w0[1],
+             **{f"{name}_steps": by[name].stats.steps for name in ("cardan", "quaternion")}}]
     figure, axis = panels(size=(6.5, 3.8))
     shown = [max(row["wobble"], 1e-4) for row in sweep]
     for formulation in ("cardan", "quaternion"):
