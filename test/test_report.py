@@ -1,7 +1,7 @@
 """``youbot-dynamics report`` (analysis/report.py): the studies' tables, the seeds'
 figures drawn from our runs (analysis/figures.py) and one page with a section per study and
 a subsection per figure. CI runs a smoke form (a few quick studies, on a local Dask cluster
-of two processes, about 30 s); the whole short form is marked slow."""
+of two processes, about 40 s on a loaded machine); the whole short form is marked slow."""
 from __future__ import annotations
 
 import re
