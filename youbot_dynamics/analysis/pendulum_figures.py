@@ -11,7 +11,6 @@ within 1 cm of the reference at the outputs every 0.1 s.
 from __future__ import annotations
 
 import re
-from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -73,26 +72,15 @@ def seed_counts(text: str) -> dict[str, int]:
 def fixed_step_trajectory(method: str, k: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
     """Times and states at every step of a fixed-step run on the seed's problem; a run
     that diverges is run again up to two steps before it diverged (the part to draw)."""
-    from youbot_dynamics.analysis.bdf import bdf_fixed_step
     from youbot_dynamics.sim.integrators import DivergenceError
-    from youbot_dynamics.systems.elastic_pendulum import (SEED_STATE0, SEED_T_END,
-                                                          STABLE_BOUND,
-                                                          elastic_pendulum_jacobian,
-                                                          elastic_pendulum_rhs,
-                                                          simulate_elastic_pendulum)
+    from youbot_dynamics.systems.bdf_study import fixed_step_states
+    from youbot_dynamics.systems.elastic_pendulum import SEED_T_END
     h = SEED_T_END / n_steps
     n = n_steps
     for _ in range(4):
         try:
-            if method == "euler":
-                solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, n * h, "euler", dt=h,
-                                                        n_out=n + 1, bounds=STABLE_BOUND)
-            else:
-                solution = bdf_fixed_step(partial(elastic_pendulum_rhs, k=k), SEED_STATE0,
-                                          n * h, n, int(method[-1]),
-                                          jac=partial(elastic_pendulum_jacobian, k=k),
-                                          bound=STABLE_BOUND)
-            return solution.t, solution.x
+            states, _, _ = fixed_step_states(method, k, n, n * h, n + 1)
+            return h * np.arange(n + 1), states
         except DivergenceError as error:
             n = max(1, int(error.time / h) - 2)
     raise RuntimeError(f"{method} k={k} N={n_steps}: no finite stretch to draw")

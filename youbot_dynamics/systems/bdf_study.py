@@ -109,18 +109,20 @@ def energy_verdict(energy_error: float | None) -> str:
     return "accurate" if energy_error < ACCURATE_ENERGY_ERROR else "stable, inaccurate"
 
 
-def fixed_step_states(method: str, k: float, n_steps: int) -> tuple[np.ndarray, int | None, float]:
-    """The states at the OUTPUTS times of a fixed-step run (DivergenceError if it
-    diverges), its Newton iterations (None for Euler) and its wall time (s)."""
+def fixed_step_states(method: str, k: float, n_steps: int, t_end: float = SEED_T_END,
+                      n_out: int = OUTPUTS) -> tuple[np.ndarray, int | None, float]:
+    """The states at n_out equally spaced times of a fixed-step run of n_steps steps over
+    [0, t_end] s (DivergenceError if it diverges; n_steps a multiple of n_out - 1), its
+    Newton iterations (None for Euler) and its wall time (s)."""
     if method == "euler":
-        solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, "euler",
-                                                dt=SEED_T_END / n_steps, n_out=OUTPUTS,
+        solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, t_end, "euler",
+                                                dt=t_end / n_steps, n_out=n_out,
                                                 bounds=STABLE_BOUND)
         return solution.x, None, solution.stats.wall_time
-    solution = bdf_fixed_step(partial(elastic_pendulum_rhs, k=k), SEED_STATE0, SEED_T_END,
+    solution = bdf_fixed_step(partial(elastic_pendulum_rhs, k=k), SEED_STATE0, t_end,
                               n_steps, int(method[-1]),
                               jac=partial(elastic_pendulum_jacobian, k=k), bound=STABLE_BOUND)
-    stride = n_steps // (OUTPUTS - 1)
+    stride = n_steps // (n_out - 1)
     return (solution.x[::stride], solution.stats.nonlinear_iterations,
             solution.stats.wall_time)
 
