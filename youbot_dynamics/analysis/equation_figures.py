@@ -246,7 +246,7 @@ def draw_cartesian_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]
     axis.set_xlabel("t (s)")
     axis.set_ylabel("|(x, y) - hand-written| (m)")
     save(figure, out / "pipeline_pendulum_difference.png",
-         "Cartesian pendulum: generated against hand-written, both at tol 1e-10 / 1e-12")
+         "Cartesian pendulum: generated ODE (tol 1e-10) against hand-written (1e-12)")
     switches = run.switches()
     drawn["pipeline_pendulum.png"] = (
         f"states {', '.join(run.segments[0].states)}; {len(run.segments)} state selection(s)"
