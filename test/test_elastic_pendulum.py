@@ -83,7 +83,7 @@ def study_rows():
 
 def test_study_cvode_statistics_near_seed_figures(study_rows):
     seed_steps = {("cvode_bdf", 10): 536, ("cvode_adams", 10): 381, ("cvode_bdf", 50): 1100,
-                  ("cvode_adams", 50): 737, ("rk45", 10): 201}
+                  ("cvode_adams", 50): 737, ("rk45", 10): 201, ("lsoda", 10): 362}
     rows = {(r.integrator, r.k): r for r in study_rows if r.table == "cvode_statistics"}
     assert set(rows) == set(seed_steps)
     for key, steps in seed_steps.items():

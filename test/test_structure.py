@@ -117,3 +117,25 @@ def test_squeezer_structural_index_three():
     assert all(differentiated[f"f{i}"] == 1 for i in range(1, 8))     # q' = v, once
     assert not any(f"f{i}" in differentiated for i in range(8, 15))   # M v' = ...
     assert (report["n_equations"], report["n_variables"]) == (39, 41)
+
+
+@pytest.mark.parametrize("example", ["lowpass", "pendulum", "squeezer"])
+def test_blt_view_is_block_lower_triangular_with_the_matching_on_its_diagonal(example):
+    """Every entry of the permuted matrix lies on or below its row's diagonal block, the
+    diagonal is the matching, and it is the same incidence, rows and columns reordered."""
+    report = structure_report(example)
+    view = report["blt"]
+    rows = [[k for k, cell in enumerate(row) if cell == "x"] for row in view["incidence"]]
+    end, block_end = 0, []
+    for size in view["block_sizes"]:
+        end += size
+        block_end += [end] * size
+    assert len(rows) == end == len(view["rows"])
+    assert all(max(columns) < block_end[r] for r, columns in enumerate(rows))
+    assert all(r in columns for r, columns in enumerate(rows))
+    assert sorted(view["columns"]) == sorted(set(view["columns"]))
+    if example == "lowpass":  # the given incidence, permuted
+        original = {f"f{i + 1}": {str(j) for j in vs} for i, vs in enumerate(LOWPASS_INCIDENCE)}
+        permuted = {name: {view["columns"][k] for k in columns}
+                    for name, columns in zip(view["rows"], rows)}
+        assert permuted == original

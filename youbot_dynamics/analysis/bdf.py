@@ -225,11 +225,10 @@ def plot_stability_regions(path: str, orders=(1, 2, 3, 4),
     """PNG of the root loci (stability boundaries) of the given orders, the unstable side
     shaded: the whole regions, and a close-up of the imaginary axis near 0 with optional
     labelled points z = h lambda."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from youbot_dynamics.analysis.figures import pyplot, save
+    plt = pyplot()
 
-    figure, axes = plt.subplots(1, 2, figsize=(13, 6.5))
+    figure, axes = plt.subplots(1, 2, figsize=(11, 5.5))
     theta = np.linspace(0.0, 2.0 * np.pi, 4001)
     for axis in axes:
         for order in orders:
@@ -252,6 +251,4 @@ def plot_stability_regions(path: str, orders=(1, 2, 3, 4),
     axes[1].set_xlim(-0.8, 0.6)
     axes[1].set_ylim(-0.1, 2.0)
     axes[1].set_title("near the imaginary axis: the spring's h i sqrt(k)", fontsize=10)
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    save(figure, path)

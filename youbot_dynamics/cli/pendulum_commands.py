@@ -135,7 +135,8 @@ TABLE_TITLES = {
                        f"|state| <= {STABLE_BOUND:g} and max|E-E0| < {STABLE_ENERGY_ERROR:g}; "
                        f"accurate: max|E-E0| < {ACCURATE_ENERGY_ERROR:g})",
     "cvode_statistics": "Statistics at rtol = atol = 1e-6 from x0 = 1.2 on [0, 20] (CVODE "
-                        "with its own difference-quotient Jacobian, as the seed's runs)",
+                        "and LSODA with their own difference-quotient Jacobians, as the "
+                        "seed's runs; scipy's LSODA beside the seed's LSODAR)",
     "energy_error": "Energy error max|E-E0| versus step size / tolerance",
 }
 COLUMNS = ("integrator", "k", "setting", "verdict", "energy_error", "steps", "rhs_evals",

@@ -18,6 +18,7 @@ where a small energy error hides a phase error.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import asdict, dataclass
 from functools import partial
 from typing import Sequence
@@ -25,7 +26,7 @@ from typing import Sequence
 import numpy as np
 
 from youbot_dynamics.analysis.bdf import bdf_fixed_step
-from youbot_dynamics.sim.integrators import DivergenceError
+from youbot_dynamics.sim.integrators import DivergenceError, Solution
 from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, SEED_STATE0,
                                                       SEED_T_END, STABLE_BOUND,
                                                       STABLE_ENERGY_ERROR,
@@ -41,8 +42,8 @@ POSITION_TOLERANCE = 1e-2
 #: Tolerance of the DOP853 reference (its outputs agree with rtol 1e-10's to 3e-9 m at
 #: k = 2000, measured).
 REFERENCE_TOL = 1e-12
-#: Output times of the comparison: every 0.1 s.
-OUTPUTS = 201
+#: Output times of the comparison: every 0.1 s; of the reference run: every 0.01 s.
+OUTPUTS, DENSE_OUTPUTS = 201, 2001
 METHODS = ("euler", "bdf2", "bdf3", "bdf4")
 #: The seed's verdicts (benchmarks.md section 3).
 SEED_VERDICTS = {
@@ -86,11 +87,19 @@ class FixedStepRow:
         return asdict(self)
 
 
+@functools.cache
+def reference_solution(k: float, tol: float = REFERENCE_TOL) -> Solution:
+    """The DOP853 reference run at rtol = atol = tol, outputs every 0.01 s (DENSE_OUTPUTS
+    over [0, 20] s); cached per process (the tables and the figures share it)."""
+    solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, "dop853", rtol=tol,
+                                            atol=tol, n_out=DENSE_OUTPUTS)
+    return solution
+
+
 def reference_positions(k: float, tol: float = REFERENCE_TOL) -> np.ndarray:
     """(x, y) of the DOP853 reference at the OUTPUTS times (OUTPUTS, 2)."""
-    solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, "dop853", rtol=tol,
-                                            atol=tol, n_out=OUTPUTS)
-    return solution.x[:, :2]
+    stride = (DENSE_OUTPUTS - 1) // (OUTPUTS - 1)
+    return reference_solution(float(k), tol).x[::stride, :2]
 
 
 def energy_verdict(energy_error: float | None) -> str:
@@ -100,18 +109,20 @@ def energy_verdict(energy_error: float | None) -> str:
     return "accurate" if energy_error < ACCURATE_ENERGY_ERROR else "stable, inaccurate"
 
 
-def fixed_step_states(method: str, k: float, n_steps: int) -> tuple[np.ndarray, int | None, float]:
-    """The states at the OUTPUTS times of a fixed-step run (DivergenceError if it
-    diverges), its Newton iterations (None for Euler) and its wall time (s)."""
+def fixed_step_states(method: str, k: float, n_steps: int, t_end: float = SEED_T_END,
+                      n_out: int = OUTPUTS) -> tuple[np.ndarray, int | None, float]:
+    """The states at n_out equally spaced times of a fixed-step run of n_steps steps over
+    [0, t_end] s (DivergenceError if it diverges; n_steps a multiple of n_out - 1), its
+    Newton iterations (None for Euler) and its wall time (s)."""
     if method == "euler":
-        solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, "euler",
-                                                dt=SEED_T_END / n_steps, n_out=OUTPUTS,
+        solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, t_end, "euler",
+                                                dt=t_end / n_steps, n_out=n_out,
                                                 bounds=STABLE_BOUND)
         return solution.x, None, solution.stats.wall_time
-    solution = bdf_fixed_step(partial(elastic_pendulum_rhs, k=k), SEED_STATE0, SEED_T_END,
+    solution = bdf_fixed_step(partial(elastic_pendulum_rhs, k=k), SEED_STATE0, t_end,
                               n_steps, int(method[-1]),
                               jac=partial(elastic_pendulum_jacobian, k=k), bound=STABLE_BOUND)
-    stride = n_steps // (OUTPUTS - 1)
+    stride = n_steps // (n_out - 1)
     return (solution.x[::stride], solution.stats.nonlinear_iterations,
             solution.stats.wall_time)
 
@@ -167,10 +178,10 @@ def cvode_order_rows(stiffnesses: Sequence[float] = (10, 50),
 
 
 def measured_orders(orders: Sequence[int] = (1, 2, 3, 4), k: float = 10.0,
-                    t_end: float = 2.0, steps: tuple[int, int] = (400, 800)) -> list[dict]:
-    """Order of convergence measured on the elastic pendulum: the slope
-    log2(e(N) / e(2N)) of the final-state max-error against a DOP853 reference at 1e-13
-    (over [0, t_end] s, k as given)."""
+                    t_end: float = 2.0, steps: Sequence[int] = (400, 800)) -> list[dict]:
+    """Order of convergence measured on the elastic pendulum: the final-state max-error
+    against a DOP853 reference at 1e-13 (over [0, t_end] s, k as given) at each step
+    count, and the slope log(e(N1) / e(N2)) / log(N2 / N1) between the last two."""
     reference, _ = simulate_elastic_pendulum(k, SEED_STATE0, t_end, "dop853", rtol=1e-13,
                                              atol=1e-13, n_out=2)
     rows = []
@@ -180,8 +191,8 @@ def measured_orders(orders: Sequence[int] = (1, 2, 3, 4), k: float = 10.0,
             jac=partial(elastic_pendulum_jacobian, k=k)).x[-1] - reference.x[-1])))
             for n in steps]
         rows.append({"order": order, "steps": list(steps), "errors": errors,
-                     "measured_order": float(np.log(errors[0] / errors[1])
-                                             / np.log(steps[1] / steps[0]))})
+                     "measured_order": float(np.log(errors[-2] / errors[-1])
+                                             / np.log(steps[-1] / steps[-2]))})
     return rows
 
 
@@ -195,23 +206,22 @@ def stability_points(rows: Sequence[FixedStepRow]) -> dict[str, complex]:
 CHOPPY_TOL, CHOPPY_K = 0.1, 10.0
 
 
-def plot_choppy_traces(path: str, t_end: float = SEED_T_END, n_out: int = 2001) -> dict:
-    """PNG of x(t) and y(t) from CVODE BDF and Adams at rtol = atol = CHOPPY_TOL (k =
-    CHOPPY_K, CVODE's difference-quotient Jacobian) against DOP853 at 1e-12, outputs by
-    CVODE's interpolation every t_end / (n_out - 1) s. Returns each run's steps and max
-    position error (m)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def plot_choppy_traces(path: str,
+                       integrators: Sequence[str] = ("cvode_bdf", "cvode_adams")) -> dict:
+    """PNG of x(t) and y(t) from CVODE (BDF and Adams, or the ``integrators`` given) at
+    rtol = atol = CHOPPY_TOL (k = CHOPPY_K, CVODE's difference-quotient Jacobian) against
+    the DOP853 reference, outputs by CVODE's interpolation every 0.01 s over [0, 20] s.
+    Returns each run's steps and max position error (m)."""
+    from youbot_dynamics.analysis.figures import pyplot, save
+    plt = pyplot()
 
-    reference, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, t_end, "dop853",
-                                             rtol=1e-12, atol=1e-12, n_out=n_out)
-    figure, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    reference = reference_solution(CHOPPY_K)
+    figure, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
     figures = {}
-    for integrator in ("cvode_bdf", "cvode_adams"):
-        solution, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, t_end, integrator,
-                                                rtol=CHOPPY_TOL, atol=CHOPPY_TOL,
-                                                n_out=n_out, jacobian="difference")
+    for integrator in integrators:
+        solution, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, SEED_T_END,
+                                                integrator, rtol=CHOPPY_TOL, atol=CHOPPY_TOL,
+                                                n_out=DENSE_OUTPUTS, jacobian="difference")
         error = float(np.max(np.linalg.norm(solution.x[:, :2] - reference.x[:, :2], axis=1)))
         figures[integrator] = {"steps": solution.stats.steps, "position_error": error}
         for axis, column in zip(axes, (0, 1)):
@@ -219,14 +229,12 @@ def plot_choppy_traces(path: str, t_end: float = SEED_T_END, n_out: int = 2001) 
                       label=f"{integrator} ({solution.stats.steps} steps)")
     for axis, column, label in zip(axes, (0, 1), ("x (m)", "y (m)")):
         axis.plot(reference.t, reference.x[:, column], "k--", linewidth=0.6,
-                  label="DOP853 1e-12")
+                  label=f"DOP853 {REFERENCE_TOL:g}")
         axis.set_ylabel(label)
         axis.grid(True, alpha=0.3)
         axis.legend(fontsize=8, loc="upper right")
     axes[0].set_title(f"Elastic pendulum k = {CHOPPY_K:g}, CVODE at rtol = atol = "
                       f"{CHOPPY_TOL:g}", fontsize=10)
     axes[1].set_xlabel("t (s)")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    save(figure, path)
     return figures

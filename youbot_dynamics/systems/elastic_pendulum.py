@@ -180,7 +180,8 @@ SEED_CVODE = {("cvode_bdf", 10): "536 steps, 580 f-evals, 9 J-evals",
               ("cvode_adams", 10): "381 steps, 455 f-evals",
               ("cvode_bdf", 50): "1100 steps, 1177 f-evals",
               ("cvode_adams", 50): "737 steps, 880 f-evals",
-              ("rk45", 10): "Dopri45: 201 steps, 1208 f-evals"}
+              ("rk45", 10): "Dopri45: 201 steps, 1208 f-evals",
+              ("lsoda", 10): "LSODAR: 362 steps, 747 f-evals"}
 
 
 def elastic_pendulum_study(energy_k: float = 10.0,

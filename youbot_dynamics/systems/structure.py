@@ -92,11 +92,17 @@ def maximum_matching(equation_vars: Sequence[Iterable[int]],
     """A maximum matching variable -> equation (Hopcroft-Karp), using only the variables
     in ``unknowns`` (all if None). Perfect when every equation is matched."""
     allowed = None if unknowns is None else set(unknowns)
-    restricted = [{j for j in vs if allowed is None or j in allowed} for vs in equation_vars]
-    graph = incidence_graph(restricted)
-    equations = [("e", i) for i in range(len(restricted))]
-    matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=equations)
-    return {node[1]: partner[1] for node, partner in matching.items() if node[0] == "v"}
+    restricted = [sorted(j for j in vs if allowed is None or j in allowed)
+                  for vs in equation_vars]
+    # Integer nodes (equation i, variable m + j): networkx keeps the two sides in sets,
+    # and sets of ints iterate in the same order in every process; ("e", i) tuples hash
+    # their strings, so the matching changed with PYTHONHASHSEED.
+    m = len(restricted)
+    graph = nx.Graph()
+    graph.add_nodes_from(range(m))
+    graph.add_edges_from((i, m + j) for i, vs in enumerate(restricted) for j in vs)
+    matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=range(m))
+    return {node - m: partner for node, partner in matching.items() if node >= m}
 
 
 def block_lower_triangular(equation_vars: Sequence[Iterable[int]],
@@ -299,6 +305,32 @@ def incidence_rows(equation_vars: Sequence[Iterable[int]], n_variables: int) -> 
             for vs in equation_vars]
 
 
+def blt_permutation(equation_vars: Sequence[Iterable[int]], assignment: dict[int, int],
+                    blocks: Sequence[Sequence[int]], n_variables: int
+                    ) -> tuple[list[int], list[int]]:
+    """Row and column order of the BLT-permuted incidence matrix: the equations block by
+    block, each column the variable matched to its row's equation, unmatched (known)
+    variables last; with this order the matrix is block lower triangular."""
+    rows = [i for block in blocks for i in block]
+    matched_to = {i: j for j, i in assignment.items()}
+    columns = [matched_to[i] for i in rows if i in matched_to]
+    return rows, columns + [j for j in range(n_variables) if j not in set(columns)]
+
+
+def blt_view(equation_vars: Sequence[Iterable[int]], assignment: dict[int, int],
+             blocks: Sequence[Sequence[int]], equation_names: Sequence[str],
+             variable_names: Sequence[str]) -> dict:
+    """The BLT-permuted incidence matrix as plain data: row (equation) and column
+    (variable) names in that order, its text rows and the block sizes."""
+    rows, columns = blt_permutation(equation_vars, assignment, blocks, len(variable_names))
+    position = {j: k for k, j in enumerate(columns)}
+    permuted = [{position[j] for j in equation_vars[i]} for i in rows]
+    return {"rows": [equation_names[i] for i in rows],
+            "columns": [variable_names[j] for j in columns],
+            "incidence": incidence_rows(permuted, len(columns)),
+            "block_sizes": [len(block) for block in blocks]}
+
+
 def structure_report(example: str) -> dict:
     """The structural analysis of one of STRUCTURE_EXAMPLES as plain data (1-based numbers
     and names as printed): incidence matrix, matching, BLT blocks and, for the equation
@@ -309,6 +341,8 @@ def structure_report(example: str) -> dict:
         n_variables = max(max(vs) for vs in LOWPASS_INCIDENCE)
         unknowns = [j for j in range(n_variables) if j + 1 not in LOWPASS_KNOWN]
         matching = maximum_matching(equation_vars, unknowns)
+        blocks = block_lower_triangular(equation_vars, matching)
+        names = [f"f{i + 1}" for i in range(len(equation_vars))]
         return {
             "example": example,
             "variables": [str(j + 1) for j in range(n_variables)],
@@ -317,8 +351,9 @@ def structure_report(example: str) -> dict:
             "incidence": incidence_rows(equation_vars, n_variables),
             "assign": [matching[j] + 1 if j in matching else 0 for j in range(n_variables)],
             "perfect_matching": len(matching) == len(equation_vars),
-            "blocks": [[i + 1 for i in block]
-                       for block in block_lower_triangular(equation_vars, matching)],
+            "blocks": [[i + 1 for i in block] for block in blocks],
+            "blt": blt_view(equation_vars, matching, blocks, names,
+                            [str(j + 1) for j in range(n_variables)]),
             "steps": ["perfect matching: no equation needs differentiating (index 0 or 1)"]
             if len(matching) == len(equation_vars) else ["no perfect matching"],
         }
@@ -341,8 +376,10 @@ def structure_report(example: str) -> dict:
     active = result.active_equations
     solved = {j: active.index(i) for j, i in result.assignment.items()
               if result.variable_association[j] is None}
-    blocks = block_lower_triangular(
-        [{j for j in result.equation_vars[i] if j in solved} for i in active], solved)
+    solved_vars = [{j for j in result.equation_vars[i] if j in solved} for i in active]
+    blocks = block_lower_triangular(solved_vars, solved)
+    unknowns = sorted(solved)
+    column = {j: k for k, j in enumerate(unknowns)}
     return {
         "example": example,
         "variables": [variable_name(v) for v in variables],
@@ -360,6 +397,10 @@ def structure_report(example: str) -> dict:
         "n_equations": len(result.equations),
         "n_variables": len(result.variables),
         "blocks": [[result.equation_names[active[i]] for i in block] for block in blocks],
+        "blt": blt_view([{column[j] for j in vs} for vs in solved_vars],
+                        {column[j]: i for j, i in solved.items()}, blocks,
+                        [result.equation_names[i] for i in active],
+                        [variable_name(result.variables[j]) for j in unknowns]),
         "structural_index": result.structural_index,
     }
 

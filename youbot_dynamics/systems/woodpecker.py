@@ -208,9 +208,8 @@ class Woodpecker:
 def plot_woodpecker(woodpecker: Woodpecker, solution: HybridSolution, path: str) -> None:
     """Save a PNG (matplotlib, Agg) of z, phiS, phiB, lambda1, lambda2 and the mode index
     (I = 1, II = 2, III = 3) over time."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from youbot_dynamics.analysis.figures import pyplot, save
+    plt = pyplot()
 
     lambdas = np.array([woodpecker.constraint_forces(mode, x)
                         for mode, x in zip(solution.mode, solution.x)])
@@ -218,7 +217,7 @@ def plot_woodpecker(woodpecker: Woodpecker, solution: HybridSolution, path: str)
     rows = [("z (m)", solution.x[:, 0]), ("phiS (rad)", solution.x[:, 1]),
             ("phiB (rad)", solution.x[:, 2]), ("lambda1 (N)", lambdas[:, 0]),
             ("lambda2 (N)", lambdas[:, 1]), ("mode", index)]
-    figure, axes = plt.subplots(len(rows), 1, sharex=True, figsize=(9, 11))
+    figure, axes = plt.subplots(len(rows), 1, sharex=True, figsize=(8, 9.5))
     for axis, (label, values) in zip(axes, rows):
         axis.plot(solution.t, values, linewidth=0.8)
         axis.set_ylabel(label)
@@ -227,6 +226,4 @@ def plot_woodpecker(woodpecker: Woodpecker, solution: HybridSolution, path: str)
     axes[-1].set_xlabel("t (s)")
     axes[0].set_title(f"Woodpecker toy: {solution.count(BEAK)} beak hits, "
                       f"{solution.stats.integrator}")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    save(figure, path)
