@@ -4,7 +4,9 @@ Each geometry hangs on a frame of the model: a robot link's frame, a free body's
 (the free-flyer joint added by :func:`~youbot_dynamics.dynamics.free_body.add_free_flyer`)
 or none (world geometry). After ``pin.framesForwardKinematics`` (or
 ``computeJointJacobians`` + ``updateFramePlacements``) on a Data of that model,
-:meth:`ContactModel.poses` gives the world pose of every geometry from ``data.oMf``, and
+:meth:`ContactModel.poses` gives the world pose of every geometry from ``data.oMf``,
+:meth:`ContactModel.centres` the centres of their bounding balls for the broad phase,
+:meth:`ContactModel.placed_points` one pair's contact points without the other poses, and
 :meth:`ContactModel.relative_jacobian` the 3 x nv map from the generalised velocity (robot
 joints and body twists alike) to a contact point's relative velocity, from Pinocchio's frame
 Jacobians. The compliant law (:meth:`ContactModel.compliant_force`, a generalised force for
@@ -60,12 +62,50 @@ class ContactModel:
                        for p in self.pairs]
         self.broad = BroadPhase([g.shape for g in self.geometries], [(p.first, p.second) for p in self.pairs],
                                 margin)
+        #: World geometries' poses as coal takes them, and every geometry's frame placement when
+        #: it is not the identity (then the world pose is data.oMf[frame] itself).
+        self._world_poses = {i: pin.SE3(g.placement) for i, (g, frame) in enumerate(zip(self.geometries, self.frames))
+                             if frame is None}
+        self._offsets = {i: g.placement for i, g in enumerate(self.geometries) if not np.array_equal(g.placement, np.eye(4))}
+        #: Bounding-ball centres: the world geometries' fixed (a half-space's: the origin), the
+        #: others' (index, frame, centre in the frame, m) to place after each kinematics pass.
+        self._fixed_centres = np.zeros((len(self.geometries), 3))
+        self._moving_centres = []
+        for i, (g, frame) in enumerate(zip(self.geometries, self.frames)):
+            if frame is None:
+                self._fixed_centres[i] = 0.0 if g.shape.kind == "halfspace" else g.placement[:3, 3]
+            else:
+                self._moving_centres.append((i, frame, np.array(g.placement[:3, 3])))
 
     # ---- geometry ---------------------------------------------------------------------------
     def poses(self, data: pin.Data) -> list[np.ndarray]:
         """World poses (4x4, m) of the geometries from ``data.oMf`` (frames placed first)."""
         return [g.placement if frame is None else data.oMf[frame].homogeneous @ g.placement
                 for g, frame in zip(self.geometries, self.frames)]
+
+    def centres(self, data: pin.Data) -> np.ndarray:
+        """World centres (n_geometries x 3, m) of the geometries' bounding balls, from
+        ``data.oMf`` (frames placed first): what :meth:`BroadPhase.close_pairs` reads."""
+        centres = self._fixed_centres.copy()
+        placements = data.oMf
+        for i, frame, centre in self._moving_centres:
+            centres[i] = placements[frame].act(centre)
+        return centres
+
+    def placed(self, data: pin.Data, geometry: int) -> np.ndarray | pin.SE3:
+        """Geometry i's world pose from ``data.oMf`` (frames placed first): the frame's own
+        pin.SE3 when the geometry sits at its origin, else the 4x4 product of :meth:`poses`."""
+        frame = self.frames[geometry]
+        if frame is None:
+            return self._world_poses[geometry]
+        offset = self._offsets.get(geometry)
+        return data.oMf[frame] if offset is None else data.oMf[frame].homogeneous @ offset
+
+    def placed_points(self, k: int, data: pin.Data, margin: float) -> list[ContactPoint]:
+        """Contact points of pair k at the poses in ``data.oMf``, gaps up to ``margin`` (m)
+        included; placing only this pair's two geometries."""
+        pair = self.pairs[k]
+        return self.narrow[k].contact_points(self.placed(data, pair.first), self.placed(data, pair.second), margin)
 
     def points(self, k: int, poses: Sequence[np.ndarray], margin: float) -> list[ContactPoint]:
         """Contact points of pair k at these poses, gaps up to ``margin`` (m) included."""
@@ -116,9 +156,10 @@ class ContactModel:
                         compliant: Sequence[int], approach_speeds: np.ndarray) -> np.ndarray:
         """Generalised force (nv; N m, N) of the Hunt-Crossley pairs ``compliant`` (indices
         into ``pairs``; pair ``compliant[j]`` last touched at ``approach_speeds[j]``, m/s):
-        sum of J^T f over the overlapping points. ``poses`` are those at q."""
+        sum of J^T f over the overlapping points. ``poses`` are those at q, and ``data``'s
+        frames are placed at q."""
         generalised = np.zeros(self.model.nv)
-        close = set(self.broad.close_pairs(poses))
+        close = set(self.broad.close_pairs(self.centres(data)))
         jacobians_ready = False
         for j, k in enumerate(compliant):
             if k not in close:

@@ -34,6 +34,8 @@ about 60 us to build: pass one to reuse it), ``threads`` the C++ threads (OpenMP
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pinocchio as pin
 
@@ -155,10 +157,20 @@ def _check_sizes(robot: Robot, q: Vector, **velocity_sized: Vector) -> None:
         sized(robot, x, "v", name)
 
 
+@functools.lru_cache(maxsize=16)
+def _strict_lower(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column indices of an n x n matrix's strict lower triangle."""
+    return np.tril_indices(n, -1)
+
+
 def symmetrised(upper: np.ndarray) -> np.ndarray:
     """The full symmetric matrix of one of which only the upper triangle is reliable (what
-    Pinocchio's crba and computeMinverse fill); a fresh array."""
-    return np.triu(upper) + np.triu(upper, 1).T
+    Pinocchio's crba and computeMinverse fill); a fresh array (the upper triangle copied
+    over the lower through cached indices: a quarter of np.triu's cost)."""
+    full = np.array(upper)
+    rows, cols = _strict_lower(len(full))
+    full[rows, cols] = full[cols, rows]
+    return full
 
 
 def mass_matrix(robot: Robot, data: pin.Data, q: Vector) -> Vector:
