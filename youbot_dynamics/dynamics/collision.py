@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import coal
 import numpy as np
@@ -96,10 +96,9 @@ class Geometry:
                                  f"known: {', '.join(OWNERS)}")
 
 
-@dataclass(frozen=True)
-class ContactPoint:
+class ContactPoint(NamedTuple):
     """World-frame witness points on shape 1 and 2 (m), unit normal from 1 to 2, depth (m,
-    > 0 when overlapping, -distance otherwise)."""
+    > 0 when overlapping, -distance otherwise). A named tuple: built several times a step."""
 
     point1: np.ndarray
     point2: np.ndarray
@@ -107,12 +106,10 @@ class ContactPoint:
     depth: float
 
 
-def transform(pose: np.ndarray | pin.SE3) -> coal.Transform3s | pin.SE3:
-    """What coal takes for a pose: a 4x4 homogeneous pose becomes a coal transform; a
-    ``pin.SE3`` is passed as it is (coal converts it without a copy through numpy)."""
-    if isinstance(pose, pin.SE3):
-        return pose
-    return coal.Transform3s(np.ascontiguousarray(pose[:3, :3]), np.ascontiguousarray(pose[:3, 3]))
+def transform(pose: np.ndarray | pin.SE3) -> pin.SE3:
+    """A pose as coal takes it: a ``pin.SE3`` (coal converts it in C++), a 4x4 homogeneous
+    pose copied into one."""
+    return pose if isinstance(pose, pin.SE3) else pin.SE3(pose)
 
 
 class PlacedPair:
@@ -147,7 +144,7 @@ class PlacedPair:
         if distance > margin:
             return []
         result = self.distance_result
-        p1, p2 = result.getNearestPoint1().copy(), result.getNearestPoint2().copy()
+        p1, p2 = result.getNearestPoint1(), result.getNearestPoint2()  # fresh arrays
         normal = np.array(result.normal, dtype=float)
         if distance > 0.0 or not self.patches:
             return [ContactPoint(p1, p2, normal, -float(distance))]
@@ -170,21 +167,29 @@ class BroadPhase:
     ``margin`` is never left out (a ball holds its shape; ``SLACK`` covers the rounding of
     the centres)."""
 
-    #: Added to every reach (m): the rounding of world centres far larger than it.
+    #: Added to every reach (m): the rounding of world centres is far below it.
     SLACK = 1e-9
 
     def __init__(self, shapes: Sequence[Shape], pairs: Sequence[tuple[int, int]], margin: float) -> None:
         self.pairs = list(pairs)
         self.margin = margin
-        radii = np.array([shape.bounding_radius for shape in shapes])
-        self.first = np.array([a for a, _ in self.pairs], dtype=int)
-        self.second = np.array([b for _, b in self.pairs], dtype=int)
-        reach = radii[self.first] + radii[self.second] + margin + self.SLACK
-        #: Squared reach of every pair (inf with a half-space: always close).
-        self.reach2 = reach * reach
+        reach = [shapes[a].bounding_radius + shapes[b].bounding_radius + margin + self.SLACK for a, b in self.pairs]
+        #: (pair, first, second, squared reach) of the bounded pairs; a half-space's are always close.
+        self.tests = [(k, a, b, r * r) for k, ((a, b), r) in enumerate(zip(self.pairs, reach)) if math.isfinite(r)]
+        self.always = [k for k, r in enumerate(reach) if not math.isfinite(r)]
 
-    def close_pairs(self, centres: np.ndarray) -> list[int]:
+    def close_pairs(self, centres: Sequence[Sequence[float]]) -> list[int]:
         """Pairs (indices into ``pairs``) worth a narrow-phase query with the shapes' origins
-        at ``centres`` (n_shapes x 3, world, m; a half-space's row may hold any finite value)."""
-        gap = centres[self.first] - centres[self.second]  # finite rows only: inf - inf is nan
-        return np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= self.reach2).tolist()
+        at ``centres`` (per shape x, y, z, world, m; a half-space's is not read), in
+        increasing order. Plain float arithmetic: for the few pairs a scene declares, a
+        numpy pass costs more in dispatch (about 20 us) than this loop."""
+        close = list(self.always)
+        for k, a, b, reach2 in self.tests:
+            xa, ya, za = centres[a]
+            xb, yb, zb = centres[b]
+            dx, dy, dz = xa - xb, ya - yb, za - zb
+            if dx * dx + dy * dy + dz * dz <= reach2:
+                close.append(k)
+        if self.always:
+            close.sort()
+        return close

@@ -67,15 +67,19 @@ class ContactModel:
         self._world_poses = {i: pin.SE3(g.placement) for i, (g, frame) in enumerate(zip(self.geometries, self.frames))
                              if frame is None}
         self._offsets = {i: g.placement for i, g in enumerate(self.geometries) if not np.array_equal(g.placement, np.eye(4))}
-        #: Bounding-ball centres: the world geometries' fixed (a half-space's: the origin), the
-        #: others' (index, frame, centre in the frame, m) to place after each kinematics pass.
-        self._fixed_centres = np.zeros((len(self.geometries), 3))
+        #: Bounding-ball centres (world, m): fixed for the geometries on the universe joint
+        #: (world geometry, links fixed to the world); the others' (index, frame, centre in the
+        #: frame) placed after each kinematics pass.
+        self._fixed_centres: list[tuple[float, float, float] | None] = [None] * len(self.geometries)
         self._moving_centres = []
         for i, (g, frame) in enumerate(zip(self.geometries, self.frames)):
+            centre = np.array(g.placement[:3, 3], dtype=float)
             if frame is None:
-                self._fixed_centres[i] = 0.0 if g.shape.kind == "halfspace" else g.placement[:3, 3]
+                self._fixed_centres[i] = tuple(centre.tolist())
+            elif model.frames[frame].parentJoint == 0:
+                self._fixed_centres[i] = tuple(model.frames[frame].placement.act(centre).tolist())
             else:
-                self._moving_centres.append((i, frame, np.array(g.placement[:3, 3])))
+                self._moving_centres.append((i, frame, centre))
 
     # ---- geometry ---------------------------------------------------------------------------
     def poses(self, data: pin.Data) -> list[np.ndarray]:
@@ -83,13 +87,13 @@ class ContactModel:
         return [g.placement if frame is None else data.oMf[frame].homogeneous @ g.placement
                 for g, frame in zip(self.geometries, self.frames)]
 
-    def centres(self, data: pin.Data) -> np.ndarray:
-        """World centres (n_geometries x 3, m) of the geometries' bounding balls, from
+    def centres(self, data: pin.Data) -> list[tuple[float, float, float]]:
+        """World centres (x, y, z per geometry, m) of the geometries' bounding balls, from
         ``data.oMf`` (frames placed first): what :meth:`BroadPhase.close_pairs` reads."""
-        centres = self._fixed_centres.copy()
+        centres = list(self._fixed_centres)
         placements = data.oMf
         for i, frame, centre in self._moving_centres:
-            centres[i] = placements[frame].act(centre)
+            centres[i] = placements[frame].act(centre).tolist()
         return centres
 
     def placed(self, data: pin.Data, geometry: int) -> np.ndarray | pin.SE3:

@@ -138,6 +138,7 @@ class ConstraintStepper:
                                 [(p.first, p.second) for p in contact.pairs], settings.margin)
         self.owners = [(contact.owner_joint(p.first), contact.owner_joint(p.second)) for p in contact.pairs]
         self.sets: dict[tuple[tuple[int, int], ...], ContactSet] = {}
+        self._frame = pin.SE3.Identity()  # scratch: a contact frame in the world
 
     def contact_set(self, key: tuple[tuple[int, int], ...]) -> ContactSet:
         """The kept :class:`ContactSet` of ``key``, built on its first use."""
@@ -166,15 +167,17 @@ class ConstraintStepper:
         if not touching:
             return pin.integrate(model, q, h * v_free), v_free, report
         active = self.contact_set(tuple((k, len(points)) for k, points in touching))
-        gaps, i = [], 0
+        gaps, i, frame = [], 0, self._frame
         for k, points in touching:
             joint1, joint2 = self.owners[k]
             world1, world2 = data.oMi[joint1], data.oMi[joint2]
             for c in points:
-                rotation = contact_rotation(c.normal)
                 point = active.points[i]
-                point.joint1_placement = world1.actInv(pin.SE3(rotation, c.point1))
-                point.joint2_placement = world2.actInv(pin.SE3(rotation, c.point2))
+                frame.rotation = contact_rotation(c.normal)
+                frame.translation = c.point1
+                point.joint1_placement = world1.actInv(frame)
+                frame.translation = c.point2
+                point.joint2_placement = world2.actInv(frame)
                 gaps.append(-c.depth)
                 report.penetration = max(report.penetration, c.depth)
                 i += 1

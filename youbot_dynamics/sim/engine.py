@@ -262,14 +262,13 @@ class ConstraintStepping:
         count = max(1, math.ceil((t_target - self.t) / dt - 1e-9))
         start, h = self.t, (t_target - self.t) / count
         self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
+        joints, friction, stepper = model.joint_velocities, model.friction, model.stepper
         for i in range(1, count + 1):
             tau = np.zeros(model.plant.nv)
             if model.nv:
-                x = self._pack()
-                joints = model.joint_velocities
-                tau[joints] = self.torque(self.t, x)
-                if model.friction is not None:
-                    tau[joints] -= model.friction.torque(self.v[joints])
+                tau[joints] = self.torque(self.t, self._pack())
+                if friction is not None:
+                    friction.add_torque(tau[joints], self.v[joints], None, -1.0)
             if model.base is not None:  # dynamic (a kinematic base refuses the stepper)
                 try:
                     tau += model.base.floor_force(model.plant.model, self.data, self.q, self.v)
@@ -280,16 +279,17 @@ class ConstraintStepping:
                     base = model.base
                     self.x[integral] += h * base.wheel_torques(self.t, self.v[model.joint_velocities][base.wheels],
                                                                self.x[integral], self.twist)[1]
-            self.q, self.v, report = model.stepper.step(self.data, self.q, self.v, tau, h)
+            self.q, self.v, report = stepper.step(self.data, self.q, self.v, tau, h)
             self.t = t_target if i == count else start + i * h
             self.steps += 1
             self.iterations += report.iterations
             self.deepest = max(self.deepest, report.penetration)
             touching = frozenset(name for name, impulse in report.normal_impulse.items() if impulse > 0)
-            self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
-                            for name in sorted(touching - self.touching)]
-            self.touching = touching
-            if not np.all(np.isfinite(self.v)):
+            if touching != self.touching:
+                self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
+                                for name in sorted(touching - self.touching)]
+                self.touching = touching
+            if not np.isfinite(self.v).all():
                 raise DivergenceError(self.t, model.integrator.method, h, "non-finite velocity")
             if not report.penetration <= self.deepest_allowed:
                 raise DivergenceError(self.t, model.integrator.method, h, f"overlap {report.penetration:.3g} m "
