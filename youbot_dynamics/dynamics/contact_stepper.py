@@ -126,7 +126,7 @@ class ContactSet:
         and the solver's iterations for the Delassus matrix and drift (m/s)."""
         self.solver.solve(pin.DelassusOperatorDense(delassus), drift, self.constraints, self.datas, self.options,
                           self.result)
-        return np.array(self.result.retrieveConstraintImpulses()), int(self.result.iterations)
+        return self.result.retrieveConstraintImpulses(), int(self.result.iterations)  # a fresh array
 
 
 class ConstraintStepper:
