@@ -64,9 +64,17 @@ class ContactModel:
                                 margin)
         #: World geometries' poses as coal takes them, and every geometry's frame placement when
         #: it is not the identity (then the world pose is data.oMf[frame] itself).
-        self._world_poses = {i: pin.SE3(g.placement) for i, (g, frame) in enumerate(zip(self.geometries, self.frames))
-                             if frame is None}
         self._offsets = {i: g.placement for i, g in enumerate(self.geometries) if not np.array_equal(g.placement, np.eye(4))}
+        #: Fixed world poses (pin.SE3) of the geometries on the universe joint (world geometry,
+        #: links fixed to the world): what :meth:`placed` would compute from data.oMf, to the bit.
+        self._fixed_poses = {}
+        for i, (g, frame) in enumerate(zip(self.geometries, self.frames)):
+            if frame is None:
+                self._fixed_poses[i] = pin.SE3(g.placement)
+            elif model.frames[frame].parentJoint == 0:
+                placement = model.frames[frame].placement
+                self._fixed_poses[i] = placement if i not in self._offsets else \
+                    pin.SE3(placement.homogeneous @ self._offsets[i])
         #: Bounding-ball centres (world, m): fixed for the geometries on the universe joint
         #: (world geometry, links fixed to the world); the others' (index, frame, centre in the
         #: frame) placed after each kinematics pass.
@@ -98,11 +106,12 @@ class ContactModel:
 
     def placed(self, data: pin.Data, geometry: int) -> np.ndarray | pin.SE3:
         """Geometry i's world pose from ``data.oMf`` (frames placed first): the frame's own
-        pin.SE3 when the geometry sits at its origin, else the 4x4 product of :meth:`poses`."""
-        frame = self.frames[geometry]
-        if frame is None:
-            return self._world_poses[geometry]
-        offset = self._offsets.get(geometry)
+        pin.SE3 when the geometry sits at its origin, else the 4x4 product of :meth:`poses`;
+        kept from the start for geometry fixed to the world."""
+        fixed = self._fixed_poses.get(geometry)
+        if fixed is not None:
+            return fixed
+        frame, offset = self.frames[geometry], self._offsets.get(geometry)
         return data.oMf[frame] if offset is None else data.oMf[frame].homogeneous @ offset
 
     def placed_points(self, k: int, data: pin.Data, margin: float) -> list[ContactPoint]:

@@ -83,9 +83,12 @@ def contact_rotation(normal: np.ndarray) -> np.ndarray:
 class ContactSet:
     """What the solve of one contact set needs, built once and updated in place: a
     ``PointContactConstraintModel`` per point (pair k's owners' joints, its friction), their
-    datas, the solver with its settings and result, and per point the normal row, pair name
-    and restitution. ``key`` is ((pair, number of points), ...) in the order the points
-    come."""
+    datas, the solver with its settings and result, and per point the pair's name and
+    restitution (point i's rows: 3i, 3i + 1 tangential, 3i + 2 normal). ``key`` is
+    ((pair, number of points), ...) in the order the points come.
+
+    Scratch space like the coal requests of the contact model: a step sets every frame it
+    reads, and the solvers start cold (no warm start is set), so one set serves any state."""
 
     def __init__(self, contact: ContactModel, key: tuple[tuple[int, int], ...], settings: StepperSettings) -> None:
         model = contact.model
@@ -108,7 +111,6 @@ class ContactSet:
         #: References into the vectors: moving a contact frame here moves the solver's.
         self.points = [constraint.extract() for constraint in self.constraints]
         self.pairs = list(zip(self.constraints, self.datas))
-        self.normal_rows = np.arange(len(self.points)) * 3 + 2
         size = 3 * len(self.points)
         if settings.solver == "pgs":
             self.solver, self.options, self.result = (pin.PGSConstraintSolver(size), pin.PGSSolverSettings(),
@@ -170,14 +172,14 @@ class ConstraintStepper:
         gaps, i, frame = [], 0, self._frame
         for k, points in touching:
             joint1, joint2 = self.owners[k]
-            world1, world2 = data.oMi[joint1], data.oMi[joint2]
+            world1, world2 = data.oMi[joint1] if joint1 else None, data.oMi[joint2] if joint2 else None
             for c in points:
                 point = active.points[i]
                 frame.rotation = contact_rotation(c.normal)
-                frame.translation = c.point1
-                point.joint1_placement = world1.actInv(frame)
+                frame.translation = c.point1  # the universe's joint frame is the world's
+                point.joint1_placement = world1.actInv(frame) if joint1 else frame
                 frame.translation = c.point2
-                point.joint2_placement = world2.actInv(frame)
+                point.joint2_placement = world2.actInv(frame) if joint2 else frame
                 gaps.append(-c.depth)
                 report.penetration = max(report.penetration, c.depth)
                 i += 1
@@ -187,14 +189,14 @@ class ConstraintStepper:
         inverse_mass = symmetrised(inverse_mass)
         delassus = jacobian @ inverse_mass @ jacobian.T
         drift = jacobian @ v_free
-        approach = (jacobian @ v)[active.normal_rows].tolist()
+        approach = (jacobian @ v)[2::3].tolist()  # normal rows: z of each contact frame
         threshold, baumgarte = -settings.restitution_threshold, settings.baumgarte
-        drift[active.normal_rows] += [
+        drift[2::3] += [
             restitution * before if before < threshold and gap + h * before < 0
             else (gap / h if gap > 0 else baumgarte * gap / h)
             for gap, before, restitution in zip(gaps, approach, active.restitutions)]
         impulses, report.iterations = active.solve(delassus, drift)
         v_next = v_free + inverse_mass @ jacobian.T @ impulses
-        for name, impulse in zip(active.names, impulses[active.normal_rows].tolist()):
+        for name, impulse in zip(active.names, impulses[2::3].tolist()):
             report.normal_impulse[name] = report.normal_impulse.get(name, 0.0) + impulse
         return pin.integrate(model, q, h * v_next), v_next, report

@@ -158,18 +158,17 @@ def _check_sizes(robot: Robot, q: Vector, **velocity_sized: Vector) -> None:
 
 
 @functools.lru_cache(maxsize=16)
-def _strict_lower(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Row and column indices of an n x n matrix's strict lower triangle."""
-    return np.tril_indices(n, -1)
+def _strict_lower(n: int) -> np.ndarray:
+    """Mask of an n x n matrix's strict lower triangle."""
+    return np.tri(n, k=-1, dtype=bool)
 
 
 def symmetrised(upper: np.ndarray) -> np.ndarray:
     """The full symmetric matrix of one of which only the upper triangle is reliable (what
     Pinocchio's crba and computeMinverse fill); a fresh array (the upper triangle copied
-    over the lower through cached indices: a quarter of np.triu's cost)."""
+    over the lower through a cached mask: a quarter of np.triu's cost)."""
     full = np.array(upper)
-    rows, cols = _strict_lower(len(full))
-    full[rows, cols] = full[cols, rows]
+    np.copyto(full, full.T, where=_strict_lower(len(full)))
     return full
 
 
