@@ -244,17 +244,23 @@ class ConstraintStepping:
         self.events: list[ContactEvent] = []
         self.deepest, self.deepest_allowed = 0.0, deepest_allowed
         self.t_previous, self.x_previous = self.t, self.x
+        # where the plant's q and v go in x, looked up once (packed at every step)
+        root = model.plant.root_nq
+        self._robot_q, self._q_block, self._v_block = slice(root, root + model.robot.nq), model.block("q"), \
+            model.velocity_block
+        self._bodies = (model.block("pose"), model.block("chart"), model.body_offset) if model.body_names else None
 
     def _pack(self) -> np.ndarray:
         model, x = self.model, self.x.copy()
-        root = model.plant.root_nq
-        x[model.block("q")] = self.q[root:root + model.robot.nq]
+        x[self._q_block] = self.q[self._robot_q]
         if model.base is not None:
+            root = self._robot_q.start
             x[model.block("base")] = model.base.unwrapped_pose(self.q[:root], x[model.block("base")][2])
-        x[model.velocity_block] = self.v
-        if model.body_names:
-            x[model.block("pose")] = self.q[model.body_offset:]
-            x[model.block("chart")] = 0.0
+        x[self._v_block] = self.v
+        if self._bodies is not None:
+            pose, chart, offset = self._bodies
+            x[pose] = self.q[offset:]
+            x[chart] = 0.0
         return x
 
     def advance(self, t_target: float) -> None:
@@ -262,10 +268,11 @@ class ConstraintStepping:
         count = max(1, math.ceil((t_target - self.t) / dt - 1e-9))
         start, h = self.t, (t_target - self.t) / count
         self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
-        joints, friction, stepper = model.joint_velocities, model.friction, model.stepper
+        joints, friction, stepper, nv, moving = model.joint_velocities, model.friction, model.stepper, \
+            model.plant.nv, model.nv > 0
         for i in range(1, count + 1):
-            tau = np.zeros(model.plant.nv)
-            if model.nv:
+            tau = np.zeros(nv)
+            if moving:
                 tau[joints] = self.torque(self.t, self._pack())
                 if friction is not None:
                     friction.add_torque(tau[joints], self.v[joints], None, -1.0)
