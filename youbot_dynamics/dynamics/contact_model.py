@@ -62,9 +62,10 @@ class ContactModel:
                        for p in self.pairs]
         self.broad = BroadPhase([g.shape for g in self.geometries], [(p.first, p.second) for p in self.pairs],
                                 margin)
-        #: World geometries' poses as coal takes them, and every geometry's frame placement when
-        #: it is not the identity (then the world pose is data.oMf[frame] itself).
-        self._offsets = {i: g.placement for i, g in enumerate(self.geometries) if not np.array_equal(g.placement, np.eye(4))}
+        #: Each geometry's placement in its frame where it is not the identity (where it is, the
+        #: geometry's world pose is data.oMf[frame] itself).
+        self._offsets = {i: g.placement for i, g in enumerate(self.geometries)
+                         if not np.array_equal(g.placement, np.eye(4))}
         #: Fixed world poses (pin.SE3) of the geometries on the universe joint (world geometry,
         #: links fixed to the world): what :meth:`placed` would compute from data.oMf, to the bit.
         self._fixed_poses = {}
