@@ -113,7 +113,7 @@ class ContactModel:
         if fixed is not None:
             return fixed
         frame, offset = self.frames[geometry], self._offsets.get(geometry)
-        return data.oMf[frame] if offset is None else data.oMf[frame].homogeneous @ offset
+        return data.oMf[frame] if offset is None else data.oMf[frame].homogeneous.dot(offset)
 
     def placed_points(self, k: int, data: pin.Data, margin: float) -> list[ContactPoint]:
         """Contact points of pair k at the poses in ``data.oMf``, gaps up to ``margin`` (m)

@@ -186,17 +186,18 @@ class ConstraintStepper:
         for constraint, cdata in active.pairs:
             constraint.calc(model, data, cdata)
         jacobian = pin.getConstraintsJacobian(model, data, active.constraints, active.datas)
+        # ndarray.dot, not @: the same BLAS products at half the dispatch cost on small arrays
         inverse_mass = symmetrised(inverse_mass)
-        delassus = jacobian @ inverse_mass @ jacobian.T
-        drift = jacobian @ v_free
-        approach = (jacobian @ v)[2::3].tolist()  # normal rows: z of each contact frame
+        delassus = jacobian.dot(inverse_mass).dot(jacobian.T)
+        drift = jacobian.dot(v_free)
+        approach = jacobian.dot(v)[2::3].tolist()  # normal rows: z of each contact frame
         threshold, baumgarte = -settings.restitution_threshold, settings.baumgarte
         drift[2::3] += [
             restitution * before if before < threshold and gap + h * before < 0
             else (gap / h if gap > 0 else baumgarte * gap / h)
             for gap, before, restitution in zip(gaps, approach, active.restitutions)]
         impulses, report.iterations = active.solve(delassus, drift)
-        v_next = v_free + inverse_mass @ jacobian.T @ impulses
+        v_next = v_free + inverse_mass.dot(jacobian.T).dot(impulses)
         for name, impulse in zip(active.names, impulses[2::3].tolist()):
             report.normal_impulse[name] = report.normal_impulse.get(name, 0.0) + impulse
         return pin.integrate(model, q, h * v_next), v_next, report
