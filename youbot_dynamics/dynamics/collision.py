@@ -14,8 +14,8 @@ shape 1 to shape 2 and the depth (m, > 0 for overlap).
 
 :class:`BroadPhase` keeps the declared pairs and hands to the narrow phase only those whose
 bounding balls (:attr:`Shape.bounding_radius` about the shape's origin), inflated by the
-margin, overlap: one vectorised test over the pairs, and the narrow-phase cost grows with
-the pairs that are close.
+margin, overlap: a few float operations per pair, and the narrow-phase cost grows with the
+pairs that are close.
 """
 from __future__ import annotations
 
@@ -125,8 +125,8 @@ class PlacedPair:
         self.patches = shape1.kind in FLAT and shape2.kind in FLAT
 
     def _distance(self, t1, t2) -> float:
-        """coal's signed distance (m) at coal transforms (or pin.SE3) t1, t2; the witnesses
-        and normal stay in ``distance_result``."""
+        """coal's signed distance (m) at world poses t1, t2 (pin.SE3 or coal transforms); the
+        witnesses and normal stay in ``distance_result``."""
         result = self.distance_result
         result.clear()  # coal keeps the smaller of the stored and the new distance
         return coal.distance(self.geometry1, t1, self.geometry2, t2, self.distance_request, result)

@@ -66,27 +66,23 @@ class ContactModel:
         #: geometry's world pose is data.oMf[frame] itself).
         self._offsets = {i: g.placement for i, g in enumerate(self.geometries)
                          if not np.array_equal(g.placement, np.eye(4))}
-        #: Fixed world poses (pin.SE3) of the geometries on the universe joint (world geometry,
-        #: links fixed to the world): what :meth:`placed` would compute from data.oMf, to the bit.
-        self._fixed_poses = {}
-        for i, (g, frame) in enumerate(zip(self.geometries, self.frames)):
-            if frame is None:
-                self._fixed_poses[i] = pin.SE3(g.placement)
-            elif model.frames[frame].parentJoint == 0:
-                placement = model.frames[frame].placement
-                self._fixed_poses[i] = placement if i not in self._offsets else \
-                    pin.SE3(placement.homogeneous @ self._offsets[i])
-        #: Bounding-ball centres (world, m): fixed for the geometries on the universe joint
-        #: (world geometry, links fixed to the world); the others' (index, frame, centre in the
-        #: frame) placed after each kinematics pass.
+        #: Geometry fixed to the world (world geometry, links on the universe joint): its world
+        #: pose (pin.SE3; what :meth:`placed` would compute from data.oMf, to the bit) and its
+        #: bounding-ball centre (world, m), kept from the start. The others' (index, frame,
+        #: centre in the frame) are placed after each kinematics pass.
+        self._fixed_poses: dict[int, pin.SE3] = {}
         self._fixed_centres: list[tuple[float, float, float] | None] = [None] * len(self.geometries)
-        self._moving_centres = []
+        self._moving_centres: list[tuple[int, int, np.ndarray]] = []
         for i, (g, frame) in enumerate(zip(self.geometries, self.frames)):
             centre = np.array(g.placement[:3, 3], dtype=float)
             if frame is None:
+                self._fixed_poses[i] = pin.SE3(g.placement)
                 self._fixed_centres[i] = tuple(centre.tolist())
             elif model.frames[frame].parentJoint == 0:
-                self._fixed_centres[i] = tuple(model.frames[frame].placement.act(centre).tolist())
+                placement = model.frames[frame].placement
+                self._fixed_poses[i] = placement if i not in self._offsets else \
+                    pin.SE3(placement.homogeneous.dot(self._offsets[i]))
+                self._fixed_centres[i] = tuple(placement.act(centre).tolist())
             else:
                 self._moving_centres.append((i, frame, centre))
 
