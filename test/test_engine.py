@@ -42,17 +42,21 @@ def test_every_contact_law_reads_its_geometry_from_the_one_contact_model(tmp_pat
     if law == "stepper":
         assert model.stepper.contact is contact
     calls = []
-    original = ContactModel.poses
+    originals = {name: getattr(ContactModel, name) for name in ("poses", "placed")}  # all laws', the stepper's
 
-    def spy(self, data):
-        calls.append(self)
-        return original(self, data)
+    def spy(original):
+        def spied(self, *args):
+            calls.append(self)
+            return original(self, *args)
+        return spied
 
-    ContactModel.poses = spy
+    for name, original in originals.items():
+        setattr(ContactModel, name, spy(original))
     try:
         result = engine.run(model)
     finally:
-        ContactModel.poses = original
+        for name, original in originals.items():
+            setattr(ContactModel, name, original)
     # the ball (1 m drop, first touch at sqrt(2/g) = 0.45 s) hit the floor, and every pose
     # query of the run went to this one object
     assert calls and all(c is contact for c in calls)

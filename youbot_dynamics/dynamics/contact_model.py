@@ -4,7 +4,9 @@ Each geometry hangs on a frame of the model: a robot link's frame, a free body's
 (the free-flyer joint added by :func:`~youbot_dynamics.dynamics.free_body.add_free_flyer`)
 or none (world geometry). After ``pin.framesForwardKinematics`` (or
 ``computeJointJacobians`` + ``updateFramePlacements``) on a Data of that model,
-:meth:`ContactModel.poses` gives the world pose of every geometry from ``data.oMf``, and
+:meth:`ContactModel.poses` gives the world pose of every geometry from ``data.oMf``,
+:meth:`ContactModel.centres` the centres of their bounding balls for the broad phase,
+:meth:`ContactModel.placed_points` one pair's contact points without the other poses, and
 :meth:`ContactModel.relative_jacobian` the 3 x nv map from the generalised velocity (robot
 joints and body twists alike) to a contact point's relative velocity, from Pinocchio's frame
 Jacobians. The compliant law (:meth:`ContactModel.compliant_force`, a generalised force for
@@ -60,12 +62,60 @@ class ContactModel:
                        for p in self.pairs]
         self.broad = BroadPhase([g.shape for g in self.geometries], [(p.first, p.second) for p in self.pairs],
                                 margin)
+        #: Each geometry's placement in its frame where it is not the identity (where it is, the
+        #: geometry's world pose is data.oMf[frame] itself).
+        self._offsets = {i: g.placement for i, g in enumerate(self.geometries)
+                         if not np.array_equal(g.placement, np.eye(4))}
+        #: Geometry fixed to the world (world geometry, links on the universe joint): its world
+        #: pose (pin.SE3; what :meth:`placed` would compute from data.oMf, to the bit) and its
+        #: bounding-ball centre (world, m), kept from the start. The others' (index, frame,
+        #: centre in the frame) are placed after each kinematics pass.
+        self._fixed_poses: dict[int, pin.SE3] = {}
+        self._fixed_centres: list[tuple[float, float, float] | None] = [None] * len(self.geometries)
+        self._moving_centres: list[tuple[int, int, np.ndarray]] = []
+        for i, (g, frame) in enumerate(zip(self.geometries, self.frames)):
+            centre = np.array(g.placement[:3, 3], dtype=float)
+            if frame is None:
+                self._fixed_poses[i] = pin.SE3(g.placement)
+                self._fixed_centres[i] = tuple(centre.tolist())
+            elif model.frames[frame].parentJoint == 0:
+                placement = model.frames[frame].placement
+                self._fixed_poses[i] = placement if i not in self._offsets else \
+                    pin.SE3(placement.homogeneous.dot(self._offsets[i]))
+                self._fixed_centres[i] = tuple(placement.act(centre).tolist())
+            else:
+                self._moving_centres.append((i, frame, centre))
 
     # ---- geometry ---------------------------------------------------------------------------
     def poses(self, data: pin.Data) -> list[np.ndarray]:
         """World poses (4x4, m) of the geometries from ``data.oMf`` (frames placed first)."""
         return [g.placement if frame is None else data.oMf[frame].homogeneous @ g.placement
                 for g, frame in zip(self.geometries, self.frames)]
+
+    def centres(self, data: pin.Data) -> list[tuple[float, float, float]]:
+        """World centres (x, y, z per geometry, m) of the geometries' bounding balls, from
+        ``data.oMf`` (frames placed first): what :meth:`BroadPhase.close_pairs` reads."""
+        centres = list(self._fixed_centres)
+        placements = data.oMf
+        for i, frame, centre in self._moving_centres:
+            centres[i] = placements[frame].act(centre).tolist()
+        return centres
+
+    def placed(self, data: pin.Data, geometry: int) -> np.ndarray | pin.SE3:
+        """Geometry i's world pose from ``data.oMf`` (frames placed first): the frame's own
+        pin.SE3 when the geometry sits at its origin, else the 4x4 product of :meth:`poses`;
+        kept from the start for geometry fixed to the world."""
+        fixed = self._fixed_poses.get(geometry)
+        if fixed is not None:
+            return fixed
+        frame, offset = self.frames[geometry], self._offsets.get(geometry)
+        return data.oMf[frame] if offset is None else data.oMf[frame].homogeneous.dot(offset)
+
+    def placed_points(self, k: int, data: pin.Data, margin: float) -> list[ContactPoint]:
+        """Contact points of pair k at the poses in ``data.oMf``, gaps up to ``margin`` (m)
+        included; placing only this pair's two geometries."""
+        pair = self.pairs[k]
+        return self.narrow[k].contact_points(self.placed(data, pair.first), self.placed(data, pair.second), margin)
 
     def points(self, k: int, poses: Sequence[np.ndarray], margin: float) -> list[ContactPoint]:
         """Contact points of pair k at these poses, gaps up to ``margin`` (m) included."""
@@ -116,9 +166,10 @@ class ContactModel:
                         compliant: Sequence[int], approach_speeds: np.ndarray) -> np.ndarray:
         """Generalised force (nv; N m, N) of the Hunt-Crossley pairs ``compliant`` (indices
         into ``pairs``; pair ``compliant[j]`` last touched at ``approach_speeds[j]``, m/s):
-        sum of J^T f over the overlapping points. ``poses`` are those at q."""
+        sum of J^T f over the overlapping points. ``poses`` are those at q, and ``data``'s
+        frames are placed at q."""
         generalised = np.zeros(self.model.nv)
-        close = set(self.broad.close_pairs(poses))
+        close = set(self.broad.close_pairs(self.centres(data)))
         jacobians_ready = False
         for j, k in enumerate(compliant):
             if k not in close:

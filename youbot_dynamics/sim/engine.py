@@ -256,17 +256,23 @@ class ConstraintStepping:
         self.events: list[ContactEvent] = []
         self.deepest, self.deepest_allowed = 0.0, deepest_allowed
         self.t_previous, self.x_previous = self.t, self.x
+        # where the plant's q and v go in x, looked up once (packed at every step)
+        root = model.plant.root_nq
+        self._robot_q, self._q_block, self._v_block = slice(root, root + model.robot.nq), model.block("q"), \
+            model.velocity_block
+        self._bodies = (model.block("pose"), model.block("chart"), model.body_offset) if model.body_names else None
 
     def _pack(self) -> np.ndarray:
         model, x = self.model, self.x.copy()
-        root = model.plant.root_nq
-        x[model.block("q")] = self.q[root:root + model.robot.nq]
+        x[self._q_block] = self.q[self._robot_q]
         if model.base is not None:
+            root = self._robot_q.start
             x[model.block("base")] = model.base.unwrapped_pose(self.q[:root], x[model.block("base")][2])
-        x[model.velocity_block] = self.v
-        if model.body_names:
-            x[model.block("pose")] = self.q[model.body_offset:]
-            x[model.block("chart")] = 0.0
+        x[self._v_block] = self.v
+        if self._bodies is not None:
+            pose, chart, offset = self._bodies
+            x[pose] = self.q[offset:]
+            x[chart] = 0.0
         return x
 
     def advance(self, t_target: float) -> None:
@@ -274,14 +280,14 @@ class ConstraintStepping:
         count = max(1, math.ceil((t_target - self.t) / dt - 1e-9))
         start, h = self.t, (t_target - self.t) / count
         self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
+        joints, friction, stepper, nv, moving = model.joint_velocities, model.friction, model.stepper, \
+            model.plant.nv, model.nv > 0
         for i in range(1, count + 1):
-            tau = np.zeros(model.plant.nv)
-            if model.nv:
-                x = self._pack()
-                joints = model.joint_velocities
-                tau[joints] = self.torque(self.t, x)
-                if model.friction is not None:
-                    tau[joints] -= model.friction.torque(self.v[joints])
+            tau = np.zeros(nv)
+            if moving:
+                tau[joints] = self.torque(self.t, self._pack())
+                if friction is not None:
+                    friction.add_torque(tau[joints], self.v[joints], None, -1.0)
             if model.base is not None:  # dynamic (a kinematic base refuses the stepper)
                 try:
                     tau += model.base.floor_force(model.plant.model, self.data, self.q, self.v)
@@ -292,16 +298,17 @@ class ConstraintStepping:
                     base = model.base
                     self.x[integral] += h * base.wheel_torques(self.t, self.v[model.joint_velocities][base.wheels],
                                                                self.x[integral], self.twist)[1]
-            self.q, self.v, report = model.stepper.step(self.data, self.q, self.v, tau, h)
+            self.q, self.v, report = stepper.step(self.data, self.q, self.v, tau, h)
             self.t = t_target if i == count else start + i * h
             self.steps += 1
             self.iterations += report.iterations
             self.deepest = max(self.deepest, report.penetration)
             touching = frozenset(name for name, impulse in report.normal_impulse.items() if impulse > 0)
-            self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
-                            for name in sorted(touching - self.touching)]
-            self.touching = touching
-            if not np.all(np.isfinite(self.v)):
+            if touching != self.touching:
+                self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
+                                for name in sorted(touching - self.touching)]
+                self.touching = touching
+            if not np.isfinite(self.v).all():
                 raise DivergenceError(self.t, model.integrator.method, h, "non-finite velocity")
             if not report.penetration <= self.deepest_allowed:
                 raise DivergenceError(self.t, model.integrator.method, h, f"overlap {report.penetration:.3g} m "
