@@ -12,7 +12,7 @@ the step it needs for the same error, on two scenes (measured figures, not tests
    not shrink with dt) or CONTACT_TIME (omega = pi / 2 ms: it levels off at +1 to +2 % as
    dt shrinks), Euler, implicitfast and RK4 at several dt.
 2. grasp: the same sphere squeezed under gravity (-z) between two 50 g pads (boxes 5 x 30
-   x 40 mm) on prismatic joints along x (bench/grasp_pads.urdf; MuJoCo: slide joints),
+   x 40 mm) on prismatic joints along x (config/scenes/grasp.yaml; MuJoCo: slide joints),
    each pushed by a PD servo (kp = 1500 N/m, kd = 17 N s/m; ours the scene's pd
    controller, MuJoCo a position actuator with the same kp, kv) towards 1 mm into the
    sphere: 1.5 N per pad, friction 0.3, so the pads hold 2 mu F = 0.9 N against the
@@ -45,12 +45,13 @@ from types import ModuleType
 from typing import Any, Callable
 
 import numpy as np
+import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
 
 from youbot_dynamics.analysis.contact_extremes import ball_drop_data  # noqa: E402
 from youbot_dynamics.sim.integrators import DivergenceError  # noqa: E402
-from youbot_dynamics.sim.scene import Scene  # noqa: E402
+from youbot_dynamics.sim.scene import Scene, scene_dir  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 E, H0, RADIUS, G = 0.8, 1.0, 0.025, 9.81
@@ -59,13 +60,13 @@ FRICTION = 0.3
 #: MuJoCo's ball_drop contact: lasting this many steps, or this long (s)
 CONTACT_STEPS, CONTACT_TIME = 10, 2e-3
 OUTPUT_RATE = 100.0  # Hz, both engines
-#: grasp: pad PD gains (N/m, N s/m), squeeze depth (m), pad thickness (m), run and slip window (s)
+#: grasp (as in config/scenes/grasp.yaml, for the MJCF): pad PD gains (N/m, N s/m), squeeze depth
+#: (m), pad thickness (m), run and slip window (s)
 KP, KD, SQUEEZE, PAD = 1500.0, 17.0, 1e-3, 0.005
 GRASP_DURATION, SLIP_FROM = 1.0, 0.25
 #: the error each engine must reach: apex error (%) and slip (m)
 TARGETS = {"ball_drop": 1.0, "grasp": 1e-4}
 UNITS = {"ball_drop": "% apex error", "grasp": "m slip"}
-GRASP_URDF = Path(__file__).resolve().parent / "grasp_pads.urdf"
 
 
 @dataclass(frozen=True)
@@ -184,20 +185,13 @@ def ball_drop_mujoco(mujoco: ModuleType, quick: bool) -> list[Run]:
 
 # ---- 2. grasp -----------------------------------------------------------------------------
 def grasp_data(law: dict[str, Any], integrator: dict[str, Any]) -> dict[str, Any]:
-    """The grasp scene (see the module docstring) with a contact law and an integrator."""
-    pad = {"type": "box", "size": [PAD, 0.03, 0.04]}
-    squeeze = {"pad_l_joint": SQUEEZE, "pad_r_joint": SQUEEZE}
-    return {
-        "name": "grasp", "robot": str(GRASP_URDF), "moving": ["pad_l_joint", "pad_r_joint"],
-        "friction": {"default": "none"},
-        "controller": {"type": "pd", "kp": KP, "kd": KD,
-                       "trajectory": {"waypoints": [squeeze], "v_max": 1.0, "a_max": 100.0}},
-        "free_bodies": [{"name": "sphere", "shape": {"type": "sphere", "radius": RADIUS}, "density": 700,
-                         "position": [0.0, 0.0, 0.0]}],
-        "geometry": [{"name": "pad_l", "link": "pad_l", "shape": pad, "pose": {"xyz": [-RADIUS - PAD / 2, 0, 0]}},
-                     {"name": "pad_r", "link": "pad_r", "shape": pad, "pose": {"xyz": [RADIUS + PAD / 2, 0, 0]}}],
-        "contacts": [{"pair": ["pad_l", "sphere"], **law}, {"pair": ["pad_r", "sphere"], **law}],
-        "integrator": integrator, "duration": GRASP_DURATION, "outputs": {"rate": OUTPUT_RATE, "record": ["q", "v"]}}
+    """The packaged grasp scene (config/scenes/grasp.yaml) with this contact law on both
+    pairs and this integrator."""
+    data = yaml.safe_load((scene_dir() / "grasp.yaml").read_text())
+    data["robot"] = str(scene_dir() / data["robot"])
+    data["contacts"] = [{"pair": c["pair"], **law} for c in data["contacts"]]
+    data["integrator"] = integrator
+    return data
 
 
 def slip(t: np.ndarray, z: np.ndarray) -> float:

@@ -39,7 +39,8 @@ def test_kept_contact_sets_step_exactly_as_sets_built_afresh(solver):
     assert len(model.stepper.sets[((0, 4),)].points) == 4
     fresh_q, fresh_v, fresh_iterations = stepped(model, 150, afresh=True)
     assert np.array_equal(kept_q, fresh_q) and np.array_equal(kept_v, fresh_v)
-    assert kept_iterations == fresh_iterations and min(kept_iterations) > 0
+    # (a step whose impulses all stay 0 stops after its first sweep, counted as iteration 0)
+    assert kept_iterations == fresh_iterations and max(kept_iterations) > 0
     # it slid at g (sin 0.4 - 0.3 cos 0.4): 0.16643 m/s along the incline (body x) after 0.15 s
     assert kept_v[0] == pytest.approx(9.81 * (np.sin(0.4) - 0.3 * np.cos(0.4)) * 0.15, rel=1e-3)
 
