@@ -35,6 +35,7 @@ import yaml
 from mcap.writer import CompressionType, Writer
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.cdr_template import Serialized
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.messages import TYPESTORE
 
@@ -161,7 +162,8 @@ class McapLogger(ClosesOnExit):
         log_time_ns: int,
         publish_time_ns: int | None = None,
     ) -> None:
-        """Serialise ``message`` to CDR and append it on ``topic``.
+        """Serialise ``message`` to CDR (a :class:`~youbot_dynamics.io.cdr_template.Serialized`
+        one is already) and append it on ``topic``.
 
         ``log_time_ns`` is the receive (log) time, ``publish_time_ns`` the send time
         (defaults to the log time); both integer nanoseconds >= 0.
@@ -179,7 +181,7 @@ class McapLogger(ClosesOnExit):
                 raise UserInputError(
                     f"{self.path}: {label} on {topic} must be integer ns >= 0, got {value!r}"
                 )
-        data = TYPESTORE.serialize_cdr(message, msgtype)
+        data = message.cdr if isinstance(message, Serialized) else TYPESTORE.serialize_cdr(message, msgtype)
         self._close_chunk_if_due(log_time_ns)
         self._sequences[topic] += 1
         self._writer.add_message(

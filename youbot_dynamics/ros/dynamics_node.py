@@ -85,7 +85,7 @@ from trajectory_msgs.msg import JointTrajectory
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.ros.commands import InputRejected
-from youbot_dynamics.ros.conversions import rclpy_class, to_cdr, to_rclpy
+from youbot_dynamics.ros.conversions import rclpy_class, to_cdr
 from youbot_dynamics.ros.parameters import check_choice, declare_all, frame_prefix_of
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
@@ -100,10 +100,6 @@ MAX_LAG = 0.25
 real-time factor then drops below the requested time scale)."""
 WARN_THROTTLE = 2.0
 """Seconds between repeated warnings about bad input."""
-SERIALIZED = frozenset({"/tf", "/tf_static"})
-"""Topics published as CDR bytes (:func:`~youbot_dynamics.ros.conversions.to_cdr`): a
-TFMessage's nested rclpy objects cost about five times as much to build (0.5 ms per sample
-of the gripping scene, a quarter of its 500 Hz period)."""
 QUOTED_CHARACTERS = 500
 """Characters of the message that made a callback fail quoted in the log."""
 MAX_MESSAGE_BYTES = {"/cmd_vel": 1024, "/joint_commands": 64 * 1024, "/joint_states": 64 * 1024, "/joint_trajectory": 1024 * 1024}
@@ -182,10 +178,19 @@ class DynamicsNode(Node):
                                       "or source a ROS 2 Jazzy); the MCAP still logs them")
         self._publish(self.session.latched)
 
-    def _publish(self, outputs: Outputs) -> None:
+    def _publish(self, outputs: Outputs, subscribed: frozenset[str] | None = None) -> None:
+        """Publish as CDR bytes (serialized once, also for the MCAP); with ``subscribed``,
+        only on those topics."""
         for topic, message in outputs:
-            if topic not in self._unpublished:
-                self.publishers_[topic].publish(to_cdr(message) if topic in SERIALIZED else to_rclpy(message))
+            if topic not in self._unpublished and (subscribed is None or topic in subscribed):
+                self.publishers_[topic].publish(to_cdr(message))
+
+    def _subscribed(self) -> frozenset[str]:
+        """The topics with subscribers now; the session builds only those and the logged ones."""
+        subscribed = frozenset(topic for topic, publisher in self.publishers_.items()
+                               if publisher.get_subscription_count())
+        self.session.consumed_by(subscribed)
+        return subscribed
 
     def _restart_pacing(self) -> None:
         self._pace_start, self._pace_k0 = time.monotonic(), self.session.k
@@ -214,8 +219,9 @@ class DynamicsNode(Node):
             int((time.monotonic() - self._pace_start) * rate) - (session.k - self._pace_k0)
         if due > MAX_LAG * rate:
             self._restart_pacing()
+        subscribed = self._subscribed()
         for _ in range(min(max(0, due), MAX_BURST)):
-            self._publish(session.step())
+            self._publish(session.step(), subscribed)
             if session.failure:
                 self.get_logger().error(session.failure)
                 return
@@ -323,8 +329,10 @@ class DynamicsNode(Node):
         self.session.trajectory(list(msg.joint_names), points, stamp_ns_of(msg.header.stamp))
 
     def _on_joint_state(self, msg: JointState) -> None:
+        subscribed = self._subscribed()
         self._publish(self.session.joint_state(list(msg.name), msg.position, msg.velocity,
-                                               stamp_ns_of(msg.header.stamp), self.get_clock().now().nanoseconds))
+                                               stamp_ns_of(msg.header.stamp), self.get_clock().now().nanoseconds),
+                      subscribed)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()

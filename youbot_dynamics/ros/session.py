@@ -51,7 +51,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +61,7 @@ from youbot_dynamics.dynamics.mobile.mecanum import mecanum_base_from_robot
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_template import CdrTemplate
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
@@ -69,7 +70,7 @@ from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                           follow, joint_sample, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, body_transforms
+from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, pose_rows
 from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
                                          implausible_joints)
 from youbot_dynamics.ros.mobile_base import MobileBase, WheelOdometry
@@ -100,6 +101,8 @@ TOPIC_TYPES = {
 ``make`` builds it from interfaces/; without it the node publishes neither /tf nor /tf_static
 but still logs them)."""
 
+KINEMATIC_TOPICS = frozenset({"/tf", "/ee_pose", "/ee_poses"})
+"""Topics that need the sample's kinematics pass."""
 LATCHED_TOPICS = frozenset({"/tf_static", "/robot_description", "/scene_markers"})
 """Topics sent once and latched (transient local, depth 1), in the MCAP too."""
 
@@ -162,16 +165,35 @@ class Recorder:
         if self.rerun is not None and not self.rerun.closed:
             self.rerun.log_sample(stamp_ns, names, q, v, tau, energy, ee_position)
 
-    def bodies(self, stamp_ns: int, transforms: Sequence[LinkTransform]) -> None:
-        """The free bodies' poses (root frame) in the Rerun recording at ``stamp_ns`` (ns)."""
+    def bodies(self, stamp_ns: int, names: Sequence[str], rows: np.ndarray) -> None:
+        """The free bodies' poses (rows of translation (m) and quaternion (x, y, z, w), root
+        frame, in the order of ``names``) in the Rerun recording at ``stamp_ns`` (ns)."""
         if self.rerun is not None and not self.rerun.closed:
-            self.rerun.log_body_poses(stamp_ns, {b.child: (b.translation, b.quaternion_xyzw) for b in transforms})
+            self.rerun.log_body_poses(stamp_ns, {name: (row[:3], row[3:]) for name, row in zip(names, rows)})
+
+    def records(self, topic: str) -> bool:
+        """True if the MCAP log records ``topic`` (so its messages must be built)."""
+        return self.mcap is not None and not self.mcap.closed and topic in self.mcap.topics
+
+    @property
+    def samples(self) -> bool:
+        """True if the Rerun recording takes samples (joint values, energy, end effector)."""
+        return self.rerun is not None and not self.rerun.closed
 
     def close(self) -> None:
         """Finalise both logs (idempotent)."""
         for log in (self.mcap, self.rerun):
             if log is not None:
                 log.close()
+
+
+def _pose_matrix(pose: object) -> np.ndarray:
+    """A geometry_msgs/Pose as a 4x4 homogeneous matrix (m)."""
+    matrix = np.eye(4)
+    matrix[:3, :3] = matrix_from_quaternion(np.array([pose.orientation.x, pose.orientation.y, pose.orientation.z,
+                                                      pose.orientation.w]))
+    matrix[:3, 3] = pose.position.x, pose.position.y, pose.position.z
+    return matrix
 
 
 class _Frames:
@@ -195,6 +217,12 @@ class _Frames:
         if clash:
             raise UserInputError(f"free bodies {clash} have the names of robot frames; /tf needs distinct "
                                  "frame names: rename the bodies in the scene")
+        self._marker_poses = {name: [_pose_matrix(marker.pose) for marker in
+                                     messages.shape_markers(0, "", name, shape, placement, FREE_BODY_RGBA)]
+                              for name, (shape, placement) in self.body_shapes.items()}
+        """Each body's markers' poses (4x4, m) in the body's frame."""
+        self._refilled = {topic: Refilled() for topic in ("/tf", "/free_bodies", "/ee_pose", "/ee_poses")}
+        self._refilled["/free_bodies_markers"] = Refilled(lambda path: ".pose." in path)
 
     def _transform(self, stamp_ns: int, transform: LinkTransform, parent: str | None = None) -> object:
         """``transform`` as a TransformStamped, its frames prefixed (the parent: ``parent``
@@ -212,33 +240,52 @@ class _Frames:
                                                             (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
         return messages.tf_message(transforms)
 
-    def bodies(self, poses: dict[str, np.ndarray]) -> list[LinkTransform]:
-        """Root frame -> body transforms from the bodies' world poses (4x4, m); the child
-        frame is the body's name (unprefixed)."""
-        return body_transforms(self.root_frame, poses)
+    def body_poses(self, poses: dict[str, np.ndarray]) -> np.ndarray:
+        """(k, 7) rows of translation (m) and quaternion (x, y, z, w) of the free bodies in the
+        root frame, in the scene's order, from their world poses (4x4, m)."""
+        return pose_rows(list(poses.values()))
 
-    def tf(self, stamp_ns: int, sample: SampleFrames | None, bodies: Sequence[LinkTransform] = (),
-           base: Sequence[object] = ()) -> object:
-        """``base`` (a moving base's odom -> base_footprint), the moving links of the
-        sample's kinematics (none without a robot), then the free bodies."""
-        links = [self._transform(stamp_ns, t) for t in sample.moving] if sample is not None else []
-        return messages.tf_message([*base, *links, *(self._transform(stamp_ns, b, self.root_frame) for b in bodies)])
+    def tf(self, stamp_ns: int, sample: SampleFrames | None, bodies: np.ndarray | None = None,
+           base: object | None = None) -> object:
+        """``base`` (a moving base's odom -> base_footprint TransformStamped), the moving links
+        of the sample's kinematics (none without a robot), then the free bodies (rows of
+        :meth:`body_poses`)."""
+        rows = [] if base is None else [_transform_row(base)]
+        if sample is not None:
+            rows.append(sample.link_poses)
+        if bodies is not None and len(bodies):
+            rows.append(bodies)
+        values = np.concatenate(rows) if rows else np.zeros((0, 7))
 
-    def free_bodies(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
+        def build(stamp_ns: int, values: np.ndarray) -> object:
+            edges = [] if base is None else [None]
+            edges += [(self.prefix + parent, self.prefix + child) for parent, child in sample.edges] \
+                if sample is not None else []
+            edges += [(self.root_frame, self.prefix + name) for name in self.body_shapes]
+            return messages.tf_message(
+                base if edge is None else messages.transform_stamped(stamp_ns, *edge, row[:3], row[3:])
+                for edge, row in zip(edges, values))
+
+        return self._refilled["/tf"](stamp_ns, values, build)
+
+    def free_bodies(self, stamp_ns: int, bodies: np.ndarray) -> object:
         """/free_bodies: the bodies' poses in the root frame, in order."""
-        return messages.pose_array(stamp_ns, self.root_frame, [(b.translation, b.quaternion_xyzw) for b in bodies])
+        return self._refilled["/free_bodies"](stamp_ns, bodies, lambda stamp_ns, rows: messages.pose_array(
+            stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in rows]))
 
-    def free_body_markers(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
-        """/free_bodies_markers: each body's shape at its pose in the root frame (namespace:
-        the body's name; the same ids every sample, so each replaces the last)."""
-        markers = []
-        for body in bodies:
-            shape, placement = self.body_shapes[body.child]
-            pose = np.eye(4)
-            pose[:3, :3], pose[:3, 3] = matrix_from_quaternion(body.quaternion_xyzw), body.translation
-            markers += messages.shape_markers(stamp_ns, self.root_frame, body.child, shape, pose @ placement,
-                                              FREE_BODY_RGBA)
-        return messages.marker_array(markers)
+    def free_body_markers(self, stamp_ns: int, poses: dict[str, np.ndarray]) -> object:
+        """/free_bodies_markers: each body's shape at its world pose (4x4, m; ``poses`` by
+        name) in the root frame (namespace: the body's name; the same ids every sample, so
+        each replaces the last)."""
+        placed = [poses[name] @ local for name, locals_ in self._marker_poses.items() for local in locals_]
+
+        def build(stamp_ns: int, values: np.ndarray) -> object:
+            return messages.marker_array(
+                marker for name, (shape, placement) in self.body_shapes.items()
+                for marker in messages.shape_markers(stamp_ns, self.root_frame, name, shape, poses[name] @ placement,
+                                                     FREE_BODY_RGBA))
+
+        return self._refilled["/free_bodies_markers"](stamp_ns, pose_rows(placed), build)
 
     def scene_markers(self) -> object:
         """/scene_markers (latched, stamp 0): the static world geometry in the root frame and
@@ -263,13 +310,45 @@ class _Frames:
         """/ee_pose, and /ee_poses for a model of several robots."""
         return ("/ee_pose", "/ee_poses") if len(self.links.ee_links) > 1 else ("/ee_pose",)
 
-    def ee_outputs(self, stamp_ns: int, sample: SampleFrames) -> Outputs:
-        """/ee_pose (and /ee_poses, see ``ee_topics``) of the sample's kinematics."""
-        position, quaternion = sample.ee_pose
-        outputs: Outputs = [("/ee_pose", messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion))]
-        if len(self.links.ee_links) > 1:
-            outputs.append(("/ee_poses", messages.pose_array(stamp_ns, self.root_frame, sample.ee_poses)))
+    def ee_outputs(self, stamp_ns: int, sample: SampleFrames, wanted: frozenset[str] | None = None) -> Outputs:
+        """/ee_pose (and /ee_poses, see ``ee_topics``) of the sample's kinematics; only those
+        in ``wanted`` if given."""
+        outputs: Outputs = []
+        if wanted is None or "/ee_pose" in wanted:
+            outputs.append(("/ee_pose", self._refilled["/ee_pose"](
+                stamp_ns, sample.ee[sample.ee_index],
+                lambda stamp_ns, row: messages.pose_stamped(stamp_ns, self.root_frame, row[:3], row[3:]))))
+        if len(self.links.ee_links) > 1 and (wanted is None or "/ee_poses" in wanted):
+            outputs.append(("/ee_poses", self._refilled["/ee_poses"](
+                stamp_ns, sample.ee[:sample.ee_count],
+                lambda stamp_ns, rows: messages.pose_array(stamp_ns, self.root_frame,
+                                                           [(row[:3], row[3:]) for row in rows]))))
         return outputs
+
+
+def _transform_row(transform: object) -> np.ndarray:
+    """Translation (m) and quaternion (x, y, z, w) of a TransformStamped, as one row."""
+    t, r = transform.transform.translation, transform.transform.rotation
+    return np.array([[t.x, t.y, t.z, r.x, r.y, r.z, r.w]])
+
+
+class Refilled:
+    """One topic's messages: the first built by ``build(stamp_ns, values)`` (through
+    :mod:`youbot_dynamics.io.messages`), every later one its CDR template
+    (:class:`~youbot_dynamics.io.cdr_template.CdrTemplate`) refilled with the stamp and the
+    float64 values (whose paths ``refilled`` accepts: the layout, names and frames stay the
+    first message's). ``values`` are the refilled fields in field order."""
+
+    def __init__(self, refilled: Callable[[str], bool] = lambda path: True) -> None:
+        self.refilled = refilled
+        self.template: CdrTemplate | None = None
+
+    def __call__(self, stamp_ns: int, values: np.ndarray, build: Callable[[int, np.ndarray], object]) -> object:
+        if self.template is not None:
+            return self.template.fill(stamp_ns, values)
+        message = build(stamp_ns, values)
+        self.template = CdrTemplate(message, self.refilled)
+        return message
 
 
 NOT_REPORTED = "n/a"
@@ -346,6 +425,14 @@ class _Session(ClosesOnExit):
         self.recorder = Recorder(self.mode, scene, robot, (*self.topics, *(t for t, _ in self.latched)),
                                  mcap_path, rrd_path, frame_id or robot.root_link)
         self.recorder.write(self.latched, 0)
+        self.consumed_by(None)
+
+    def consumed_by(self, subscribed: Iterable[str] | None) -> None:
+        """Say which topics have subscribers (the node asks its publishers; None: every
+        topic, the default): a sample builds the messages of ``wanted``, the topics
+        subscribed or recorded in the MCAP, and no other."""
+        self.wanted = frozenset(topic for topic in self.topics
+                                if subscribed is None or topic in subscribed or self.recorder.records(topic))
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
         """/diagnostics with one status of this session (also logged); with a robot, its
@@ -416,6 +503,7 @@ class SimulationSession(_Session):
         self.samples_per_solve = max(1, int(samples_per_solve))
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters, default_effort_limit)
         self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
+        self._joint_states = Refilled()
         self._locked_q = np.array([self.robot.locked[name] for name in self.locked_names])
         self.paused = False
         self.failure: str | None = None
@@ -514,35 +602,41 @@ class SimulationSession(_Session):
         return self._outputs(self._pending.pop())
 
     def _outputs(self, snapshot: Snapshot) -> Outputs:
-        stamp, q = self.stamp_ns, snapshot.q
+        """The sample's messages, those in ``wanted`` only (one kinematics pass feeds /tf,
+        /ee_pose and the Rerun sample; none when nothing takes them), logged."""
+        stamp, q, wanted = self.stamp_ns, snapshot.q, self.wanted
         self.snapshot = snapshot
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
-        bodies = self.frames.bodies(snapshot.bodies)
-        sample = self.frames.links.at(q) if self.frames.has_robot else None
+        has_bodies = bool(self.frames.body_shapes)
+        bodies = self.frames.body_poses(snapshot.bodies) if has_bodies else None
+        kinematics = self.frames.has_robot and (self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS))
+        sample = self.frames.links.at(q) if kinematics else None
         try:
-            outputs = [("/clock", messages.clock(stamp))]
+            outputs = [("/clock", messages.clock(stamp))] if "/clock" in wanted else []
+            if "/joint_states" in wanted:
+                outputs.append(("/joint_states", self._joint_state(stamp, snapshot)))
             if sample is not None:
-                outputs += [("/joint_states", self._joint_state(stamp, snapshot)),
-                            *self.frames.ee_outputs(stamp, sample)]
-            if bodies:
-                outputs += [("/free_bodies", self.frames.free_bodies(stamp, bodies)),
-                            ("/free_bodies_markers", self.frames.free_body_markers(stamp, bodies))]
-            base: Sequence[object] = ()
-            if self.moving_base is not None:
-                odometry, transform = self.moving_base.outputs(stamp, self.scene_time, snapshot)
-                outputs += odometry
-                base = (transform,)
-            outputs.append(("/tf", self.frames.tf(stamp, sample, bodies, base)))
+                outputs += self.frames.ee_outputs(stamp, sample, wanted)
+            if has_bodies and "/free_bodies" in wanted:
+                outputs.append(("/free_bodies", self.frames.free_bodies(stamp, bodies)))
+            if has_bodies and "/free_bodies_markers" in wanted:
+                outputs.append(("/free_bodies_markers", self.frames.free_body_markers(stamp, snapshot.bodies)))
+            base = None
+            if self.moving_base is not None:     # always: it advances the odometry
+                odometry, base = self.moving_base.outputs(stamp, self.scene_time, snapshot)
+                outputs += [(topic, message) for topic, message in odometry if topic in wanted]
+            if "/tf" in wanted:
+                outputs.append(("/tf", self.frames.tf(stamp, sample, bodies, base)))
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
         if sample is not None:
             self.recorder.sample(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy,
-                                 sample.ee_pose[0])
-        if bodies:
-            self.recorder.bodies(stamp, bodies)
+                                 sample.ee[sample.ee_index, :3])
+        if has_bodies:
+            self.recorder.bodies(stamp, tuple(self.frames.body_shapes), bodies)
         return outputs
 
     def _joint_state(self, stamp_ns: int, snapshot: Snapshot) -> object:
@@ -550,9 +644,9 @@ class SimulationSession(_Session):
         tree order) at its locked value with velocity and effort 0, so that every movable
         joint of the URDF has a position (robot_state_publisher needs wheels and fingers)."""
         zeros = np.zeros(len(self.locked_names))
-        return messages.joint_state(stamp_ns, (*snapshot.joint_names, *self.locked_names),
-                                    np.concatenate([snapshot.q, self._locked_q]),
-                                    np.concatenate([snapshot.v, zeros]), np.concatenate([snapshot.tau, zeros]))
+        values = np.concatenate([snapshot.q, self._locked_q, snapshot.v, zeros, snapshot.tau, zeros])
+        return self._joint_states(stamp_ns, values, lambda stamp_ns, values: messages.joint_state(
+            stamp_ns, (*snapshot.joint_names, *self.locked_names), *np.split(values, 3)))
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
@@ -625,6 +719,7 @@ class InverseSession(_Session):
                          node_name)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
+        self._torques = Refilled()
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
         self.stamp_ns, self.samples = 0, 0
         self.last_unstamped = False
@@ -693,19 +788,29 @@ class InverseSession(_Session):
                                                f"finite on {', '.join(implausible)}"))
             self.estimator.restart("implausible" if finite else "non_finite")
             return []
-        frames = self.frames.links.at(middle.q)
+        wanted = self.wanted
+        kinematics = self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS)
+        frames = self.frames.links.at(middle.q) if kinematics else None
         try:
-            outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
-                                                                  middle.v, tau)),
-                       *self.frames.ee_outputs(stamp, frames), ("/tf", self.frames.tf(stamp, frames))]
+            outputs: Outputs = []
+            if "/computed_torques" in wanted:
+                outputs.append(("/computed_torques", self._torques(
+                    stamp, np.concatenate([middle.q, middle.v, tau]), lambda stamp_ns, values: messages.joint_state(
+                        stamp_ns, self.robot.joint_names, *np.split(values, 3)))))
+            if frames is not None:
+                outputs += self.frames.ee_outputs(stamp, frames, wanted)
+                if "/tf" in wanted:
+                    outputs.append(("/tf", self.frames.tf(stamp, frames)))
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             self.estimator.restart("non_finite")
             return odom
         self.recorder.write(outputs, stamp)
-        data = self.dynamics.data
-        energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
-        self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, frames.ee_pose[0])
+        if self.recorder.samples:
+            data = self.dynamics.data
+            energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
+            self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy,
+                                 frames.ee[frames.ee_index, :3])
         self.stamp_ns, self.samples = stamp, self.samples + 1
         return odom + outputs
 
