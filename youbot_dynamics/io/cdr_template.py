@@ -185,3 +185,21 @@ class CdrTemplate:
                                                dtype=np.uint8)
         return Serialized(self.msgtype, data.tobytes())
 
+
+class Refilled:
+    """One topic's messages: the first built by ``build(stamp_ns, values)`` (through
+    :mod:`youbot_dynamics.io.messages`), every later one its CDR template
+    (:class:`CdrTemplate`) refilled with the stamp and the
+    float64 values (whose paths ``refilled`` accepts: the layout, names and frames stay the
+    first message's). ``values`` are the refilled fields in field order."""
+
+    def __init__(self, refilled: Callable[[str], bool] = lambda path: True) -> None:
+        self.refilled = refilled
+        self.template: CdrTemplate | None = None
+
+    def __call__(self, stamp_ns: int, values: np.ndarray, build: Callable[[int, np.ndarray], object]) -> object:
+        if self.template is not None:
+            return self.template.fill(stamp_ns, values)
+        message = build(stamp_ns, values)
+        self.template = CdrTemplate(message, self.refilled)
+        return message

@@ -51,7 +51,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -61,7 +61,7 @@ from youbot_dynamics.dynamics.mobile.mecanum import mecanum_base_from_robot
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
-from youbot_dynamics.io.cdr_template import CdrTemplate
+from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
@@ -330,25 +330,6 @@ def _transform_row(transform: object) -> np.ndarray:
     """Translation (m) and quaternion (x, y, z, w) of a TransformStamped, as one row."""
     t, r = transform.transform.translation, transform.transform.rotation
     return np.array([[t.x, t.y, t.z, r.x, r.y, r.z, r.w]])
-
-
-class Refilled:
-    """One topic's messages: the first built by ``build(stamp_ns, values)`` (through
-    :mod:`youbot_dynamics.io.messages`), every later one its CDR template
-    (:class:`~youbot_dynamics.io.cdr_template.CdrTemplate`) refilled with the stamp and the
-    float64 values (whose paths ``refilled`` accepts: the layout, names and frames stay the
-    first message's). ``values`` are the refilled fields in field order."""
-
-    def __init__(self, refilled: Callable[[str], bool] = lambda path: True) -> None:
-        self.refilled = refilled
-        self.template: CdrTemplate | None = None
-
-    def __call__(self, stamp_ns: int, values: np.ndarray, build: Callable[[int, np.ndarray], object]) -> object:
-        if self.template is not None:
-            return self.template.fill(stamp_ns, values)
-        message = build(stamp_ns, values)
-        self.template = CdrTemplate(message, self.refilled)
-        return message
 
 
 NOT_REPORTED = "n/a"
