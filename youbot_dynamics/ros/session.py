@@ -68,11 +68,12 @@ from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
-                                          follow, joint_sample, joint_trajectory, node_time_of_stamp)
+from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, STAMP_LIMIT_NS, EffortCommands, InputCounters,
+                                          InputRejected, JointSample, follow, joint_sample, joint_trajectory,
+                                          node_time_of_stamp)
 from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, pose_rows
 from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
-                                         implausible_joints)
+                                         implausible_joints, plausible_limit)
 from youbot_dynamics.ros.mobile_base import MobileBase, WheelOdometry
 from youbot_dynamics.ros.mobile_base import TOPICS as MOBILE_BASE_TOPICS
 from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
@@ -701,6 +702,11 @@ class InverseSession(_Session):
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self._torques = Refilled()
+        self._names_key: tuple[str, ...] | None = None
+        """The names of the last sample accepted through ``joint_sample`` (``_index``: its
+        positions of the robot's joints)."""
+        self._velocity_bound = plausible_limit(self.robot, "velocity")
+        self._effort_bound = plausible_limit(self.robot, "effort")
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
         self.stamp_ns, self.samples = 0, 0
         self.last_unstamped = False
@@ -729,23 +735,108 @@ class InverseSession(_Session):
         (beyond the effort-limit bound) or not finite is not published: the sample counts as
         accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
         estimate restarts."""
-        try:
+        outputs, rejected = self.joint_states([(names, position, velocity, stamp_ns, received_ns)])
+        if rejected:
+            raise rejected[0]
+        return outputs
+
+    def joint_states(self, samples: Sequence[tuple[Sequence[str], Sequence[float], Sequence[float], int, int | None]]
+                     ) -> tuple[Outputs, list[InputRejected]]:
+        """:meth:`joint_state` of each sample in turn ((names, position, velocity, stamp_ns,
+        received_ns)), the same outputs in the same order, the rejected samples' errors
+        returned (counted) instead of raised. The samples are checked, differenced and
+        their torques computed as arrays (Pinocchio's batch RNEA); where a torque is
+        implausible or an estimate not finite, they are taken one by one as
+        :meth:`joint_state` takes them, with the same result."""
+        checked = self._checked(samples)
+        rejected = [sample for sample in checked if isinstance(sample, InputRejected)]
+        sequence = [None if isinstance(sample, InputRejected) else sample for sample in checked]
+        if self.odometry is None:
+            state = self.estimator.state()
+            stencils = self.estimator.push_many(sequence)
+            if stencils is not None:
+                outputs = self._torques_of(stencils)
+                if outputs is not None:
+                    return outputs, rejected
+                self.estimator.restore(state)
+        return [output for sample in sequence for output in self._one(sample)], rejected
+
+    def _checked(self, samples: Sequence[tuple]) -> list[JointSample | InputRejected]:
+        """Each sample checked (see :meth:`joint_state`) and counted: a JointSample, or the
+        InputRejected it raised. Samples naming the joints as the last accepted one did are
+        checked as arrays; any that fails, and any other, through ``joint_sample``."""
+        stamps: list[int | InputRejected] = []
+        for _, _, _, stamp_ns, received_ns in samples:
             unstamped = stamp_ns == 0
             if unstamped and self.last_unstamped:
                 if received_ns is None:
-                    raise InputRejected("bad_timing", "joint state not stamped and no receive time given")
+                    stamps.append(InputRejected("bad_timing", "joint state not stamped and no receive time given"))
+                    continue
                 stamp_ns = received_ns
             self.last_unstamped = unstamped
-            sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
-            too_fast = implausible_joints(self.robot, sample.v, "velocity")
-            if too_fast:
-                raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
-                                    f"limit of {', '.join(too_fast)}")
-        except InputRejected as error:
-            self.counters.reject(error)
+            stamps.append(stamp_ns)
+        good = self._good_rows(samples, stamps)
+        checked: list[JointSample | InputRejected] = []
+        for k, ((names, position, velocity, _, _), stamp) in enumerate(zip(samples, stamps)):
+            try:
+                if isinstance(stamp, InputRejected):
+                    raise stamp
+                if good is not None and good[2][k]:
+                    sample = JointSample(int(stamp), good[0][k], good[1][k])
+                else:
+                    sample = self._joint_sample(names, position, velocity, stamp)
+            except InputRejected as error:
+                self.counters.reject(error)
+                checked.append(error)
+                continue
+            self.counters.accepted += 1
+            checked.append(sample)
+        return checked
+
+    def _good_rows(self, samples: Sequence[tuple], stamps: Sequence[int | InputRejected]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(q, v) rows in joint order and which rows pass every check of ``_joint_sample``,
+        for samples that name the joints exactly as the last accepted one did; None when
+        they cannot be taken as arrays."""
+        if self._names_key is None or any(tuple(names) != self._names_key for names, *_ in samples):
+            return None
+        width = len(self._names_key)
+        try:
+            position = np.array([sample[1] for sample in samples], dtype=float)
+            velocity = np.array([sample[2] for sample in samples], dtype=float)
+        except (ValueError, TypeError):
+            return None
+        if position.shape != (len(samples), width) or velocity.shape != position.shape:
+            return None
+        stamp = np.array([-1 if isinstance(s, InputRejected) else s for s in stamps], dtype=object)
+        q, v = position[:, self._index], velocity[:, self._index]
+        with np.errstate(invalid="ignore"):
+            good = (np.isfinite(position).all(axis=1) & np.isfinite(velocity).all(axis=1)
+                    & (np.abs(v) <= self._velocity_bound).all(axis=1)
+                    & np.array([0 <= s < STAMP_LIMIT_NS for s in stamp], dtype=bool))
+        return q, v, good
+
+    def _joint_sample(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
+                      stamp_ns: int) -> JointSample:
+        """One sample checked (``joint_sample`` and the velocity bound); raises InputRejected.
+        Remembers the names of an accepted sample for the array checks."""
+        sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
+        too_fast = implausible_joints(self.robot, sample.v, "velocity")
+        if too_fast:
+            raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
+                                f"limit of {', '.join(too_fast)}")
+        key = tuple(str(name) for name in names)
+        if key != self._names_key:
+            position_of = {name: i for i, name in enumerate(key)}
+            self._names_key, self._index = key, np.array([position_of[n] for n in self.robot.joint_names])
+        return sample
+
+    def _one(self, sample: JointSample | None) -> Outputs:
+        """The outputs of one checked sample (None: a rejected one, which breaks the
+        stencil): /odom, then the torque of the previous sample once three are known."""
+        if sample is None:
             self.estimator.clear()
-            raise
-        self.counters.accepted += 1
+            return []
         odom: Outputs = []
         if self.odometry is not None:
             odom = [("/odom", self.odometry.outputs(sample.stamp_ns, sample.stamp_ns / NS_PER_S,
@@ -759,17 +850,33 @@ class InverseSession(_Session):
         if estimate is None:
             return odom
         middle, a = estimate
-        stamp = middle.stamp_ns
         tau = self.dynamics.torque(middle.q, middle.v, a)
         implausible = implausible_joints(self.robot, tau)
         if implausible:
             finite = bool(np.isfinite(tau).all())
             self.counters.reject(InputRejected("implausible_torque" if finite else "non_finite",
-                                               f"torque at {stamp} ns beyond the effort-limit bound or not "
-                                               f"finite on {', '.join(implausible)}"))
+                                               f"torque at {middle.stamp_ns} ns beyond the effort-limit bound or "
+                                               f"not finite on {', '.join(implausible)}"))
             self.estimator.restart("implausible" if finite else "non_finite")
             return []
-        wanted = self.wanted
+        return odom + self._torque_outputs(middle, tau)
+
+    def _torques_of(self, stencils: list[tuple[int, JointSample, np.ndarray]]) -> Outputs | None:
+        """The outputs of the estimates of ``push_many``, torques computed at once; None
+        (nothing done) if a torque is implausible or not finite."""
+        if not stencils:
+            return []
+        middles = [middle for _, middle, _ in stencils]
+        tau = self.dynamics.torques(np.array([m.q for m in middles]), np.array([m.v for m in middles]),
+                                    np.array([a for *_, a in stencils]))
+        with np.errstate(invalid="ignore"):
+            if not (np.abs(tau) <= self._effort_bound).all():
+                return None
+        return [output for middle, row in zip(middles, tau) for output in self._torque_outputs(middle, row)]
+
+    def _torque_outputs(self, middle: JointSample, tau: np.ndarray) -> Outputs:
+        """/computed_torques, /ee_pose(s) and /tf of a sample's torque (those wanted), logged."""
+        stamp, wanted = middle.stamp_ns, self.wanted
         kinematics = self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS)
         frames = self.frames.links.at(middle.q) if kinematics else None
         try:
@@ -785,7 +892,7 @@ class InverseSession(_Session):
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             self.estimator.restart("non_finite")
-            return odom
+            return []
         self.recorder.write(outputs, stamp)
         if self.recorder.samples:
             data = self.dynamics.data
@@ -793,7 +900,7 @@ class InverseSession(_Session):
             self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy,
                                  frames.ee[frames.ee_index, :3])
         self.stamp_ns, self.samples = stamp, self.samples + 1
-        return odom + outputs
+        return outputs
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: samples processed, input counters and the estimator's restarts
