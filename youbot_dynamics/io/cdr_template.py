@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -161,29 +161,37 @@ class CdrTemplate:
         """The message with the stamps at ``stamp_ns`` (int ns >= 0) and the refilled leaves
         set to ``values`` (float64, in ``paths`` order). A value that is not finite or a
         quaternion that is not of unit norm raises ``MessageFieldError`` naming its field."""
-        values = np.asarray(values, dtype=np.float64).reshape(-1)
-        if values.size != len(self.paths):
-            raise MessageFieldError(self.msgtype, f"{values.size} values for {len(self.paths)} refilled fields")
-        if not math.isfinite(np.add.reduce(values)):   # one pass; an overflowing sum is looked at below
+        return self.fill_many([stamp_ns], np.asarray(values, dtype=np.float64).reshape(1, -1))[0]
+
+    def fill_many(self, stamps_ns: Sequence[int], values: np.ndarray) -> list[Serialized]:
+        """``fill`` of N messages at once: ``stamps_ns`` (N,) and ``values`` (N, len(paths))."""
+        values = np.asarray(values, dtype=np.float64)
+        count = len(stamps_ns)
+        if count == 0:
+            return []
+        if values.shape != (count, len(self.paths)):
+            raise MessageFieldError(self.msgtype, f"values of shape {values.shape} for {count} messages of "
+                                    f"{len(self.paths)} refilled fields")
+        if not math.isfinite(np.add.reduce(values, axis=None)):   # one pass; an overflowing sum is looked at below
             finite = np.isfinite(values)
             if not finite.all():
-                index = int(np.flatnonzero(~finite)[0])
-                raise MessageFieldError(self.paths[index], f"is {values[index]}, not finite")
+                row, index = (int(i[0]) for i in np.nonzero(~finite))
+                raise MessageFieldError(self.paths[index], f"is {values[row, index]}, not finite")
         if len(self._quaternions):
-            quaternions = values[self._quaternions]
-            norms = np.sqrt(np.einsum("ij,ij->i", quaternions, quaternions))
+            quaternions = values[:, self._quaternions]
+            norms = np.sqrt(np.einsum("nij,nij->ni", quaternions, quaternions))
             error = np.abs(norms - 1.0)
             if error.max() > UNIT_QUATERNION_TOLERANCE:
-                bad = int(np.argmax(error))
+                row, bad = np.unravel_index(int(np.argmax(error)), error.shape)
                 field = self.paths[self._quaternions[bad, 0]].rsplit(".", 1)[0]
-                raise MessageFieldError(field, f"has norm {norms[bad]}, expected a unit quaternion")
-        data = self._bytes.copy()
-        data[self._floats] = values.astype("<f8", copy=False).view(np.uint8)
+                raise MessageFieldError(field, f"has norm {norms[row, bad]}, expected a unit quaternion")
+        data = np.tile(self._bytes, (count, 1))
+        data[:, self._floats] = values.astype("<f8", copy=False).view(np.uint8)
         if self._stamp_count:
-            stamp = time(stamp_ns)
-            data[self._stamps] = np.frombuffer(struct.pack("<iI", stamp.sec, stamp.nanosec) * self._stamp_count,
-                                               dtype=np.uint8)
-        return Serialized(self.msgtype, data.tobytes())
+            stamps = [time(stamp_ns) for stamp_ns in stamps_ns]
+            fields = np.array([(stamp.sec, stamp.nanosec) for stamp in stamps], dtype="<u4").view(np.uint8)
+            data[:, self._stamps] = np.tile(fields, (1, self._stamp_count))
+        return [Serialized(self.msgtype, row.tobytes()) for row in data]
 
 
 class Refilled:
@@ -191,15 +199,25 @@ class Refilled:
     :mod:`youbot_dynamics.io.messages`), every later one its CDR template
     (:class:`CdrTemplate`) refilled with the stamp and the
     float64 values (whose paths ``refilled`` accepts: the layout, names and frames stay the
-    first message's). ``values`` are the refilled fields in field order."""
+    first message's) into the stamps whose paths ``stamped`` accepts. ``values`` are the
+    refilled fields in field order."""
 
-    def __init__(self, refilled: Callable[[str], bool] = lambda path: True) -> None:
-        self.refilled = refilled
+    def __init__(self, refilled: Callable[[str], bool] = lambda path: True,
+                 stamped: Callable[[str], bool] = lambda path: path.endswith("header.stamp")) -> None:
+        self.refilled, self.stamped = refilled, stamped
         self.template: CdrTemplate | None = None
 
     def __call__(self, stamp_ns: int, values: np.ndarray, build: Callable[[int, np.ndarray], object]) -> object:
         if self.template is not None:
             return self.template.fill(stamp_ns, values)
         message = build(stamp_ns, values)
-        self.template = CdrTemplate(message, self.refilled)
+        self.template = CdrTemplate(message, self.refilled, self.stamped)
         return message
+
+    def many(self, stamps_ns: Sequence[int], values: np.ndarray, build: Callable[[int, np.ndarray], object]
+             ) -> list[object]:
+        """The messages of N samples: ``stamps_ns`` (N,), ``values`` (N, fields)."""
+        if not len(stamps_ns):
+            return []
+        first = [] if self.template is not None else [self(stamps_ns[0], values[0], build)]
+        return first + self.template.fill_many(stamps_ns[len(first):], values[len(first):])

@@ -98,6 +98,9 @@ MAX_BURST = 20
 MAX_LAG = 0.25
 """Wall seconds the samples may fall behind their pacing before it restarts from now (the
 real-time factor then drops below the requested time scale)."""
+INVERSE_PERIOD = 0.01
+"""Wall seconds between inverse-mode ticks: each takes the joint states received since the
+last as one batch (:meth:`~youbot_dynamics.ros.session.InverseSession.joint_states`)."""
 WARN_THROTTLE = 2.0
 """Seconds between repeated warnings about bad input."""
 QUOTED_CHARACTERS = 500
@@ -146,10 +149,13 @@ class DynamicsNode(Node):
             self._restart_pacing()
             self.create_timer(1.0 / p["publish_rate"], self._guarded("step timer", self._on_tick), clock=steady)
         else:
+            self._inbox: list[tuple] = []
             self._subscribe(JointState, "/joint_states", self._on_joint_state,
                             SUBSCRIPTION_PROFILES[p["joint_states_qos"]],
                             event_callbacks=SubscriptionEventCallbacks(
                                 incompatible_qos=self._on_incompatible_joint_states))
+            self.create_timer(INVERSE_PERIOD, self._guarded("joint states batch", self._on_joint_states),
+                              clock=steady)
         self._diagnostics_mark = (time.monotonic(), self.session.t)
         self.create_timer(p["diagnostics_period"], self._guarded("diagnostics timer", self._on_diagnostics),
                           clock=steady)
@@ -329,10 +335,20 @@ class DynamicsNode(Node):
         self.session.trajectory(list(msg.joint_names), points, stamp_ns_of(msg.header.stamp))
 
     def _on_joint_state(self, msg: JointState) -> None:
+        self._inbox.append((list(msg.name), msg.position, msg.velocity, stamp_ns_of(msg.header.stamp),
+                            self.get_clock().now().nanoseconds))
+
+    def _on_joint_states(self) -> None:
+        """The joint states received since the last tick, as one batch."""
+        if not self._inbox:
+            return
+        samples, self._inbox = self._inbox, []
         subscribed = self._subscribed()
-        self._publish(self.session.joint_state(list(msg.name), msg.position, msg.velocity,
-                                               stamp_ns_of(msg.header.stamp), self.get_clock().now().nanoseconds),
-                      subscribed)
+        outputs, rejected = self.session.joint_states(samples)
+        self._publish(outputs, subscribed)
+        for error in rejected:
+            self.get_logger().warning(f"/joint_states: ignored ({error}); keeping the last good state",
+                                      throttle_duration_sec=WARN_THROTTLE)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()
@@ -369,7 +385,9 @@ class DynamicsNode(Node):
         self.session.commands.on_timeout = self.params["on_timeout"]
 
     def close(self) -> None:
-        """Finalise the logs (idempotent)."""
+        """Take the joint states still waiting (inverse mode), finalise the logs (idempotent)."""
+        if getattr(self, "_inbox", None):
+            self._on_joint_states()
         self.session.close()
 
 

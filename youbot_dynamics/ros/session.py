@@ -197,6 +197,12 @@ def _pose_matrix(pose: object) -> np.ndarray:
     return matrix
 
 
+def marker_stamped(path: str) -> bool:
+    """The stamps of a MarkerArray that carry the sample's time: each marker's header (not
+    its empty texture's, stamped 0)."""
+    return path.endswith("header.stamp") and ".texture." not in path
+
+
 class _Frames:
     """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame``, /tf, /free_bodies
     and /free_bodies_markers messages of the free bodies among ``geometries`` (frame names
@@ -223,7 +229,7 @@ class _Frames:
                               for name, (shape, placement) in self.body_shapes.items()}
         """Each body's markers' poses (4x4, m) in the body's frame."""
         self._refilled = {topic: Refilled() for topic in ("/tf", "/free_bodies", "/ee_pose", "/ee_poses")}
-        self._refilled["/free_bodies_markers"] = Refilled(lambda path: ".pose." in path)
+        self._refilled["/free_bodies_markers"] = Refilled(lambda path: ".pose." in path, marker_stamped)
 
     def _transform(self, stamp_ns: int, transform: LinkTransform, parent: str | None = None) -> object:
         """``transform`` as a TransformStamped, its frames prefixed (the parent: ``parent``
@@ -751,7 +757,7 @@ class InverseSession(_Session):
         checked = self._checked(samples)
         rejected = [sample for sample in checked if isinstance(sample, InputRejected)]
         sequence = [None if isinstance(sample, InputRejected) else sample for sample in checked]
-        if self.odometry is None:
+        if self.odometry is None and len(sequence) > 1:     # one sample: cheaper one by one
             state = self.estimator.state()
             stencils = self.estimator.push_many(sequence)
             if stencils is not None:
@@ -775,7 +781,7 @@ class InverseSession(_Session):
                 stamp_ns = received_ns
             self.last_unstamped = unstamped
             stamps.append(stamp_ns)
-        good = self._good_rows(samples, stamps)
+        good = self._good_rows(samples, stamps) if len(samples) > 1 else None
         checked: list[JointSample | InputRejected] = []
         for k, ((names, position, velocity, _, _), stamp) in enumerate(zip(samples, stamps)):
             try:
@@ -872,7 +878,22 @@ class InverseSession(_Session):
         with np.errstate(invalid="ignore"):
             if not (np.abs(tau) <= self._effort_bound).all():
                 return None
-        return [output for middle, row in zip(middles, tau) for output in self._torque_outputs(middle, row)]
+        if self.recorder.samples or not self.wanted.isdisjoint(KINEMATIC_TOPICS):
+            return [output for middle, row in zip(middles, tau) for output in self._torque_outputs(middle, row)]
+        stamps = [middle.stamp_ns for middle in middles]     # /computed_torques alone: refilled at once
+        outputs: Outputs = []
+        if "/computed_torques" in self.wanted:
+            values = np.hstack([np.array([m.q for m in middles]), np.array([m.v for m in middles]), tau])
+            try:
+                torques = self._torques.many(stamps, values, lambda stamp_ns, row: messages.joint_state(
+                    stamp_ns, self.robot.joint_names, *np.split(row, 3)))
+            except messages.MessageFieldError:
+                return None
+            outputs = [("/computed_torques", message) for message in torques]
+            for output, stamp in zip(outputs, stamps):
+                self.recorder.write([output], stamp)
+        self.stamp_ns, self.samples = stamps[-1], self.samples + len(stamps)
+        return outputs
 
     def _torque_outputs(self, middle: JointSample, tau: np.ndarray) -> Outputs:
         """/computed_torques, /ee_pose(s) and /tf of a sample's torque (those wanted), logged."""
