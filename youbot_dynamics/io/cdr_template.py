@@ -10,8 +10,8 @@ the bytes and two numpy scatters instead of building and serializing a tree of P
 objects (a 15-transform TFMessage: about 5 us against 250 us).
 
 Where a number sits is taken from rosbags' own serializer, not from a second statement of
-the CDR rules: the prototype is serialized with the leaf set to two bit patterns that differ
-in every byte, and the bytes that differ are the leaf's. A refilled message is checked like
+the CDR rules: the prototype is serialized with the refilled leaves set to two bit patterns
+that differ in every byte, and the bytes that differ are theirs, in field order. A refilled message is checked like
 a built one (every float finite, every quaternion of unit norm: ``MessageFieldError`` names
 the field otherwise), so nothing non-finite is sent or logged.
 
@@ -111,16 +111,18 @@ def _serialized(message: Any) -> np.ndarray:
     return np.frombuffer(bytes(TYPESTORE.serialize_cdr(message, message.__msgtype__)), dtype=np.uint8)
 
 
-def _located(message: Any, write: Callable[[int], None], width: int, what: str) -> int:
-    """Byte offset of the ``width`` bytes that ``write(k)`` (k = 0, 1: the two patterns)
-    changes in the serialized message."""
+def _located(message: Any, write: Callable[[int], None], count: int, width: int, what: str) -> np.ndarray:
+    """Byte offsets (count,) of the ``count`` fields of ``width`` bytes that ``write(k)``
+    (k = 0, 1: every field to one of two patterns differing in every byte) changes in the
+    serialized message, in the order of the bytes (the CDR order of the fields)."""
     write(0)
     first = _serialized(message)
     write(1)
     changed = np.flatnonzero(first != _serialized(message))
-    if len(changed) != width or changed[-1] - changed[0] != width - 1:
-        raise RuntimeError(f"{message.__msgtype__}: {what} is not {width} contiguous bytes of the CDR form")
-    return int(changed[0])
+    groups = changed.reshape(-1, width) if len(changed) == count * width else None
+    if groups is None or (count and not (groups[:, -1] - groups[:, 0] == width - 1).all()):
+        raise RuntimeError(f"{message.__msgtype__}: {what} are not {count} fields of {width} bytes in the CDR form")
+    return groups[:, 0]
 
 
 class CdrTemplate:
@@ -137,13 +139,17 @@ class CdrTemplate:
         self.paths = tuple(path for path, *_ in leaves)
         saved = [_get(owner, key) for _, owner, key, _ in leaves]
         saved_stamps = [(stamp.sec, stamp.nanosec) for _, stamp in stamps]
-        float_offsets = [_located(prototype, lambda k, o=owner, n=key: _set(o, n, _PATTERNS[k]), 8, path)
-                         for path, owner, key, _ in leaves]
-        stamp_offsets = []
-        for path, stamp in stamps:
-            def write(k: int, stamp: Any = stamp) -> None:
+
+        def write_floats(k: int) -> None:
+            for _, owner, key, _ in leaves:
+                _set(owner, key, _PATTERNS[k])
+
+        def write_stamps(k: int) -> None:
+            for _, stamp in stamps:
                 stamp.sec, stamp.nanosec = _STAMP_PATTERNS[k]
-            stamp_offsets.append(_located(prototype, write, 8, path))
+
+        float_offsets = _located(prototype, write_floats, len(leaves), 8, "the refilled floats")
+        stamp_offsets = _located(prototype, write_stamps, len(stamps), 8, "the stamps")
         for (_, owner, key, _), value in zip(leaves, saved):
             _set(owner, key, value)
         for (_, stamp), (sec, nanosec) in zip(stamps, saved_stamps):
