@@ -162,12 +162,41 @@ class CdrTemplate:
         if len(quaternion_fields) % 4:
             raise RuntimeError(f"{self.msgtype}: a quaternion is refilled in part; refill all four fields or none")
         self._quaternions = np.array(quaternion_fields, dtype=np.intp).reshape(-1, 4)
+        self._unit_squares = ((1.0 - UNIT_QUATERNION_TOLERANCE) ** 2, (1.0 + UNIT_QUATERNION_TOLERANCE) ** 2)
+        """Bounds of |q|^2 for | |q| - 1 | <= the tolerance of io.messages."""
 
     def fill(self, stamp_ns: int, values: np.ndarray) -> Serialized:
         """The message with the stamps at ``stamp_ns`` (int ns >= 0) and the refilled leaves
         set to ``values`` (float64, in ``paths`` order). A value that is not finite or a
         quaternion that is not of unit norm raises ``MessageFieldError`` naming its field."""
-        return self.fill_many([stamp_ns], np.asarray(values, dtype=np.float64).reshape(1, -1))[0]
+        values = np.ascontiguousarray(values, dtype="<f8").reshape(-1)
+        if values.size != len(self.paths):
+            raise MessageFieldError(self.msgtype, f"{values.size} values for {len(self.paths)} refilled fields")
+        self._check(values[None, :])
+        data = self._bytes.copy()
+        data[self._floats] = values.view(np.uint8)
+        if self._stamp_count:
+            stamp = time(stamp_ns)
+            data[self._stamps] = np.frombuffer(struct.pack("<iI", stamp.sec, stamp.nanosec) * self._stamp_count,
+                                               dtype=np.uint8)
+        return Serialized(self.msgtype, data.tobytes())
+
+    def _check(self, values: np.ndarray) -> None:
+        """Raise ``MessageFieldError`` for the first value (N, len(paths)) that is not finite
+        or the first quaternion that is not of unit norm."""
+        if not math.isfinite(np.add.reduce(values, axis=None)):   # one pass; an overflowing sum is looked at below
+            finite = np.isfinite(values)
+            if not finite.all():
+                row, index = (int(i[0]) for i in np.nonzero(~finite))
+                raise MessageFieldError(self.paths[index], f"is {values[row, index]}, not finite")
+        if len(self._quaternions):
+            quaternions = values[:, self._quaternions]
+            squares = np.einsum("nij,nij->ni", quaternions, quaternions)
+            if not (self._unit_squares[0] <= squares.min() and squares.max() <= self._unit_squares[1]):
+                norms = np.sqrt(squares)
+                row, bad = np.unravel_index(int(np.argmax(np.abs(norms - 1.0))), norms.shape)
+                field = self.paths[self._quaternions[bad, 0]].rsplit(".", 1)[0]
+                raise MessageFieldError(field, f"has norm {norms[row, bad]}, expected a unit quaternion")
 
     def fill_many(self, stamps_ns: Sequence[int], values: np.ndarray) -> list[Serialized]:
         """``fill`` of N messages at once: ``stamps_ns`` (N,) and ``values`` (N, len(paths))."""
@@ -178,19 +207,7 @@ class CdrTemplate:
         if values.shape != (count, len(self.paths)):
             raise MessageFieldError(self.msgtype, f"values of shape {values.shape} for {count} messages of "
                                     f"{len(self.paths)} refilled fields")
-        if not math.isfinite(np.add.reduce(values, axis=None)):   # one pass; an overflowing sum is looked at below
-            finite = np.isfinite(values)
-            if not finite.all():
-                row, index = (int(i[0]) for i in np.nonzero(~finite))
-                raise MessageFieldError(self.paths[index], f"is {values[row, index]}, not finite")
-        if len(self._quaternions):
-            quaternions = values[:, self._quaternions]
-            norms = np.sqrt(np.einsum("nij,nij->ni", quaternions, quaternions))
-            error = np.abs(norms - 1.0)
-            if error.max() > UNIT_QUATERNION_TOLERANCE:
-                row, bad = np.unravel_index(int(np.argmax(error)), error.shape)
-                field = self.paths[self._quaternions[bad, 0]].rsplit(".", 1)[0]
-                raise MessageFieldError(field, f"has norm {norms[row, bad]}, expected a unit quaternion")
+        self._check(values)
         data = np.tile(self._bytes, (count, 1))
         data[:, self._floats] = values.astype("<f8", copy=False).view(np.uint8)
         if self._stamp_count:

@@ -74,10 +74,7 @@ loses less than this much of the recording."""
 
 
 class Samples(NamedTuple):
-    """Samples of a run: t (N,) integer ns; q, v, tau (N, n); energy (N,) J; ee (N, 3) m.
-
-    ``log_sample`` buffers one sample per instance (floats and lists).
-    """
+    """Samples of a run: t (N,) integer ns; q, v, tau (N, n); energy (N,) J; ee (N, 3) m."""
 
     t: np.ndarray
     q: np.ndarray
@@ -175,7 +172,9 @@ class RerunLogger(ClosesOnExit):
         self.batch_size = max(1, int(batch_size))
         self.flush_span_ns = round(float(flush_span) * 1e9)
         self._series_names: tuple[str, ...] | None = None
-        self._pending: list[Samples] = []
+        self._pending: list[np.ndarray] = []
+        """Buffered samples of ``log_sample``: rows of q, v, tau, energy, ee (checked)."""
+        self._pending_t: list[int] = []
         self._pending_names: tuple[str, ...] = ()
         self._ee_path: list[np.ndarray] = []
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -237,21 +236,21 @@ class RerunLogger(ClosesOnExit):
         """
         self._recording()
         names = tuple(joint_names)
-        self._resolve(names)
-        n = len(names)
-        row = Samples(
-            t=int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0]),
-            q=finite_floats(q, "Rerun q", n),
-            v=finite_floats(v, "Rerun v", n),
-            tau=finite_floats(tau, "Rerun tau", n),
-            energy=finite_floats([energy], "Rerun energy", 1)[0],
-            ee=finite_floats(ee_position, "Rerun ee_position", 3),
-        )
         if names != self._pending_names:
+            self._resolve(names)
             self._flush()
             self._pending_names = names
+        n = len(names)
+        t = int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0])
+        row = np.concatenate([np.asarray(part, dtype=np.float64).reshape(-1) for part in (q, v, tau, [energy],
+                                                                                           ee_position)])
+        if row.size != 3 * n + 4 or not np.isfinite(row).all():    # the field checks name what is wrong
+            row = np.concatenate([finite_floats(q, "Rerun q", n), finite_floats(v, "Rerun v", n),
+                                  finite_floats(tau, "Rerun tau", n), finite_floats([energy], "Rerun energy", 1),
+                                  finite_floats(ee_position, "Rerun ee_position", 3)])
         self._pending.append(row)
-        if len(self._pending) >= self.batch_size or row.t - self._pending[0].t >= self.flush_span_ns:
+        self._pending_t.append(t)
+        if len(self._pending) >= self.batch_size or t - self._pending_t[0] >= self.flush_span_ns:
             self._flush()
 
     def log_body_poses(self, stamp_ns: int, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
@@ -329,8 +328,10 @@ class RerunLogger(ClosesOnExit):
     def _flush(self) -> None:
         """Send the samples buffered by ``log_sample``."""
         if self._pending:
-            rows, self._pending = self._pending, []
-            self._send(self._pending_names, Samples(*(np.array(column) for column in zip(*rows))))
+            rows, times, self._pending, self._pending_t = np.vstack(self._pending), self._pending_t, [], []
+            n = len(self._pending_names)
+            self._send(self._pending_names, Samples(np.array(times, dtype=np.int64), rows[:, :n], rows[:, n:2 * n],
+                                                    rows[:, 2 * n:3 * n], rows[:, 3 * n], rows[:, 3 * n + 1:]))
             self._recording().flush(timeout_sec=0.0)     # start writing to the file, do not wait
 
     def _flush_bodies(self) -> None:
