@@ -252,47 +252,49 @@ class _Frames:
         root frame, in the scene's order, from their world poses (4x4, m)."""
         return pose_rows(list(poses.values()))
 
-    def tf(self, stamp_ns: int, sample: SampleFrames | None, bodies: np.ndarray | None = None,
-           base: object | None = None) -> object:
-        """``base`` (a moving base's odom -> base_footprint TransformStamped), the moving links
-        of the sample's kinematics (none without a robot), then the free bodies (rows of
-        :meth:`body_poses`)."""
-        rows = [] if base is None else [_transform_row(base)]
-        if sample is not None:
-            rows.append(sample.link_poses)
-        if bodies is not None and len(bodies):
-            rows.append(bodies)
-        values = np.concatenate(rows) if rows else np.zeros((0, 7))
+    def tf(self, stamps: Sequence[int], samples: Sequence[SampleFrames] | None,
+           bodies: Sequence[np.ndarray] | None = None, base: object | None = None) -> list[object]:
+        """/tf of N samples (``stamps`` ns): ``base`` (one sample's moving base odom ->
+        base_footprint TransformStamped), the moving links of each sample's kinematics (none
+        without a robot), then the free bodies (rows of :meth:`body_poses`)."""
+        blocks = [] if base is None else [np.tile(_transform_row(base).reshape(-1), (len(stamps), 1))]
+        if samples is not None:
+            blocks.append(np.array([sample.link_poses.reshape(-1) for sample in samples]))
+        if bodies is not None and len(self.body_shapes):
+            blocks.append(np.array([rows.reshape(-1) for rows in bodies]))
+        values = np.hstack(blocks) if blocks else np.zeros((len(stamps), 0))
 
         def build(stamp_ns: int, values: np.ndarray) -> object:
             edges = [] if base is None else [None]
-            edges += [(self.prefix + parent, self.prefix + child) for parent, child in sample.edges] \
-                if sample is not None else []
+            edges += [(self.prefix + parent, self.prefix + child) for parent, child in samples[0].edges] \
+                if samples is not None else []
             edges += [(self.root_frame, self.prefix + name) for name in self.body_shapes]
             return messages.tf_message(
                 base if edge is None else messages.transform_stamped(stamp_ns, *edge, row[:3], row[3:])
-                for edge, row in zip(edges, values))
+                for edge, row in zip(edges, values.reshape(-1, 7)))
 
-        return self._refilled["/tf"](stamp_ns, values, build)
+        return self._refilled["/tf"].many(stamps, values, build)
 
-    def free_bodies(self, stamp_ns: int, bodies: np.ndarray) -> object:
-        """/free_bodies: the bodies' poses in the root frame, in order."""
-        return self._refilled["/free_bodies"](stamp_ns, bodies, lambda stamp_ns, rows: messages.pose_array(
-            stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in rows]))
+    def free_bodies(self, stamps: Sequence[int], bodies: Sequence[np.ndarray]) -> list[object]:
+        """/free_bodies of N samples: the bodies' poses in the root frame, in order."""
+        return self._refilled["/free_bodies"].many(
+            stamps, np.array([rows.reshape(-1) for rows in bodies]), lambda stamp_ns, values: messages.pose_array(
+                stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))
 
-    def free_body_markers(self, stamp_ns: int, poses: dict[str, np.ndarray]) -> object:
-        """/free_bodies_markers: each body's shape at its world pose (4x4, m; ``poses`` by
-        name) in the root frame (namespace: the body's name; the same ids every sample, so
-        each replaces the last)."""
-        placed = [poses[name] @ local for name, locals_ in self._marker_poses.items() for local in locals_]
+    def free_body_markers(self, stamps: Sequence[int], poses: Sequence[dict[str, np.ndarray]]) -> list[object]:
+        """/free_bodies_markers of N samples: each body's shape at its world pose (4x4, m;
+        ``poses`` by name) in the root frame (namespace: the body's name; the same ids every
+        sample, so each replaces the last)."""
+        values = np.array([pose_rows([sample[name] @ local for name, locals_ in self._marker_poses.items()
+                                      for local in locals_]).reshape(-1) for sample in poses])
 
         def build(stamp_ns: int, values: np.ndarray) -> object:
             return messages.marker_array(
                 marker for name, (shape, placement) in self.body_shapes.items()
-                for marker in messages.shape_markers(stamp_ns, self.root_frame, name, shape, poses[name] @ placement,
-                                                     FREE_BODY_RGBA))
+                for marker in messages.shape_markers(stamp_ns, self.root_frame, name, shape,
+                                                     poses[0][name] @ placement, FREE_BODY_RGBA))
 
-        return self._refilled["/free_bodies_markers"](stamp_ns, pose_rows(placed), build)
+        return self._refilled["/free_bodies_markers"].many(stamps, values, build)
 
     def scene_markers(self) -> object:
         """/scene_markers (latched, stamp 0): the static world geometry in the root frame and
@@ -317,20 +319,21 @@ class _Frames:
         """/ee_pose, and /ee_poses for a model of several robots."""
         return ("/ee_pose", "/ee_poses") if len(self.links.ee_links) > 1 else ("/ee_pose",)
 
-    def ee_outputs(self, stamp_ns: int, sample: SampleFrames, wanted: frozenset[str] | None = None) -> Outputs:
-        """/ee_pose (and /ee_poses, see ``ee_topics``) of the sample's kinematics; only those
+    def ee_outputs(self, stamps: Sequence[int], samples: Sequence[SampleFrames],
+                   wanted: frozenset[str] | None = None) -> list[Outputs]:
+        """/ee_pose (and /ee_poses, see ``ee_topics``) of N samples' kinematics; only those
         in ``wanted`` if given."""
-        outputs: Outputs = []
+        topics: list[tuple[str, list[object]]] = []
         if wanted is None or "/ee_pose" in wanted:
-            outputs.append(("/ee_pose", self._refilled["/ee_pose"](
-                stamp_ns, sample.ee[sample.ee_index],
+            topics.append(("/ee_pose", self._refilled["/ee_pose"].many(
+                stamps, np.array([sample.ee[sample.ee_index] for sample in samples]),
                 lambda stamp_ns, row: messages.pose_stamped(stamp_ns, self.root_frame, row[:3], row[3:]))))
         if len(self.links.ee_links) > 1 and (wanted is None or "/ee_poses" in wanted):
-            outputs.append(("/ee_poses", self._refilled["/ee_poses"](
-                stamp_ns, sample.ee[:sample.ee_count],
-                lambda stamp_ns, rows: messages.pose_array(stamp_ns, self.root_frame,
-                                                           [(row[:3], row[3:]) for row in rows]))))
-        return outputs
+            topics.append(("/ee_poses", self._refilled["/ee_poses"].many(
+                stamps, np.array([sample.ee[:sample.ee_count].reshape(-1) for sample in samples]),
+                lambda stamp_ns, values: messages.pose_array(stamp_ns, self.root_frame,
+                                                             [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))))
+        return [[(topic, built[k]) for topic, built in topics] for k in range(len(stamps))]
 
 
 def _transform_row(transform: object) -> np.ndarray:
@@ -524,7 +527,7 @@ class SimulationSession(_Session):
         self.commands.clear()
         if self.moving_base is not None:
             self.moving_base.reset()
-        self.k, self.failure, self.wall_time, self._pending = 0, None, 0.0, []
+        self.k, self.failure, self.wall_time, self._pending, self._prebuilt = 0, None, 0.0, [], []
         self.snapshot = self.simulator.snapshot()
         self.energy0, self.energy_error = self.snapshot.energy, 0.0
         self._started = False
@@ -586,55 +589,94 @@ class SimulationSession(_Session):
                 return []
             finally:
                 self.wall_time += time.perf_counter() - start
+            self._prebuilt = self._block(self._pending[::-1])
         self.k += 1
-        return self._outputs(self._pending.pop())
+        prebuilt = self._prebuilt.pop() if self._prebuilt else None
+        return self._outputs(self._pending.pop(), prebuilt if prebuilt is not None and prebuilt[0] == self.wanted
+                             else None)
 
-    def _outputs(self, snapshot: Snapshot) -> Outputs:
-        """The sample's messages, those in ``wanted`` only (one kinematics pass feeds /tf,
-        /ee_pose and the Rerun sample; none when nothing takes them), logged."""
-        stamp, q, wanted = self.stamp_ns, snapshot.q, self.wanted
+    def _block(self, snapshots: list[Snapshot]) -> list[tuple]:
+        """The messages of the next samples (``snapshots``, in time order) built at once, in
+        pop order, each with the ``wanted`` they were built for; none with a moving base
+        (its odometry advances sample by sample) or when a message would be invalid (then
+        each is built at its own step, so that the failure falls on its sample)."""
+        if self.moving_base is not None:
+            return []
+        stamps = [self.epoch_ns + (self.k + 1 + j) * self.step_ns for j in range(len(snapshots))]
+        try:
+            built = self._sample_messages(snapshots, stamps)
+        except messages.MessageFieldError:
+            return []
+        return [(self.wanted, *sample) for sample in reversed(built)]
+
+    def _sample_messages(self, snapshots: Sequence[Snapshot], stamps: Sequence[int]
+                         ) -> list[tuple[Outputs, SampleFrames | None, np.ndarray | None]]:
+        """The messages of the topics in ``wanted`` of N samples at ``stamps`` (ns), built
+        together, with each sample's kinematics (one pass per sample feeds /tf, /ee_pose and
+        the Rerun sample; none when nothing takes them) and its free bodies' rows. A moving
+        base's outputs advance its odometry: one sample at a time. Raises MessageFieldError."""
+        wanted = self.wanted
+        has_bodies = bool(self.frames.body_shapes)
+        bodies = [self.frames.body_poses(snapshot.bodies) for snapshot in snapshots] if has_bodies else None
+        kinematics = self.frames.has_robot and (self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS))
+        samples = [self.frames.links.at(snapshot.q) for snapshot in snapshots] if kinematics else None
+        per_sample: list[Outputs] = [[] for _ in snapshots]
+
+        def add(topic: str, built: list[object]) -> None:
+            for outputs, message in zip(per_sample, built):
+                outputs.append((topic, message))
+
+        if "/clock" in wanted:
+            add("/clock", [messages.clock(stamp) for stamp in stamps])
+        if "/joint_states" in wanted:
+            add("/joint_states", self._joint_states_of(stamps, snapshots))
+        if samples is not None:
+            for outputs, ee in zip(per_sample, self.frames.ee_outputs(stamps, samples, wanted)):
+                outputs += ee
+        if has_bodies and "/free_bodies" in wanted:
+            add("/free_bodies", self.frames.free_bodies(stamps, bodies))
+        if has_bodies and "/free_bodies_markers" in wanted:
+            add("/free_bodies_markers", self.frames.free_body_markers(stamps, [s.bodies for s in snapshots]))
+        base = None
+        if self.moving_base is not None:     # always: it advances the odometry
+            odometry, base = self.moving_base.outputs(stamps[0], self.scene_time, snapshots[0])
+            per_sample[0] += [(topic, message) for topic, message in odometry if topic in wanted]
+        if "/tf" in wanted:
+            add("/tf", self.frames.tf(stamps, samples, bodies, base))
+        return [(outputs, None if samples is None else samples[k], None if bodies is None else bodies[k])
+                for k, outputs in enumerate(per_sample)]
+
+    def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None = None) -> Outputs:
+        """The sample's messages (``prebuilt``: (wanted, messages, kinematics, body rows) of
+        :meth:`_block`, or built now), logged."""
+        stamp = self.stamp_ns
         self.snapshot = snapshot
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
-        has_bodies = bool(self.frames.body_shapes)
-        bodies = self.frames.body_poses(snapshot.bodies) if has_bodies else None
-        kinematics = self.frames.has_robot and (self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS))
-        sample = self.frames.links.at(q) if kinematics else None
         try:
-            outputs = [("/clock", messages.clock(stamp))] if "/clock" in wanted else []
-            if "/joint_states" in wanted:
-                outputs.append(("/joint_states", self._joint_state(stamp, snapshot)))
-            if sample is not None:
-                outputs += self.frames.ee_outputs(stamp, sample, wanted)
-            if has_bodies and "/free_bodies" in wanted:
-                outputs.append(("/free_bodies", self.frames.free_bodies(stamp, bodies)))
-            if has_bodies and "/free_bodies_markers" in wanted:
-                outputs.append(("/free_bodies_markers", self.frames.free_body_markers(stamp, snapshot.bodies)))
-            base = None
-            if self.moving_base is not None:     # always: it advances the odometry
-                odometry, base = self.moving_base.outputs(stamp, self.scene_time, snapshot)
-                outputs += [(topic, message) for topic, message in odometry if topic in wanted]
-            if "/tf" in wanted:
-                outputs.append(("/tf", self.frames.tf(stamp, sample, bodies, base)))
+            outputs, sample, bodies = prebuilt[1:] if prebuilt is not None else \
+                self._sample_messages([snapshot], [stamp])[0]
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
         if sample is not None:
-            self.recorder.sample(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy,
+            self.recorder.sample(stamp, snapshot.joint_names, snapshot.q, snapshot.v, snapshot.tau, snapshot.energy,
                                  sample.ee[sample.ee_index, :3])
-        if has_bodies:
+        if bodies is not None:
             self.recorder.bodies(stamp, tuple(self.frames.body_shapes), bodies)
         return outputs
 
-    def _joint_state(self, stamp_ns: int, snapshot: Snapshot) -> object:
-        """/joint_states: the moving joints (joint order), then every locked joint (URDF
-        tree order) at its locked value with velocity and effort 0, so that every movable
-        joint of the URDF has a position (robot_state_publisher needs wheels and fingers)."""
-        zeros = np.zeros(len(self.locked_names))
-        values = np.concatenate([snapshot.q, self._locked_q, snapshot.v, zeros, snapshot.tau, zeros])
-        return self._joint_states(stamp_ns, values, lambda stamp_ns, values: messages.joint_state(
-            stamp_ns, (*snapshot.joint_names, *self.locked_names), *np.split(values, 3)))
+    def _joint_states_of(self, stamps: Sequence[int], snapshots: Sequence[Snapshot]) -> list[object]:
+        """/joint_states of N samples: the moving joints (joint order), then every locked
+        joint (URDF tree order) at its locked value with velocity and effort 0, so that
+        every movable joint of the URDF has a position (robot_state_publisher needs wheels
+        and fingers)."""
+        locked, zeros = np.tile(self._locked_q, (len(stamps), 1)), np.zeros((len(stamps), len(self.locked_names)))
+        values = np.hstack([np.array([s.q for s in snapshots]), locked, np.array([s.v for s in snapshots]), zeros,
+                            np.array([s.tau for s in snapshots]), zeros])
+        return self._joint_states.many(stamps, values, lambda stamp_ns, row: messages.joint_state(
+            stamp_ns, (*snapshots[0].joint_names, *self.locked_names), *np.split(row, 3)))
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
@@ -907,9 +949,9 @@ class InverseSession(_Session):
                     stamp, np.concatenate([middle.q, middle.v, tau]), lambda stamp_ns, values: messages.joint_state(
                         stamp_ns, self.robot.joint_names, *np.split(values, 3)))))
             if frames is not None:
-                outputs += self.frames.ee_outputs(stamp, frames, wanted)
+                outputs += self.frames.ee_outputs([stamp], [frames], wanted)[0]
                 if "/tf" in wanted:
-                    outputs.append(("/tf", self.frames.tf(stamp, frames)))
+                    outputs.append(("/tf", self.frames.tf([stamp], [frames])[0]))
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             self.estimator.restart("non_finite")
