@@ -84,6 +84,13 @@ class Samples(NamedTuple):
     ee: np.ndarray
 
 
+def _stamp(stamp_ns: int) -> int:
+    """A sample's stamp (integer ns >= 0) as an int; ``stamps_ns`` names what is wrong."""
+    if type(stamp_ns) is int and stamp_ns >= 0:
+        return stamp_ns
+    return int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0])
+
+
 def body_entity(name: str) -> str:
     """Entity path of the free body ``name``."""
     return f"{FREE_BODIES}/{rr.escape_entity_path_part(name)}"
@@ -241,7 +248,7 @@ class RerunLogger(ClosesOnExit):
             self._flush()
             self._pending_names = names
         n = len(names)
-        t = int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0])
+        t = _stamp(stamp_ns)
         row = np.concatenate([np.asarray(part, dtype=np.float64).reshape(-1) for part in (q, v, tau, [energy],
                                                                                            ee_position)])
         if row.size != 3 * n + 4 or not np.isfinite(row).all():    # the field checks name what is wrong
@@ -262,7 +269,7 @@ class RerunLogger(ClosesOnExit):
         if set(poses) != set(self.bodies):
             raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies "
                                  f"{sorted(self.bodies)}")
-        t = int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0])
+        t = _stamp(stamp_ns)
         translations = [finite_floats(poses[name][0], f"Rerun {name} translation", 3) for name in self.bodies]
         quaternions = [finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]
         self._body_rows.append((t, translations, quaternions))

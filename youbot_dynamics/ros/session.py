@@ -157,8 +157,7 @@ class Recorder:
     def write(self, outputs: Outputs, stamp_ns: int) -> None:
         """Log messages at ``stamp_ns`` (log and publish time)."""
         if self.mcap is not None and not self.mcap.closed:
-            for topic, message in outputs:
-                self.mcap.write(topic, message, stamp_ns)
+            self.mcap.write_all(outputs, stamp_ns)
 
     def sample(self, stamp_ns: int, names: Sequence[str], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
                energy: float, ee_position: np.ndarray) -> None:
