@@ -135,10 +135,10 @@ class AccelerationEstimator:
             if len(window) == 3:
                 stencils.append((index, *window))
         if stencils:
+            spans = np.array([after.stamp_ns - before.stamp_ns for _, before, _, after in stencils]) / NS_PER_S
             with np.errstate(over="ignore", invalid="ignore"):     # checked just below
                 estimates = (np.array([after.v for *_, after in stencils]) -
-                             np.array([before.v for _, before, _, _ in stencils])) / \
-                    (np.array([after.stamp_ns - before.stamp_ns for _, before, _, after in stencils]) / NS_PER_S)[:, None]
+                             np.array([before.v for _, before, _, _ in stencils])) / spans[:, None]
             if not np.isfinite(estimates).all():
                 return None
             self.filtered = estimates[-1]
