@@ -89,6 +89,10 @@ def test_refilled_values_are_checked_like_built_ones() -> None:
         template.fill(-1, poses(3))
     with pytest.raises(messages.MessageFieldError, match="stamp"):
         template.fill(2**31 * 10**9, poses(3))
+    with pytest.raises(messages.MessageFieldError, match="stamp"):
+        template.fill_many([1, -1], np.array([poses(3).reshape(-1)] * 2))
+    with pytest.raises(messages.MessageFieldError, match="stamp"):
+        template.fill_many([1, 2.0], np.array([poses(3).reshape(-1)] * 2))
 
 
 def test_refilled_builds_the_first_message_and_refills_the_next() -> None:

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from youbot_dynamics.io.messages import TYPESTORE, UNIT_QUATERNION_TOLERANCE, MessageFieldError, time
+from youbot_dynamics.io.stamps import NS_PER_S
 
 _PATTERNS = (struct.unpack("<d", b"\x11" * 8)[0], struct.unpack("<d", b"\x22" * 8)[0])
 """Two finite float64 values whose bytes differ everywhere (3.8e-226, 3.6e-145)."""
@@ -125,6 +126,17 @@ def _located(message: Any, write: Callable[[int], None], count: int, width: int,
     return groups[:, 0]
 
 
+def stamps_ns_checked(stamps: Sequence[int]) -> np.ndarray:
+    """``stamps`` (integer ns) as int64, each a valid builtin_interfaces/Time (the checks of
+    :func:`youbot_dynamics.io.messages.time`, which names what is wrong)."""
+    array = np.asarray(stamps)
+    if array.dtype != np.int64 or array.min() < 0 or array.max() >= 2**31 * NS_PER_S:
+        for stamp in stamps:
+            time(stamp)                     # raises MessageFieldError for the first bad one
+        array = array.astype(np.int64)
+    return array
+
+
 class CdrTemplate:
     """The CDR bytes of ``prototype`` (a rosbags message) with its float64 leaves whose path
     ``refilled(path)`` accepts and the stamps whose path ``stamped(path)`` accepts
@@ -211,8 +223,8 @@ class CdrTemplate:
         data = np.tile(self._bytes, (count, 1))
         data[:, self._floats] = values.astype("<f8", copy=False).view(np.uint8)
         if self._stamp_count:
-            stamps = [time(stamp_ns) for stamp_ns in stamps_ns]
-            fields = np.array([(stamp.sec, stamp.nanosec) for stamp in stamps], dtype="<u4").view(np.uint8)
+            seconds, nanoseconds = np.divmod(stamps_ns_checked(stamps_ns), NS_PER_S)
+            fields = np.column_stack([seconds, nanoseconds]).astype("<u4").view(np.uint8)
             data[:, self._stamps] = np.tile(fields, (1, self._stamp_count))
         return [Serialized(self.msgtype, row.tobytes()) for row in data]
 
