@@ -98,12 +98,16 @@ def session_run(rate: float, duration: float, log_dir: Path | None) -> float:
     return session.t / (time.perf_counter() - start)
 
 
-def main_job(duration: float = 4.0, source: Path = REPO) -> tuple[float, float, float]:
-    """(real-time factor with logs, the integrator's alone, simulated s per CPU s of the
-    whole process) of ``youbot-dynamics main-job --duration`` (gripping, 500 Hz, MCAP +
-    Rerun, node start to finish) run from ``source`` in its own process. The first two are
-    wall-time figures as the command prints them; the third counts only the process's own
-    CPU time (start-up included), what a machine to itself would give as wall time."""
+def main_job(duration: float = 4.0, source: Path = REPO) -> tuple[float, float]:
+    """(real-time factor with logs, the integrator's alone) of ``youbot-dynamics main-job
+    --duration`` (gripping, 500 Hz, MCAP + Rerun, node start to finish; wall time, as the
+    command prints them) run from ``source`` in its own process."""
+    return main_job_figures(duration, source)[:2]
+
+
+def main_job_figures(duration: float = 4.0, source: Path = REPO) -> tuple[float, float, float]:
+    """:func:`main_job` and, third, simulated s per CPU s of the whole process (start-up
+    included): what a machine to itself would give as wall time."""
     import resource
 
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -210,7 +214,7 @@ def issue14(duration: float, old: Path | None) -> None:
     costs = [(label, *output_cost(source)) for label, source in trees]
     print(table(("source", "outputs us/sample, no logs", "outputs us/sample, MCAP + Rerun"),
                 [(label, f"{off:.0f}", f"{on:.0f}") for label, off, on in costs]))
-    rows = [(label, *(f"{x:.2f}" for x in main_job(duration, source))) for label, source in trees]
+    rows = [(label, *(f"{x:.2f}" for x in main_job_figures(duration, source))) for label, source in trees]
     print(table(("source", f"main job real-time factor with logs ({duration:g} s, wall)", "integrator alone (wall)",
                  "simulated s per CPU s (start-up included)"), rows))
     mode, whole = inverse_cost()
