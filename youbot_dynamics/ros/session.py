@@ -2,13 +2,18 @@
 torques from joint states (inverse mode), build the messages through ``io.messages`` and log
 them through ``io`` (MCAP in rosbag2 form, Rerun). The node only moves messages in and out.
 
-Every output is a list of ``(topic, message)`` (rosbags objects) that the caller publishes
-(``session.topics`` names them), /tf (every moving link and every free body) among them in
-every sample; everything published is also logged. Topics are named as logged, as in the
-root namespace (``/joint_states``); the node publishes them under their graph names
-(:mod:`youbot_dynamics.ros.topics`). Frame names carry ``frame_prefix`` (see ``_Frames``).
-One kinematics pass per sample (:meth:`~youbot_dynamics.ros.frames.LinkFrames.at`) gives
-/tf, /ee_pose and /ee_poses. ``session.latched`` holds what is sent
+Every output is a list of ``(topic, message)`` that the caller publishes (``session.topics``
+names them), /tf (every moving link and every free body) among them; everything published is
+also logged. A sample carries the topics something consumes (``wanted``): those the node
+reports subscribed (``consumed_by``; by default every topic) and those the MCAP records; the
+others are not built. The first message of a topic is built by ``io.messages``; the next
+ones refill its CDR bytes (:mod:`youbot_dynamics.io.cdr_template`: ``Serialized`` messages,
+which read like the rosbags ones), and the MCAP and the node's publishers take those bytes.
+Topics are named as logged, as in the root namespace (``/joint_states``); the node publishes
+them under their graph names (:mod:`youbot_dynamics.ros.topics`). Frame names carry
+``frame_prefix`` (see ``_Frames``). One kinematics pass per sample
+(:meth:`~youbot_dynamics.ros.frames.LinkFrames.at`) gives /tf, /ee_pose, /ee_poses and the
+Rerun sample, and none runs when nothing takes them. ``session.latched`` holds what is sent
 once, latched (transient local), and logged at t = 0: /tf_static (every fixed link) and,
 with a robot, /robot_description (std_msgs/String: the URDF of what is simulated, the
 composed URDF for a composed scene), named as robot_state_publisher names them. Stamps and
