@@ -16,7 +16,10 @@ subscribes /cmd_vel (geometry_msgs/Twist) and publishes /odom and /base_pose_gro
 (nav_msgs/Odometry) and odom -> base_footprint on /tf (:mod:`youbot_dynamics.ros.mobile_base`).
 inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
 default keep-all: a replay as fast as possible loses no sample; best_effort for drivers that
-publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics. Parameters:
+publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics; the joint
+states received in each ``INVERSE_PERIOD`` (10 ms) tick are taken as one batch. Messages are
+published as CDR bytes and only on topics with subscribers (the latched ones and /diagnostics
+always); the session builds only those and the ones its MCAP records. Parameters:
 :mod:`youbot_dynamics.ros.parameters`, checked (all or nothing) in the on-set callback and
 applied in the post-set callback.
 
