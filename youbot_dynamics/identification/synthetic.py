@@ -9,7 +9,8 @@
   the applied (clipped) torques, exact; :func:`add_effort_noise` then writes a copy of the
   bag's /joint_states with Gaussian noise on the efforts, as a torque sensor would report.
 - By inverse dynamics (:func:`record_joint_states`): Pinocchio's RNEA plus the simulator's
-  friction law (:func:`~youbot_dynamics.dynamics.rigid_body.inverse_dynamics`) along the
+  friction law over all samples at once
+  (:func:`~youbot_dynamics.dynamics.rigid_body.inverse_dynamics_batch`) along the
   trajectory's exact q, qd, qdd, with the noise added to every effort: the torques a
   perfectly tracking controller would apply. Fast, and independent of the simulator.
 """
@@ -24,10 +25,11 @@ from lxml import etree
 import yaml
 
 from youbot_dynamics.dynamics.friction import JointFriction
-from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
+from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch
 from youbot_dynamics.identification.excitation import FourierTrajectory
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import read_bag
+from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.model.robot import Robot, keep_joints
@@ -72,17 +74,18 @@ def record_joint_states(path: str | Path, robot: Robot, trajectory: FourierTraje
     listed first at 0; the trajectory's joints follow in reverse order, so readers must
     match by name."""
     moving = keep_joints(robot, list(trajectory.joint_names))
-    friction, data = JointFriction.from_urdf(moving), moving.model.createData()
     t_ns = np.rint(np.arange(int(round(duration * rate))) * 1e9 / rate).astype(np.int64)
     q, v, a = trajectory.evaluate(t_ns * 1e-9)
-    names, zeros = [*passengers, *reversed(moving.joint_names)], [0.0] * len(passengers)
+    tau = inverse_dynamics_batch(moving, q, v, a, JointFriction.from_urdf(moving)) + \
+        rng.normal(0.0, noise, (len(t_ns), moving.nv))
+    names, zeros = [*passengers, *reversed(moving.joint_names)], np.zeros((len(t_ns), len(passengers)))
+    values = np.hstack([zeros, q[:, ::-1], zeros, v[:, ::-1], zeros, tau[:, ::-1]])
+    joint_states = Refilled()
     with McapLogger(path) as log:
         log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
-        for k, stamp in enumerate(t_ns):
-            tau = inverse_dynamics(moving, data, q[k], v[k], a[k], friction) + rng.normal(0.0, noise, moving.nv)
-            log.write("/joint_states", messages.joint_state(int(stamp), names, [*zeros, *q[k][::-1]],
-                                                            [*zeros, *v[k][::-1]], [*zeros, *tau[::-1]]),
-                      log_time_ns=int(stamp))
+        for stamp, row in zip(t_ns.tolist(), values):
+            log.write("/joint_states", joint_states(stamp, row, lambda stamp, row: messages.joint_state(
+                stamp, names, *np.split(row, 3))), log_time_ns=stamp)
 
 
 def excitation_scene(robot_urdf: str | Path, trajectory: FourierTrajectory, duration: float,

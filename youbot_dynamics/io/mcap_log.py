@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import IO
 
@@ -35,6 +36,7 @@ import yaml
 from mcap.writer import CompressionType, Writer
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.cdr_template import Serialized
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.messages import TYPESTORE
 
@@ -161,34 +163,41 @@ class McapLogger(ClosesOnExit):
         log_time_ns: int,
         publish_time_ns: int | None = None,
     ) -> None:
-        """Serialise ``message`` to CDR and append it on ``topic``.
+        """Serialise ``message`` to CDR (a :class:`~youbot_dynamics.io.cdr_template.Serialized`
+        one is already) and append it on ``topic``.
 
         ``log_time_ns`` is the receive (log) time, ``publish_time_ns`` the send time
         (defaults to the log time); both integer nanoseconds >= 0.
         """
+        self.write_all([(topic, message)], log_time_ns, publish_time_ns)
+
+    def write_all(self, messages: Sequence[tuple[str, object]], log_time_ns: int,
+                  publish_time_ns: int | None = None) -> None:
+        """``write`` of (topic, message) pairs that share their log and publish times (one
+        sample's messages): the times and the chunk bound checked once."""
         self._check_open()
-        if topic not in self._channels:
-            raise UserInputError(f"{self.path}: topic {topic} was not added before writing")
-        channel, msgtype = self._channels[topic]
-        actual = getattr(message, "__msgtype__", type(message).__name__)
-        if actual != msgtype:
-            raise UserInputError(f"{self.path}: topic {topic} carries {msgtype}, got {actual}")
         publish_time_ns = log_time_ns if publish_time_ns is None else publish_time_ns
         for label, value in (("log time", log_time_ns), ("publish time", publish_time_ns)):
             if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**64:
-                raise UserInputError(
-                    f"{self.path}: {label} on {topic} must be integer ns >= 0, got {value!r}"
-                )
-        data = TYPESTORE.serialize_cdr(message, msgtype)
+                topics = ", ".join(topic for topic, _ in messages)
+                raise UserInputError(f"{self.path}: {label} on {topics} must be integer ns >= 0, got {value!r}")
+        records = []
+        for topic, message in messages:
+            if topic not in self._channels:
+                raise UserInputError(f"{self.path}: topic {topic} was not added before writing")
+            channel, msgtype = self._channels[topic]
+            actual = getattr(message, "__msgtype__", type(message).__name__)
+            if actual != msgtype:
+                raise UserInputError(f"{self.path}: topic {topic} carries {msgtype}, got {actual}")
+            data = message.cdr if isinstance(message, Serialized) else TYPESTORE.serialize_cdr(message, msgtype)
+            records.append((topic, channel, bytes(data)))
+        if not records:
+            return
         self._close_chunk_if_due(log_time_ns)
-        self._sequences[topic] += 1
-        self._writer.add_message(
-            channel_id=channel,
-            log_time=log_time_ns,
-            data=bytes(data),
-            publish_time=publish_time_ns,
-            sequence=self._sequences[topic],
-        )
+        for topic, channel, data in records:
+            self._sequences[topic] += 1
+            self._writer.add_message(channel_id=channel, log_time=log_time_ns, data=data,
+                                     publish_time=publish_time_ns, sequence=self._sequences[topic])
 
     def _close_chunk_if_due(self, log_time_ns: int) -> None:
         """Close the open chunk if a message at ``log_time_ns`` would make it span

@@ -74,10 +74,7 @@ loses less than this much of the recording."""
 
 
 class Samples(NamedTuple):
-    """Samples of a run: t (N,) integer ns; q, v, tau (N, n); energy (N,) J; ee (N, 3) m.
-
-    ``log_sample`` buffers one sample per instance (floats and lists).
-    """
+    """Samples of a run: t (N,) integer ns; q, v, tau (N, n); energy (N,) J; ee (N, 3) m."""
 
     t: np.ndarray
     q: np.ndarray
@@ -85,6 +82,13 @@ class Samples(NamedTuple):
     tau: np.ndarray
     energy: np.ndarray
     ee: np.ndarray
+
+
+def _stamp(stamp_ns: int) -> int:
+    """A sample's stamp (integer ns >= 0) as an int; ``stamps_ns`` names what is wrong."""
+    if type(stamp_ns) is int and stamp_ns >= 0:
+        return stamp_ns
+    return int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0])
 
 
 def body_entity(name: str) -> str:
@@ -175,7 +179,9 @@ class RerunLogger(ClosesOnExit):
         self.batch_size = max(1, int(batch_size))
         self.flush_span_ns = round(float(flush_span) * 1e9)
         self._series_names: tuple[str, ...] | None = None
-        self._pending: list[Samples] = []
+        self._pending: list[np.ndarray] = []
+        """Buffered samples of ``log_sample``: rows of q, v, tau, energy, ee (checked)."""
+        self._pending_t: list[int] = []
         self._pending_names: tuple[str, ...] = ()
         self._ee_path: list[np.ndarray] = []
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -237,21 +243,21 @@ class RerunLogger(ClosesOnExit):
         """
         self._recording()
         names = tuple(joint_names)
-        self._resolve(names)
-        n = len(names)
-        row = Samples(
-            t=int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0]),
-            q=finite_floats(q, "Rerun q", n),
-            v=finite_floats(v, "Rerun v", n),
-            tau=finite_floats(tau, "Rerun tau", n),
-            energy=finite_floats([energy], "Rerun energy", 1)[0],
-            ee=finite_floats(ee_position, "Rerun ee_position", 3),
-        )
         if names != self._pending_names:
+            self._resolve(names)
             self._flush()
             self._pending_names = names
+        n = len(names)
+        t = _stamp(stamp_ns)
+        row = np.concatenate([np.asarray(part, dtype=np.float64).reshape(-1) for part in (q, v, tau, [energy],
+                                                                                           ee_position)])
+        if row.size != 3 * n + 4 or not np.isfinite(row).all():    # the field checks name what is wrong
+            row = np.concatenate([finite_floats(q, "Rerun q", n), finite_floats(v, "Rerun v", n),
+                                  finite_floats(tau, "Rerun tau", n), finite_floats([energy], "Rerun energy", 1),
+                                  finite_floats(ee_position, "Rerun ee_position", 3)])
         self._pending.append(row)
-        if len(self._pending) >= self.batch_size or row.t - self._pending[0].t >= self.flush_span_ns:
+        self._pending_t.append(t)
+        if len(self._pending) >= self.batch_size or t - self._pending_t[0] >= self.flush_span_ns:
             self._flush()
 
     def log_body_poses(self, stamp_ns: int, poses: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> None:
@@ -263,7 +269,7 @@ class RerunLogger(ClosesOnExit):
         if set(poses) != set(self.bodies):
             raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies "
                                  f"{sorted(self.bodies)}")
-        t = int(stamps_ns([stamp_ns], "Rerun stamp_ns")[0])
+        t = _stamp(stamp_ns)
         translations = [finite_floats(poses[name][0], f"Rerun {name} translation", 3) for name in self.bodies]
         quaternions = [finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]
         self._body_rows.append((t, translations, quaternions))
@@ -329,8 +335,10 @@ class RerunLogger(ClosesOnExit):
     def _flush(self) -> None:
         """Send the samples buffered by ``log_sample``."""
         if self._pending:
-            rows, self._pending = self._pending, []
-            self._send(self._pending_names, Samples(*(np.array(column) for column in zip(*rows))))
+            rows, times, self._pending, self._pending_t = np.vstack(self._pending), self._pending_t, [], []
+            n = len(self._pending_names)
+            self._send(self._pending_names, Samples(np.array(times, dtype=np.int64), rows[:, :n], rows[:, n:2 * n],
+                                                    rows[:, 2 * n:3 * n], rows[:, 3 * n], rows[:, 3 * n + 1:]))
             self._recording().flush(timeout_sec=0.0)     # start writing to the file, do not wait
 
     def _flush_bodies(self) -> None:

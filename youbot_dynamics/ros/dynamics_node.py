@@ -16,7 +16,10 @@ subscribes /cmd_vel (geometry_msgs/Twist) and publishes /odom and /base_pose_gro
 (nav_msgs/Odometry) and odom -> base_footprint on /tf (:mod:`youbot_dynamics.ros.mobile_base`).
 inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
 default keep-all: a replay as fast as possible loses no sample; best_effort for drivers that
-publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics. Parameters:
+publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics; the joint
+states received in each ``INVERSE_PERIOD`` (10 ms) tick are taken as one batch. Messages are
+published as CDR bytes and only on topics with subscribers (the latched ones and /diagnostics
+always); the session builds only those and the ones its MCAP records. Parameters:
 :mod:`youbot_dynamics.ros.parameters`, checked (all or nothing) in the on-set callback and
 applied in the post-set callback.
 
@@ -85,7 +88,7 @@ from trajectory_msgs.msg import JointTrajectory
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.ros.commands import InputRejected
-from youbot_dynamics.ros.conversions import rclpy_class, to_cdr, to_rclpy
+from youbot_dynamics.ros.conversions import rclpy_class, to_cdr
 from youbot_dynamics.ros.parameters import check_choice, declare_all, frame_prefix_of
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
@@ -98,12 +101,11 @@ MAX_BURST = 20
 MAX_LAG = 0.25
 """Wall seconds the samples may fall behind their pacing before it restarts from now (the
 real-time factor then drops below the requested time scale)."""
+INVERSE_PERIOD = 0.01
+"""Wall seconds between inverse-mode ticks: each takes the joint states received since the
+last as one batch (:meth:`~youbot_dynamics.ros.session.InverseSession.joint_states`)."""
 WARN_THROTTLE = 2.0
 """Seconds between repeated warnings about bad input."""
-SERIALIZED = frozenset({"/tf", "/tf_static"})
-"""Topics published as CDR bytes (:func:`~youbot_dynamics.ros.conversions.to_cdr`): a
-TFMessage's nested rclpy objects cost about five times as much to build (0.5 ms per sample
-of the gripping scene, a quarter of its 500 Hz period)."""
 QUOTED_CHARACTERS = 500
 """Characters of the message that made a callback fail quoted in the log."""
 MAX_MESSAGE_BYTES = {"/cmd_vel": 1024, "/joint_commands": 64 * 1024, "/joint_states": 64 * 1024, "/joint_trajectory": 1024 * 1024}
@@ -150,10 +152,13 @@ class DynamicsNode(Node):
             self._restart_pacing()
             self.create_timer(1.0 / p["publish_rate"], self._guarded("step timer", self._on_tick), clock=steady)
         else:
+            self._inbox: list[tuple] = []
             self._subscribe(JointState, "/joint_states", self._on_joint_state,
                             SUBSCRIPTION_PROFILES[p["joint_states_qos"]],
                             event_callbacks=SubscriptionEventCallbacks(
                                 incompatible_qos=self._on_incompatible_joint_states))
+            self.create_timer(INVERSE_PERIOD, self._guarded("joint states batch", self._on_joint_states),
+                              clock=steady)
         self._diagnostics_mark = (time.monotonic(), self.session.t)
         self.create_timer(p["diagnostics_period"], self._guarded("diagnostics timer", self._on_diagnostics),
                           clock=steady)
@@ -182,10 +187,19 @@ class DynamicsNode(Node):
                                       "or source a ROS 2 Jazzy); the MCAP still logs them")
         self._publish(self.session.latched)
 
-    def _publish(self, outputs: Outputs) -> None:
+    def _publish(self, outputs: Outputs, subscribed: frozenset[str] | None = None) -> None:
+        """Publish as CDR bytes (serialized once, also for the MCAP); with ``subscribed``,
+        only on those topics."""
         for topic, message in outputs:
-            if topic not in self._unpublished:
-                self.publishers_[topic].publish(to_cdr(message) if topic in SERIALIZED else to_rclpy(message))
+            if topic not in self._unpublished and (subscribed is None or topic in subscribed):
+                self.publishers_[topic].publish(to_cdr(message))
+
+    def _subscribed(self) -> frozenset[str]:
+        """The topics with subscribers now; the session builds only those and the logged ones."""
+        subscribed = frozenset(topic for topic, publisher in self.publishers_.items()
+                               if publisher.get_subscription_count())
+        self.session.consumed_by(subscribed)
+        return subscribed
 
     def _restart_pacing(self) -> None:
         self._pace_start, self._pace_k0 = time.monotonic(), self.session.k
@@ -214,8 +228,9 @@ class DynamicsNode(Node):
             int((time.monotonic() - self._pace_start) * rate) - (session.k - self._pace_k0)
         if due > MAX_LAG * rate:
             self._restart_pacing()
+        subscribed = self._subscribed()
         for _ in range(min(max(0, due), MAX_BURST)):
-            self._publish(session.step())
+            self._publish(session.step(), subscribed)
             if session.failure:
                 self.get_logger().error(session.failure)
                 return
@@ -323,8 +338,20 @@ class DynamicsNode(Node):
         self.session.trajectory(list(msg.joint_names), points, stamp_ns_of(msg.header.stamp))
 
     def _on_joint_state(self, msg: JointState) -> None:
-        self._publish(self.session.joint_state(list(msg.name), msg.position, msg.velocity,
-                                               stamp_ns_of(msg.header.stamp), self.get_clock().now().nanoseconds))
+        self._inbox.append((list(msg.name), msg.position, msg.velocity, stamp_ns_of(msg.header.stamp),
+                            self.get_clock().now().nanoseconds))
+
+    def _on_joint_states(self) -> None:
+        """The joint states received since the last tick, as one batch."""
+        if not self._inbox:
+            return
+        samples, self._inbox = self._inbox, []
+        subscribed = self._subscribed()
+        outputs, rejected = self.session.joint_states(samples)
+        self._publish(outputs, subscribed)
+        for error in rejected:
+            self.get_logger().warning(f"/joint_states: ignored ({error}); keeping the last good state",
+                                      throttle_duration_sec=WARN_THROTTLE)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()
@@ -361,7 +388,9 @@ class DynamicsNode(Node):
         self.session.commands.on_timeout = self.params["on_timeout"]
 
     def close(self) -> None:
-        """Finalise the logs (idempotent)."""
+        """Take the joint states still waiting (inverse mode), finalise the logs (idempotent)."""
+        if getattr(self, "_inbox", None):
+            self._on_joint_states()
         self.session.close()
 
 

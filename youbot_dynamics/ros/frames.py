@@ -13,7 +13,7 @@ quaternions are (x, y, z, w) with w >= 0.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -32,32 +32,48 @@ class LinkTransform(NamedTuple):
 
 
 class SampleFrames(NamedTuple):
-    """One sample's kinematics: ``moving`` (parent -> child across every moving joint, URDF
-    tree order), ``ee_poses`` (position (3,) m and quaternion (x, y, z, w) of every link of
-    ``LinkFrames.ee_links`` in the root link's frame, in that order) and ``ee_pose`` (the
-    same for ``LinkFrames.ee_link``)."""
+    """One sample's kinematics as arrays of poses, each row a translation (3,) m and a
+    quaternion (x, y, z, w), w >= 0: ``link_poses`` (k, 7), child in parent across every
+    moving joint (URDF tree order, ``edges`` names them (parent, child)); ``ee`` the links of
+    ``LinkFrames.ee_links`` in the root link's frame, in that order, then ``ee_link`` if it
+    is not among them; ``ee_index`` the row of ``ee_link``. ``moving``, ``ee_poses`` and
+    ``ee_pose`` give the same as (translation, quaternion) pairs."""
 
-    moving: tuple[LinkTransform, ...]
-    ee_poses: tuple[tuple[np.ndarray, np.ndarray], ...]
-    ee_pose: tuple[np.ndarray, np.ndarray]
+    edges: tuple[tuple[str, str], ...]
+    link_poses: np.ndarray
+    ee: np.ndarray
+    ee_count: int
+    ee_index: int
+
+    @property
+    def moving(self) -> tuple[LinkTransform, ...]:
+        """parent -> child across every moving joint, URDF tree order."""
+        return tuple(LinkTransform(parent, child, pose[:3], pose[3:])
+                     for (parent, child), pose in zip(self.edges, self.link_poses))
+
+    @property
+    def ee_poses(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """(position, quaternion) of every link of ``LinkFrames.ee_links``, in that order."""
+        return tuple((pose[:3], pose[3:]) for pose in self.ee[:self.ee_count])
+
+    @property
+    def ee_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """(position, quaternion) of ``LinkFrames.ee_link``."""
+        pose = self.ee[self.ee_index]
+        return pose[:3], pose[3:]
 
 
-def _position_quaternion(placement: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
-    """Translation (3,) m and quaternion (x, y, z, w), w >= 0, of ``placement``."""
-    xyz_quaternion = pin.SE3ToXYZQUAT(placement)
-    quaternion = xyz_quaternion[3:]
-    return xyz_quaternion[:3], -quaternion if quaternion[3] < 0.0 else quaternion
+def pose_rows(poses: Sequence[np.ndarray]) -> np.ndarray:
+    """(k, 7) rows of translation (m) and quaternion (x, y, z, w), w >= 0, of k poses (4x4, m)."""
+    rows = np.array([pin.SE3ToXYZQUAT(pin.SE3(pose)) for pose in poses]).reshape(-1, 7)
+    rows[rows[:, 6] < 0.0, 3:] *= -1.0
+    return rows
 
 
 def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTransform:
     """``transform`` (4x4, m) as the pose of ``child`` in ``parent``."""
-    return LinkTransform(parent, child, *_position_quaternion(pin.SE3(transform)))
-
-
-def body_transforms(world_frame: str, poses: Mapping[str, np.ndarray]) -> list[LinkTransform]:
-    """``world_frame`` -> body transforms of free bodies from their world poses (4x4, m) by
-    body name, in the mapping's order; the child frame is the body's name."""
-    return [_link_transform(world_frame, name, pose) for name, pose in poses.items()]
+    row = pose_rows([transform])[0]
+    return LinkTransform(parent, child, row[:3], row[3:])
 
 
 class LinkFrames:
@@ -79,15 +95,17 @@ class LinkFrames:
         self._ee = tuple(robot.frame_id(link) for link in links)
         self._ee_index = links.index(self.ee_link)
         self.static = tuple(_link_transform(j.parent, j.child, j.origin) for j in robot.tree if j.type == "fixed")
-        self._moving = tuple((j.parent, j.child, robot.frame_id(j.parent), robot.frame_id(j.child))
-                             for j in robot.tree if j.type != "fixed")
+        moving = [j for j in robot.tree if j.type != "fixed"]
+        self._edges = tuple((j.parent, j.child) for j in moving)
+        self._moving_ids = tuple((robot.frame_id(j.parent), robot.frame_id(j.child)) for j in moving)
 
     def at(self, q: np.ndarray) -> SampleFrames:
         """The frames at joint positions q (the robot's configuration, Pinocchio order)."""
         pin.framesForwardKinematics(self.robot.model, self._data, np.asarray(q, dtype=float))
         placements = self._data.oMf
-        moving = tuple(LinkTransform(parent, child, *_position_quaternion(placements[p].actInv(placements[c])))
-                       for parent, child, p, c in self._moving)
         root = placements[self._root]
-        poses = tuple(_position_quaternion(root.actInv(placements[e])) for e in self._ee)
-        return SampleFrames(moving, poses[:len(self.ee_links)], poses[self._ee_index])
+        poses = np.array([*(pin.SE3ToXYZQUAT(placements[p].actInv(placements[c])) for p, c in self._moving_ids),
+                          *(pin.SE3ToXYZQUAT(root.actInv(placements[e])) for e in self._ee)])
+        poses[poses[:, 6] < 0.0, 3:] *= -1.0
+        moving = len(self._moving_ids)
+        return SampleFrames(self._edges, poses[:moving], poses[moving:], len(self.ee_links), self._ee_index)

@@ -42,10 +42,13 @@ steady state for v (the bristle deflection cannot be measured).
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+import pinocchio as pin
 
 from youbot_dynamics.dynamics.friction import JointFriction
-from youbot_dynamics.dynamics.rigid_body import inverse_dynamics
+from youbot_dynamics.dynamics.rigid_body import inverse_dynamics, inverse_dynamics_batch
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.ros.commands import DEFAULT_EFFORT_LIMIT, InputRejected, JointSample
@@ -110,6 +113,50 @@ class AccelerationEstimator:
         self.filtered = estimate
         return middle, estimate
 
+    def push_many(self, samples: Sequence[JointSample | None]) -> list[tuple[int, JointSample, np.ndarray]] | None:
+        """``push`` of each sample in turn (None: ``clear``, for a rejected one), the
+        estimates computed at once: (index of the sample that completed the stencil, the
+        middle sample, its estimate), in order. None, with nothing changed, when a push
+        would have raised (an estimate not finite) or with a filter (``time_constant`` > 0:
+        each estimate depends on the last); then push one by one."""
+        if self.time_constant > 0.0:
+            return None
+        window, restarts, stencils = list(self.samples), dict.fromkeys(RESTART_CAUSES, 0), []
+        for index, sample in enumerate(samples):
+            if sample is None:
+                window = []
+                continue
+            if window:
+                step = sample.stamp_ns - window[-1].stamp_ns
+                if step <= 0 or step > self.max_gap_ns:
+                    restarts["backwards" if step <= 0 else "gap"] += 1
+                    window = []
+            window = [*window[-2:], sample]
+            if len(window) == 3:
+                stencils.append((index, *window))
+        if stencils:
+            spans = np.array([after.stamp_ns - before.stamp_ns for _, before, _, after in stencils]) / NS_PER_S
+            with np.errstate(over="ignore", invalid="ignore"):     # checked just below
+                estimates = (np.array([after.v for *_, after in stencils]) -
+                             np.array([before.v for _, before, _, _ in stencils])) / spans[:, None]
+            if not np.isfinite(estimates).all():
+                return None
+            self.filtered = estimates[-1]
+        self.samples = window
+        for cause, count in restarts.items():
+            self.restarts[cause] += count
+        return [(index, middle, estimate) for (index, _, middle, _), estimate in zip(stencils, estimates)] \
+            if stencils else []
+
+    def state(self) -> tuple:
+        """What ``restore`` puts back: the samples, the filter state, the restart counts."""
+        return list(self.samples), self.filtered, dict(self.restarts)
+
+    def restore(self, state: tuple) -> None:
+        """Back to a ``state()``."""
+        samples, filtered, restarts = state
+        self.samples, self.filtered, self.restarts = list(samples), filtered, dict(restarts)
+
 
 def plausible_limit(robot: Robot, quantity: str = "effort") -> np.ndarray:
     """|tau_i| (N m, N; ``quantity`` "effort") or |v_i| (rad/s, m/s; "velocity") above which
@@ -128,13 +175,25 @@ def implausible_joints(robot: Robot, values: np.ndarray, quantity: str = "effort
 
 
 class InverseDynamics:
-    """tau = RNEA(q, v, a) + tau_friction(v) for a robot and its friction model (or None)."""
+    """tau = RNEA(q, v, a) + tau_friction(v) for a robot and its friction model (or None),
+    of one sample (``torque``) or of many (``torques``, Pinocchio's batch RNEA)."""
 
     def __init__(self, robot: Robot, friction: JointFriction | None) -> None:
         self.robot, self.friction = robot, friction
         self.data = robot.model.createData()
+        self.pool = pin.ModelPool(robot.model, 1)
+
+    def _bristles(self, v: np.ndarray) -> np.ndarray | None:
+        if self.friction is None or self.friction.lugre is None:
+            return None
+        if v.ndim == 1:
+            return self.friction.steady_state_bristles(v)
+        return np.array([self.friction.steady_state_bristles(row) for row in v])
 
     def torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """Joint torques (N m, N) in joint order."""
-        z = None if self.friction is None or self.friction.lugre is None else self.friction.steady_state_bristles(v)
-        return inverse_dynamics(self.robot, self.data, q, v, a, self.friction, z)
+        return inverse_dynamics(self.robot, self.data, q, v, a, self.friction, self._bristles(v))
+
+    def torques(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Joint torques (N, nv) of N samples (rows of q, v, a)."""
+        return inverse_dynamics_batch(self.robot, q, v, a, self.friction, self._bristles(v), pool=self.pool)

@@ -2,13 +2,18 @@
 torques from joint states (inverse mode), build the messages through ``io.messages`` and log
 them through ``io`` (MCAP in rosbag2 form, Rerun). The node only moves messages in and out.
 
-Every output is a list of ``(topic, message)`` (rosbags objects) that the caller publishes
-(``session.topics`` names them), /tf (every moving link and every free body) among them in
-every sample; everything published is also logged. Topics are named as logged, as in the
-root namespace (``/joint_states``); the node publishes them under their graph names
-(:mod:`youbot_dynamics.ros.topics`). Frame names carry ``frame_prefix`` (see ``_Frames``).
-One kinematics pass per sample (:meth:`~youbot_dynamics.ros.frames.LinkFrames.at`) gives
-/tf, /ee_pose and /ee_poses. ``session.latched`` holds what is sent
+Every output is a list of ``(topic, message)`` that the caller publishes (``session.topics``
+names them), /tf (every moving link and every free body) among them; everything published is
+also logged. A sample carries the topics something consumes (``wanted``): those the node
+reports subscribed (``consumed_by``; by default every topic) and those the MCAP records; the
+others are not built. The first message of a topic is built by ``io.messages``; the next
+ones refill its CDR bytes (:mod:`youbot_dynamics.io.cdr_template`: ``Serialized`` messages,
+which read like the rosbags ones), and the MCAP and the node's publishers take those bytes.
+Topics are named as logged, as in the root namespace (``/joint_states``); the node publishes
+them under their graph names (:mod:`youbot_dynamics.ros.topics`). Frame names carry
+``frame_prefix`` (see ``_Frames``). One kinematics pass per sample
+(:meth:`~youbot_dynamics.ros.frames.LinkFrames.at`) gives /tf, /ee_pose, /ee_poses and the
+Rerun sample, and none runs when nothing takes them. ``session.latched`` holds what is sent
 once, latched (transient local), and logged at t = 0: /tf_static (every fixed link) and,
 with a robot, /robot_description (std_msgs/String: the URDF of what is simulated, the
 composed URDF for a composed scene), named as robot_state_publisher names them. Stamps and
@@ -51,7 +56,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -61,17 +66,19 @@ from youbot_dynamics.dynamics.mobile.mecanum import mecanum_base_from_robot
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
-                                          follow, joint_sample, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, body_transforms
+from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, STAMP_LIMIT_NS, EffortCommands, InputCounters,
+                                          InputRejected, JointSample, follow, joint_sample, joint_trajectory,
+                                          node_time_of_stamp)
+from youbot_dynamics.ros.frames import LinkFrames, LinkTransform, SampleFrames, pose_rows
 from youbot_dynamics.ros.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, InverseDynamics,
-                                         implausible_joints)
+                                         implausible_joints, plausible_limit)
 from youbot_dynamics.ros.mobile_base import MobileBase, WheelOdometry
 from youbot_dynamics.ros.mobile_base import TOPICS as MOBILE_BASE_TOPICS
 from youbot_dynamics.sim.integrators import DivergenceError, checked_output_spacing
@@ -100,6 +107,8 @@ TOPIC_TYPES = {
 ``make`` builds it from interfaces/; without it the node publishes neither /tf nor /tf_static
 but still logs them)."""
 
+KINEMATIC_TOPICS = frozenset({"/tf", "/ee_pose", "/ee_poses"})
+"""Topics that need the sample's kinematics pass."""
 LATCHED_TOPICS = frozenset({"/tf_static", "/robot_description", "/scene_markers"})
 """Topics sent once and latched (transient local, depth 1), in the MCAP too."""
 
@@ -153,8 +162,7 @@ class Recorder:
     def write(self, outputs: Outputs, stamp_ns: int) -> None:
         """Log messages at ``stamp_ns`` (log and publish time)."""
         if self.mcap is not None and not self.mcap.closed:
-            for topic, message in outputs:
-                self.mcap.write(topic, message, stamp_ns)
+            self.mcap.write_all(outputs, stamp_ns)
 
     def sample(self, stamp_ns: int, names: Sequence[str], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
                energy: float, ee_position: np.ndarray) -> None:
@@ -162,16 +170,41 @@ class Recorder:
         if self.rerun is not None and not self.rerun.closed:
             self.rerun.log_sample(stamp_ns, names, q, v, tau, energy, ee_position)
 
-    def bodies(self, stamp_ns: int, transforms: Sequence[LinkTransform]) -> None:
-        """The free bodies' poses (root frame) in the Rerun recording at ``stamp_ns`` (ns)."""
+    def bodies(self, stamp_ns: int, names: Sequence[str], rows: np.ndarray) -> None:
+        """The free bodies' poses (rows of translation (m) and quaternion (x, y, z, w), root
+        frame, in the order of ``names``) in the Rerun recording at ``stamp_ns`` (ns)."""
         if self.rerun is not None and not self.rerun.closed:
-            self.rerun.log_body_poses(stamp_ns, {b.child: (b.translation, b.quaternion_xyzw) for b in transforms})
+            self.rerun.log_body_poses(stamp_ns, {name: (row[:3], row[3:]) for name, row in zip(names, rows)})
+
+    def records(self, topic: str) -> bool:
+        """True if the MCAP log records ``topic`` (so its messages must be built)."""
+        return self.mcap is not None and not self.mcap.closed and topic in self.mcap.topics
+
+    @property
+    def samples(self) -> bool:
+        """True if the Rerun recording takes samples (joint values, energy, end effector)."""
+        return self.rerun is not None and not self.rerun.closed
 
     def close(self) -> None:
         """Finalise both logs (idempotent)."""
         for log in (self.mcap, self.rerun):
             if log is not None:
                 log.close()
+
+
+def _pose_matrix(pose: object) -> np.ndarray:
+    """A geometry_msgs/Pose as a 4x4 homogeneous matrix (m)."""
+    matrix = np.eye(4)
+    matrix[:3, :3] = matrix_from_quaternion(np.array([pose.orientation.x, pose.orientation.y, pose.orientation.z,
+                                                      pose.orientation.w]))
+    matrix[:3, 3] = pose.position.x, pose.position.y, pose.position.z
+    return matrix
+
+
+def marker_stamped(path: str) -> bool:
+    """The stamps of a MarkerArray that carry the sample's time: each marker's header (not
+    its empty texture's, stamped 0)."""
+    return path.endswith("header.stamp") and ".texture." not in path
 
 
 class _Frames:
@@ -195,6 +228,12 @@ class _Frames:
         if clash:
             raise UserInputError(f"free bodies {clash} have the names of robot frames; /tf needs distinct "
                                  "frame names: rename the bodies in the scene")
+        self._marker_poses = {name: [_pose_matrix(marker.pose) for marker in
+                                     messages.shape_markers(0, "", name, shape, placement, FREE_BODY_RGBA)]
+                              for name, (shape, placement) in self.body_shapes.items()}
+        """Each body's markers' poses (4x4, m) in the body's frame."""
+        self._refilled = {topic: Refilled() for topic in ("/tf", "/free_bodies", "/ee_pose", "/ee_poses")}
+        self._refilled["/free_bodies_markers"] = Refilled(lambda path: ".pose." in path, marker_stamped)
 
     def _transform(self, stamp_ns: int, transform: LinkTransform, parent: str | None = None) -> object:
         """``transform`` as a TransformStamped, its frames prefixed (the parent: ``parent``
@@ -212,33 +251,54 @@ class _Frames:
                                                             (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
         return messages.tf_message(transforms)
 
-    def bodies(self, poses: dict[str, np.ndarray]) -> list[LinkTransform]:
-        """Root frame -> body transforms from the bodies' world poses (4x4, m); the child
-        frame is the body's name (unprefixed)."""
-        return body_transforms(self.root_frame, poses)
+    def body_poses(self, poses: dict[str, np.ndarray]) -> np.ndarray:
+        """(k, 7) rows of translation (m) and quaternion (x, y, z, w) of the free bodies in the
+        root frame, in the scene's order, from their world poses (4x4, m)."""
+        return pose_rows(list(poses.values()))
 
-    def tf(self, stamp_ns: int, sample: SampleFrames | None, bodies: Sequence[LinkTransform] = (),
-           base: Sequence[object] = ()) -> object:
-        """``base`` (a moving base's odom -> base_footprint), the moving links of the
-        sample's kinematics (none without a robot), then the free bodies."""
-        links = [self._transform(stamp_ns, t) for t in sample.moving] if sample is not None else []
-        return messages.tf_message([*base, *links, *(self._transform(stamp_ns, b, self.root_frame) for b in bodies)])
+    def tf(self, stamps: Sequence[int], samples: Sequence[SampleFrames] | None,
+           bodies: Sequence[np.ndarray] | None = None, base: object | None = None) -> list[object]:
+        """/tf of N samples (``stamps`` ns): ``base`` (one sample's moving base odom ->
+        base_footprint TransformStamped), the moving links of each sample's kinematics (none
+        without a robot), then the free bodies (rows of :meth:`body_poses`)."""
+        blocks = [] if base is None else [np.tile(_transform_row(base).reshape(-1), (len(stamps), 1))]
+        if samples is not None:
+            blocks.append(np.array([sample.link_poses.reshape(-1) for sample in samples]))
+        if bodies is not None and len(self.body_shapes):
+            blocks.append(np.array([rows.reshape(-1) for rows in bodies]))
+        values = np.hstack(blocks) if blocks else np.zeros((len(stamps), 0))
 
-    def free_bodies(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
-        """/free_bodies: the bodies' poses in the root frame, in order."""
-        return messages.pose_array(stamp_ns, self.root_frame, [(b.translation, b.quaternion_xyzw) for b in bodies])
+        def build(stamp_ns: int, values: np.ndarray) -> object:
+            edges = [] if base is None else [None]
+            edges += [(self.prefix + parent, self.prefix + child) for parent, child in samples[0].edges] \
+                if samples is not None else []
+            edges += [(self.root_frame, self.prefix + name) for name in self.body_shapes]
+            return messages.tf_message(
+                base if edge is None else messages.transform_stamped(stamp_ns, *edge, row[:3], row[3:])
+                for edge, row in zip(edges, values.reshape(-1, 7)))
 
-    def free_body_markers(self, stamp_ns: int, bodies: Sequence[LinkTransform]) -> object:
-        """/free_bodies_markers: each body's shape at its pose in the root frame (namespace:
-        the body's name; the same ids every sample, so each replaces the last)."""
-        markers = []
-        for body in bodies:
-            shape, placement = self.body_shapes[body.child]
-            pose = np.eye(4)
-            pose[:3, :3], pose[:3, 3] = matrix_from_quaternion(body.quaternion_xyzw), body.translation
-            markers += messages.shape_markers(stamp_ns, self.root_frame, body.child, shape, pose @ placement,
-                                              FREE_BODY_RGBA)
-        return messages.marker_array(markers)
+        return self._refilled["/tf"].many(stamps, values, build)
+
+    def free_bodies(self, stamps: Sequence[int], bodies: Sequence[np.ndarray]) -> list[object]:
+        """/free_bodies of N samples: the bodies' poses in the root frame, in order."""
+        return self._refilled["/free_bodies"].many(
+            stamps, np.array([rows.reshape(-1) for rows in bodies]), lambda stamp_ns, values: messages.pose_array(
+                stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))
+
+    def free_body_markers(self, stamps: Sequence[int], poses: Sequence[dict[str, np.ndarray]]) -> list[object]:
+        """/free_bodies_markers of N samples: each body's shape at its world pose (4x4, m;
+        ``poses`` by name) in the root frame (namespace: the body's name; the same ids every
+        sample, so each replaces the last)."""
+        values = np.array([pose_rows([sample[name] @ local for name, locals_ in self._marker_poses.items()
+                                      for local in locals_]).reshape(-1) for sample in poses])
+
+        def build(stamp_ns: int, values: np.ndarray) -> object:
+            return messages.marker_array(
+                marker for name, (shape, placement) in self.body_shapes.items()
+                for marker in messages.shape_markers(stamp_ns, self.root_frame, name, shape,
+                                                     poses[0][name] @ placement, FREE_BODY_RGBA))
+
+        return self._refilled["/free_bodies_markers"].many(stamps, values, build)
 
     def scene_markers(self) -> object:
         """/scene_markers (latched, stamp 0): the static world geometry in the root frame and
@@ -263,13 +323,27 @@ class _Frames:
         """/ee_pose, and /ee_poses for a model of several robots."""
         return ("/ee_pose", "/ee_poses") if len(self.links.ee_links) > 1 else ("/ee_pose",)
 
-    def ee_outputs(self, stamp_ns: int, sample: SampleFrames) -> Outputs:
-        """/ee_pose (and /ee_poses, see ``ee_topics``) of the sample's kinematics."""
-        position, quaternion = sample.ee_pose
-        outputs: Outputs = [("/ee_pose", messages.pose_stamped(stamp_ns, self.root_frame, position, quaternion))]
-        if len(self.links.ee_links) > 1:
-            outputs.append(("/ee_poses", messages.pose_array(stamp_ns, self.root_frame, sample.ee_poses)))
-        return outputs
+    def ee_outputs(self, stamps: Sequence[int], samples: Sequence[SampleFrames],
+                   wanted: frozenset[str] | None = None) -> list[Outputs]:
+        """/ee_pose (and /ee_poses, see ``ee_topics``) of N samples' kinematics; only those
+        in ``wanted`` if given."""
+        topics: list[tuple[str, list[object]]] = []
+        if wanted is None or "/ee_pose" in wanted:
+            topics.append(("/ee_pose", self._refilled["/ee_pose"].many(
+                stamps, np.array([sample.ee[sample.ee_index] for sample in samples]),
+                lambda stamp_ns, row: messages.pose_stamped(stamp_ns, self.root_frame, row[:3], row[3:]))))
+        if len(self.links.ee_links) > 1 and (wanted is None or "/ee_poses" in wanted):
+            topics.append(("/ee_poses", self._refilled["/ee_poses"].many(
+                stamps, np.array([sample.ee[:sample.ee_count].reshape(-1) for sample in samples]),
+                lambda stamp_ns, values: messages.pose_array(stamp_ns, self.root_frame,
+                                                             [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))))
+        return [[(topic, built[k]) for topic, built in topics] for k in range(len(stamps))]
+
+
+def _transform_row(transform: object) -> np.ndarray:
+    """Translation (m) and quaternion (x, y, z, w) of a TransformStamped, as one row."""
+    t, r = transform.transform.translation, transform.transform.rotation
+    return np.array([[t.x, t.y, t.z, r.x, r.y, r.z, r.w]])
 
 
 NOT_REPORTED = "n/a"
@@ -346,6 +420,14 @@ class _Session(ClosesOnExit):
         self.recorder = Recorder(self.mode, scene, robot, (*self.topics, *(t for t, _ in self.latched)),
                                  mcap_path, rrd_path, frame_id or robot.root_link)
         self.recorder.write(self.latched, 0)
+        self.consumed_by(None)
+
+    def consumed_by(self, subscribed: Iterable[str] | None) -> None:
+        """Say which topics have subscribers (the node asks its publishers; None: every
+        topic, the default): a sample builds the messages of ``wanted``, the topics
+        subscribed or recorded in the MCAP, and no other."""
+        self.wanted = frozenset(topic for topic in self.topics
+                                if subscribed is None or topic in subscribed or self.recorder.records(topic))
 
     def _diagnostic_outputs(self, level: str, text: str, values: dict) -> Outputs:
         """/diagnostics with one status of this session (also logged); with a robot, its
@@ -416,6 +498,7 @@ class SimulationSession(_Session):
         self.samples_per_solve = max(1, int(samples_per_solve))
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters, default_effort_limit)
         self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
+        self._joint_states = Refilled()
         self._locked_q = np.array([self.robot.locked[name] for name in self.locked_names])
         self.paused = False
         self.failure: str | None = None
@@ -448,7 +531,7 @@ class SimulationSession(_Session):
         self.commands.clear()
         if self.moving_base is not None:
             self.moving_base.reset()
-        self.k, self.failure, self.wall_time, self._pending = 0, None, 0.0, []
+        self.k, self.failure, self.wall_time, self._pending, self._prebuilt = 0, None, 0.0, [], []
         self.snapshot = self.simulator.snapshot()
         self.energy0, self.energy_error = self.snapshot.energy, 0.0
         self._started = False
@@ -510,49 +593,94 @@ class SimulationSession(_Session):
                 return []
             finally:
                 self.wall_time += time.perf_counter() - start
+            self._prebuilt = self._block(self._pending[::-1])
         self.k += 1
-        return self._outputs(self._pending.pop())
+        prebuilt = self._prebuilt.pop() if self._prebuilt else None
+        return self._outputs(self._pending.pop(), prebuilt if prebuilt is not None and prebuilt[0] == self.wanted
+                             else None)
 
-    def _outputs(self, snapshot: Snapshot) -> Outputs:
-        stamp, q = self.stamp_ns, snapshot.q
+    def _block(self, snapshots: list[Snapshot]) -> list[tuple]:
+        """The messages of the next samples (``snapshots``, in time order) built at once, in
+        pop order, each with the ``wanted`` they were built for; none with a moving base
+        (its odometry advances sample by sample) or when a message would be invalid (then
+        each is built at its own step, so that the failure falls on its sample)."""
+        if self.moving_base is not None:
+            return []
+        stamps = [self.epoch_ns + (self.k + 1 + j) * self.step_ns for j in range(len(snapshots))]
+        try:
+            built = self._sample_messages(snapshots, stamps)
+        except messages.MessageFieldError:
+            return []
+        return [(self.wanted, *sample) for sample in reversed(built)]
+
+    def _sample_messages(self, snapshots: Sequence[Snapshot], stamps: Sequence[int]
+                         ) -> list[tuple[Outputs, SampleFrames | None, np.ndarray | None]]:
+        """The messages of the topics in ``wanted`` of N samples at ``stamps`` (ns), built
+        together, with each sample's kinematics (one pass per sample feeds /tf, /ee_pose and
+        the Rerun sample; none when nothing takes them) and its free bodies' rows. A moving
+        base's outputs advance its odometry: one sample at a time. Raises MessageFieldError."""
+        wanted = self.wanted
+        has_bodies = bool(self.frames.body_shapes)
+        bodies = [self.frames.body_poses(snapshot.bodies) for snapshot in snapshots] if has_bodies else None
+        kinematics = self.frames.has_robot and (self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS))
+        samples = [self.frames.links.at(snapshot.q) for snapshot in snapshots] if kinematics else None
+        per_sample: list[Outputs] = [[] for _ in snapshots]
+
+        def add(topic: str, built: list[object]) -> None:
+            for outputs, message in zip(per_sample, built):
+                outputs.append((topic, message))
+
+        if "/clock" in wanted:
+            add("/clock", [messages.clock(stamp) for stamp in stamps])
+        if "/joint_states" in wanted:
+            add("/joint_states", self._joint_states_of(stamps, snapshots))
+        if samples is not None:
+            for outputs, ee in zip(per_sample, self.frames.ee_outputs(stamps, samples, wanted)):
+                outputs += ee
+        if has_bodies and "/free_bodies" in wanted:
+            add("/free_bodies", self.frames.free_bodies(stamps, bodies))
+        if has_bodies and "/free_bodies_markers" in wanted:
+            add("/free_bodies_markers", self.frames.free_body_markers(stamps, [s.bodies for s in snapshots]))
+        base = None
+        if self.moving_base is not None:     # always: it advances the odometry
+            odometry, base = self.moving_base.outputs(stamps[0], self.scene_time, snapshots[0])
+            per_sample[0] += [(topic, message) for topic, message in odometry if topic in wanted]
+        if "/tf" in wanted:
+            add("/tf", self.frames.tf(stamps, samples, bodies, base))
+        return [(outputs, None if samples is None else samples[k], None if bodies is None else bodies[k])
+                for k, outputs in enumerate(per_sample)]
+
+    def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None = None) -> Outputs:
+        """The sample's messages (``prebuilt``: (wanted, messages, kinematics, body rows) of
+        :meth:`_block`, or built now), logged."""
+        stamp = self.stamp_ns
         self.snapshot = snapshot
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
-        bodies = self.frames.bodies(snapshot.bodies)
-        sample = self.frames.links.at(q) if self.frames.has_robot else None
         try:
-            outputs = [("/clock", messages.clock(stamp))]
-            if sample is not None:
-                outputs += [("/joint_states", self._joint_state(stamp, snapshot)),
-                            *self.frames.ee_outputs(stamp, sample)]
-            if bodies:
-                outputs += [("/free_bodies", self.frames.free_bodies(stamp, bodies)),
-                            ("/free_bodies_markers", self.frames.free_body_markers(stamp, bodies))]
-            base: Sequence[object] = ()
-            if self.moving_base is not None:
-                odometry, transform = self.moving_base.outputs(stamp, self.scene_time, snapshot)
-                outputs += odometry
-                base = (transform,)
-            outputs.append(("/tf", self.frames.tf(stamp, sample, bodies, base)))
+            outputs, sample, bodies = prebuilt[1:] if prebuilt is not None else \
+                self._sample_messages([snapshot], [stamp])[0]
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
         if sample is not None:
-            self.recorder.sample(stamp, snapshot.joint_names, q, snapshot.v, snapshot.tau, snapshot.energy,
-                                 sample.ee_pose[0])
-        if bodies:
-            self.recorder.bodies(stamp, bodies)
+            self.recorder.sample(stamp, snapshot.joint_names, snapshot.q, snapshot.v, snapshot.tau, snapshot.energy,
+                                 sample.ee[sample.ee_index, :3])
+        if bodies is not None:
+            self.recorder.bodies(stamp, tuple(self.frames.body_shapes), bodies)
         return outputs
 
-    def _joint_state(self, stamp_ns: int, snapshot: Snapshot) -> object:
-        """/joint_states: the moving joints (joint order), then every locked joint (URDF
-        tree order) at its locked value with velocity and effort 0, so that every movable
-        joint of the URDF has a position (robot_state_publisher needs wheels and fingers)."""
-        zeros = np.zeros(len(self.locked_names))
-        return messages.joint_state(stamp_ns, (*snapshot.joint_names, *self.locked_names),
-                                    np.concatenate([snapshot.q, self._locked_q]),
-                                    np.concatenate([snapshot.v, zeros]), np.concatenate([snapshot.tau, zeros]))
+    def _joint_states_of(self, stamps: Sequence[int], snapshots: Sequence[Snapshot]) -> list[object]:
+        """/joint_states of N samples: the moving joints (joint order), then every locked
+        joint (URDF tree order) at its locked value with velocity and effort 0, so that
+        every movable joint of the URDF has a position (robot_state_publisher needs wheels
+        and fingers)."""
+        locked, zeros = np.tile(self._locked_q, (len(stamps), 1)), np.zeros((len(stamps), len(self.locked_names)))
+        values = np.hstack([np.array([s.q for s in snapshots]), locked, np.array([s.v for s in snapshots]), zeros,
+                            np.array([s.tau for s in snapshots]), zeros])
+        return self._joint_states.many(stamps, values, lambda stamp_ns, row: messages.joint_state(
+            stamp_ns, (*snapshots[0].joint_names, *self.locked_names), *np.split(row, 3)))
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
@@ -625,6 +753,12 @@ class InverseSession(_Session):
                          node_name)
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
+        self._torques = Refilled()
+        self._names_key: tuple[str, ...] | None = None
+        """The names of the last sample accepted through ``joint_sample`` (``_index``: its
+        positions of the robot's joints)."""
+        self._velocity_bound = plausible_limit(self.robot, "velocity")
+        self._effort_bound = plausible_limit(self.robot, "effort")
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
         self.stamp_ns, self.samples = 0, 0
         self.last_unstamped = False
@@ -653,23 +787,108 @@ class InverseSession(_Session):
         (beyond the effort-limit bound) or not finite is not published: the sample counts as
         accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
         estimate restarts."""
-        try:
+        outputs, rejected = self.joint_states([(names, position, velocity, stamp_ns, received_ns)])
+        if rejected:
+            raise rejected[0]
+        return outputs
+
+    def joint_states(self, samples: Sequence[tuple[Sequence[str], Sequence[float], Sequence[float], int, int | None]]
+                     ) -> tuple[Outputs, list[InputRejected]]:
+        """:meth:`joint_state` of each sample in turn ((names, position, velocity, stamp_ns,
+        received_ns)), the same outputs in the same order, the rejected samples' errors
+        returned (counted) instead of raised. The samples are checked, differenced and
+        their torques computed as arrays (Pinocchio's batch RNEA); where a torque is
+        implausible or an estimate not finite, they are taken one by one as
+        :meth:`joint_state` takes them, with the same result."""
+        checked = self._checked(samples)
+        rejected = [sample for sample in checked if isinstance(sample, InputRejected)]
+        sequence = [None if isinstance(sample, InputRejected) else sample for sample in checked]
+        if self.odometry is None and len(sequence) > 1:     # one sample: cheaper one by one
+            state = self.estimator.state()
+            stencils = self.estimator.push_many(sequence)
+            if stencils is not None:
+                outputs = self._torques_of(stencils)
+                if outputs is not None:
+                    return outputs, rejected
+                self.estimator.restore(state)
+        return [output for sample in sequence for output in self._one(sample)], rejected
+
+    def _checked(self, samples: Sequence[tuple]) -> list[JointSample | InputRejected]:
+        """Each sample checked (see :meth:`joint_state`) and counted: a JointSample, or the
+        InputRejected it raised. Samples naming the joints as the last accepted one did are
+        checked as arrays; any that fails, and any other, through ``joint_sample``."""
+        stamps: list[int | InputRejected] = []
+        for _, _, _, stamp_ns, received_ns in samples:
             unstamped = stamp_ns == 0
             if unstamped and self.last_unstamped:
                 if received_ns is None:
-                    raise InputRejected("bad_timing", "joint state not stamped and no receive time given")
+                    stamps.append(InputRejected("bad_timing", "joint state not stamped and no receive time given"))
+                    continue
                 stamp_ns = received_ns
             self.last_unstamped = unstamped
-            sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
-            too_fast = implausible_joints(self.robot, sample.v, "velocity")
-            if too_fast:
-                raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
-                                    f"limit of {', '.join(too_fast)}")
-        except InputRejected as error:
-            self.counters.reject(error)
+            stamps.append(stamp_ns)
+        good = self._good_rows(samples, stamps) if len(samples) > 1 else None
+        checked: list[JointSample | InputRejected] = []
+        for k, ((names, position, velocity, _, _), stamp) in enumerate(zip(samples, stamps)):
+            try:
+                if isinstance(stamp, InputRejected):
+                    raise stamp
+                if good is not None and good[2][k]:
+                    sample = JointSample(int(stamp), good[0][k], good[1][k])
+                else:
+                    sample = self._joint_sample(names, position, velocity, stamp)
+            except InputRejected as error:
+                self.counters.reject(error)
+                checked.append(error)
+                continue
+            self.counters.accepted += 1
+            checked.append(sample)
+        return checked
+
+    def _good_rows(self, samples: Sequence[tuple], stamps: Sequence[int | InputRejected]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(q, v) rows in joint order and which rows pass every check of ``_joint_sample``,
+        for samples that name the joints exactly as the last accepted one did; None when
+        they cannot be taken as arrays."""
+        if self._names_key is None or any(tuple(names) != self._names_key for names, *_ in samples):
+            return None
+        width = len(self._names_key)
+        try:
+            position = np.array([sample[1] for sample in samples], dtype=float)
+            velocity = np.array([sample[2] for sample in samples], dtype=float)
+        except (ValueError, TypeError):
+            return None
+        if position.shape != (len(samples), width) or velocity.shape != position.shape:
+            return None
+        stamp = np.array([-1 if isinstance(s, InputRejected) else s for s in stamps], dtype=object)
+        q, v = position[:, self._index], velocity[:, self._index]
+        with np.errstate(invalid="ignore"):
+            good = (np.isfinite(position).all(axis=1) & np.isfinite(velocity).all(axis=1)
+                    & (np.abs(v) <= self._velocity_bound).all(axis=1)
+                    & np.array([0 <= s < STAMP_LIMIT_NS for s in stamp], dtype=bool))
+        return q, v, good
+
+    def _joint_sample(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
+                      stamp_ns: int) -> JointSample:
+        """One sample checked (``joint_sample`` and the velocity bound); raises InputRejected.
+        Remembers the names of an accepted sample for the array checks."""
+        sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
+        too_fast = implausible_joints(self.robot, sample.v, "velocity")
+        if too_fast:
+            raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
+                                f"limit of {', '.join(too_fast)}")
+        key = tuple(str(name) for name in names)
+        if key != self._names_key:
+            position_of = {name: i for i, name in enumerate(key)}
+            self._names_key, self._index = key, np.array([position_of[n] for n in self.robot.joint_names])
+        return sample
+
+    def _one(self, sample: JointSample | None) -> Outputs:
+        """The outputs of one checked sample (None: a rejected one, which breaks the
+        stencil): /odom, then the torque of the previous sample once three are known."""
+        if sample is None:
             self.estimator.clear()
-            raise
-        self.counters.accepted += 1
+            return []
         odom: Outputs = []
         if self.odometry is not None:
             odom = [("/odom", self.odometry.outputs(sample.stamp_ns, sample.stamp_ns / NS_PER_S,
@@ -683,31 +902,72 @@ class InverseSession(_Session):
         if estimate is None:
             return odom
         middle, a = estimate
-        stamp = middle.stamp_ns
         tau = self.dynamics.torque(middle.q, middle.v, a)
         implausible = implausible_joints(self.robot, tau)
         if implausible:
             finite = bool(np.isfinite(tau).all())
             self.counters.reject(InputRejected("implausible_torque" if finite else "non_finite",
-                                               f"torque at {stamp} ns beyond the effort-limit bound or not "
-                                               f"finite on {', '.join(implausible)}"))
+                                               f"torque at {middle.stamp_ns} ns beyond the effort-limit bound or "
+                                               f"not finite on {', '.join(implausible)}"))
             self.estimator.restart("implausible" if finite else "non_finite")
             return []
-        frames = self.frames.links.at(middle.q)
+        return odom + self._torque_outputs(middle, tau)
+
+    def _torques_of(self, stencils: list[tuple[int, JointSample, np.ndarray]]) -> Outputs | None:
+        """The outputs of the estimates of ``push_many``, torques computed at once; None
+        (nothing done) if a torque is implausible or not finite."""
+        if not stencils:
+            return []
+        middles = [middle for _, middle, _ in stencils]
+        tau = self.dynamics.torques(np.array([m.q for m in middles]), np.array([m.v for m in middles]),
+                                    np.array([a for *_, a in stencils]))
+        with np.errstate(invalid="ignore"):
+            if not (np.abs(tau) <= self._effort_bound).all():
+                return None
+        if self.recorder.samples or not self.wanted.isdisjoint(KINEMATIC_TOPICS):
+            return [output for middle, row in zip(middles, tau) for output in self._torque_outputs(middle, row)]
+        stamps = [middle.stamp_ns for middle in middles]     # /computed_torques alone: refilled at once
+        outputs: Outputs = []
+        if "/computed_torques" in self.wanted:
+            values = np.hstack([np.array([m.q for m in middles]), np.array([m.v for m in middles]), tau])
+            try:
+                torques = self._torques.many(stamps, values, lambda stamp_ns, row: messages.joint_state(
+                    stamp_ns, self.robot.joint_names, *np.split(row, 3)))
+            except messages.MessageFieldError:
+                return None
+            outputs = [("/computed_torques", message) for message in torques]
+            for output, stamp in zip(outputs, stamps):
+                self.recorder.write([output], stamp)
+        self.stamp_ns, self.samples = stamps[-1], self.samples + len(stamps)
+        return outputs
+
+    def _torque_outputs(self, middle: JointSample, tau: np.ndarray) -> Outputs:
+        """/computed_torques, /ee_pose(s) and /tf of a sample's torque (those wanted), logged."""
+        stamp, wanted = middle.stamp_ns, self.wanted
+        kinematics = self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS)
+        frames = self.frames.links.at(middle.q) if kinematics else None
         try:
-            outputs = [("/computed_torques", messages.joint_state(stamp, self.robot.joint_names, middle.q,
-                                                                  middle.v, tau)),
-                       *self.frames.ee_outputs(stamp, frames), ("/tf", self.frames.tf(stamp, frames))]
+            outputs: Outputs = []
+            if "/computed_torques" in wanted:
+                outputs.append(("/computed_torques", self._torques(
+                    stamp, np.concatenate([middle.q, middle.v, tau]), lambda stamp_ns, values: messages.joint_state(
+                        stamp_ns, self.robot.joint_names, *np.split(values, 3)))))
+            if frames is not None:
+                outputs += self.frames.ee_outputs([stamp], [frames], wanted)[0]
+                if "/tf" in wanted:
+                    outputs.append(("/tf", self.frames.tf([stamp], [frames])[0]))
         except messages.MessageFieldError as error:
             self.counters.reject(InputRejected("non_finite", str(error)))
             self.estimator.restart("non_finite")
-            return odom
+            return []
         self.recorder.write(outputs, stamp)
-        data = self.dynamics.data
-        energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
-        self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy, frames.ee_pose[0])
+        if self.recorder.samples:
+            data = self.dynamics.data
+            energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
+            self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy,
+                                 frames.ee[frames.ee_index, :3])
         self.stamp_ns, self.samples = stamp, self.samples + 1
-        return odom + outputs
+        return outputs
 
     def diagnostics(self, real_time_factor: float) -> Outputs:
         """/diagnostics now: samples processed, input counters and the estimator's restarts

@@ -1,0 +1,92 @@
+"""Inverse mode on a batch of joint states (``InverseSession.joint_states``: checks,
+differences and Pinocchio's batch RNEA as arrays) against the same samples taken one by one
+(``joint_state``, the per-sample path): the same messages in the same order, bit for bit,
+the same counters and estimator restarts, whatever the stream holds (gaps, stamps going
+back, unstamped samples, NaN, unknown or missing joints, velocity jumps that give
+implausible torques)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from youbot_dynamics.ros.commands import InputRejected
+from youbot_dynamics.ros.conversions import to_cdr
+from youbot_dynamics.ros.session import InverseSession
+from youbot_dynamics.sim.scene import load_scene
+
+SCENE = load_scene("arm_ptp")
+PERIOD_NS = 2_000_000
+
+
+def stream(rng: np.random.Generator, count: int) -> list[tuple]:
+    """(names, position, velocity, stamp_ns, received_ns) of a 500 Hz stream with faults."""
+    names = list(SCENE.robot.joint_names)
+    q0 = np.array(SCENE.q0)
+    samples, stamp = [], 0
+    for k in range(count):
+        stamp += PERIOD_NS
+        t = stamp * 1e-9
+        q, v = q0 + 0.2 * np.sin(3 * t + np.arange(5)), 0.6 * np.cos(3 * t + np.arange(5))
+        fault = rng.random()
+        sample = [names, q.tolist(), v.tolist(), stamp, stamp + 7]
+        if fault < 0.03:
+            sample[1] = [*q[:4], np.nan]                      # non_finite
+        elif fault < 0.05:
+            sample[0] = [*names[:4], "no_such_joint"]         # unknown_joint
+        elif fault < 0.07:
+            sample[3] = stamp - 5 * PERIOD_NS                 # backwards
+        elif fault < 0.09:
+            stamp += 200_000_000                              # a gap
+            sample[3] = stamp
+        elif fault < 0.11:
+            sample[2] = (v + 3.0).tolist()                    # a velocity step: implausible torque
+        elif fault < 0.13:
+            sample[3] = 0                                     # unstamped
+        elif fault < 0.14:
+            sample[0], sample[1], sample[2] = names[:4], q[:4].tolist(), v[:4].tolist()   # missing_joint
+        elif fault < 0.15:
+            sample[0] = list(reversed(names))                 # another order: matched by name
+            sample[1], sample[2] = q[::-1].tolist(), v[::-1].tolist()
+        samples.append(tuple(sample))
+    return samples
+
+
+def one_by_one(samples: list[tuple], consumed: set[str] | None) -> tuple[list, InverseSession]:
+    session = InverseSession(SCENE)
+    session.consumed_by(consumed)
+    outputs = []
+    for sample in samples:
+        try:
+            outputs += session.joint_state(*sample)
+        except InputRejected:
+            pass
+    return outputs, session
+
+
+def batched(samples: list[tuple], size: int, consumed: set[str] | None) -> tuple[list, InverseSession, int]:
+    session = InverseSession(SCENE)
+    session.consumed_by(consumed)
+    outputs, rejected = [], 0
+    for start in range(0, len(samples), size):
+        out, errors = session.joint_states(samples[start:start + size])
+        outputs += out
+        rejected += len(errors)
+    return outputs, session, rejected
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("size", [1, 2, 7, 64])
+@pytest.mark.parametrize("consumed", [None, {"/computed_torques"}])     # every topic; the torques alone
+def test_a_batch_gives_what_one_by_one_gives(seed: int, size: int, consumed: set[str] | None) -> None:
+    samples = stream(np.random.default_rng(seed), 300)
+    expected, reference = one_by_one(samples, consumed)
+    outputs, session, rejected = batched(samples, size, consumed)
+    assert [topic for topic, _ in outputs] == [topic for topic, _ in expected]
+    assert [to_cdr(message) for _, message in outputs] == [to_cdr(message) for _, message in expected]
+    assert session.counters.as_values() == reference.counters.as_values()
+    assert session.estimator.restarts == reference.estimator.restarts
+    assert rejected == sum(reference.counters.rejected.values()) - reference.counters.rejected.get(
+        "implausible_torque", 0) - reference.estimator.restarts["non_finite"]
+    assert reference.samples == session.samples > 100       # the stream did give torques
+    assert reference.counters.rejected.get("implausible_torque", 0) > 0   # and the faults happened
+    assert reference.estimator.restarts["gap"] > 0 and reference.estimator.restarts["backwards"] > 0
