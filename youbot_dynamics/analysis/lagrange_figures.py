@@ -67,18 +67,27 @@ def parameters_text(lagrange, p) -> str:
     return ", ".join(f"{symbol} = {value:g}" for symbol, value in zip(lagrange.parameters, p))
 
 
+def conservative_figures(out: Path, name: str, q0, label: str, units: tuple[str, ...], full: bool):
+    """The conservative run of model ``name`` from q0 at rest, its q plot and its energy-error
+    plot (``lagrange_<name>_q.png``, ``lagrange_<name>_energy.png``); (model, parameter values,
+    solution, energy (J), max relative energy drift)."""
+    lagrange, p, solution = simulate(name, q0, 0.0, T_CONSERVATIVE, full)
+    start = ", ".join(f"{value:g}" for value in q0)
+    coordinates_plot(out / f"lagrange_{name}_q.png", solution,
+                     f"{label} from ({start}), conservative: q1, q2, q3", units)
+    energy = lagrange.energy_of(solution.x, p)
+    drift = float(np.max(np.abs(energy - energy[0])) / abs(energy[0]))
+    energy_plot(out / f"lagrange_{name}_energy.png", solution.t, {"E - E(0)": energy - energy[0]},
+                f"{label}: energy error (conservative)")
+    return lagrange, p, solution, energy, drift
+
+
 def draw_lagrange_2d(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of LAGRANGE_2D_SET."""
     from youbot_dynamics.systems.lagrange import SEED_INITIAL, equilibrium
     q0 = SEED_INITIAL["2d"][0]
-    lagrange, p, solution = simulate("2d", q0, 0.0, T_CONSERVATIVE, full)
-    coordinates_plot(out / "lagrange_2d_q.png", solution,
-                     "Planar elastic double pendulum from q1 = 0.8: q1, q2, q3",
-                     ("rad", "rad", "m"))
-    energy = lagrange.energy_of(solution.x, p)
-    drift = float(np.max(np.abs(energy - energy[0])) / abs(energy[0]))
-    energy_plot(out / "lagrange_2d_energy.png", solution.t, {"E - E(0)": energy - energy[0]},
-                "Planar elastic double pendulum: energy error (conservative)")
+    lagrange, p, solution, energy, drift = conservative_figures(out, "2d", q0, "Planar elastic double pendulum",
+                                                                ("rad", "rad", "m"), full)
     _, pf, damped = simulate("2d", q0, FRICTION, T_FRICTION[full], full)
     damped_energy = lagrange.energy_of(damped.x, pf)
     rest = np.r_[equilibrium("2d", pf), np.zeros(3)]
@@ -111,14 +120,8 @@ def draw_lagrange_3d(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of LAGRANGE_3D_SET."""
     from youbot_dynamics.systems.lagrange import SEED_INITIAL
     q0 = SEED_INITIAL["3d"][0]
-    lagrange, p, solution = simulate("3d", q0, 0.0, T_CONSERVATIVE, full)
-    coordinates_plot(out / "lagrange_3d_q.png", solution,
-                     "3D pendulum from (0.5, 0.1, 0.5), conservative: q1, q2, q3",
-                     ("rad", "rad", "rad"))
-    energy = lagrange.energy_of(solution.x, p)
-    drift = float(np.max(np.abs(energy - energy[0])) / abs(energy[0]))
-    energy_plot(out / "lagrange_3d_energy.png", solution.t, {"E - E(0)": energy - energy[0]},
-                "3D pendulum: energy error (conservative)")
+    lagrange, p, solution, energy, drift = conservative_figures(out, "3d", q0, "3D pendulum", ("rad", "rad", "rad"),
+                                                                full)
     drawn = {
         "lagrange_3d_q.png": (
             f"parameters {parameters_text(lagrange, p)}; at t = {T_CONSERVATIVE:g} s q = "
