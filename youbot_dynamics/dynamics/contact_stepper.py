@@ -33,9 +33,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
+from numba import njit, types
 
 from youbot_dynamics.dynamics.collision import BroadPhase
 from youbot_dynamics.dynamics.contact_model import ContactModel
+from youbot_dynamics.dynamics.friction import READ_VECTOR
 from youbot_dynamics.dynamics.rigid_body import symmetrised
 
 #: PGS stops when a sweep moves no impulse by more than this fraction of the largest (see
@@ -68,20 +70,31 @@ class StepReport:
     iterations: int = 0
 
 
-def contact_rotation(normal: np.ndarray) -> np.ndarray:
-    """A rotation whose z axis is the unit ``normal``: x = helper x normal normalised (helper
-    the world x axis, or y when the normal is near x), y = normal x x. Plain float arithmetic
-    (np.cross costs tens of microseconds), the same roundings as the vector formulas."""
-    n0, n1, n2 = normal.tolist()
+@njit(types.void(READ_VECTOR, types.Array(types.float64, 2, "A")), cache=True)
+def _contact_rotation(normal: np.ndarray, out: np.ndarray) -> None:
+    """out = :func:`contact_rotation` of ``normal`` (3,), in place (3 x 3)."""
+    if normal.shape[0] != 3 or out.shape[0] != 3 or out.shape[1] != 3:
+        raise ValueError("contact rotation: a normal (3,) and a 3 x 3 output")
+    n0, n1, n2 = normal[0], normal[1], normal[2]
     if abs(n0) < 0.9:  # helper (1, 0, 0)
         x0, x1, x2 = 0.0, -n2, n1
     else:              # helper (0, 1, 0)
         x0, x1, x2 = n2, 0.0, -n0
     length = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
     x0, x1, x2 = x0 / length, x1 / length, x2 / length
-    return np.array([[x0, n1 * x2 - n2 * x1, n0],
-                     [x1, n2 * x0 - n0 * x2, n1],
-                     [x2, n0 * x1 - n1 * x0, n2]])
+    out[0, 0], out[0, 1], out[0, 2] = x0, n1 * x2 - n2 * x1, n0
+    out[1, 0], out[1, 1], out[1, 2] = x1, n2 * x0 - n0 * x2, n1
+    out[2, 0], out[2, 1], out[2, 2] = x2, n0 * x1 - n1 * x0, n2
+
+
+def contact_rotation(normal: np.ndarray) -> np.ndarray:
+    """A rotation whose z axis is the unit ``normal``: x = helper x normal normalised (helper
+    the world x axis, or y when the normal is near x), y = normal x x. Compiled scalar
+    arithmetic (np.cross costs tens of microseconds), the same roundings as the vector
+    formulas."""
+    rotation = np.empty((3, 3))
+    _contact_rotation(np.asarray(normal, dtype=float), rotation)
+    return rotation
 
 
 class ContactSet:
@@ -157,6 +170,7 @@ class ConstraintStepper:
         self.owners = [(contact.owner_joint(p.first), contact.owner_joint(p.second)) for p in contact.pairs]
         self.sets: dict[tuple[tuple[int, int], ...], ContactSet] = {}
         self._frame = pin.SE3.Identity()  # scratch: a contact frame in the world
+        self._rotation = np.empty((3, 3))  # scratch: its rotation
 
     def contact_set(self, key: tuple[tuple[int, int], ...]) -> ContactSet:
         """The kept :class:`ContactSet` of ``key``, built on its first use."""
@@ -177,21 +191,22 @@ class ConstraintStepper:
         # one pass: joint placements, joint Jacobians and the upper triangle of M^-1
         inverse_mass = pin.computeMinverse(model, data, q)
         pin.updateFramePlacements(model, data)
-        touching = []
-        for k in self.broad.close_pairs(contact.centres(data)):
-            points = contact.placed_points(k, data, settings.margin)
+        touching, placements = [], contact.placements(data)
+        for k in self.broad.close_pairs(contact.centres(placements)):
+            points = contact.points(k, placements, settings.margin)
             if points:
                 touching.append((k, points))
         if not touching:
             return pin.integrate(model, q, h * v_free), v_free, report
         active = self.contact_set(tuple((k, len(points)) for k, points in touching))
-        gaps, i, frame = [], 0, self._frame
+        gaps, i, frame, rotation = [], 0, self._frame, self._rotation
         for k, points in touching:
             joint1, joint2 = self.owners[k]
             world1, world2 = data.oMi[joint1] if joint1 else None, data.oMi[joint2] if joint2 else None
             for c in points:
                 point = active.points[i]
-                frame.rotation = contact_rotation(c.normal)
+                _contact_rotation(c.normal, rotation)
+                frame.rotation = rotation
                 frame.translation = c.point1  # the universe's joint frame is the world's
                 point.joint1_placement = world1.actInv(frame) if joint1 else frame
                 frame.translation = c.point2
