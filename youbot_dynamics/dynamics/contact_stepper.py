@@ -20,11 +20,12 @@ level, Moreau-Jean style):
    :class:`ContactSet`) or ``pin.ADMMConstraintSolver`` (the friction cone as given),
    v+ = v_f + M^-1 J^T lambda, q+ = integrate(q, h v+).
 
-Nothing of this is rebuilt per step: one ``computeMinverse`` pass places the joints, fills
-the joint Jacobians and M^-1 for the whole step; the broad phase culls the pairs by bounding
-balls; and the constraint models, their datas and the solver with its settings and result
-are built once per contact SET (which pairs touch at how many points, a
-:class:`ContactSet`) and kept, the step only moving the contact frames in place.
+Nothing of this is rebuilt per step: one ABA pass (world convention) places the joints and
+fills the joint Jacobians, ``computeMinverse`` reuses it for M^-1 of the whole step; the
+broad phase culls the pairs by bounding balls; and the constraint models, their datas and
+the solver with its settings and result are built once per contact SET (which pairs touch
+at how many points, a :class:`ContactSet`) and kept, the step only moving the contact
+frames in place.
 """
 from __future__ import annotations
 
@@ -187,9 +188,10 @@ class ConstraintStepper:
         ``data`` is a Data of the model (scratch)."""
         model, settings, contact = self.model, self.settings, self.contact
         report = StepReport()
-        v_free = v + h * pin.aba(model, data, q, v, tau)
-        # one pass: joint placements, joint Jacobians and the upper triangle of M^-1
-        inverse_mass = pin.computeMinverse(model, data, q)
+        # ABA in the world convention places the joints and fills the joint Jacobians, and
+        # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
+        v_free = v + h * pin.aba(model, data, q, v, tau, pin.Convention.WORLD)
+        inverse_mass = pin.computeMinverse(model, data)
         pin.updateFramePlacements(model, data)
         touching, placements = [], contact.placements(data)
         for k in self.broad.close_pairs(contact.centres(placements)):
@@ -198,7 +200,7 @@ class ConstraintStepper:
                 touching.append((k, points))
         if not touching:
             return pin.integrate(model, q, h * v_free), v_free, report
-        active = self.contact_set(tuple((k, len(points)) for k, points in touching))
+        active = self.contact_set(tuple([(k, len(points)) for k, points in touching]))
         gaps, i, frame, rotation = [], 0, self._frame, self._rotation
         for k, points in touching:
             joint1, joint2 = self.owners[k]
