@@ -38,8 +38,7 @@ from numba import njit, types
 
 from youbot_dynamics.dynamics.collision import BroadPhase
 from youbot_dynamics.dynamics.contact_model import ContactModel
-from youbot_dynamics.dynamics.friction import READ_VECTOR
-from youbot_dynamics.dynamics.rigid_body import symmetrised
+from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR
 
 #: PGS stops when a sweep moves no impulse by more than this fraction of the largest (see
 #: :class:`ContactSet`); ``tolerance`` is ADMM's.
@@ -98,6 +97,71 @@ def contact_rotation(normal: np.ndarray) -> np.ndarray:
     return rotation
 
 
+_READ_MATRIX, _WRITTEN_MATRIX = types.Array(types.float64, 2, "A", readonly=True), types.Array(types.float64, 2, "A")
+
+
+@njit(types.void(_READ_MATRIX, _READ_MATRIX, READ_VECTOR, READ_VECTOR, READ_VECTOR, READ_VECTOR, types.float64,
+                 types.float64, types.float64, _WRITTEN_MATRIX, _WRITTEN_MATRIX, WRITTEN_VECTOR), cache=True)
+def _delassus_and_drift(upper: np.ndarray, jacobian: np.ndarray, v_free: np.ndarray, v: np.ndarray,
+                        gaps: np.ndarray, restitutions: np.ndarray, h: float, threshold: float, baumgarte: float,
+                        mass_jt: np.ndarray, delassus: np.ndarray, drift: np.ndarray) -> None:
+    """Step 3 of the module docstring in one compiled pass. From the upper triangle of M^-1
+    (nv x nv, what computeMinverse fills) and the constraints' Jacobian J (3p x nv; point
+    i's normal row 3i + 2): mass_jt = M^-1 J^T (nv x 3p), delassus = J M^-1 J^T (3p x 3p,
+    symmetric to the bit), drift = J v_free (m/s) plus per point, with its gap (m, < 0
+    overlapping), restitution and approach speed J_n v before the step: the rebound
+    restitution J_n v if J_n v < ``threshold`` (m/s, negative) and the gap closes within h
+    (s), else gap / h for a gap, ``baumgarte`` gap / h for an overlap."""
+    rows, nv = jacobian.shape
+    if (upper.shape[0] != nv or upper.shape[1] != nv or v_free.shape[0] != nv or v.shape[0] != nv
+            or rows != 3 * gaps.shape[0] or restitutions.shape[0] != gaps.shape[0] or mass_jt.shape[0] != nv
+            or mass_jt.shape[1] != rows or delassus.shape[0] != rows or delassus.shape[1] != rows
+            or drift.shape[0] != rows):
+        raise ValueError("contact step: M^-1 (nv x nv), J (3p x nv), velocities (nv,), gaps and restitutions "
+                         "(p,) and outputs of matching sizes")
+    for a in range(nv):
+        for i in range(rows):
+            total = 0.0
+            for b in range(nv):
+                total += (upper[a, b] if a <= b else upper[b, a]) * jacobian[i, b]
+            mass_jt[a, i] = total
+    for i in range(rows):
+        for j in range(i, rows):
+            total = 0.0
+            for a in range(nv):
+                total += jacobian[i, a] * mass_jt[a, j]
+            delassus[i, j] = total
+            delassus[j, i] = total
+        total = 0.0
+        for a in range(nv):
+            total += jacobian[i, a] * v_free[a]
+        drift[i] = total
+    for point in range(gaps.shape[0]):
+        row, gap = 3 * point + 2, gaps[point]
+        before = 0.0
+        for a in range(nv):
+            before += jacobian[row, a] * v[a]
+        if before < threshold and gap + h * before < 0.0:
+            drift[row] += restitutions[point] * before
+        elif gap > 0.0:
+            drift[row] += gap / h
+        else:
+            drift[row] += baumgarte * gap / h
+
+
+@njit(types.void(READ_VECTOR, _READ_MATRIX, READ_VECTOR, WRITTEN_VECTOR), cache=True)
+def _velocity_after(v_free: np.ndarray, mass_jt: np.ndarray, impulses: np.ndarray, out: np.ndarray) -> None:
+    """out = v_free + M^-1 J^T lambda (m/s, rad/s) from mass_jt = M^-1 J^T and the impulses."""
+    nv, rows = mass_jt.shape
+    if v_free.shape[0] != nv or impulses.shape[0] != rows or out.shape[0] != nv:
+        raise ValueError("contact step: v_free (nv,), M^-1 J^T (nv x 3p), impulses (3p,), out (nv,)")
+    for a in range(nv):
+        total = 0.0
+        for i in range(rows):
+            total += mass_jt[a, i] * impulses[i]
+        out[a] = v_free[a] + total
+
+
 class ContactSet:
     """What the solve of one contact set needs, built once and updated in place: a
     ``PointContactConstraintModel`` per point (pair k's owners' joints, its friction), their
@@ -114,7 +178,7 @@ class ContactSet:
         self.constraints = pin.StdVec_ConstraintModel()
         self.datas = pin.StdVec_ConstraintData()
         self.names: list[str] = []
-        self.restitutions: list[float] = []
+        restitutions: list[float] = []
         for k, count in key:
             pair = contact.pairs[k]
             joint1, joint2 = contact.owner_joint(pair.first), contact.owner_joint(pair.second)
@@ -123,13 +187,16 @@ class ContactSet:
                 point.setFriction(pair.law.friction)
                 self.constraints.append(pin.ConstraintModel(point))
                 self.names.append(pair.name)
-                self.restitutions.append(pair.law.restitution)
+                restitutions.append(pair.law.restitution)
         for constraint in self.constraints:
             self.datas.append(constraint.createData())
         #: References into the vectors: moving a contact frame here moves the solver's.
         self.points = [constraint.extract() for constraint in self.constraints]
         self.pairs = list(zip(self.constraints, self.datas))
         size = 3 * len(self.points)
+        self.restitutions = np.array(restitutions, dtype=float)
+        #: scratch for M^-1 J^T, the Delassus matrix and the drift (see :func:`_delassus_and_drift`)
+        self.mass_jt, self.delassus, self.drift = np.empty((model.nv, size)), np.empty((size, size)), np.empty(size)
         if settings.solver == "pgs":
             self.solver, self.options, self.result = (pin.PGSConstraintSolver(size), pin.PGSSolverSettings(),
                                                       pin.PGSSolverResult())
@@ -219,18 +286,12 @@ class ConstraintStepper:
         for constraint, cdata in active.pairs:
             constraint.calc(model, data, cdata)
         jacobian = pin.getConstraintsJacobian(model, data, active.constraints, active.datas)
-        # ndarray.dot, not @: the same BLAS products at half the dispatch cost on small arrays
-        inverse_mass = symmetrised(inverse_mass)
-        delassus = jacobian.dot(inverse_mass).dot(jacobian.T)
-        drift = jacobian.dot(v_free)
-        approach = jacobian.dot(v)[2::3].tolist()  # normal rows: z of each contact frame
-        threshold, baumgarte = -settings.restitution_threshold, settings.baumgarte
-        drift[2::3] += [
-            restitution * before if before < threshold and gap + h * before < 0
-            else (gap / h if gap > 0 else baumgarte * gap / h)
-            for gap, before, restitution in zip(gaps, approach, active.restitutions)]
-        impulses, report.iterations = active.solve(delassus, drift)
-        v_next = v_free + inverse_mass.dot(jacobian.T).dot(impulses)
+        _delassus_and_drift(inverse_mass, jacobian, v_free, v, np.array(gaps), active.restitutions, h,
+                            -settings.restitution_threshold, settings.baumgarte, active.mass_jt, active.delassus,
+                            active.drift)
+        impulses, report.iterations = active.solve(active.delassus, active.drift)
+        v_next = np.empty_like(v_free)
+        _velocity_after(v_free, active.mass_jt, impulses, v_next)
         for name, impulse in zip(active.names, impulses[2::3].tolist()):
             report.normal_impulse[name] = report.normal_impulse.get(name, 0.0) + impulse
         return pin.integrate(model, q, h * v_next), v_next, report
