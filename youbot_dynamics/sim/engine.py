@@ -308,7 +308,7 @@ class ConstraintStepping:
                 self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
                                 for name in sorted(touching - self.touching)]
                 self.touching = touching
-            if not np.isfinite(self.v).all():
+            if not math.isfinite(self.v.dot(self.v)):  # a NaN, an infinity, or |v| beyond 1e154
                 raise DivergenceError(self.t, model.integrator.method, h, "non-finite velocity")
             if not report.penetration <= self.deepest_allowed:
                 raise DivergenceError(self.t, model.integrator.method, h, f"overlap {report.penetration:.3g} m "
