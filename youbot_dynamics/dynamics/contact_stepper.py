@@ -122,8 +122,10 @@ def _delassus_and_drift(upper: np.ndarray, jacobian: np.ndarray, v_free: np.ndar
     for a in range(nv):
         for i in range(rows):
             total = 0.0
-            for b in range(nv):
-                total += (upper[a, b] if a <= b else upper[b, a]) * jacobian[i, b]
+            for b in range(a):  # M^-1[a, b] = upper[b, a] below the diagonal
+                total += upper[b, a] * jacobian[i, b]
+            for b in range(a, nv):
+                total += upper[a, b] * jacobian[i, b]
             mass_jt[a, i] = total
     for i in range(rows):
         for j in range(i, rows):
