@@ -263,7 +263,9 @@ class ConstraintStepping:
         self._bodies = (model.block("pose"), model.block("chart"), model.body_offset) if model.body_names else None
 
     def _pack(self) -> np.ndarray:
-        model, x = self.model, self.x.copy()
+        """``x`` with the stepper's q and v written in, in place: :meth:`advance` steps its own
+        copy of the state (the previous one stays as ``x_previous``)."""
+        model, x = self.model, self.x
         x[self._q_block] = self.q[self._robot_q]
         if model.base is not None:
             root = self._robot_q.start

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit, types
 
+from youbot_dynamics.dynamics.friction import unchecked
 from youbot_dynamics.errors import UserInputError
 
 
@@ -64,6 +65,10 @@ def _desired(points: np.ndarray, timing: np.ndarray, t: float, out: np.ndarray) 
     for i in range(n):
         d = points[k + 1, i] - points[k, i]
         out[0, i], out[1, i], out[2, i] = points[k, i] + s * d, ds * d, dds * d
+
+
+#: :func:`_desired` without numba's type dispatch (for the arrays of ``_compiled`` and a float t).
+_desired_unchecked = unchecked(_desired)
 
 
 @dataclass(frozen=True)
@@ -160,15 +165,22 @@ class PointToPointTrajectory:
     def evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Desired position, velocity and acceleration (n,) at time t (s); before 0 the
         start, after the end the last point at rest."""
-        out = np.empty((3, self.points.shape[1]))
-        _desired(self.points, self._timing, t, out)
+        points, timing = self._compiled
+        out = np.empty((3, points.shape[1]))
+        _desired_unchecked(points, timing, float(t), out)
         return out[0], out[1], out[2]
 
     @functools.cached_property
-    def _timing(self) -> np.ndarray:
-        """Per segment (start s, acceleration, coast rate, acceleration phase, duration), NaN
-        for a segment of zero length: what :func:`_desired` reads."""
+    def _compiled(self) -> tuple[np.ndarray, np.ndarray]:
+        """What :func:`_desired` reads: the points as float64 and per segment (start s,
+        acceleration, coast rate, acceleration phase, duration), NaN for a segment of zero
+        length, C-ordered (its signature's types: it is called without numba's dispatch)."""
         timing = np.array([(start, *((p.acceleration, p.peak_rate, p.t_accelerate, p.duration) if p else (np.nan,) * 4))
                            for start, p in zip(self.segment_start.tolist(), self.profiles)], dtype=float).reshape(-1, 5)
-        timing.setflags(write=False)
-        return timing
+        points = np.ascontiguousarray(self.points, dtype=float)
+        if points.ndim != 2 or timing.shape[0] != points.shape[0] - 1:
+            raise UserInputError(f"trajectory: {points.shape[0]} points need {points.shape[0] - 1} segments, "
+                                 f"got {timing.shape[0]}")
+        for array in (points, timing):
+            array.setflags(write=False)
+        return points, timing
