@@ -4,9 +4,9 @@ Each geometry hangs on a frame of the model: a robot link's frame, a free body's
 (the free-flyer joint added by :func:`~youbot_dynamics.dynamics.free_body.add_free_flyer`)
 or none (world geometry). After ``pin.framesForwardKinematics`` (or
 ``computeJointJacobians`` + ``updateFramePlacements``) on a Data of that model,
-:meth:`ContactModel.poses` gives the world pose of every geometry from ``data.oMf``,
-:meth:`ContactModel.centres` the centres of their bounding balls for the broad phase,
-:meth:`ContactModel.placed_points` one pair's contact points without the other poses, and
+:meth:`ContactModel.placements` gives the world pose of every geometry from ``data.oMf``
+(:meth:`ContactModel.poses` as 4x4 matrices), :meth:`ContactModel.centres` the centres of
+their bounding balls for the broad phase, :meth:`ContactModel.points` one pair's contact points, and
 :meth:`ContactModel.relative_jacobian` the 3 x nv map from the generalised velocity (robot
 joints and body twists alike) to a contact point's relative velocity, from Pinocchio's frame
 Jacobians. The compliant law (:meth:`ContactModel.compliant_force`, a generalised force for
@@ -62,60 +62,54 @@ class ContactModel:
                        for p in self.pairs]
         self.broad = BroadPhase([g.shape for g in self.geometries], [(p.first, p.second) for p in self.pairs],
                                 margin)
-        #: Each geometry's placement in its frame where it is not the identity (where it is, the
-        #: geometry's world pose is data.oMf[frame] itself).
-        self._offsets = {i: g.placement for i, g in enumerate(self.geometries)
+        #: Each geometry's placement in its frame (pin.SE3) where it is not the identity (where
+        #: it is, the geometry's world pose is data.oMf[frame] itself).
+        self._offsets = {i: pin.SE3(g.placement) for i, g in enumerate(self.geometries)
                          if not np.array_equal(g.placement, np.eye(4))}
         #: Geometry fixed to the world (world geometry, links on the universe joint): its world
-        #: pose (pin.SE3; what :meth:`placed` would compute from data.oMf, to the bit) and its
-        #: bounding-ball centre (world, m), kept from the start. The others' (index, frame,
-        #: centre in the frame) are placed after each kinematics pass.
-        self._fixed_poses: dict[int, pin.SE3] = {}
+        #: pose (pin.SE3, what :meth:`placements` would compute from data.oMf) and its
+        #: bounding-ball centre (the shape's origin, world, m), kept from the start (None for
+        #: the others). The others' (index, frame, offset or None) are placed after each
+        #: kinematics pass.
+        self._fixed_poses: list[pin.SE3 | None] = [None] * len(self.geometries)
         self._fixed_centres: list[tuple[float, float, float] | None] = [None] * len(self.geometries)
-        self._moving_centres: list[tuple[int, int, np.ndarray]] = []
-        for i, (g, frame) in enumerate(zip(self.geometries, self.frames)):
-            centre = np.array(g.placement[:3, 3], dtype=float)
+        self._moving: list[tuple[int, int, pin.SE3 | None]] = []
+        for i, frame in enumerate(self.frames):
+            offset = self._offsets.get(i)
             if frame is None:
-                self._fixed_poses[i] = pin.SE3(g.placement)
-                self._fixed_centres[i] = tuple(centre.tolist())
+                pose = pin.SE3(self.geometries[i].placement)
             elif model.frames[frame].parentJoint == 0:
-                placement = model.frames[frame].placement
-                self._fixed_poses[i] = placement if i not in self._offsets else \
-                    pin.SE3(placement.homogeneous.dot(self._offsets[i]))
-                self._fixed_centres[i] = tuple(placement.act(centre).tolist())
+                pose = model.frames[frame].placement if offset is None else model.frames[frame].placement * offset
             else:
-                self._moving_centres.append((i, frame, centre))
+                self._moving.append((i, frame, offset))
+                continue
+            self._fixed_poses[i], self._fixed_centres[i] = pose, tuple(pose.translation.tolist())
 
     # ---- geometry ---------------------------------------------------------------------------
+    def placements(self, data: pin.Data) -> list[pin.SE3]:
+        """World poses (pin.SE3, m) of the geometries from ``data.oMf`` (frames placed
+        first): the frame's pose times the geometry's placement in it (Pinocchio's SE3
+        product), the frame's own where the geometry sits at its origin, kept from the start
+        for geometry fixed to the world. One pose per geometry per kinematics pass: the broad
+        phase reads their origins, the narrow phase the poses."""
+        placed = list(self._fixed_poses)
+        frames = data.oMf
+        for i, frame, offset in self._moving:
+            placed[i] = frames[frame] if offset is None else frames[frame] * offset
+        return placed
+
     def poses(self, data: pin.Data) -> list[np.ndarray]:
-        """World poses (4x4, m) of the geometries from ``data.oMf`` (frames placed first)."""
-        return [g.placement if frame is None else data.oMf[frame].homogeneous @ g.placement
-                for g, frame in zip(self.geometries, self.frames)]
+        """World poses (4x4, m) of the geometries from ``data.oMf`` (frames placed first):
+        :meth:`placements` as matrices."""
+        return [placement.homogeneous for placement in self.placements(data)]
 
-    def centres(self, data: pin.Data) -> list[tuple[float, float, float]]:
-        """World centres (x, y, z per geometry, m) of the geometries' bounding balls, from
-        ``data.oMf`` (frames placed first): what :meth:`BroadPhase.close_pairs` reads."""
+    def centres(self, placements: Sequence[pin.SE3]) -> list[tuple[float, float, float]]:
+        """World centres (x, y, z per geometry, m) of the geometries' bounding balls (their
+        shapes' origins) at :meth:`placements`: what :meth:`BroadPhase.close_pairs` reads."""
         centres = list(self._fixed_centres)
-        placements = data.oMf
-        for i, frame, centre in self._moving_centres:
-            centres[i] = placements[frame].act(centre).tolist()
+        for i, _, _ in self._moving:
+            centres[i] = placements[i].translation.tolist()
         return centres
-
-    def placed(self, data: pin.Data, geometry: int) -> np.ndarray | pin.SE3:
-        """Geometry i's world pose from ``data.oMf`` (frames placed first): the frame's own
-        pin.SE3 when the geometry sits at its origin, else the 4x4 product of :meth:`poses`;
-        kept from the start for geometry fixed to the world."""
-        fixed = self._fixed_poses.get(geometry)
-        if fixed is not None:
-            return fixed
-        frame, offset = self.frames[geometry], self._offsets.get(geometry)
-        return data.oMf[frame] if offset is None else data.oMf[frame].homogeneous.dot(offset)
-
-    def placed_points(self, k: int, data: pin.Data, margin: float) -> list[ContactPoint]:
-        """Contact points of pair k at the poses in ``data.oMf``, gaps up to ``margin`` (m)
-        included; placing only this pair's two geometries."""
-        pair = self.pairs[k]
-        return self.narrow[k].contact_points(self.placed(data, pair.first), self.placed(data, pair.second), margin)
 
     def points(self, k: int, poses: Sequence[np.ndarray], margin: float) -> list[ContactPoint]:
         """Contact points of pair k at these poses, gaps up to ``margin`` (m) included."""
@@ -169,7 +163,7 @@ class ContactModel:
         sum of J^T f over the overlapping points. ``poses`` are those at q, and ``data``'s
         frames are placed at q."""
         generalised = np.zeros(self.model.nv)
-        close = set(self.broad.close_pairs(self.centres(data)))
+        close = set(self.broad.close_pairs(self.centres(self.placements(data))))
         jacobians_ready = False
         for j, k in enumerate(compliant):
             if k not in close:

@@ -20,11 +20,12 @@ level, Moreau-Jean style):
    :class:`ContactSet`) or ``pin.ADMMConstraintSolver`` (the friction cone as given),
    v+ = v_f + M^-1 J^T lambda, q+ = integrate(q, h v+).
 
-Nothing of this is rebuilt per step: one ``computeMinverse`` pass places the joints, fills
-the joint Jacobians and M^-1 for the whole step; the broad phase culls the pairs by bounding
-balls; and the constraint models, their datas and the solver with its settings and result
-are built once per contact SET (which pairs touch at how many points, a
-:class:`ContactSet`) and kept, the step only moving the contact frames in place.
+Nothing of this is rebuilt per step: one ABA pass (world convention) places the joints and
+fills the joint Jacobians, ``computeMinverse`` reuses it for M^-1 of the whole step; the
+broad phase culls the pairs by bounding balls; and the constraint models, their datas and
+the solver with its settings and result are built once per contact SET (which pairs touch
+at how many points, a :class:`ContactSet`) and kept, the step only moving the contact
+frames in place.
 """
 from __future__ import annotations
 
@@ -33,10 +34,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
+from numba import njit, types
 
 from youbot_dynamics.dynamics.collision import BroadPhase
 from youbot_dynamics.dynamics.contact_model import ContactModel
-from youbot_dynamics.dynamics.rigid_body import symmetrised
+from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR
 
 #: PGS stops when a sweep moves no impulse by more than this fraction of the largest (see
 #: :class:`ContactSet`); ``tolerance`` is ADMM's.
@@ -68,20 +70,98 @@ class StepReport:
     iterations: int = 0
 
 
-def contact_rotation(normal: np.ndarray) -> np.ndarray:
-    """A rotation whose z axis is the unit ``normal``: x = helper x normal normalised (helper
-    the world x axis, or y when the normal is near x), y = normal x x. Plain float arithmetic
-    (np.cross costs tens of microseconds), the same roundings as the vector formulas."""
-    n0, n1, n2 = normal.tolist()
+@njit(types.void(READ_VECTOR, types.Array(types.float64, 2, "A")), cache=True)
+def _contact_rotation(normal: np.ndarray, out: np.ndarray) -> None:
+    """out = :func:`contact_rotation` of ``normal`` (3,), in place (3 x 3)."""
+    if normal.shape[0] != 3 or out.shape[0] != 3 or out.shape[1] != 3:
+        raise ValueError("contact rotation: a normal (3,) and a 3 x 3 output")
+    n0, n1, n2 = normal[0], normal[1], normal[2]
     if abs(n0) < 0.9:  # helper (1, 0, 0)
         x0, x1, x2 = 0.0, -n2, n1
     else:              # helper (0, 1, 0)
         x0, x1, x2 = n2, 0.0, -n0
     length = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
     x0, x1, x2 = x0 / length, x1 / length, x2 / length
-    return np.array([[x0, n1 * x2 - n2 * x1, n0],
-                     [x1, n2 * x0 - n0 * x2, n1],
-                     [x2, n0 * x1 - n1 * x0, n2]])
+    out[0, 0], out[0, 1], out[0, 2] = x0, n1 * x2 - n2 * x1, n0
+    out[1, 0], out[1, 1], out[1, 2] = x1, n2 * x0 - n0 * x2, n1
+    out[2, 0], out[2, 1], out[2, 2] = x2, n0 * x1 - n1 * x0, n2
+
+
+def contact_rotation(normal: np.ndarray) -> np.ndarray:
+    """A rotation whose z axis is the unit ``normal``: x = helper x normal normalised (helper
+    the world x axis, or y when the normal is near x), y = normal x x. Compiled scalar
+    arithmetic (np.cross costs tens of microseconds), the same roundings as the vector
+    formulas."""
+    rotation = np.empty((3, 3))
+    _contact_rotation(np.asarray(normal, dtype=float), rotation)
+    return rotation
+
+
+_READ_MATRIX, _WRITTEN_MATRIX = types.Array(types.float64, 2, "A", readonly=True), types.Array(types.float64, 2, "A")
+
+
+@njit(types.void(_READ_MATRIX, _READ_MATRIX, READ_VECTOR, READ_VECTOR, READ_VECTOR, READ_VECTOR, types.float64,
+                 types.float64, types.float64, _WRITTEN_MATRIX, _WRITTEN_MATRIX, WRITTEN_VECTOR), cache=True)
+def _delassus_and_drift(upper: np.ndarray, jacobian: np.ndarray, v_free: np.ndarray, v: np.ndarray,
+                        gaps: np.ndarray, restitutions: np.ndarray, h: float, threshold: float, baumgarte: float,
+                        mass_jt: np.ndarray, delassus: np.ndarray, drift: np.ndarray) -> None:
+    """Step 3 of the module docstring in one compiled pass. From the upper triangle of M^-1
+    (nv x nv, what computeMinverse fills) and the constraints' Jacobian J (3p x nv; point
+    i's normal row 3i + 2): mass_jt = M^-1 J^T (nv x 3p), delassus = J M^-1 J^T (3p x 3p,
+    symmetric to the bit), drift = J v_free (m/s) plus per point, with its gap (m, < 0
+    overlapping), restitution and approach speed J_n v before the step: the rebound
+    restitution J_n v if J_n v < ``threshold`` (m/s, negative) and the gap closes within h
+    (s), else gap / h for a gap, ``baumgarte`` gap / h for an overlap."""
+    rows, nv = jacobian.shape
+    if (upper.shape[0] != nv or upper.shape[1] != nv or v_free.shape[0] != nv or v.shape[0] != nv
+            or rows != 3 * gaps.shape[0] or restitutions.shape[0] != gaps.shape[0] or mass_jt.shape[0] != nv
+            or mass_jt.shape[1] != rows or delassus.shape[0] != rows or delassus.shape[1] != rows
+            or drift.shape[0] != rows):
+        raise ValueError("contact step: M^-1 (nv x nv), J (3p x nv), velocities (nv,), gaps and restitutions "
+                         "(p,) and outputs of matching sizes")
+    for a in range(nv):
+        for i in range(rows):
+            total = 0.0
+            for b in range(a):  # M^-1[a, b] = upper[b, a] below the diagonal
+                total += upper[b, a] * jacobian[i, b]
+            for b in range(a, nv):
+                total += upper[a, b] * jacobian[i, b]
+            mass_jt[a, i] = total
+    for i in range(rows):
+        for j in range(i, rows):
+            total = 0.0
+            for a in range(nv):
+                total += jacobian[i, a] * mass_jt[a, j]
+            delassus[i, j] = total
+            delassus[j, i] = total
+        total = 0.0
+        for a in range(nv):
+            total += jacobian[i, a] * v_free[a]
+        drift[i] = total
+    for point in range(gaps.shape[0]):
+        row, gap = 3 * point + 2, gaps[point]
+        before = 0.0
+        for a in range(nv):
+            before += jacobian[row, a] * v[a]
+        if before < threshold and gap + h * before < 0.0:
+            drift[row] += restitutions[point] * before
+        elif gap > 0.0:
+            drift[row] += gap / h
+        else:
+            drift[row] += baumgarte * gap / h
+
+
+@njit(types.void(READ_VECTOR, _READ_MATRIX, READ_VECTOR, WRITTEN_VECTOR), cache=True)
+def _velocity_after(v_free: np.ndarray, mass_jt: np.ndarray, impulses: np.ndarray, out: np.ndarray) -> None:
+    """out = v_free + M^-1 J^T lambda (m/s, rad/s) from mass_jt = M^-1 J^T and the impulses."""
+    nv, rows = mass_jt.shape
+    if v_free.shape[0] != nv or impulses.shape[0] != rows or out.shape[0] != nv:
+        raise ValueError("contact step: v_free (nv,), M^-1 J^T (nv x 3p), impulses (3p,), out (nv,)")
+    for a in range(nv):
+        total = 0.0
+        for i in range(rows):
+            total += mass_jt[a, i] * impulses[i]
+        out[a] = v_free[a] + total
 
 
 class ContactSet:
@@ -100,7 +180,7 @@ class ContactSet:
         self.constraints = pin.StdVec_ConstraintModel()
         self.datas = pin.StdVec_ConstraintData()
         self.names: list[str] = []
-        self.restitutions: list[float] = []
+        restitutions: list[float] = []
         for k, count in key:
             pair = contact.pairs[k]
             joint1, joint2 = contact.owner_joint(pair.first), contact.owner_joint(pair.second)
@@ -109,13 +189,16 @@ class ContactSet:
                 point.setFriction(pair.law.friction)
                 self.constraints.append(pin.ConstraintModel(point))
                 self.names.append(pair.name)
-                self.restitutions.append(pair.law.restitution)
+                restitutions.append(pair.law.restitution)
         for constraint in self.constraints:
             self.datas.append(constraint.createData())
         #: References into the vectors: moving a contact frame here moves the solver's.
         self.points = [constraint.extract() for constraint in self.constraints]
         self.pairs = list(zip(self.constraints, self.datas))
         size = 3 * len(self.points)
+        self.restitutions = np.array(restitutions, dtype=float)
+        #: scratch for M^-1 J^T, the Delassus matrix and the drift (see :func:`_delassus_and_drift`)
+        self.mass_jt, self.delassus, self.drift = np.empty((model.nv, size)), np.empty((size, size)), np.empty(size)
         if settings.solver == "pgs":
             self.solver, self.options, self.result = (pin.PGSConstraintSolver(size), pin.PGSSolverSettings(),
                                                       pin.PGSSolverResult())
@@ -157,6 +240,7 @@ class ConstraintStepper:
         self.owners = [(contact.owner_joint(p.first), contact.owner_joint(p.second)) for p in contact.pairs]
         self.sets: dict[tuple[tuple[int, int], ...], ContactSet] = {}
         self._frame = pin.SE3.Identity()  # scratch: a contact frame in the world
+        self._rotation = np.empty((3, 3))  # scratch: its rotation
 
     def contact_set(self, key: tuple[tuple[int, int], ...]) -> ContactSet:
         """The kept :class:`ContactSet` of ``key``, built on its first use."""
@@ -173,25 +257,27 @@ class ConstraintStepper:
         ``data`` is a Data of the model (scratch)."""
         model, settings, contact = self.model, self.settings, self.contact
         report = StepReport()
-        v_free = v + h * pin.aba(model, data, q, v, tau)
-        # one pass: joint placements, joint Jacobians and the upper triangle of M^-1
-        inverse_mass = pin.computeMinverse(model, data, q)
+        # ABA in the world convention places the joints and fills the joint Jacobians, and
+        # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
+        v_free = v + h * pin.aba(model, data, q, v, tau, pin.Convention.WORLD)
+        inverse_mass = pin.computeMinverse(model, data)
         pin.updateFramePlacements(model, data)
-        touching = []
-        for k in self.broad.close_pairs(contact.centres(data)):
-            points = contact.placed_points(k, data, settings.margin)
+        touching, placements = [], contact.placements(data)
+        for k in self.broad.close_pairs(contact.centres(placements)):
+            points = contact.points(k, placements, settings.margin)
             if points:
                 touching.append((k, points))
         if not touching:
             return pin.integrate(model, q, h * v_free), v_free, report
-        active = self.contact_set(tuple((k, len(points)) for k, points in touching))
-        gaps, i, frame = [], 0, self._frame
+        active = self.contact_set(tuple([(k, len(points)) for k, points in touching]))
+        gaps, i, frame, rotation = [], 0, self._frame, self._rotation
         for k, points in touching:
             joint1, joint2 = self.owners[k]
             world1, world2 = data.oMi[joint1] if joint1 else None, data.oMi[joint2] if joint2 else None
             for c in points:
                 point = active.points[i]
-                frame.rotation = contact_rotation(c.normal)
+                _contact_rotation(c.normal, rotation)
+                frame.rotation = rotation
                 frame.translation = c.point1  # the universe's joint frame is the world's
                 point.joint1_placement = world1.actInv(frame) if joint1 else frame
                 frame.translation = c.point2
@@ -202,18 +288,12 @@ class ConstraintStepper:
         for constraint, cdata in active.pairs:
             constraint.calc(model, data, cdata)
         jacobian = pin.getConstraintsJacobian(model, data, active.constraints, active.datas)
-        # ndarray.dot, not @: the same BLAS products at half the dispatch cost on small arrays
-        inverse_mass = symmetrised(inverse_mass)
-        delassus = jacobian.dot(inverse_mass).dot(jacobian.T)
-        drift = jacobian.dot(v_free)
-        approach = jacobian.dot(v)[2::3].tolist()  # normal rows: z of each contact frame
-        threshold, baumgarte = -settings.restitution_threshold, settings.baumgarte
-        drift[2::3] += [
-            restitution * before if before < threshold and gap + h * before < 0
-            else (gap / h if gap > 0 else baumgarte * gap / h)
-            for gap, before, restitution in zip(gaps, approach, active.restitutions)]
-        impulses, report.iterations = active.solve(delassus, drift)
-        v_next = v_free + inverse_mass.dot(jacobian.T).dot(impulses)
+        _delassus_and_drift(inverse_mass, jacobian, v_free, v, np.array(gaps), active.restitutions, h,
+                            -settings.restitution_threshold, settings.baumgarte, active.mass_jt, active.delassus,
+                            active.drift)
+        impulses, report.iterations = active.solve(active.delassus, active.drift)
+        v_next = np.empty_like(v_free)
+        _velocity_after(v_free, active.mass_jt, impulses, v_next)
         for name, impulse in zip(active.names, impulses[2::3].tolist()):
             report.normal_impulse[name] = report.normal_impulse.get(name, 0.0) + impulse
         return pin.integrate(model, q, h * v_next), v_next, report

@@ -40,10 +40,9 @@ about 60 us to build: pass one to reuse it), ``threads`` the C++ threads (OpenMP
 """
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 import pinocchio as pin
+from numba import njit, types
 
 from youbot_dynamics.dynamics.friction import (FLOAT, NO_BRISTLES, JointFriction, add_friction_torque_unchecked,
                                                subtract_friction_torque_unchecked)
@@ -188,20 +187,28 @@ def _check_sizes(robot: Robot, q: Vector, **velocity_sized: Vector) -> None:
 
 def symmetrised(upper: np.ndarray) -> np.ndarray:
     """The full symmetric matrix of one of which only the upper triangle is reliable (what
-    Pinocchio's crba and computeMinverse fill); a fresh array. The strict lower triangle is
-    copied from the upper one through cached indices, and + 0.0 makes it the same to the bit
-    (signed zeros included) as triu(M) + triu(M, 1)^T, at a fifth of its cost."""
-    full = np.array(upper, dtype=float)
-    rows, columns = _strict_lower(full.shape[0])
-    full[rows, columns] = full[columns, rows]
-    full += 0.0
+    Pinocchio's crba and computeMinverse fill); a fresh array in the input's memory order.
+    Each entry is upper[i, j] + 0.0 (i <= j), mirrored: the same to the bit (signed zeros
+    included) as triu(M) + triu(M, 1)^T, in one compiled pass (1 us for 20 x 20, where
+    numpy's fancy indexing took 15)."""
+    upper = np.asarray(upper, dtype=float)
+    full = np.empty_like(upper)
+    _mirror_upper(upper, full)
     return full
 
 
-@functools.lru_cache(maxsize=64)
-def _strict_lower(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(rows, columns) of the strict lower triangle of an n x n matrix (np.tril_indices)."""
-    return np.tril_indices(n, -1)
+@njit(types.void(types.Array(types.float64, 2, "A", readonly=True), types.Array(types.float64, 2, "A")),
+      cache=True)
+def _mirror_upper(upper: np.ndarray, full: np.ndarray) -> None:
+    """full[i, j] = full[j, i] = upper[i, j] + 0.0 for i <= j (square matrices)."""
+    n = upper.shape[0]
+    if upper.shape[1] != n or full.shape[0] != n or full.shape[1] != n:
+        raise ValueError("symmetrised: the matrix must be square")
+    for j in range(n):
+        for i in range(j + 1):
+            value = upper[i, j] + 0.0
+            full[i, j] = value
+            full[j, i] = value
 
 
 def mass_matrix(robot: Robot, data: pin.Data, q: Vector) -> Vector:

@@ -263,7 +263,9 @@ class ConstraintStepping:
         self._bodies = (model.block("pose"), model.block("chart"), model.body_offset) if model.body_names else None
 
     def _pack(self) -> np.ndarray:
-        model, x = self.model, self.x.copy()
+        """``x`` with the stepper's q and v written in, in place: :meth:`advance` steps its own
+        copy of the state (the previous one stays as ``x_previous``)."""
+        model, x = self.model, self.x
         x[self._q_block] = self.q[self._robot_q]
         if model.base is not None:
             root = self._robot_q.start
@@ -308,7 +310,7 @@ class ConstraintStepping:
                 self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
                                 for name in sorted(touching - self.touching)]
                 self.touching = touching
-            if not np.isfinite(self.v).all():
+            if not math.isfinite(self.v.dot(self.v)):  # a NaN, an infinity, or |v| beyond 1e154
                 raise DivergenceError(self.t, model.integrator.method, h, "non-finite velocity")
             if not report.penetration <= self.deepest_allowed:
                 raise DivergenceError(self.t, model.integrator.method, h, f"overlap {report.penetration:.3g} m "

@@ -13,25 +13,62 @@ Units: rad or m for positions, per second and per second squared for the limits.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit, types
 
+from youbot_dynamics.dynamics.friction import unchecked
 from youbot_dynamics.errors import UserInputError
 
 
-_POINT = types.Array(types.float64, 1, "A", readonly=True)
+_TABLE = types.Array(types.float64, 2, "C", readonly=True)
 
 
-@njit(types.void(_POINT, _POINT, types.float64, types.float64, types.float64, types.Array(types.float64, 2, "C")),
-      cache=True)
-def _on_segment(q_a: np.ndarray, q_b: np.ndarray, s: float, ds: float, dds: float, out: np.ndarray) -> None:
-    """out = (q_a + s d, ds d, dds d) with d = q_b - q_a, as numpy computes them (one call
-    instead of five array operations: about 2 us less)."""
-    for i in range(q_a.shape[0]):
-        d = q_b[i] - q_a[i]
-        out[0, i], out[1, i], out[2, i] = q_a[i] + s * d, ds * d, dds * d
+@njit(types.UniTuple(types.float64, 3)(*(types.float64,) * 5), cache=True)
+def _profile_at(a: float, v: float, t_a: float, T: float, t: float) -> tuple[float, float, float]:
+    """s, s', s'' at time t (s) of the trapezoid with acceleration a (1/s^2), coast rate v
+    (1/s), acceleration phase t_a (s) and duration T (s), clamped to [0, T]."""
+    if t <= 0.0:
+        return 0.0, 0.0, 0.0
+    if t >= T:
+        return 1.0, 0.0, 0.0
+    if t < t_a:
+        return 0.5 * a * t * t, a * t, a
+    if t <= T - t_a:
+        return 0.5 * a * t_a * t_a + v * (t - t_a), v, 0.0
+    r = T - t
+    return 1.0 - 0.5 * a * r * r, a * r, -a
+
+
+@njit(types.void(types.Array(types.float64, 2, "A", readonly=True), _TABLE, types.float64,
+                 types.Array(types.float64, 2, "C")), cache=True)
+def _desired(points: np.ndarray, timing: np.ndarray, t: float, out: np.ndarray) -> None:
+    """out = (q_d, v_d, a_d) at time t (s) of the trajectory through ``points`` (k+1, n) with
+    per segment the row (start s, acceleration, coast rate, acceleration phase, duration) of
+    ``timing`` (k, 5), NaN profile for a segment of zero length: before 0 the start, after
+    the end the last point at rest. Each entry q_a + s d, s' d, s'' d with d = q_b - q_a, as
+    numpy computes them (one call instead of a search, a profile and five array operations)."""
+    n, segments = points.shape[1], timing.shape[0]
+    out[1:, :] = 0.0
+    if segments == 0 or t <= 0.0:
+        out[0, :] = points[0]
+        return
+    k = segments - 1
+    while timing[k, 0] > t:  # the last segment started at or before t (searchsorted right - 1)
+        k -= 1
+    if np.isnan(timing[k, 1]):
+        out[0, :] = points[k + 1]
+        return
+    s, ds, dds = _profile_at(timing[k, 1], timing[k, 2], timing[k, 3], timing[k, 4], t - timing[k, 0])
+    for i in range(n):
+        d = points[k + 1, i] - points[k, i]
+        out[0, i], out[1, i], out[2, i] = points[k, i] + s * d, ds * d, dds * d
+
+
+#: :func:`_desired` without numba's type dispatch (for the arrays of ``_compiled`` and a float t).
+_desired_unchecked = unchecked(_desired)
 
 
 @dataclass(frozen=True)
@@ -60,17 +97,7 @@ class TrapezoidProfile:
 
     def evaluate(self, t: float) -> tuple[float, float, float]:
         """s, s' (1/s), s'' (1/s^2) at time t (s) from the segment start (clamped)."""
-        a, v, t_a, T = self.acceleration, self.peak_rate, self.t_accelerate, self.duration
-        if t <= 0.0:
-            return 0.0, 0.0, 0.0
-        if t >= T:
-            return 1.0, 0.0, 0.0
-        if t < t_a:
-            return 0.5 * a * t * t, a * t, a
-        if t <= T - t_a:
-            return 0.5 * a * t_a * t_a + v * (t - t_a), v, 0.0
-        r = T - t
-        return 1.0 - 0.5 * a * r * r, a * r, -a
+        return _profile_at(self.acceleration, self.peak_rate, self.t_accelerate, self.duration, t)
 
 
 @dataclass(frozen=True)
@@ -138,13 +165,22 @@ class PointToPointTrajectory:
     def evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Desired position, velocity and acceleration (n,) at time t (s); before 0 the
         start, after the end the last point at rest."""
-        if not self.profiles or t <= 0.0:
-            return self.points[0].copy(), np.zeros(self.points.shape[1]), np.zeros(self.points.shape[1])
-        k = int(self.segment_start.searchsorted(t, side="right")) - 1
-        profile = self.profiles[k]
-        q_a, q_b = self.points[k], self.points[k + 1]
-        if profile is None:
-            return q_b.copy(), np.zeros_like(q_b), np.zeros_like(q_b)
-        out = np.empty((3, len(q_a)))
-        _on_segment(q_a, q_b, *profile.evaluate(t - float(self.segment_start[k])), out)
+        points, timing = self._compiled
+        out = np.empty((3, points.shape[1]))
+        _desired_unchecked(points, timing, float(t), out)
         return out[0], out[1], out[2]
+
+    @functools.cached_property
+    def _compiled(self) -> tuple[np.ndarray, np.ndarray]:
+        """What :func:`_desired` reads: the points as float64 and per segment (start s,
+        acceleration, coast rate, acceleration phase, duration), NaN for a segment of zero
+        length, C-ordered (its signature's types: it is called without numba's dispatch)."""
+        timing = np.array([(start, *((p.acceleration, p.peak_rate, p.t_accelerate, p.duration) if p else (np.nan,) * 4))
+                           for start, p in zip(self.segment_start.tolist(), self.profiles)], dtype=float).reshape(-1, 5)
+        points = np.ascontiguousarray(self.points, dtype=float)
+        if points.ndim != 2 or timing.shape[0] != points.shape[0] - 1:
+            raise UserInputError(f"trajectory: {points.shape[0]} points need {points.shape[0] - 1} segments, "
+                                 f"got {timing.shape[0]}")
+        for array in (points, timing):
+            array.setflags(write=False)
+        return points, timing
