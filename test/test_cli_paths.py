@@ -103,6 +103,7 @@ def test_main_job_creates_its_output_folder_before_the_run(tmp_path: Path) -> No
 def test_main_job_refuses_an_unbounded_run(capsys) -> None:
     _one_line_error(capsys, ["main-job", "--scene", "arm_swing", "--rate", "1e9"], "output samples")
     _one_line_error(capsys, ["main-job", "--scene", "arm_swing", "--duration", "inf"], "--duration")
+    _one_line_error(capsys, ["main-job", "--scene", "arm_swing", "--time-scale", "-1"], "--time-scale")
 
 
 @pytest.mark.parametrize("name, content", [("scene.yaml", b"duration: 1\n"), ("notes.txt", b""),

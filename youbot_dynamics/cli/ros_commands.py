@@ -3,9 +3,10 @@
 - ``replay BAG [--rate R | --fast] [--topic T ...] [--wait-for TOPIC]``: publish a bag's
   messages on their topics with the recorded timing (scaled by R), or as fast as possible,
   driving /clock (see :mod:`youbot_dynamics.ros.replay_node`).
-- ``main-job [--scene NAME] [--duration S] [--out DIR] [--rate HZ]``: the dynamics node in
-  simulate mode on the scene (default ``gripping``: two youBots hand a wooden sphere over,
-  chosen because it runs faster than real time with logging) for S simulated seconds
+- ``main-job [--scene NAME] [--duration S] [--out DIR] [--rate HZ] [--time-scale X]``: the
+  dynamics node in simulate mode on the scene (default ``gripping``: two youBots hand a
+  wooden sphere over, chosen because it runs faster than real time with logging), paced at
+  X simulated seconds per wall second (default 1; 0: as fast as possible), for S simulated seconds
   (default the scene's own duration), publishing on ROS 2 topics and writing
   DIR/<scene>.mcap and DIR/<scene>.rrd; prints the real-time factor, the integrator
   statistics (n/a for a counter the integrator does not report), the energy error, the
@@ -48,6 +49,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="simulated seconds (default: the scene's own duration)")
     job.add_argument("--out", default="out", help="folder for the logs (default out/)")
     job.add_argument("--rate", type=float, default=500.0, help="publish rate, Hz of simulated time (default 500)")
+    job.add_argument("--time-scale", type=float, default=1.0, metavar="X",
+                     help="simulated seconds per wall second (default 1: real time; 0: as fast as possible)")
     job.set_defaults(run=run_main_job)
 
 
@@ -97,8 +100,10 @@ def run_main_job(args: argparse.Namespace) -> int:
     out = output_folder(args.out, "--out")  # before the run: a file in the way, no permission
     paths = {"mcap_path": str(out / f"{name}.mcap"), "rrd_path": str(out / f"{name}.rrd")}
     start = time.monotonic()
+    if not (math.isfinite(args.time_scale) and args.time_scale >= 0):
+        raise CommandError(f"--time-scale must be finite and >= 0, got {args.time_scale}")
     status, node = run(args=[], overrides={"scene": args.scene, "mode": "simulate", "duration": duration,
-                                           "publish_rate": args.rate, **paths})
+                                           "publish_rate": args.rate, "time_scale": args.time_scale, **paths})
     wall = time.monotonic() - start
     if node is None:
         return status
