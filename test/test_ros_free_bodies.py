@@ -68,8 +68,11 @@ def ball_drop_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
         collector = Collector(context, TOPICS)
         with spinning(context, node, collector) as executor:
             wait_until(lambda: node.finished, what="the node to finish")
-            wait_until(lambda: collector.count("/free_bodies") == N and collector.count("/diagnostics") > 0
-                       and collector.count("/free_bodies_markers") == N, what=f"{N} /free_bodies samples")
+            wait_until(lambda: all(collector.count(topic) == N for topic in ("/free_bodies", "/free_bodies_markers",
+                                                                             "/clock"))
+                       and any(float(diagnostic_values(m)["sim_time"]) == DURATION
+                               for m in collector.messages("/diagnostics")),
+                       what=f"{N} samples on each topic and the closing /diagnostics")
             # a subscriber that comes after the run still gets the latched /scene_markers
             late, latched = Node("late", context=context), []
             late.create_subscription(rclpy_class("visualization_msgs/msg/MarkerArray"), "/scene_markers",

@@ -53,11 +53,16 @@ def test_simulate_mode_publishes_the_simulated_motion() -> None:
         collector = Collector(context, OUTPUTS)
         with spinning(context, node, collector):
             wait_until(lambda: node.finished, what="the node to finish")
-            wait_until(lambda: collector.count("/joint_states") == 51 and collector.count("/diagnostics") > 0,
-                       what="51 samples")
+            # each topic has its own reader: wait for all three (/clock's last sample has come
+            # after /joint_states' in CI) and for the closing /diagnostics, the one at t = 0.5 s
+            wait_until(lambda: all(collector.count(topic) == 51 for topic in ("/joint_states", "/ee_pose", "/clock"))
+                       and any(abs(float(diagnostic_values(m)["sim_time"]) - 0.5) < 1e-9
+                               for m in collector.messages("/diagnostics")),
+                       what="51 samples on each topic and the closing /diagnostics")
         states, poses = collector.messages("/joint_states"), collector.messages("/ee_pose")
         clocks = [m.clock.sec * 10**9 + m.clock.nanosec for m in collector.messages("/clock")]
-        diagnostics = diagnostic_values(collector.messages("/diagnostics")[-1])
+        diagnostics = next(values for values in map(diagnostic_values, collector.messages("/diagnostics"))
+                           if abs(float(values["sim_time"]) - 0.5) < 1e-9)
     reference = SimulationSession(load_scene("arm_ptp"), 100.0, samples_per_solve=2)
     expected = [dict(reference.step())["/joint_states"] for _ in range(51)]
     assert [stamp_ns(m) for m in states] == clocks == [10_000_000 * k for k in range(51)]
