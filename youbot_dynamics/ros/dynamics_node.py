@@ -185,7 +185,6 @@ class DynamicsNode(Node):
             self.get_logger().warning(f"not publishing {', '.join(sorted(self._unpublished))}: their message "
                                       "package is not installed (tf2_msgs: `make` builds it from interfaces/, "
                                       "or source a ROS 2 Jazzy); the MCAP still logs them")
-        self._latched_readers: dict[str, int] = {}
         self._publish(self.session.latched)
 
     def _publish(self, outputs: Outputs, subscribed: frozenset[str] | None = None) -> None:
@@ -197,22 +196,10 @@ class DynamicsNode(Node):
 
     def _subscribed(self) -> frozenset[str]:
         """The topics with subscribers now; the session builds only those and the logged ones."""
-        counts = {topic: publisher.get_subscription_count() for topic, publisher in self.publishers_.items()}
-        self._republish_latched(counts)
-        subscribed = frozenset(topic for topic, count in counts.items() if count)
+        subscribed = frozenset(topic for topic, publisher in self.publishers_.items()
+                               if publisher.get_subscription_count())
         self.session.consumed_by(subscribed)
         return subscribed
-
-    def _republish_latched(self, counts: dict[str, int]) -> None:
-        """Publish a latched topic's messages again when it has gained subscribers since the
-        last tick: a transient-local sample can miss a reader whose discovery races the first
-        publication (test_namespaces: one of two nodes' /tf_static lost in 4 of 16 runs
-        before); tf2 and other latched readers take a repeat as the same message."""
-        gained = {topic for topic in LATCHED_TOPICS
-                  if counts.get(topic, 0) > self._latched_readers.get(topic, 0)}
-        self._latched_readers.update({topic: counts[topic] for topic in LATCHED_TOPICS if topic in counts})
-        if gained:
-            self._publish([(topic, message) for topic, message in self.session.latched if topic in gained])
 
     def _restart_pacing(self) -> None:
         self._pace_start, self._pace_k0 = time.monotonic(), self.session.k
