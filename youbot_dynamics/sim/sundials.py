@@ -9,16 +9,15 @@ a step that holds a root returns at the root first (``roots`` names the events t
 A guard that reads exactly 0 at the start is inactive until it leaves 0 (SUNDIALS' rule),
 which is how a hybrid restart ignores the crossing it just handled.
 
-scikit-sundae 1.2 reports only residual and Jacobian evaluations and does not expose
-IDASetSuppressAlg. Both are reached through the SUNDIALS library that its wheel ships
-(``scikit_sundae.libs/libsundials_ida-*.so``, already loaded by its extension module):
-:func:`ida_memory` reads the solver's IDA memory pointer out of the extension object (its
-layout is that of scikit-sundae 1.2.0, the locked version; another version is refused, and
-every read is checked against what scikit-sundae itself reports), then
-:func:`ida_counters` reads the error-test failures, nonlinear iterations and nonlinear
-convergence failures, and :func:`suppress_algebraic_error` calls IDASetSuppressAlg, which
-takes the algebraic components (id 0) out of IDA's local error test. CVODE's counters stay
-``None``: its extension is not opened here.
+scikit-sundae 1.2 reports only right-hand-side (residual) and Jacobian evaluations and does
+not expose IDASetSuppressAlg. Both are reached through the SUNDIALS libraries that its wheel
+ships (``scikit_sundae.libs/libsundials_{cvode,ida}-*.so``, already loaded by its extension
+modules): :func:`solver_memory` reads the solver's CVODE or IDA memory pointer out of the
+extension object (its layout is that of scikit-sundae 1.2.0, the locked version; another
+version is refused, and every read is checked against what scikit-sundae itself reports),
+then :func:`solver_counters` reads the error-test failures, nonlinear iterations and
+nonlinear convergence failures, and :func:`suppress_algebraic_error` calls IDASetSuppressAlg,
+which takes the algebraic components (id 0) out of IDA's local error test.
 """
 from __future__ import annotations
 
@@ -27,7 +26,7 @@ import ctypes.util
 import functools
 import os
 from pathlib import Path
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 import sksundae
@@ -50,72 +49,95 @@ COLLAPSE_FLAGS = (-2, -3, -4)
 #: SUNDIALS' flag for a return at a located root (CV_ROOT_RETURN, IDA_ROOT_RETURN).
 ROOT_RETURN = 2
 
-#: The scikit-sundae version whose extension-object layout :func:`ida_memory` reads.
-IDA_LAYOUT_VERSION = "1.2.0"
-#: Byte offset of ``void* mem`` in sksundae._cy_ida.IDA: after the object header (reference
-#: count and type, 16 bytes) and Cython's virtual-table pointer (8 bytes).
-IDA_MEMORY_OFFSET = 24
-#: IntegratorStats counters read from IDA (field -> IDAGetNum* function).
-IDA_COUNTERS = {"rejected_steps": "IDAGetNumErrTestFails",
-                "nonlinear_iterations": "IDAGetNumNonlinSolvIters",
-                "nonlinear_convergence_failures": "IDAGetNumNonlinSolvConvFails"}
+#: The scikit-sundae version whose extension-object layout :func:`solver_memory` reads.
+LAYOUT_VERSION = "1.2.0"
+#: Byte offset of ``void* mem`` in sksundae._cy_cvode.CVODE and sksundae._cy_ida.IDA: after
+#: the object header (reference count and type, 16 bytes) and Cython's virtual-table pointer
+#: (8 bytes).
+MEMORY_OFFSET = 24
+
+
+class SundialsSolver(NamedTuple):
+    """Where one SUNDIALS solver of scikit-sundae's wheel is reached: its library (file-name
+    pattern in ``scikit_sundae.libs``, else the system's ``system_name``), the prefix of its
+    C functions, its evaluation counter (checked against scikit-sundae's ``nfev``) and the
+    attribute of the sksundae solver that holds the extension object."""
+
+    library_glob: str
+    system_name: str
+    prefix: str
+    evaluations: str
+    extension: str
+
+
+SOLVERS = {"cvode": SundialsSolver("libsundials_cvode-*.so*", "sundials_cvode", "CVode", "GetNumRhsEvals",
+                                   "_CVODE__CVODE"),
+           "ida": SundialsSolver("libsundials_ida-*.so*", "sundials_ida", "IDA", "GetNumResEvals", "_IDA__IDA")}
+#: IntegratorStats counters read from either solver (field -> <prefix>GetNum* function).
+COUNTERS = {"rejected_steps": "GetNumErrTestFails",
+            "nonlinear_iterations": "GetNumNonlinSolvIters",
+            "nonlinear_convergence_failures": "GetNumNonlinSolvConvFails"}
 
 
 @functools.cache
-def ida_library() -> ctypes.CDLL | None:
-    """The SUNDIALS IDA library scikit-sundae's extension is linked against (the wheel's
-    copy, else the system's), or None if neither is found."""
-    shipped = sorted((Path(sksundae.__file__).parent.parent / "scikit_sundae.libs")
-                     .glob("libsundials_ida-*.so*"))
-    path = str(shipped[0]) if shipped else ctypes.util.find_library("sundials_ida")
+def solver_library(kind: str) -> ctypes.CDLL | None:
+    """The SUNDIALS library of solver ``kind`` ('cvode' or 'ida') that scikit-sundae's
+    extension is linked against (the wheel's copy, else the system's), or None if neither
+    is found."""
+    solver = SOLVERS[kind]
+    shipped = sorted((Path(sksundae.__file__).parent.parent / "scikit_sundae.libs").glob(solver.library_glob))
+    path = str(shipped[0]) if shipped else ctypes.util.find_library(solver.system_name)
     if path is None:
         return None
     library = ctypes.CDLL(path)
-    for name in (*IDA_COUNTERS.values(), "IDAGetNumResEvals"):
-        getattr(library, name).argtypes = (ctypes.c_void_p, ctypes.POINTER(ctypes.c_long))
-    library.IDAGetCurrentTime.argtypes = (ctypes.c_void_p, ctypes.POINTER(ctypes.c_double))
-    library.IDASetSuppressAlg.argtypes = (ctypes.c_void_p, ctypes.c_int)
+    for name in (*COUNTERS.values(), solver.evaluations):
+        getattr(library, solver.prefix + name).argtypes = (ctypes.c_void_p, ctypes.POINTER(ctypes.c_long))
+    getattr(library, solver.prefix + "GetCurrentTime").argtypes = (ctypes.c_void_p, ctypes.POINTER(ctypes.c_double))
+    if kind == "ida":
+        library.IDASetSuppressAlg.argtypes = (ctypes.c_void_p, ctypes.c_int)
     return library
 
 
-def ida_memory(solver: IDA) -> ctypes.c_void_p | None:
-    """IDA's memory pointer inside an initialised scikit-sundae IDA solver, or None when the
-    library or the known layout (scikit-sundae IDA_LAYOUT_VERSION) is not available."""
-    if sksundae.__version__ != IDA_LAYOUT_VERSION or ida_library() is None:
+def solver_memory(kind: str, solver: CVODE | IDA) -> ctypes.c_void_p | None:
+    """The SUNDIALS memory pointer inside an initialised scikit-sundae solver of ``kind``, or
+    None when the library or the known layout (scikit-sundae LAYOUT_VERSION) is not
+    available."""
+    if sksundae.__version__ != LAYOUT_VERSION or solver_library(kind) is None:
         return None
-    extension = solver._IDA__IDA
-    return ctypes.c_void_p(ctypes.c_void_p.from_address(id(extension)
-                                                        + IDA_MEMORY_OFFSET).value)
+    extension = getattr(solver, SOLVERS[kind].extension)
+    return ctypes.c_void_p(ctypes.c_void_p.from_address(id(extension) + MEMORY_OFFSET).value)
 
 
-def ida_count(memory: ctypes.c_void_p, function: str) -> int:
-    """One IDAGetNum* counter; a failing call is an IntegrationError."""
+def solver_count(kind: str, memory: ctypes.c_void_p, function: str) -> int:
+    """One <prefix>GetNum* counter (``function`` without the prefix); a failing call is an
+    IntegrationError."""
+    name = SOLVERS[kind].prefix + function
     value = ctypes.c_long()
-    flag = getattr(ida_library(), function)(memory, ctypes.byref(value))
+    flag = getattr(solver_library(kind), name)(memory, ctypes.byref(value))
     if flag != 0:
-        raise IntegrationError(f"ida: {function} failed with flag {flag}")
+        raise IntegrationError(f"{kind}: {name} failed with flag {flag}")
     return int(value.value)
 
 
-def checked_memory(memory: ctypes.c_void_p, result) -> None:
-    """The pointer must be the solver's own: IDA's time and residual count must be those
-    scikit-sundae reports in ``result``."""
+def checked_memory(kind: str, memory: ctypes.c_void_p, result) -> None:
+    """The pointer must be the solver's own: its current time must be readable and its
+    evaluation count must be the one scikit-sundae reports in ``result``."""
     now = ctypes.c_double()
-    flag = ida_library().IDAGetCurrentTime(memory, ctypes.byref(now))
-    if flag != 0 or ida_count(memory, "IDAGetNumResEvals") != int(result.nfev):
-        raise IntegrationError("ida: the IDA memory read from scikit-sundae's solver does "
+    flag = getattr(solver_library(kind), SOLVERS[kind].prefix + "GetCurrentTime")(memory, ctypes.byref(now))
+    if flag != 0 or solver_count(kind, memory, SOLVERS[kind].evaluations) != int(result.nfev):
+        raise IntegrationError(f"{kind}: the SUNDIALS memory read from scikit-sundae's solver does "
                                f"not match its results (flag {flag}); its layout differs "
-                               f"from scikit-sundae {IDA_LAYOUT_VERSION}'s")
+                               f"from scikit-sundae {LAYOUT_VERSION}'s")
 
 
-def ida_counters(memory: ctypes.c_void_p) -> dict[str, int]:
+def solver_counters(kind: str, memory: ctypes.c_void_p) -> dict[str, int]:
     """Error-test failures, nonlinear iterations and convergence failures so far."""
-    return {field: ida_count(memory, function) for field, function in IDA_COUNTERS.items()}
+    return {field: solver_count(kind, memory, function) for field, function in COUNTERS.items()}
 
 
 def suppress_algebraic_error(memory: ctypes.c_void_p) -> None:
     """IDASetSuppressAlg(mem, true): the components with id 0 leave the error test."""
-    flag = ida_library().IDASetSuppressAlg(memory, 1)
+    flag = solver_library("ida").IDASetSuppressAlg(memory, 1)
     if flag != 0:
         raise IntegrationError(f"ida: IDASetSuppressAlg failed with flag {flag}")
 
@@ -145,13 +167,16 @@ class SundialsStepper:
 
     locates_events = True
 
-    def __init__(self, name: str, solver, t0: float, t_end: float, initial) -> None:
-        self.name, self.solver, self.t_end = name, solver, t_end
+    def __init__(self, kind: str, name: str, solver: CVODE | IDA, t0: float, t_end: float, initial) -> None:
+        self.kind, self.name, self.solver, self.t_end = kind, name, solver, t_end
         self.t, self.x = t0, np.array(initial.y, dtype=float)
         self.h = 0.0
         self.steps = 0
         self.last = initial
         self.roots: list[int] = []
+        self.memory = solver_memory(kind, solver)
+        if self.memory is not None:
+            checked_memory(kind, self.memory, initial)
 
     def checked(self, result):
         """The solver's result, or the typed error for its failure flag."""
@@ -180,10 +205,16 @@ class SundialsStepper:
         return np.array(self.last.y)
 
     def finish(self, stats: IntegratorStats) -> None:
+        """Steps, evaluations and SUNDIALS' own error-test failures, nonlinear iterations and
+        convergence failures (None only if its memory cannot be reached)."""
         stats.steps = self.steps
         stats.rhs_evals, stats.jac_evals = int(self.last.nfev), int(self.last.njev)
-        stats.rejected_steps = stats.nonlinear_iterations = None
-        stats.nonlinear_convergence_failures = None
+        counters = dict.fromkeys(COUNTERS)
+        if self.memory is not None:
+            checked_memory(self.kind, self.memory, self.last)
+            counters = solver_counters(self.kind, self.memory)
+        for field, value in counters.items():
+            setattr(stats, field, value)
 
 
 def common_options(rtol: float, atol, max_step: float, min_step: float | None) -> dict:
@@ -220,7 +251,7 @@ class CvodeStepper(SundialsStepper):
                 jj[:, :] = jac(t, y)
             options["jacfn"] = jacfn
         solver = CVODE(rhsfn, method=method, **options)
-        super().__init__(name, solver, t0, t_end, solver.init_step(t0, x0))
+        super().__init__("cvode", name, solver, t0, t_end, solver.init_step(t0, x0))
 
 
 class IdaStepper(SundialsStepper):
@@ -247,25 +278,15 @@ class IdaStepper(SundialsStepper):
             options["jacfn"] = jacfn
         options.update(extra or {})
         solver = IDA(resfn, **options)
-        super().__init__("ida", solver, t0, t_end, solver.init_step(t0, y0, yp0))
-        self.memory = ida_memory(solver)
-        if self.memory is not None:
-            checked_memory(self.memory, self.last)
+        super().__init__("ida", "ida", solver, t0, t_end, solver.init_step(t0, y0, yp0))
         if suppress_alg:
             if self.memory is None:
-                library = "missing" if ida_library() is None else "found"
+                library = "missing" if solver_library("ida") is None else "found"
                 raise NotImplementedError(
                     "suppress_alg needs IDASetSuppressAlg through scikit-sundae "
-                    f"{IDA_LAYOUT_VERSION}'s SUNDIALS library, found version "
+                    f"{LAYOUT_VERSION}'s SUNDIALS library, found version "
                     f"{sksundae.__version__} (library {library})")
             suppress_algebraic_error(self.memory)
-
-    def finish(self, stats: IntegratorStats) -> None:
-        super().finish(stats)
-        if self.memory is not None:
-            checked_memory(self.memory, self.last)
-            for field, value in ida_counters(self.memory).items():
-                setattr(stats, field, value)
 
     def derivative_at(self, t: float) -> np.ndarray:
         """y' at t: the last result's when it is at t, else IDA's interpolation."""
