@@ -21,8 +21,9 @@ level, Moreau-Jean style):
    v+ = v_f + M^-1 J^T lambda, q+ = integrate(q, h v+).
 
 Nothing of this is rebuilt per step: one ABA pass (world convention) places the joints and
-fills the joint Jacobians, ``computeMinverse`` reuses it for M^-1 of the whole step; the
-broad phase culls the pairs by bounding balls; and the constraint models, their datas and
+fills the joint Jacobians, ``computeMinverse`` reuses it for M^-1 of the whole step; coal's
+geometry model places the geometries on those joints and measures every pair in two C++
+calls (:meth:`ContactModel.touching`); and the constraint models, their datas and
 the solver with its settings and result are built once per contact SET (which pairs touch
 at how many points, a :class:`ContactSet`) and kept, the step only moving the contact
 frames in place.
@@ -36,7 +37,6 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
-from youbot_dynamics.dynamics.collision import BroadPhase
 from youbot_dynamics.dynamics.contact_model import ContactModel
 from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR
 
@@ -235,8 +235,6 @@ class ConstraintStepper:
 
     def __init__(self, contact: ContactModel, settings: StepperSettings) -> None:
         self.contact, self.model, self.settings = contact, contact.model, settings
-        self.broad = BroadPhase([g.shape for g in contact.geometries],
-                                [(p.first, p.second) for p in contact.pairs], settings.margin)
         self.owners = [(contact.owner_joint(p.first), contact.owner_joint(p.second)) for p in contact.pairs]
         self.sets: dict[tuple[tuple[int, int], ...], ContactSet] = {}
         self._frame = pin.SE3.Identity()  # scratch: a contact frame in the world
@@ -255,18 +253,13 @@ class ConstraintStepper:
              h: float) -> tuple[np.ndarray, np.ndarray, StepReport]:
         """(q+, v+, report) after one step of h seconds under generalised forces tau (nv,);
         ``data`` is a Data of the model (scratch)."""
-        model, settings, contact = self.model, self.settings, self.contact
+        model, settings = self.model, self.settings
         report = StepReport()
         # ABA in the world convention places the joints and fills the joint Jacobians, and
         # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
         v_free = v + h * pin.aba(model, data, q, v, tau, pin.Convention.WORLD)
         inverse_mass = pin.computeMinverse(model, data)
-        pin.updateFramePlacements(model, data)
-        touching, placements = [], contact.placements(data)
-        for k in self.broad.close_pairs(contact.centres(placements)):
-            points = contact.points(k, placements, settings.margin)
-            if points:
-                touching.append((k, points))
+        touching = self.contact.touching(data, settings.margin)
         if not touching:
             return pin.integrate(model, q, h * v_free), v_free, report
         active = self.contact_set(tuple([(k, len(points)) for k, points in touching]))
