@@ -53,7 +53,7 @@ class Pair:
 class ContactModel:
     """Geometries on the frames of ``model`` (``frames[i]`` is geometry i's frame id, None
     for world geometry) and the declared pairs; immutable after construction (the coal
-    requests it holds are scratch space)."""
+    requests and the geometry data it holds are scratch space)."""
 
     def __init__(self, model: pin.Model, geometries: Sequence[Geometry], frames: Sequence[int | None],
                  pairs: Sequence[Pair], margin: float = BROAD_PHASE_MARGIN) -> None:
