@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from youbot_dynamics.sim.engine import initial_state
 from youbot_dynamics.sim.model import compile as compile_scene
 from youbot_dynamics.sim.scene import load_scene
 
@@ -33,3 +34,33 @@ def test_placements_are_the_frame_poses_times_the_placements_and_centres_their_o
                                        err_msg=geometry.name)
             assert np.array_equal(poses[i], placements[i].homogeneous), geometry.name
             assert list(centres[i]) == placements[i].translation.tolist(), geometry.name
+
+
+def test_touching_through_coals_geometry_model_is_points_of_the_placements():
+    """``touching`` (coal's geometry model placing the geometries from data.oMi and measuring
+    every pair in C++) against ``points`` on ``placements`` pair by pair: the same pairs and
+    the same contact points to the bit. Gripping at random configurations (every pair with
+    an infinite margin, then only those within 0.3 m) and box_slide's box lowered 2 mm into
+    the incline (a face on a face: coal's patch of several points)."""
+    for name, margins in (("gripping", (np.inf, 0.3)), ("box_slide", (0.01,))):
+        model = compile_scene(load_scene(name))
+        contact, plant = model.contact, model.plant.model
+        data = plant.createData()
+        rng = np.random.default_rng(7)
+        configurations = [pin.integrate(plant, pin.neutral(plant), rng.normal(size=plant.nv)) for _ in range(5)] \
+            if name == "gripping" else [model.configuration(initial_state(model).x) - [0, 0, 0.002, 0, 0, 0, 0]]
+        for q in configurations:
+            pin.framesForwardKinematics(plant, data, q)
+            placements = contact.placements(data)
+            for margin in margins:
+                expected = [(k, contact.points(k, placements, margin)) for k in range(len(contact.pairs))]
+                expected = [(k, points) for k, points in expected if points]
+                found = contact.touching(data, margin)
+                assert [k for k, _ in found] == [k for k, _ in expected], (name, margin)
+                for (_, points), (_, reference) in zip(found, expected):
+                    assert len(points) == len(reference)
+                    for c, r in zip(points, reference):
+                        for a, b in zip(c, r):
+                            assert np.array_equal(a, b), (name, margin)
+        if name == "box_slide":
+            assert max(len(points) for _, points in found) > 1  # a patch

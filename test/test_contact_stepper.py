@@ -1,9 +1,10 @@
 """The constraint stepper's per-step machinery: contact sets kept and moved in place step
-exactly as sets built afresh, the contact frame's rotation, and the compiled Delassus, drift
-and velocity kernels."""
+exactly as sets built afresh, the contact frame's rotation and its placements in the joints'
+frames, and the compiled Delassus, drift and velocity kernels."""
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from youbot_dynamics.dynamics import contact_stepper
@@ -78,6 +79,27 @@ def test_contact_rotation_is_the_cross_product_formula_to_the_bit():
         assert np.array_equal(rotation, reference_rotation(normal))
     assert np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-15) and np.linalg.det(rotation) == pytest.approx(1.0)
     assert np.array_equal(rotation[:, 2], normal)
+
+
+def test_contact_placements_are_pinocchios_act_inv_to_the_bit():
+    """Random joint placements, normals and witness points: the contact frame in each joint's
+    frame as Pinocchio computes it, M.actInv(SE3(contact_rotation(n), c)), to the bit; for the
+    universe (the identity) the world frame itself."""
+    rng = np.random.default_rng(12)
+    outputs = [np.empty((3, 3)), np.empty(3), np.empty((3, 3)), np.empty(3)]
+    for trial in range(2000):
+        joint1 = pin.SE3.Identity() if trial % 4 == 0 else pin.SE3.Random()
+        joint2 = pin.SE3.Random()
+        normal = rng.normal(size=3)
+        normal /= np.linalg.norm(normal)
+        point1, point2 = rng.normal(size=3), rng.normal(size=3)
+        contact_stepper._contact_placements(normal, point1, point2, joint1.rotation, joint1.translation,
+                                            joint2.rotation, joint2.translation, *outputs)
+        for joint, point, rotation, translation in ((joint1, point1, *outputs[:2]), (joint2, point2, *outputs[2:])):
+            expected = joint.actInv(pin.SE3(contact_rotation(normal), point))
+            assert np.array_equal(rotation, expected.rotation) and np.array_equal(translation, expected.translation)
+        if trial % 4 == 0:
+            assert np.array_equal(outputs[0], contact_rotation(normal)) and np.array_equal(outputs[1], point1)
 
 
 def test_delassus_drift_and_velocity_kernels_against_numpy():

@@ -42,7 +42,7 @@ def test_every_contact_law_reads_its_geometry_from_the_one_contact_model(tmp_pat
     if law == "stepper":
         assert model.stepper.contact is contact
     calls = []
-    originals = {name: getattr(ContactModel, name) for name in ("poses", "placements")}  # all laws', the stepper's
+    originals = {name: getattr(ContactModel, name) for name in ("poses", "placements", "touching")}  # all laws', the stepper's
 
     def spy(original):
         def spied(self, *args):

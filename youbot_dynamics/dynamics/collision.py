@@ -143,9 +143,14 @@ class PlacedPair:
         distance = self._distance(t1, t2)
         if distance > margin:
             return []
-        result = self.distance_result
+        return self.witnessed(distance, self.distance_result, t1, t2)
+
+    def witnessed(self, distance: float, result: coal.DistanceResult, t1, t2) -> list[ContactPoint]:
+        """The contact points of coal's signed ``distance`` (m) and its ``result`` (witness
+        points and normal) at world poses t1, t2 (pin.SE3 or coal transforms): the witness
+        pair, or coal's contact patch where two flat shapes overlap (see module docstring)."""
         p1, p2 = result.getNearestPoint1(), result.getNearestPoint2()  # fresh arrays
-        normal = np.array(result.normal, dtype=float)
+        normal = result.normal.copy()  # float64; a view into the result otherwise
         if distance > 0.0 or not self.patches:
             return [ContactPoint(p1, p2, normal, -float(distance))]
         collision = coal.CollisionResult()

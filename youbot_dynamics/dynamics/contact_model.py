@@ -6,7 +6,9 @@ or none (world geometry). After ``pin.framesForwardKinematics`` (or
 ``computeJointJacobians`` + ``updateFramePlacements``) on a Data of that model,
 :meth:`ContactModel.placements` gives the world pose of every geometry from ``data.oMf``
 (:meth:`ContactModel.poses` as 4x4 matrices), :meth:`ContactModel.centres` the centres of
-their bounding balls for the broad phase, :meth:`ContactModel.points` one pair's contact points, and
+their bounding balls for the broad phase, :meth:`ContactModel.points` one pair's contact points,
+:meth:`ContactModel.touching` every pair's within a margin straight from the joint placements
+(coal's geometry model on the C++ side: Pinocchio's GeometryModel), and
 :meth:`ContactModel.relative_jacobian` the 3 x nv map from the generalised velocity (robot
 joints and body twists alike) to a contact point's relative velocity, from Pinocchio's frame
 Jacobians. The compliant law (:meth:`ContactModel.compliant_force`, a generalised force for
@@ -31,6 +33,7 @@ from youbot_dynamics.dynamics.collision import BroadPhase, ContactPoint, Geometr
 from youbot_dynamics.dynamics.contact import (ContactLaw, HuntCrossley, hunt_crossley_force,
                                               hunt_crossley_potential, hysteresis_factor, newton_impulse,
                                               regularised_coulomb)
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.lie import skew
 
 #: Pairs farther apart than this (m) skip the narrow phase of the compliant law.
@@ -50,7 +53,7 @@ class Pair:
 class ContactModel:
     """Geometries on the frames of ``model`` (``frames[i]`` is geometry i's frame id, None
     for world geometry) and the declared pairs; immutable after construction (the coal
-    requests it holds are scratch space)."""
+    requests and the geometry data it holds are scratch space)."""
 
     def __init__(self, model: pin.Model, geometries: Sequence[Geometry], frames: Sequence[int | None],
                  pairs: Sequence[Pair], margin: float = BROAD_PHASE_MARGIN) -> None:
@@ -84,6 +87,36 @@ class ContactModel:
                 self._moving.append((i, frame, offset))
                 continue
             self._fixed_poses[i], self._fixed_centres[i] = pose, tuple(pose.translation.tolist())
+        #: coal's geometry model on the joints of ``model`` (geometry i is object i, pair k
+        #: collision pair k) and its data (scratch space like the coal requests): for
+        #: :meth:`touching`, one C++ call places every geometry, one measures every pair.
+        self.geometry_model = pin.GeometryModel()
+        for i, geometry in enumerate(self.geometries):
+            joint, frame, placement = self._attachment(i)
+            self.geometry_model.addGeometryObject(pin.GeometryObject(geometry.name, joint, frame, placement,
+                                                                     geometry.shape.coal_geometry()))
+        for pair in self.pairs:
+            if self.geometry_model.existCollisionPair(pin.CollisionPair(pair.first, pair.second)):
+                raise UserInputError(f"contact pair {pair.name} is declared twice; declare it once")
+            self.geometry_model.addCollisionPair(pin.CollisionPair(pair.first, pair.second))
+        self.geometry_data = self.geometry_model.createData()
+        for request in self.geometry_data.distanceRequests:
+            request.enable_signed_distance = True
+        placed = self.geometry_data.oMg
+        #: per pair: its distance result and its geometries' world poses (references into the
+        #: geometry data, filled by each :meth:`touching`) and its narrow phase
+        self._measured = [(self.geometry_data.distanceResults[k], placed[pair.first], placed[pair.second],
+                           self.narrow[k]) for k, pair in enumerate(self.pairs)]
+
+    def _attachment(self, geometry: int) -> tuple[int, int, pin.SE3]:
+        """Geometry i's joint, frame and placement in the joint's frame (pin.SE3, m): the
+        frame's placement times the geometry's in the frame (the universe's for world
+        geometry)."""
+        frame = self.frames[geometry]
+        offset = pin.SE3(self.geometries[geometry].placement)
+        if frame is None:
+            return 0, 0, offset
+        return self.model.frames[frame].parentJoint, frame, self.model.frames[frame].placement * offset
 
     # ---- geometry ---------------------------------------------------------------------------
     def placements(self, data: pin.Data) -> list[pin.SE3]:
@@ -115,6 +148,22 @@ class ContactModel:
         """Contact points of pair k at these poses, gaps up to ``margin`` (m) included."""
         pair = self.pairs[k]
         return self.narrow[k].contact_points(poses[pair.first], poses[pair.second], margin)
+
+    def touching(self, data: pin.Data, margin: float) -> list[tuple[int, list[ContactPoint]]]:
+        """(k, contact points) of every pair k within ``margin`` (m), in pair order, at the
+        joint placements of ``data`` (data.oMi, after any kinematics pass): coal's geometry
+        model places every geometry and measures every pair in two C++ calls (the queries of
+        :meth:`points`, the same results), and only the pairs within the margin are read on."""
+        pin.updateGeometryPlacements(self.model, data, self.geometry_model, self.geometry_data)
+        pin.computeDistances(self.geometry_model, self.geometry_data)
+        found = []
+        for k, (result, placed1, placed2, narrow) in enumerate(self._measured):
+            distance = result.min_distance
+            if not distance > margin:
+                points = narrow.witnessed(distance, result, placed1, placed2)
+                if points:
+                    found.append((k, points))
+        return found
 
     def gap(self, k: int, poses: Sequence[np.ndarray]) -> float:
         """Signed distance (m, < 0 overlapping) of pair k."""

@@ -21,8 +21,9 @@ level, Moreau-Jean style):
    v+ = v_f + M^-1 J^T lambda, q+ = integrate(q, h v+).
 
 Nothing of this is rebuilt per step: one ABA pass (world convention) places the joints and
-fills the joint Jacobians, ``computeMinverse`` reuses it for M^-1 of the whole step; the
-broad phase culls the pairs by bounding balls; and the constraint models, their datas and
+fills the joint Jacobians, ``computeMinverse`` reuses it for M^-1 of the whole step; coal's
+geometry model places the geometries on those joints and measures every pair in two C++
+calls (:meth:`ContactModel.touching`); and the constraint models, their datas and
 the solver with its settings and result are built once per contact SET (which pairs touch
 at how many points, a :class:`ContactSet`) and kept, the step only moving the contact
 frames in place.
@@ -36,7 +37,6 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
-from youbot_dynamics.dynamics.collision import BroadPhase
 from youbot_dynamics.dynamics.contact_model import ContactModel
 from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR
 
@@ -98,6 +98,37 @@ def contact_rotation(normal: np.ndarray) -> np.ndarray:
 
 
 _READ_MATRIX, _WRITTEN_MATRIX = types.Array(types.float64, 2, "A", readonly=True), types.Array(types.float64, 2, "A")
+
+
+@njit(types.void(READ_VECTOR, READ_VECTOR, READ_VECTOR, _READ_MATRIX, READ_VECTOR, _READ_MATRIX, READ_VECTOR,
+                 _WRITTEN_MATRIX, WRITTEN_VECTOR, _WRITTEN_MATRIX, WRITTEN_VECTOR), cache=True)
+def _contact_placements(normal: np.ndarray, point1: np.ndarray, point2: np.ndarray, rotation1: np.ndarray,
+                        translation1: np.ndarray, rotation2: np.ndarray, translation2: np.ndarray,
+                        out_rotation1: np.ndarray, out_translation1: np.ndarray, out_rotation2: np.ndarray,
+                        out_translation2: np.ndarray) -> None:
+    """A contact point's frame in its two joints' frames, in place: the contact frame (z along
+    the ``normal``, :func:`contact_rotation`) at ``point1`` seen from joint 1, placed in the
+    world at (``rotation1``, ``translation1``), and at ``point2`` seen from joint 2 (world,
+    m): Pinocchio's SE3 actInv, R^T R_c and R^T (c - p), its sums in its order (to the
+    bit)."""
+    if (normal.shape[0] != 3 or point1.shape[0] != 3 or point2.shape[0] != 3 or translation1.shape[0] != 3
+            or translation2.shape[0] != 3 or out_translation1.shape[0] != 3 or out_translation2.shape[0] != 3
+            or rotation1.shape != (3, 3) or rotation2.shape != (3, 3) or out_rotation1.shape != (3, 3)
+            or out_rotation2.shape != (3, 3)):
+        raise ValueError("contact placements: a normal and points (3,), joint placements (3 x 3, 3) and "
+                         "outputs of the same sizes")
+    contact = np.empty((3, 3))
+    _contact_rotation(normal, contact)
+    for rotation, translation, point, out_rotation, out_translation in (
+            (rotation1, translation1, point1, out_rotation1, out_translation1),
+            (rotation2, translation2, point2, out_rotation2, out_translation2)):
+        for i in range(3):
+            for j in range(3):
+                out_rotation[i, j] = (rotation[0, i] * contact[0, j] + rotation[1, i] * contact[1, j]
+                                      + rotation[2, i] * contact[2, j])
+        d0, d1, d2 = point[0] - translation[0], point[1] - translation[1], point[2] - translation[2]
+        for i in range(3):
+            out_translation[i] = rotation[0, i] * d0 + rotation[1, i] * d1 + rotation[2, i] * d2
 
 
 @njit(types.void(_READ_MATRIX, _READ_MATRIX, READ_VECTOR, READ_VECTOR, READ_VECTOR, READ_VECTOR, types.float64,
@@ -194,6 +225,11 @@ class ContactSet:
             self.datas.append(constraint.createData())
         #: References into the vectors: moving a contact frame here moves the solver's.
         self.points = [constraint.extract() for constraint in self.constraints]
+        #: per point, views of its frame's rotation and translation in joint 1's and joint 2's
+        #: frames (what :func:`_contact_placements` writes)
+        self.placements = [(point.joint1_placement.rotation, point.joint1_placement.translation,
+                            point.joint2_placement.rotation, point.joint2_placement.translation)
+                           for point in self.points]
         self.pairs = list(zip(self.constraints, self.datas))
         size = 3 * len(self.points)
         self.restitutions = np.array(restitutions, dtype=float)
@@ -235,12 +271,10 @@ class ConstraintStepper:
 
     def __init__(self, contact: ContactModel, settings: StepperSettings) -> None:
         self.contact, self.model, self.settings = contact, contact.model, settings
-        self.broad = BroadPhase([g.shape for g in contact.geometries],
-                                [(p.first, p.second) for p in contact.pairs], settings.margin)
         self.owners = [(contact.owner_joint(p.first), contact.owner_joint(p.second)) for p in contact.pairs]
         self.sets: dict[tuple[tuple[int, int], ...], ContactSet] = {}
-        self._frame = pin.SE3.Identity()  # scratch: a contact frame in the world
-        self._rotation = np.empty((3, 3))  # scratch: its rotation
+        self._placed_in: pin.Data | None = None  # the Data whose joint placements _joint_views shows
+        self._joint_views: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
 
     def contact_set(self, key: tuple[tuple[int, int], ...]) -> ContactSet:
         """The kept :class:`ContactSet` of ``key``, built on its first use."""
@@ -251,37 +285,38 @@ class ConstraintStepper:
             found = self.sets[key] = ContactSet(self.contact, key, self.settings)
         return found
 
+    def joint_placements(self, data: pin.Data) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+        """Per pair, views of its owner joints' world rotations and translations in ``data``
+        (data.oMi; the universe's, the identity, for world geometry): read where the
+        kinematics pass writes them, made once per Data (which is kept alive with them)."""
+        if self._placed_in is not data:
+            placed = data.oMi
+            self._joint_views = [(placed[joint1].rotation, placed[joint1].translation, placed[joint2].rotation,
+                                  placed[joint2].translation) for joint1, joint2 in self.owners]
+            self._placed_in = data
+        return self._joint_views
+
     def step(self, data: pin.Data, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
              h: float) -> tuple[np.ndarray, np.ndarray, StepReport]:
         """(q+, v+, report) after one step of h seconds under generalised forces tau (nv,);
         ``data`` is a Data of the model (scratch)."""
-        model, settings, contact = self.model, self.settings, self.contact
+        model, settings = self.model, self.settings
         report = StepReport()
         # ABA in the world convention places the joints and fills the joint Jacobians, and
         # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
         v_free = v + h * pin.aba(model, data, q, v, tau, pin.Convention.WORLD)
         inverse_mass = pin.computeMinverse(model, data)
-        pin.updateFramePlacements(model, data)
-        touching, placements = [], contact.placements(data)
-        for k in self.broad.close_pairs(contact.centres(placements)):
-            points = contact.points(k, placements, settings.margin)
-            if points:
-                touching.append((k, points))
+        touching = self.contact.touching(data, settings.margin)
         if not touching:
             return pin.integrate(model, q, h * v_free), v_free, report
         active = self.contact_set(tuple([(k, len(points)) for k, points in touching]))
-        gaps, i, frame, rotation = [], 0, self._frame, self._rotation
+        gaps, i, joints = [], 0, self.joint_placements(data)
         for k, points in touching:
-            joint1, joint2 = self.owners[k]
-            world1, world2 = data.oMi[joint1] if joint1 else None, data.oMi[joint2] if joint2 else None
+            rotation1, translation1, rotation2, translation2 = joints[k]
             for c in points:
-                point = active.points[i]
-                _contact_rotation(c.normal, rotation)
-                frame.rotation = rotation
-                frame.translation = c.point1  # the universe's joint frame is the world's
-                point.joint1_placement = world1.actInv(frame) if joint1 else frame
-                frame.translation = c.point2
-                point.joint2_placement = world2.actInv(frame) if joint2 else frame
+                placed1, at1, placed2, at2 = active.placements[i]
+                _contact_placements(c.normal, c.point1, c.point2, rotation1, translation1, rotation2, translation2,
+                                    placed1, at1, placed2, at2)
                 gaps.append(-c.depth)
                 report.penetration = max(report.penetration, c.depth)
                 i += 1
