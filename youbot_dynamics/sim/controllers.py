@@ -58,12 +58,10 @@ class Reference:
         them: a point-to-point trajectory's (``PointToPointTrajectory.compiled``), or the hold
         as the only point of a motion without segments; None for another trajectory (its
         ``evaluate`` runs in Python)."""
-        if self.trajectory is None:
-            points = np.array(self.hold, dtype=float).reshape(1, -1)
+        if self.trajectory is None:  # the hold itself where it is float64 (as ``at`` returns it)
             timing = np.zeros((0, 5))
-            for array in (points, timing):
-                array.setflags(write=False)
-            return points, timing
+            timing.setflags(write=False)
+            return np.ascontiguousarray(self.hold, dtype=float).reshape(1, -1), timing
         if isinstance(self.trajectory, PointToPointTrajectory):
             return self.trajectory.compiled
         return None

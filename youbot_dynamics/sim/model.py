@@ -101,23 +101,29 @@ ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
 # The computed-torque right-hand side of a robot alone (SimModel.computed_torque_derivative)
 # in two compiled calls around pin.rnea and pin.aba, each under 8 arguments (numba's entry
-# point costs ~0.03 us per argument and ~0.1 us more from the 8th on). Its arrays (n joints):
-# the law's parameters (3, n): rows Kp (1/s^2), Kd (1/s), effort limit (N m); the work
-# array (6, n): rows q_d, v_d, a_d (the desired motion at t), the commanded acceleration,
-# the torque left after friction, and the LuGre joints' steady-state bristles at v_d (the
-# first n_lugre entries: the caller's, in Python, as JointFriction.steady_state_bristles).
+# point costs ~0.03 us per argument and ~0.1 us more from the 8th on). Its arrays (n joints,
+# x = [q, v, z], z the LuGre bristles): the law's parameters (3, n): rows Kp (1/s^2), Kd
+# (1/s), effort limit (N m); the work array (8, n): rows q_d, v_d, a_d (the desired motion at
+# t), the commanded acceleration, the torque left after friction, the LuGre joints'
+# steady-state bristles at v_d (the first n_lugre entries: the caller's, in Python, as
+# JointFriction.steady_state_bristles), then q and v copied from x (what the two Pinocchio
+# calls read: views of the work array made once, no slicing of x per call).
 _LAW, _WORK = types.Array(types.float64, 2, "C", readonly=True), types.Array(types.float64, 2, "C")
 
 
-@njit(types.void(POINTS, TIMING, types.float64, READ_VECTOR, READ_VECTOR, _LAW, _WORK), cache=True)
-def _computed_torque_command(points: np.ndarray, timing: np.ndarray, t: float, q: np.ndarray, v: np.ndarray,
-                             law: np.ndarray, work: np.ndarray) -> None:
-    """Before the RNEA: work rows 0-2 = the desired motion at time t (s) of a compiled
-    reference (:func:`~youbot_dynamics.sim.trajectory.desired_motion`), row 3 = a_d + Kp
-    (q_d - q) + Kd (v_d - v) (:func:`~youbot_dynamics.sim.controllers.commanded_acceleration`);
-    sizes checked (ValueError)."""
-    if law.shape[0] != 3 or work.shape[0] != 6:
-        raise ValueError("computed torque: the law's parameters need 3 rows, the work array 6")
+@njit(types.void(POINTS, TIMING, types.float64, READ_VECTOR, _LAW, _WORK), cache=True)
+def _computed_torque_command(points: np.ndarray, timing: np.ndarray, t: float, x: np.ndarray, law: np.ndarray,
+                             work: np.ndarray) -> None:
+    """Before the RNEA: work rows 6, 7 = q, v (x's first 2n entries), rows 0-2 = the desired
+    motion at time t (s) of a compiled reference (:func:`~youbot_dynamics.sim.trajectory
+    .desired_motion`), row 3 = a_d + Kp (q_d - q) + Kd (v_d - v) (:func:`~youbot_dynamics.sim
+    .controllers.commanded_acceleration`); sizes checked (ValueError)."""
+    n = work.shape[1]
+    if law.shape[0] != 3 or work.shape[0] != 8 or x.shape[0] < 2 * n:
+        raise ValueError("computed torque: the law's parameters need 3 rows, the work array 8, x q and v")
+    q, v = work[6], work[7]
+    q[:] = x[:n]
+    v[:] = x[n:2 * n]
     desired_motion(points, timing, t, work[:3])
     commanded_acceleration(q, v, work[0], work[1], work[2], law[0], law[1], work[3])
 
@@ -132,8 +138,8 @@ def _computed_torque_derivative(work: np.ndarray, law: np.ndarray, table: np.nda
     row 4 = tau - tau_friction(v, z), dx[:n] = v, dx[2n:] = dz/dt (dx[n:2n] = ABA(q, v,
     row 4) is the caller's). Sizes checked (ValueError) before anything but tau is written."""
     n = tau.shape[0]
-    if law.shape[0] != 3 or work.shape[0] != 6 or work.shape[1] != n or joints.shape[0] > n:
-        raise ValueError("computed torque: the law's parameters need 3 rows, the work array 6, one column per joint")
+    if law.shape[0] != 3 or work.shape[0] != 8 or work.shape[1] != n or joints.shape[0] > n:
+        raise ValueError("computed torque: the law's parameters need 3 rows, the work array 8, one column per joint")
     if dx.shape[0] != x.shape[0] or x.shape[0] < 2 * n:
         raise ValueError("computed torque: x and dx/dt need one size, at least q and v")
     accumulate_friction_torque(work[1], work[5, :joints.shape[0]], table, 1.0, tau)
@@ -287,17 +293,16 @@ class SimModel:
         points, timing = compiled
         law = np.array([controller.kp, controller.kd, controller.limit], dtype=float)
         law.setflags(write=False)
-        work = np.zeros((6, nv))
-        command, left = work[3], work[4]
+        work = np.zeros((8, nv))
+        command, left, q, v = work[3], work[4], work[6], work[7]
         bristles = work[5, :joints.shape[0]] if self.friction.lugre is not None else None
         steady_state_bristles, size = self.friction.steady_state_bristles, self.layout.size
         rnea, aba, empty = pin.rnea, pin.aba, np.empty
 
         def rhs(t: float, x: np.ndarray) -> np.ndarray:
             if type(x) is np.ndarray and x.dtype is FLOAT and x.ndim == 1:
-                q, v = x[:nv], x[nv:end]
                 try:
-                    _computed_torque_command_unchecked(points, timing, t, q, v, law, work)
+                    _computed_torque_command_unchecked(points, timing, t, x, law, work)
                     tau = rnea(model, data, q, v, command)
                     if bristles is not None:
                         bristles[:] = steady_state_bristles(work[1])
