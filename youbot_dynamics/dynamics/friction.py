@@ -222,7 +222,9 @@ def _bristle_rates(v: Vector, z: Vector, table: np.ndarray, joints: np.ndarray, 
     _rates(v, z, table, joints, out)
 
 
-@register_jitable
+# Inlined where it is used (numba IR inlining; the same operations): as a called function
+# it cost friction_left_and_rates 0.07 us of its 0.44 us.
+@register_jitable(inline="always")
 def left_torque_and_rates(v: Vector, z: Vector, tau: Vector, table: np.ndarray, joints: np.ndarray,
                           left: Vector, rates: Vector) -> None:
     """The friction's share of a robot's state derivative: left = tau - tau_friction(v, z)

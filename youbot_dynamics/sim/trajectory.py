@@ -56,20 +56,20 @@ def desired_motion(points: np.ndarray, timing: np.ndarray, t: float, out: np.nda
     n, segments = points.shape[1], timing.shape[0]
     if out.shape[0] != 3 or out.shape[1] != n:
         raise ValueError("trajectory: the desired motion needs a (3, n) output for n joints")
-    out[1:, :] = 0.0
-    if segments == 0 or t <= 0.0:
-        out[0, :] = points[0]
-        return
-    k = segments - 1
-    while timing[k, 0] > t:  # the last segment started at or before t (searchsorted right - 1)
-        k -= 1
-    if np.isnan(timing[k, 1]):
-        out[0, :] = points[k + 1]
-        return
-    s, ds, dds = _profile_at(timing[k, 1], timing[k, 2], timing[k, 3], timing[k, 4], t - timing[k, 0])
-    for i in range(n):
-        d = points[k + 1, i] - points[k, i]
-        out[0, i], out[1, i], out[2, i] = points[k, i] + s * d, ds * d, dds * d
+    rest = 0  # the point held at rest: the start (before 0 or without segments)
+    if segments > 0 and not t <= 0.0:  # a NaN t takes the last segment: NaN out
+        k = segments - 1
+        while timing[k, 0] > t:  # the last segment started at or before t (searchsorted right - 1)
+            k -= 1
+        if not np.isnan(timing[k, 1]):
+            s, ds, dds = _profile_at(timing[k, 1], timing[k, 2], timing[k, 3], timing[k, 4], t - timing[k, 0])
+            for i in range(n):
+                d = points[k + 1, i] - points[k, i]
+                out[0, i], out[1, i], out[2, i] = points[k, i] + s * d, ds * d, dds * d
+            return
+        rest = k + 1  # a segment of zero length: its end
+    for i in range(n):  # element by element: numba's slice assignments cost ~0.02 us each
+        out[0, i], out[1, i], out[2, i] = points[rest, i], 0.0, 0.0
 
 
 @njit(types.void(POINTS, TIMING, types.float64, types.Array(types.float64, 2, "C")), cache=True)
