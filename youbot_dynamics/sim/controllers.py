@@ -150,7 +150,9 @@ class ComputedTorque:
     """tau = RNEA(q, v, a_d + Kp e + Kd e'), clipped to the effort limits.
 
     For float64 q and v (the simulator's) the arithmetic around the RNEA runs compiled (the
-    same operations in the same order as numpy's), about 6 us less per call."""
+    same operations in the same order as numpy's), about 6 us less per call. The integrators'
+    rhs of a robot alone does not call it: it runs the same law fused with the robot's
+    derivative (:meth:`~youbot_dynamics.sim.model.SimModel.computed_torque_derivative`)."""
 
     kind = "computed_torque"
 
