@@ -8,9 +8,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from youbot_dynamics.sim.controllers import Reference
 from youbot_dynamics.sim.engine import initial_state, right_hand_side
 from youbot_dynamics.sim.model import compile
-from youbot_dynamics.sim.scene import load_scene, scene_dir
+from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir
+from youbot_dynamics.sim.scene_reader import read_yaml
 
 
 class Plain(np.ndarray):
@@ -72,3 +74,53 @@ def test_computed_torque_equals_its_formula():
         np.testing.assert_array_equal(controller.torque(t, q, v, state.reference), expected)
         np.testing.assert_array_equal(controller.torque(t, q.view(Plain), v.view(Plain), state.reference), expected)
     assert clipped  # some samples hit an effort limit (the clipping is exercised)
+
+
+def _computed_torque_scene(lugre: bool):
+    """arm_ptp as it is, or with LuGre friction on joints 2 and 3 (the feedforward then
+    needs the steady-state bristles at v_d)."""
+    path = scene_dir() / "arm_ptp.yaml"
+    data = read_yaml(path.read_bytes(), str(path))
+    if lugre:
+        for joint in ("arm_joint_2", "arm_joint_3"):
+            data["friction"]["joints"][joint] = {"law": "lugre", "sigma0": 1000.0, "sigma1": 5.0, "sigma2": 1.0,
+                                                 "coulomb": 0.3, "static": 0.4, "stribeck_velocity": 0.1}
+    return compile(Scene.from_dict(data, str(path), path.parent))
+
+
+class _Sampled:
+    """A trajectory without a compiled form (as a /joint_trajectory's): rest at ``q``."""
+
+    def __init__(self, q: np.ndarray) -> None:
+        self.q = q
+
+    def evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.q, np.zeros_like(self.q), np.zeros_like(self.q)
+
+
+@pytest.mark.parametrize("lugre", [False, True])
+def test_the_fused_computed_torque_rhs_equals_the_controller_then_robot_derivative(lugre):
+    model = _computed_torque_scene(lugre)
+    state = initial_state(model)
+    controller, robot = model.controller, model.robot
+    q_block, v_block, z_block = model.slices["q"], model.slices["v"], model.slices["z"]
+    assert (z_block.stop - z_block.start == 2) == lugre
+    rng = np.random.default_rng(6)
+    held = Reference(state.x[q_block] + 0.1)
+    for reference in (state.reference, held):
+        assert model.computed_torque_derivative(state.data, reference, None) is not None  # fused
+        rhs = right_hand_side(model, state.data, reference)[1]
+        clipped = 0
+        for t in np.linspace(-0.5, 14.5, 31):
+            x = state.x + rng.normal(0.0, 0.2, state.x.shape)
+            x[v_block] = rng.normal(0.0, 1.0, robot.nv)
+            x[z_block] = rng.normal(0.0, 1e-3, z_block.stop - z_block.start)
+            tau = controller.torque(t, x[q_block], x[v_block], reference)
+            clipped += int(np.any(np.abs(tau) == robot.effort_limit))
+            expected = model.robot_derivative(robot.model.createData(), x, tau)
+            np.testing.assert_array_equal(rhs(t, x), expected)
+            np.testing.assert_array_equal(rhs(t, x.view(Plain)), expected)  # the general path
+        assert clipped
+    assert model.computed_torque_derivative(state.data, Reference(held.hold, _Sampled(held.hold)), rhs) is None
+    with pytest.raises(ValueError, match="one value per joint"):  # the general path names a size the fused refuses
+        rhs(0.1, np.zeros(2 * robot.nv - 1))

@@ -19,12 +19,14 @@ the friction model forward along the desired motion (it cannot see the bristle s
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 from numba import njit, types
+from numba.extending import register_jitable
 
 from youbot_dynamics.dynamics.friction import (FLOAT, NO_BRISTLES, READ_VECTOR, WRITTEN_VECTOR, JointFriction,
                                                add_friction_torque_unchecked, unchecked)
@@ -49,6 +51,20 @@ class Reference:
             zero = np.zeros_like(self.hold)
             return self.hold, zero, zero
         return self.trajectory.evaluate(t)
+
+    @functools.cached_property
+    def compiled(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(points, timing) as :func:`~youbot_dynamics.sim.trajectory.desired_motion` reads
+        them: a point-to-point trajectory's (``PointToPointTrajectory.compiled``), or the hold
+        as the only point of a motion without segments; None for another trajectory (its
+        ``evaluate`` runs in Python)."""
+        if self.trajectory is None:  # the hold itself where it is float64 (as ``at`` returns it)
+            timing = np.zeros((0, 5))
+            timing.setflags(write=False)
+            return np.ascontiguousarray(self.hold, dtype=float).reshape(1, -1), timing
+        if isinstance(self.trajectory, PointToPointTrajectory):
+            return self.trajectory.compiled
+        return None
 
 
 class Controller(Protocol):
@@ -89,10 +105,11 @@ class GravityCompensatedPD:
         return np.clip(gravity + self.kp * (q_d - q) + self.kd * (v_d - v), -self.limit, self.limit)
 
 
-@njit(types.void(*(READ_VECTOR,) * 7, WRITTEN_VECTOR), cache=True)
-def _commanded_acceleration(q: np.ndarray, v: np.ndarray, q_d: np.ndarray, v_d: np.ndarray, a_d: np.ndarray,
-                            kp: np.ndarray, kd: np.ndarray, out: np.ndarray) -> None:
-    """out = a_d + Kp (q_d - q) + Kd (v_d - v), joint by joint (numpy's operation order)."""
+@register_jitable
+def commanded_acceleration(q: np.ndarray, v: np.ndarray, q_d: np.ndarray, v_d: np.ndarray, a_d: np.ndarray,
+                           kp: np.ndarray, kd: np.ndarray, out: np.ndarray) -> None:
+    """out = a_d + Kp (q_d - q) + Kd (v_d - v), joint by joint (numpy's operation order);
+    sizes checked (ValueError) before anything is written."""
     n = out.shape[0]
     if not (q.shape[0] == v.shape[0] == q_d.shape[0] == v_d.shape[0] == a_d.shape[0] == kp.shape[0] == kd.shape[0] == n):
         raise ValueError("computed torque: q, v, the reference and the gains need one value per joint")
@@ -100,8 +117,8 @@ def _commanded_acceleration(q: np.ndarray, v: np.ndarray, q_d: np.ndarray, v_d: 
         out[i] = a_d[i] + kp[i] * (q_d[i] - q[i]) + kd[i] * (v_d[i] - v[i])
 
 
-@njit(types.void(READ_VECTOR, WRITTEN_VECTOR), cache=True)
-def _clip_to_limits(limit: np.ndarray, tau: np.ndarray) -> None:
+@register_jitable
+def clip_to_limits(limit: np.ndarray, tau: np.ndarray) -> None:
     """tau = clip(tau, -limit, limit) in place (a NaN stays NaN, as with np.clip)."""
     if limit.shape[0] != tau.shape[0]:
         raise ValueError("computed torque: one effort limit per joint")
@@ -112,6 +129,19 @@ def _clip_to_limits(limit: np.ndarray, tau: np.ndarray) -> None:
             tau[i] = limit[i]
 
 
+@njit(types.void(*(READ_VECTOR,) * 7, WRITTEN_VECTOR), cache=True)
+def _commanded_acceleration(q: np.ndarray, v: np.ndarray, q_d: np.ndarray, v_d: np.ndarray, a_d: np.ndarray,
+                            kp: np.ndarray, kd: np.ndarray, out: np.ndarray) -> None:
+    """out = a_d + Kp (q_d - q) + Kd (v_d - v) (see :func:`commanded_acceleration`)."""
+    commanded_acceleration(q, v, q_d, v_d, a_d, kp, kd, out)
+
+
+@njit(types.void(READ_VECTOR, WRITTEN_VECTOR), cache=True)
+def _clip_to_limits(limit: np.ndarray, tau: np.ndarray) -> None:
+    """tau = clip(tau, -limit, limit) in place (see :func:`clip_to_limits`)."""
+    clip_to_limits(limit, tau)
+
+
 _commanded_acceleration_unchecked = unchecked(_commanded_acceleration)
 _clip_to_limits_unchecked = unchecked(_clip_to_limits)
 
@@ -120,7 +150,9 @@ class ComputedTorque:
     """tau = RNEA(q, v, a_d + Kp e + Kd e'), clipped to the effort limits.
 
     For float64 q and v (the simulator's) the arithmetic around the RNEA runs compiled (the
-    same operations in the same order as numpy's), about 6 us less per call."""
+    same operations in the same order as numpy's), about 6 us less per call. The integrators'
+    rhs of a robot alone does not call it: it runs the same law fused with the robot's
+    derivative (:meth:`~youbot_dynamics.sim.model.SimModel.computed_torque_derivative`)."""
 
     kind = "computed_torque"
 

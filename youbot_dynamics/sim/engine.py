@@ -365,7 +365,8 @@ def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None
     """(torque(t, x), rhs(t, x)): the robot's applied torque (N m) and dx/dt, under a held
     ``command``, a Python controller's ``held`` torque or the scene's controller tracking
     ``reference``; each chosen once here, so the integrators' calls take the shortest path
-    (for a robot alone: the controller and one ABA with friction)."""
+    (for a robot alone: the controller and one ABA with friction; under computed torque the
+    two fused, :meth:`~youbot_dynamics.sim.model.SimModel.computed_torque_derivative`)."""
     if held is not None:
         def torque(t: float, x: np.ndarray) -> np.ndarray:
             return held.value
@@ -385,6 +386,9 @@ def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None
 
         def rhs(t: float, x: np.ndarray) -> np.ndarray:
             return robot_derivative(data, x, torque(t, x))
+
+        if held is None and command is None:
+            rhs = model.computed_torque_derivative(data, reference, rhs) or rhs
     else:
         def rhs(t: float, x: np.ndarray) -> np.ndarray:
             return derivative(model, data, x, torque(t, x), t, reference.base_twist)

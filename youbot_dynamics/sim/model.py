@@ -61,12 +61,15 @@ from typing import Callable, Mapping
 
 import numpy as np
 import pinocchio as pin
+from numba import njit, types
 
 from youbot_dynamics.dynamics.contact import HuntCrossley, NewtonImpact
 from youbot_dynamics.dynamics.contact_model import ContactModel, Pair
 from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper, StepperSettings
 from youbot_dynamics.dynamics.free_body import add_free_flyer
-from youbot_dynamics.dynamics.friction import FLOAT, JointFriction, friction_left_and_rates_unchecked
+from youbot_dynamics.dynamics.friction import (FLOAT, JOINTS, READ_VECTOR, TABLE, WRITTEN_VECTOR,
+                                               JointFriction, accumulate_friction_torque,
+                                               friction_left_and_rates_unchecked, left_torque_and_rates, unchecked)
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy, potential_energy, symmetrised
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.compose import robot_with_gravity
@@ -74,14 +77,15 @@ from youbot_dynamics.model.configuration import require_fixed_root
 from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.base import POSE_LABELS, TWIST_LABELS, BaseModel, BaseMotion, planar_robot
-from youbot_dynamics.sim.controllers import Controller, Reference, make_controller
+from youbot_dynamics.sim.controllers import (ComputedTorque, Controller, Reference, clip_to_limits,
+                                             commanded_acceleration, make_controller)
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
 from youbot_dynamics.sim.registry import integrator_kind
 from youbot_dynamics.sim.scene import IntegratorSpec, Scene
 from youbot_dynamics.sim.scene_contacts import ROTATION_COORDINATES
 from youbot_dynamics.sim.scene_reader import SceneError
 from youbot_dynamics.sim.state import StateLayout
-from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+from youbot_dynamics.sim.trajectory import POINTS, TIMING, PointToPointTrajectory, desired_motion
 from youbot_dynamics.systems.rotations import SEQUENCES, cardan_angle_rates, cardan_matrix, quaternion_rate
 
 #: A joint velocity beyond this multiple of its URDF limit is divergence.
@@ -93,6 +97,60 @@ RECENTRE_ANGLE = 1.0
 MIN_APPROACH_SPEED = 1e-2
 #: A Python controller: (t s, q rad, v rad/s) of the robot's moving joints -> joint torques (N m).
 ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+
+
+# The computed-torque right-hand side of a robot alone (SimModel.computed_torque_derivative)
+# in two compiled calls around pin.rnea and pin.aba, each under 8 arguments (numba's entry
+# point costs ~0.03 us per argument and ~0.1 us more from the 8th on). Its arrays (n joints,
+# x = [q, v, z], z the LuGre bristles): the law's parameters (3, n): rows Kp (1/s^2), Kd
+# (1/s), effort limit (N m); the work array (8, n): rows q_d, v_d, a_d (the desired motion at
+# t), the commanded acceleration, the torque left after friction, the LuGre joints'
+# steady-state bristles at v_d (the first n_lugre entries: the caller's, in Python, as
+# JointFriction.steady_state_bristles), then q and v copied from x (what the two Pinocchio
+# calls read: views of the work array made once, no slicing of x per call).
+_LAW, _WORK = types.Array(types.float64, 2, "C", readonly=True), types.Array(types.float64, 2, "C")
+
+
+@njit(types.void(POINTS, TIMING, types.float64, READ_VECTOR, _LAW, _WORK), cache=True)
+def _computed_torque_command(points: np.ndarray, timing: np.ndarray, t: float, x: np.ndarray, law: np.ndarray,
+                             work: np.ndarray) -> None:
+    """Before the RNEA: work rows 6, 7 = q, v (x's first 2n entries), rows 0-2 = the desired
+    motion at time t (s) of a compiled reference (:func:`~youbot_dynamics.sim.trajectory
+    .desired_motion`), row 3 = a_d + Kp (q_d - q) + Kd (v_d - v) (:func:`~youbot_dynamics.sim
+    .controllers.commanded_acceleration`); sizes checked (ValueError)."""
+    n = work.shape[1]
+    if law.shape[0] != 3 or work.shape[0] != 8 or x.shape[0] < 2 * n:
+        raise ValueError("computed torque: the law's parameters need 3 rows, the work array 8, x q and v")
+    for i in range(n):  # element by element: numba's slice assignments cost ~0.02 us each
+        work[6, i], work[7, i] = x[i], x[n + i]
+    desired_motion(points, timing, t, work[:3])
+    commanded_acceleration(work[6], work[7], work[0], work[1], work[2], law[0], law[1], work[3])
+
+
+@njit(types.void(_WORK, _LAW, TABLE, JOINTS, READ_VECTOR, WRITTEN_VECTOR, WRITTEN_VECTOR), cache=True)
+def _computed_torque_derivative(work: np.ndarray, law: np.ndarray, table: np.ndarray, joints: np.ndarray,
+                                x: np.ndarray, tau: np.ndarray, dx: np.ndarray) -> None:
+    """Between the RNEA and the ABA, x = [q, v, z] (n joints, z the LuGre bristles): tau
+    (N m, the RNEA's at the commanded acceleration) += tau_friction(v_d, bristles at v_d)
+    and clipped to +-limit, as :class:`~youbot_dynamics.sim.controllers.ComputedTorque`
+    does; then the plant's share of dx/dt as :meth:`SimModel.robot_derivative`'s: work
+    row 4 = tau - tau_friction(v, z), dx[:n] = v, dx[2n:] = dz/dt (dx[n:2n] = ABA(q, v,
+    row 4) is the caller's). Sizes checked (ValueError) before anything but tau is written."""
+    n = tau.shape[0]
+    if law.shape[0] != 3 or work.shape[0] != 8 or work.shape[1] != n or joints.shape[0] > n:
+        raise ValueError("computed torque: the law's parameters need 3 rows, the work array 8, one column per joint")
+    if dx.shape[0] != x.shape[0] or x.shape[0] < 2 * n:
+        raise ValueError("computed torque: x and dx/dt need one size, at least q and v")
+    accumulate_friction_torque(work[1], work[5, :joints.shape[0]], table, 1.0, tau)
+    clip_to_limits(law[2], tau)
+    left_torque_and_rates(x[n:2 * n], x[2 * n:], tau, table, joints, work[4], dx[2 * n:])
+    for i in range(n):
+        dx[i] = x[n + i]
+
+
+_computed_torque_command_unchecked = unchecked(_computed_torque_command)
+_computed_torque_derivative_unchecked = unchecked(_computed_torque_derivative)
+
 
 #: Every block a state may hold (see the module docstring), in state order.
 BLOCKS = ("q", "v", "base", "base_v", "wheel_i", "twist", "z", "pose", "chart", "cardan", "s", "armed")
@@ -214,6 +272,49 @@ class SimModel:
         else:
             dx[v_block] = forward_dynamics(self.robot, data, q, v, tau, self.friction)
         return dx
+
+    def computed_torque_derivative(self, data: pin.Data, reference: Reference,
+                                   general: Callable[[float, np.ndarray], np.ndarray]
+                                   ) -> Callable[[float, np.ndarray], np.ndarray] | None:
+        """dx/dt(t, x) of a robot alone under the scene's computed torque tracking
+        ``reference``: the controller's law and :meth:`robot_derivative` fused into two
+        compiled calls without type dispatch around pin.rnea and pin.aba on ``data`` (the same
+        arithmetic in the same order as ``general``, the two called one after the other).
+        The closure owns its scratch space (the work array). ``general`` takes an x the
+        compiled calls cannot (not a float64 vector, or a size they refuse). None where the
+        fused path does not apply: another controller, no compiled :meth:`robot_derivative`
+        path, a reference whose trajectory has no compiled form (``Reference.compiled``)."""
+        fast, compiled, controller = self._compiled_derivative, reference.compiled, self.controller
+        if (fast is None or compiled is None or not isinstance(controller, ComputedTorque)
+                or controller.friction is not self.friction):
+            return None
+        nv, end, model, table, joints = fast
+        points, timing = compiled
+        law = np.array([controller.kp, controller.kd, controller.limit], dtype=float)
+        law.setflags(write=False)
+        work = np.zeros((8, nv))
+        command, left, q, v = work[3], work[4], work[6], work[7]
+        bristles = work[5, :joints.shape[0]] if self.friction.lugre is not None else None
+        steady_state_bristles, size = self.friction.steady_state_bristles, self.layout.size
+        rnea, aba, empty = pin.rnea, pin.aba, np.empty
+
+        def rhs(t: float, x: np.ndarray) -> np.ndarray:
+            if type(x) is np.ndarray and x.dtype is FLOAT and x.ndim == 1:
+                try:
+                    _computed_torque_command_unchecked(points, timing, t, x, law, work)
+                    tau = rnea(model, data, q, v, command)
+                    if bristles is not None:
+                        bristles[:] = steady_state_bristles(work[1])
+                    dx = empty(size)
+                    _computed_torque_derivative_unchecked(work, law, table, joints, x, tau, dx)
+                except ValueError:
+                    pass  # a size the compiled calls refuse: the general path names it
+                else:
+                    dx[nv:end] = aba(model, data, q, v, left)
+                    return dx
+            return general(t, x)
+
+        return rhs
 
     @functools.cached_property
     def bodies_in(self) -> Mapping[str, tuple[int, ...]]:

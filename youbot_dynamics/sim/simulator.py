@@ -41,7 +41,7 @@ class Simulator:
                  control_rate: float | None = None) -> None:
         self.model: SimModel = compile(scene, integrator, limits, controller, control_rate)
         self.state: SimState = engine.initial_state(self.model)
-        self._rhs: tuple[SimState, object, Callable] | None = None
+        self._rhs: tuple[SimState | None, object, Callable | None] = (None, None, None)
 
     # ---- the model ----------------------------------------------------------------------
     @property
@@ -94,11 +94,11 @@ class Simulator:
     def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
         """dx/dt with the scene's controller: what the integrators call (the engine's
         :func:`~youbot_dynamics.sim.engine.right_hand_side`, built once per state)."""
-        state = self.state
-        if self._rhs is None or self._rhs[0] is not state or self._rhs[1] is not state.reference:
-            self._rhs = (state, state.reference,
-                         engine.right_hand_side(self.model, state.data, state.reference)[1])
-        return self._rhs[2](t, x)
+        state, (built_for, reference, rhs) = self.state, self._rhs
+        if built_for is not state or reference is not state.reference:
+            rhs = engine.right_hand_side(self.model, state.data, state.reference)[1]
+            self._rhs = (state, state.reference, rhs)
+        return rhs(t, x)
 
     def rhs_cost(self) -> dict[str, int | str]:
         """What one rhs evaluation computes, by count: the state dimension, the plant's

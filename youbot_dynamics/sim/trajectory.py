@@ -18,12 +18,14 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit, types
+from numba.extending import register_jitable
 
 from youbot_dynamics.dynamics.friction import unchecked
 from youbot_dynamics.errors import UserInputError
 
 
-_TABLE = types.Array(types.float64, 2, "C", readonly=True)
+#: numba types of what :func:`desired_motion` reads: the points (k+1, n), the timing (k, 5).
+POINTS, TIMING = types.Array(types.float64, 2, "A", readonly=True), types.Array(types.float64, 2, "C", readonly=True)
 
 
 @njit(types.UniTuple(types.float64, 3)(*(types.float64,) * 5), cache=True)
@@ -42,32 +44,41 @@ def _profile_at(a: float, v: float, t_a: float, T: float, t: float) -> tuple[flo
     return 1.0 - 0.5 * a * r * r, a * r, -a
 
 
-@njit(types.void(types.Array(types.float64, 2, "A", readonly=True), _TABLE, types.float64,
-                 types.Array(types.float64, 2, "C")), cache=True)
-def _desired(points: np.ndarray, timing: np.ndarray, t: float, out: np.ndarray) -> None:
+@register_jitable
+def desired_motion(points: np.ndarray, timing: np.ndarray, t: float, out: np.ndarray) -> None:
     """out = (q_d, v_d, a_d) at time t (s) of the trajectory through ``points`` (k+1, n) with
     per segment the row (start s, acceleration, coast rate, acceleration phase, duration) of
     ``timing`` (k, 5), NaN profile for a segment of zero length: before 0 the start, after
     the end the last point at rest. Each entry q_a + s d, s' d, s'' d with d = q_b - q_a, as
-    numpy computes them (one call instead of a search, a profile and five array operations)."""
+    numpy computes them (one call instead of a search, a profile and five array operations).
+    An out that is not (3, n) is a ValueError raised before anything is written; the timing
+    is trusted (:attr:`PointToPointTrajectory.compiled` checks it once)."""
     n, segments = points.shape[1], timing.shape[0]
-    out[1:, :] = 0.0
-    if segments == 0 or t <= 0.0:
-        out[0, :] = points[0]
-        return
-    k = segments - 1
-    while timing[k, 0] > t:  # the last segment started at or before t (searchsorted right - 1)
-        k -= 1
-    if np.isnan(timing[k, 1]):
-        out[0, :] = points[k + 1]
-        return
-    s, ds, dds = _profile_at(timing[k, 1], timing[k, 2], timing[k, 3], timing[k, 4], t - timing[k, 0])
-    for i in range(n):
-        d = points[k + 1, i] - points[k, i]
-        out[0, i], out[1, i], out[2, i] = points[k, i] + s * d, ds * d, dds * d
+    if out.shape[0] != 3 or out.shape[1] != n:
+        raise ValueError("trajectory: the desired motion needs a (3, n) output for n joints")
+    rest = 0  # the point held at rest: the start (before 0 or without segments)
+    if segments > 0 and not t <= 0.0:  # a NaN t takes the last segment: NaN out
+        k = segments - 1
+        while timing[k, 0] > t:  # the last segment started at or before t (searchsorted right - 1)
+            k -= 1
+        if not np.isnan(timing[k, 1]):
+            s, ds, dds = _profile_at(timing[k, 1], timing[k, 2], timing[k, 3], timing[k, 4], t - timing[k, 0])
+            for i in range(n):
+                d = points[k + 1, i] - points[k, i]
+                out[0, i], out[1, i], out[2, i] = points[k, i] + s * d, ds * d, dds * d
+            return
+        rest = k + 1  # a segment of zero length: its end
+    for i in range(n):  # element by element: numba's slice assignments cost ~0.02 us each
+        out[0, i], out[1, i], out[2, i] = points[rest, i], 0.0, 0.0
 
 
-#: :func:`_desired` without numba's type dispatch (for the arrays of ``_compiled`` and a float t).
+@njit(types.void(POINTS, TIMING, types.float64, types.Array(types.float64, 2, "C")), cache=True)
+def _desired(points: np.ndarray, timing: np.ndarray, t: float, out: np.ndarray) -> None:
+    """out = (q_d, v_d, a_d) at time t (s) (see :func:`desired_motion`)."""
+    desired_motion(points, timing, t, out)
+
+
+#: :func:`_desired` without numba's type dispatch (for the arrays of ``compiled`` and a float t).
 _desired_unchecked = unchecked(_desired)
 
 
@@ -165,14 +176,14 @@ class PointToPointTrajectory:
     def evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Desired position, velocity and acceleration (n,) at time t (s); before 0 the
         start, after the end the last point at rest."""
-        points, timing = self._compiled
+        points, timing = self.compiled
         out = np.empty((3, points.shape[1]))
         _desired_unchecked(points, timing, float(t), out)
         return out[0], out[1], out[2]
 
     @functools.cached_property
-    def _compiled(self) -> tuple[np.ndarray, np.ndarray]:
-        """What :func:`_desired` reads: the points as float64 and per segment (start s,
+    def compiled(self) -> tuple[np.ndarray, np.ndarray]:
+        """What :func:`desired_motion` reads: the points as float64 and per segment (start s,
         acceleration, coast rate, acceleration phase, duration), NaN for a segment of zero
         length, C-ordered (its signature's types: it is called without numba's dispatch)."""
         timing = np.array([(start, *((p.acceleration, p.peak_rate, p.t_accelerate, p.duration) if p else (np.nan,) * 4))
