@@ -253,7 +253,7 @@ def test_chunked_writer_writes_what_mcap_writer_writes(tmp_path: Path, chunk_siz
                                             metadata={"k": str(k)}) for k in range(3)]
         for k in range(60):
             log_time = (k if k < 40 else k - 25) * 1_000_000
-            add(writer, [(channels[j], k + 1, bytes([k, j]) * (k % 7)) for j in range(2 if k % 3 else 1)],
+            add(writer, [(channels[j], bytes([k, j]) * (k % 7)) for j in range(2 if k % 3 else 1)],
                 log_time, log_time + 5)
             if k in (10, 11, 50):
                 writer.flush()
@@ -262,10 +262,13 @@ def test_chunked_writer_writes_what_mcap_writer_writes(tmp_path: Path, chunk_siz
                 channels.append(writer.register_channel(topic="/s", message_encoding="cdr", schema_id=string))
         writer.finish()
 
+    sequences: dict[int, int] = {}
+
     def mcap_add(writer: Writer, records, log_time: int, publish_time: int) -> None:
-        for channel, sequence, data in records:
+        for channel, data in records:
+            sequences[channel] = sequences.get(channel, 0) + 1
             writer.add_message(channel_id=channel, log_time=log_time, data=data, publish_time=publish_time,
-                               sequence=sequence)
+                               sequence=sequences[channel])
 
     with (tmp_path / "mcap.mcap").open("wb") as stream:
         calls(Writer(stream, chunk_size=chunk_size), mcap_add)

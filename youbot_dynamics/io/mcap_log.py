@@ -112,7 +112,6 @@ class McapLogger(ClosesOnExit):
         self._stream.flush()          # the header on disk at once: even an early crash leaves an MCAP
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, tuple[int, str]] = {}
-        self._sequences: dict[int, int] = {}    # the last sequence number of each channel
         self.chunk_span_ns, self.chunk_wall_s = int(chunk_span_ns), float(chunk_wall_s)
         self._chunk: tuple[int, int, float] | None = None   # open chunk: first, last log time; wall start
         self.chunks_closed = 0   # by the time bound (mcap's 1 MiB size bound closes others on its own)
@@ -155,7 +154,6 @@ class McapLogger(ClosesOnExit):
             topic=topic, message_encoding="cdr", schema_id=self._schemas[msgtype], metadata=metadata
         )
         self._channels[topic] = (channel, msgtype)
-        self._sequences[channel] = 0
 
     def write(
         self,
@@ -197,11 +195,7 @@ class McapLogger(ClosesOnExit):
         if not records:
             return
         self._close_chunk_if_due(log_time_ns)
-        sequences = self._sequences
-        for k, (channel, data) in enumerate(records):
-            sequences[channel] += 1
-            records[k] = (channel, sequences[channel], data)
-        self._writer.add_messages(records, log_time_ns, publish_time_ns)
+        self._writer.add_messages(records, log_time_ns, publish_time_ns)    # sequence numbers: 1, 2, ... per topic
 
     def _close_chunk_if_due(self, log_time_ns: int) -> None:
         """Close the open chunk if a message at ``log_time_ns`` would make it span

@@ -76,10 +76,11 @@ class ChunkedWriter:
         self._chunk_record(channel)
         return channel.id
 
-    def add_messages(self, messages: Sequence[tuple[int, int, bytes]], log_time: int, publish_time: int) -> None:
-        """Messages (channel id, sequence number, data) logged at ``log_time`` and
-        published at ``publish_time`` (ns), in order, into the open chunk; the chunk closes
-        after a message that takes it past ``chunk_size`` bytes."""
+    def add_messages(self, messages: Sequence[tuple[int, bytes]], log_time: int, publish_time: int) -> None:
+        """Messages (channel id, data) logged at ``log_time`` and published at
+        ``publish_time`` (ns), in order, into the open chunk, each with its count on its
+        channel as its sequence number (1, 2, ...); the chunk closes after a message that
+        takes it past ``chunk_size`` bytes."""
         if not messages:
             return
         self._times = [min(self._times[0], log_time), max(self._times[1], log_time)] if self._times else \
@@ -87,11 +88,11 @@ class ChunkedWriter:
         if self._chunk_times:
             self._chunk_times = [min(self._chunk_times[0], log_time), max(self._chunk_times[1], log_time)]
         chunk, index, counts, header = self._chunk, self._chunk_index, self._counts, _MESSAGE.pack
-        for channel, sequence, data in messages:
+        for channel, data in messages:
             if not self._chunk_times:             # the first message of a chunk
                 self._chunk_times = [log_time, log_time]
             index.setdefault(channel, []).extend((log_time, len(chunk)))
-            counts[channel] = counts.get(channel, 0) + 1
+            sequence = counts[channel] = counts.get(channel, 0) + 1
             chunk += header(Opcode.MESSAGE, _MESSAGE_FIXED + len(data), channel, sequence, log_time, publish_time)
             chunk += data
             if len(chunk) > self.chunk_size:
