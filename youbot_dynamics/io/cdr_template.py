@@ -28,7 +28,6 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
-
 from numba import njit, types
 
 from youbot_dynamics.io.messages import TYPESTORE, UNIT_QUATERNION_TOLERANCE, MessageFieldError, time

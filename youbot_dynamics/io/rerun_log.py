@@ -132,9 +132,10 @@ class RerunLogger(ClosesOnExit):
     ``world`` or ``link``); a context manager.
 
     ``log_sample`` appends one sample of the robot (for a running node; buffered and sent
-    every ``batch_size`` samples or ``flush_span`` simulated seconds, whichever comes first); ``log_trajectory`` appends many at once (for offline
-    runs); ``log_body_poses`` appends one sample of the free bodies (buffered alike). All
-    send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
+    every ``batch_size`` samples or ``flush_span`` simulated seconds, whichever comes
+    first); ``log_trajectory`` appends many at once (for offline runs); ``log_body_poses``
+    (or ``log_body_rows``, an array) appends one sample of the free bodies (buffered alike).
+    All send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
     is buffered, writes the end-effector path and disconnects so the file gets its footer.
     Joint names must be moving URDF joints (``UserInputError`` otherwise); values must be
     finite and times integer nanoseconds (``MessageFieldError``, a ValueError naming the

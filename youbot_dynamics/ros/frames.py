@@ -15,8 +15,9 @@ The relative poses and the quaternions are computed by compiled loops that repea
 Pinocchio's arithmetic (``SE3.actInv``: R_p^T R_c and R_p^T (t_c - t_p), sums in index
 order; ``SE3ToXYZQUAT``: Eigen's rotation-to-quaternion, whose trace sums r00 + (r11 + r22)),
 so the rows are those of ``pin.SE3ToXYZQUAT(oMf[p].actInv(oMf[c]))`` to the bit
-(test_session_outputs checks it on random configurations) at a third of the cost of one
-Python call into Pinocchio per frame.
+(test_session_outputs checks it on random configurations); what stays in Python is one
+call per frame that reads its placement (the two youBots' pass: 10 us, where two Pinocchio
+calls per frame took 28).
 """
 from __future__ import annotations
 
