@@ -220,7 +220,8 @@ def test_free_bodies_without_a_robot(tmp_path: Path) -> None:
     from its origin, so it is shifted by half its length to be centred like coal's) in the
     named frame of the body, and one transform world -> body per sample on sim_time; the
     world geometry: a box where the scene places it and a halfspace as a square of its
-    plane, in the world frame. Poses must name every body and be finite."""
+    plane, in the world frame. Poses must name every body and be finite; log_body_rows
+    (every other sample here) logs the same as log_body_poses."""
     shapes = {"ball": Shape("sphere", radius=0.025), "crate": Shape("box", size=(0.1, 0.2, 0.3)),
               "can": Shape("cylinder", radius=0.03, length=0.12), "pill": Shape("capsule", radius=0.01, length=0.04)}
     shelf = np.eye(4)
@@ -233,8 +234,11 @@ def test_free_bodies_without_a_robot(tmp_path: Path) -> None:
                      recording_name="bodies", batch_size=3) as log:
         for k, stamp_ns in enumerate(stamps):
             turn = [0.0, 0.0, math.sin(0.05 * k), math.cos(0.05 * k)]
-            log.log_body_poses(stamp_ns, {name: ([0.1 * i, 0.0, 1.0 - 1e-9 * stamp_ns], turn)
-                                          for i, name in enumerate(shapes)})
+            poses = {name: ([0.1 * i, 0.0, 1.0 - 1e-9 * stamp_ns], turn) for i, name in enumerate(shapes)}
+            if k % 2:
+                log.log_body_rows(stamp_ns, np.array([[*poses[name][0], *poses[name][1]] for name in shapes]))
+            else:
+                log.log_body_poses(stamp_ns, poses)
         with pytest.raises(UserInputError, match="expected the free bodies"):
             log.log_body_poses(10**9, {"ball": ([0, 0, 0], [0, 0, 0, 1])})
         with pytest.raises(ValueError, match=r"Rerun can translation\[2\]"):
@@ -242,6 +246,8 @@ def test_free_bodies_without_a_robot(tmp_path: Path) -> None:
                                        for name in shapes})
         with pytest.raises(ValueError, match="Rerun stamp_ns: must be integer nanoseconds"):
             log.log_body_poses(1.0, {name: ([0, 0, 0], [0, 0, 0, 1]) for name in shapes})
+        with pytest.raises(ValueError, match=r"Rerun pill quaternion\[3\]"):
+            log.log_body_rows(10**9, [[0, 0, 0, 0, 0, 0, math.inf if name == "pill" else 1] for name in shapes])
     temporal, static, timelines = read_rows(path)
     assert timelines == {"sim_time"}
     assert set(temporal) == {f"/free_bodies/{name}" for name in shapes}

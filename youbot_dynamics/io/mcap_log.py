@@ -6,15 +6,16 @@ dependency after a line of 80 ``=`` and ``MSG: pkg/Type``); channels with messag
 ``cdr`` and metadata ``offered_qos_profiles`` (YAML, Jazzy style) and ``topic_type_hash``
 (RIHS01); CDR from the rosbags serializer; log and publish times in nanoseconds; a summary
 with statistics, chunk indexes and message indexes. A single .mcap file plays with
-``ros2 bag play``. Written with ``mcap.writer.Writer`` rather than rosbags' rosbag2 Writer,
-which makes a folder, cannot set publish time apart from log time, and omits
-``topic_type_hash``.
+``ros2 bag play``. Written as ``mcap.writer.Writer`` writes it (byte for byte, through
+:class:`~youbot_dynamics.io.mcap_writer.ChunkedWriter`, which appends a sample's messages
+to the open chunk in one call) rather than with rosbags' rosbag2 Writer, which makes a
+folder, cannot set publish time apart from log time, and omits ``topic_type_hash``.
 
 Crash safety: messages are grouped in chunks, and a chunk stays in memory until it is
 closed. ``McapLogger`` closes the open chunk (writes it with its message indexes, flushes
 the stream and fsyncs the file) before a message that would make it span
 ``chunk_span_ns`` of log time (default 1 s) or that arrives ``chunk_wall_s`` wall seconds
-(default 1 s) after the chunk's first message, whichever comes first; mcap's own bound of
+(default 1 s) after the chunk's first message, whichever comes first; mcap's bound of
 1 MiB per chunk also holds. A SIGKILL or a power cut therefore loses only the open chunk:
 less than 1 s of log time. The bounds are checked when a message is written: a writer that
 falls silent keeps its last chunk open until its next message (the node writes /diagnostics
@@ -33,11 +34,11 @@ from pathlib import Path
 from typing import IO
 
 import yaml
-from mcap.writer import CompressionType, Writer
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.cdr_template import Serialized
 from youbot_dynamics.io.closing import ClosesOnExit
+from youbot_dynamics.io.mcap_writer import ChunkedWriter
 from youbot_dynamics.io.messages import TYPESTORE
 
 DEFAULT_CHUNK_SPAN_NS = 1_000_000_000
@@ -94,8 +95,8 @@ class McapLogger(ClosesOnExit):
     and SIGHUP handling. Chunks close on a time bound (see the module docstring).
     """
 
-    def __init__(self, path: str | Path, *, compression: CompressionType = CompressionType.ZSTD,
-                 chunk_span_ns: int = DEFAULT_CHUNK_SPAN_NS, chunk_wall_s: float = DEFAULT_CHUNK_WALL_S):
+    def __init__(self, path: str | Path, *, chunk_span_ns: int = DEFAULT_CHUNK_SPAN_NS,
+                 chunk_wall_s: float = DEFAULT_CHUNK_WALL_S):
         """Create (or overwrite) ``path``; the parent folder is created if missing.
 
         ``chunk_span_ns`` (log time, ns) and ``chunk_wall_s`` (wall s) bound how long a
@@ -106,12 +107,11 @@ class McapLogger(ClosesOnExit):
             raise UserInputError(f"MCAP log path {self.path} must end in .mcap")
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._stream: IO[bytes] | None = self.path.open("wb")
-        self._writer = Writer(self._stream, compression=compression)
+        self._writer = ChunkedWriter(self._stream)
         self._writer.start(profile="ros2", library="youbot_dynamics (mcap-python)")
         self._stream.flush()          # the header on disk at once: even an early crash leaves an MCAP
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, tuple[int, str]] = {}
-        self._sequences: dict[str, int] = {}
         self.chunk_span_ns, self.chunk_wall_s = int(chunk_span_ns), float(chunk_wall_s)
         self._chunk: tuple[int, int, float] | None = None   # open chunk: first, last log time; wall start
         self.chunks_closed = 0   # by the time bound (mcap's 1 MiB size bound closes others on its own)
@@ -154,7 +154,6 @@ class McapLogger(ClosesOnExit):
             topic=topic, message_encoding="cdr", schema_id=self._schemas[msgtype], metadata=metadata
         )
         self._channels[topic] = (channel, msgtype)
-        self._sequences[topic] = 0
 
     def write(
         self,
@@ -186,18 +185,17 @@ class McapLogger(ClosesOnExit):
             if topic not in self._channels:
                 raise UserInputError(f"{self.path}: topic {topic} was not added before writing")
             channel, msgtype = self._channels[topic]
+            if type(message) is Serialized and message.__msgtype__ == msgtype:
+                records.append((channel, message.cdr))
+                continue
             actual = getattr(message, "__msgtype__", type(message).__name__)
             if actual != msgtype:
                 raise UserInputError(f"{self.path}: topic {topic} carries {msgtype}, got {actual}")
-            data = message.cdr if isinstance(message, Serialized) else TYPESTORE.serialize_cdr(message, msgtype)
-            records.append((topic, channel, bytes(data)))
+            records.append((channel, bytes(TYPESTORE.serialize_cdr(message, msgtype))))
         if not records:
             return
         self._close_chunk_if_due(log_time_ns)
-        for topic, channel, data in records:
-            self._sequences[topic] += 1
-            self._writer.add_message(channel_id=channel, log_time=log_time_ns, data=data,
-                                     publish_time=publish_time_ns, sequence=self._sequences[topic])
+        self._writer.add_messages(records, log_time_ns, publish_time_ns)    # sequence numbers: 1, 2, ... per topic
 
     def _close_chunk_if_due(self, log_time_ns: int) -> None:
         """Close the open chunk if a message at ``log_time_ns`` would make it span

@@ -132,9 +132,10 @@ class RerunLogger(ClosesOnExit):
     ``world`` or ``link``); a context manager.
 
     ``log_sample`` appends one sample of the robot (for a running node; buffered and sent
-    every ``batch_size`` samples or ``flush_span`` simulated seconds, whichever comes first); ``log_trajectory`` appends many at once (for offline
-    runs); ``log_body_poses`` appends one sample of the free bodies (buffered alike). All
-    send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
+    every ``batch_size`` samples or ``flush_span`` simulated seconds, whichever comes
+    first); ``log_trajectory`` appends many at once (for offline runs); ``log_body_poses``
+    (or ``log_body_rows``, an array) appends one sample of the free bodies (buffered alike).
+    All send with ``send_columns``. ``close`` (idempotent; also on ``__exit__``) sends what
     is buffered, writes the end-effector path and disconnects so the file gets its footer.
     Joint names must be moving URDF joints (``UserInputError`` otherwise); values must be
     finite and times integer nanoseconds (``MessageFieldError``, a ValueError naming the
@@ -175,7 +176,8 @@ class RerunLogger(ClosesOnExit):
         clash = sorted(set(self.bodies) & (links | {self.world_frame}))
         if clash:
             raise UserInputError(f"Rerun log: free bodies {clash} have the names of robot frames; rename them")
-        self._body_rows: list[tuple[int, list[list[float]], list[list[float]]]] = []
+        self._body_rows: list[tuple[int, np.ndarray]] = []
+        """Buffered free-body samples: stamp (ns) and rows (bodies, 7) of translation and quaternion."""
         self.batch_size = max(1, int(batch_size))
         self.flush_span_ns = round(float(flush_span) * 1e9)
         self._series_names: tuple[str, ...] | None = None
@@ -249,8 +251,7 @@ class RerunLogger(ClosesOnExit):
             self._pending_names = names
         n = len(names)
         t = _stamp(stamp_ns)
-        row = np.concatenate([np.asarray(part, dtype=np.float64).reshape(-1) for part in (q, v, tau, [energy],
-                                                                                           ee_position)])
+        row = np.concatenate((q, v, tau, (energy,), ee_position), axis=None, dtype=np.float64)
         if row.size != 3 * n + 4 or not np.isfinite(row).all():    # the field checks name what is wrong
             row = np.concatenate([finite_floats(q, "Rerun q", n), finite_floats(v, "Rerun v", n),
                                   finite_floats(tau, "Rerun tau", n), finite_floats([energy], "Rerun energy", 1),
@@ -269,10 +270,24 @@ class RerunLogger(ClosesOnExit):
         if set(poses) != set(self.bodies):
             raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies "
                                  f"{sorted(self.bodies)}")
-        t = _stamp(stamp_ns)
-        translations = [finite_floats(poses[name][0], f"Rerun {name} translation", 3) for name in self.bodies]
-        quaternions = [finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]
-        self._body_rows.append((t, translations, quaternions))
+        self._buffer_bodies(_stamp(stamp_ns), np.array(
+            [finite_floats(poses[name][0], f"Rerun {name} translation", 3)
+             + finite_floats(poses[name][1], f"Rerun {name} quaternion", 4) for name in self.bodies]))
+
+    def log_body_rows(self, stamp_ns: int, rows: np.ndarray) -> None:
+        """``log_body_poses`` of the free bodies as rows (one per body, in ``bodies``
+        order) of translation (m) and quaternion (x, y, z, w): one check of the array."""
+        self._recording()
+        rows = np.asarray(rows, dtype=np.float64)
+        if rows.shape != (len(self.bodies), 7) or not np.isfinite(rows).all():    # log_body_poses names it
+            self.log_body_poses(stamp_ns, {name: (row[:3], row[3:]) for name, row in zip(self.bodies, rows)})
+            return
+        self._buffer_bodies(_stamp(stamp_ns), rows)
+
+    def _buffer_bodies(self, t: int, rows: np.ndarray) -> None:
+        """Buffer checked body rows at ``t`` (ns); send the batch when it is full or spans
+        ``flush_span``."""
+        self._body_rows.append((t, rows))
         if len(self._body_rows) >= self.batch_size or t - self._body_rows[0][0] >= self.flush_span_ns:
             self._flush_bodies()
 
@@ -347,11 +362,10 @@ class RerunLogger(ClosesOnExit):
         if not self._body_rows:
             return
         rows, self._body_rows = self._body_rows, []
-        index = [rr.TimeColumn(TIMELINE, duration=durations([row[0] for row in rows]))]
-        translations = np.array([row[1] for row in rows])    # (samples, bodies, 3)
-        quaternions = np.array([row[2] for row in rows])     # (samples, bodies, 4)
+        index = [rr.TimeColumn(TIMELINE, duration=durations([t for t, _ in rows]))]
+        poses = np.array([pose for _, pose in rows])    # (samples, bodies, 7)
         for k, name in enumerate(self.bodies):
-            columns = rr.Transform3D.columns(translation=translations[:, k], quaternion=quaternions[:, k],
+            columns = rr.Transform3D.columns(translation=poses[:, k, :3], quaternion=poses[:, k, 3:],
                                              parent_frame=[self.world_frame] * len(rows), child_frame=[name] * len(rows))
             self._recording().send_columns(body_entity(name), indexes=index, columns=columns)
         self._recording().flush(timeout_sec=0.0)

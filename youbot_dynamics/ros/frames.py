@@ -10,14 +10,24 @@ robot's model: mimic joints follow their primaries): parent -> child is
 oMf[parent]^-1 oMf[child]. The screw-axis kinematics of ``model/screws.py`` are independent
 of this pass, and the tests hold it to them. Poses are 4x4 homogeneous matrices (m);
 quaternions are (x, y, z, w) with w >= 0.
+
+The relative poses and the quaternions are computed by compiled loops that repeat
+Pinocchio's arithmetic (``SE3.actInv``: R_p^T R_c and R_p^T (t_c - t_p), sums in index
+order; ``SE3ToXYZQUAT``: Eigen's rotation-to-quaternion, whose trace sums r00 + (r11 + r22)),
+so the rows are those of ``pin.SE3ToXYZQUAT(oMf[p].actInv(oMf[c]))`` to the bit
+(test_session_outputs checks it on random configurations); what stays in Python is one
+call per frame that reads its placement (the two youBots' pass: 10 us, where two Pinocchio
+calls per frame took 28).
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
+from numba import njit, types
 
 from youbot_dynamics.model.robot import Robot
 
@@ -63,10 +73,71 @@ class SampleFrames(NamedTuple):
         return pose[:3], pose[3:]
 
 
+@njit(cache=True)
+def _quaternion_xyzw(m: np.ndarray, out: np.ndarray) -> None:
+    """out (4,) = the unit quaternion (x, y, z, w), w >= 0, of the rotation m (3x3), as
+    Eigen converts it (trace r00 + (r11 + r22); above 0 from w, else from the largest
+    diagonal entry)."""
+    t = m[0, 0] + (m[1, 1] + m[2, 2])
+    if t > 0.0:
+        t = math.sqrt(t + 1.0)
+        out[3] = 0.5 * t
+        t = 0.5 / t
+        out[0] = (m[2, 1] - m[1, 2]) * t
+        out[1] = (m[0, 2] - m[2, 0]) * t
+        out[2] = (m[1, 0] - m[0, 1]) * t
+    else:
+        i = 0
+        if m[1, 1] > m[0, 0]:
+            i = 1
+        if m[2, 2] > m[i, i]:
+            i = 2
+        j = (i + 1) % 3
+        k = (j + 1) % 3
+        t = math.sqrt(m[i, i] - m[j, j] - m[k, k] + 1.0)
+        out[i] = 0.5 * t
+        t = 0.5 / t
+        out[3] = (m[k, j] - m[j, k]) * t
+        out[j] = (m[j, i] + m[i, j]) * t
+        out[k] = (m[k, i] + m[i, k]) * t
+    if out[3] < 0.0:
+        for i in range(4):
+            out[i] = -out[i]
+
+
+_POSES = types.Array(types.float64, 3, "C", readonly=True)
+_ROWS = types.Array(types.float64, 2, "C")
+_INDICES = types.Array(types.intp, 1, "C", readonly=True)
+
+
+@njit(types.void(_POSES, _ROWS), cache=True)
+def _pose_rows(poses: np.ndarray, out: np.ndarray) -> None:
+    """out[e] = translation and quaternion (x, y, z, w), w >= 0, of poses[e] (4x4)."""
+    for e in range(poses.shape[0]):
+        out[e, 0], out[e, 1], out[e, 2] = poses[e, 0, 3], poses[e, 1, 3], poses[e, 2, 3]
+        _quaternion_xyzw(poses[e, :3, :3], out[e, 3:])
+
+
+@njit(types.void(_POSES, _INDICES, _INDICES, _ROWS), cache=True)
+def _relative_pose_rows(poses: np.ndarray, parents: np.ndarray, children: np.ndarray, out: np.ndarray) -> None:
+    """out[e] = translation and quaternion (x, y, z, w), w >= 0, of poses[children[e]] in
+    the frame of poses[parents[e]] (4x4 each), with the roundings of Pinocchio's actInv."""
+    rotation = np.empty((3, 3))
+    for e in range(parents.shape[0]):
+        p, c = poses[parents[e]], poses[children[e]]
+        d0, d1, d2 = c[0, 3] - p[0, 3], c[1, 3] - p[1, 3], c[2, 3] - p[2, 3]
+        for i in range(3):
+            out[e, i] = p[0, i] * d0 + p[1, i] * d1 + p[2, i] * d2
+            for j in range(3):
+                rotation[i, j] = p[0, i] * c[0, j] + p[1, i] * c[1, j] + p[2, i] * c[2, j]
+        _quaternion_xyzw(rotation, out[e, 3:])
+
+
 def pose_rows(poses: Sequence[np.ndarray]) -> np.ndarray:
     """(k, 7) rows of translation (m) and quaternion (x, y, z, w), w >= 0, of k poses (4x4, m)."""
-    rows = np.array([pin.SE3ToXYZQUAT(pin.SE3(pose)) for pose in poses]).reshape(-1, 7)
-    rows[rows[:, 6] < 0.0, 3:] *= -1.0
+    stacked = np.ascontiguousarray(np.reshape(poses, (-1, 4, 4)), dtype=np.float64)
+    rows = np.empty((len(stacked), 7))
+    _pose_rows(stacked, rows)
     return rows
 
 
@@ -97,15 +168,19 @@ class LinkFrames:
         self.static = tuple(_link_transform(j.parent, j.child, j.origin) for j in robot.tree if j.type == "fixed")
         moving = [j for j in robot.tree if j.type != "fixed"]
         self._edges = tuple((j.parent, j.child) for j in moving)
-        self._moving_ids = tuple((robot.frame_id(j.parent), robot.frame_id(j.child)) for j in moving)
+        pairs = [*((robot.frame_id(j.parent), robot.frame_id(j.child)) for j in moving),
+                 *((self._root, e) for e in self._ee)]
+        frames = sorted({frame for pair in pairs for frame in pair})
+        self._frames = tuple(frames)
+        self._parents = np.array([frames.index(p) for p, _ in pairs], dtype=np.intp)
+        self._children = np.array([frames.index(c) for _, c in pairs], dtype=np.intp)
 
     def at(self, q: np.ndarray) -> SampleFrames:
         """The frames at joint positions q (the robot's configuration, Pinocchio order)."""
         pin.framesForwardKinematics(self.robot.model, self._data, np.asarray(q, dtype=float))
-        placements = self._data.oMf
-        root = placements[self._root]
-        poses = np.array([*(pin.SE3ToXYZQUAT(placements[p].actInv(placements[c])) for p, c in self._moving_ids),
-                          *(pin.SE3ToXYZQUAT(root.actInv(placements[e])) for e in self._ee)])
-        poses[poses[:, 6] < 0.0, 3:] *= -1.0
-        moving = len(self._moving_ids)
+        placements = self._data.oMf.tolist()
+        placements = np.array([placements[frame].np for frame in self._frames])
+        poses = np.empty((len(self._parents), 7))
+        _relative_pose_rows(placements, self._parents, self._children, poses)
+        moving = len(self._edges)
         return SampleFrames(self._edges, poses[:moving], poses[moving:], len(self.ee_links), self._ee_index)

@@ -170,11 +170,12 @@ class Recorder:
         if self.rerun is not None and not self.rerun.closed:
             self.rerun.log_sample(stamp_ns, names, q, v, tau, energy, ee_position)
 
-    def bodies(self, stamp_ns: int, names: Sequence[str], rows: np.ndarray) -> None:
+    def bodies(self, stamp_ns: int, rows: np.ndarray) -> None:
         """The free bodies' poses (rows of translation (m) and quaternion (x, y, z, w), root
-        frame, in the order of ``names``) in the Rerun recording at ``stamp_ns`` (ns)."""
+        frame, in the scene's order, as the recording's ``bodies``) in the Rerun recording
+        at ``stamp_ns`` (ns)."""
         if self.rerun is not None and not self.rerun.closed:
-            self.rerun.log_body_poses(stamp_ns, {name: (row[:3], row[3:]) for name, row in zip(names, rows)})
+            self.rerun.log_body_rows(stamp_ns, rows)
 
     def records(self, topic: str) -> bool:
         """True if the MCAP log records ``topic`` (so its messages must be built)."""
@@ -251,10 +252,10 @@ class _Frames:
                                                             (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
         return messages.tf_message(transforms)
 
-    def body_poses(self, poses: dict[str, np.ndarray]) -> np.ndarray:
-        """(k, 7) rows of translation (m) and quaternion (x, y, z, w) of the free bodies in the
-        root frame, in the scene's order, from their world poses (4x4, m)."""
-        return pose_rows(list(poses.values()))
+    def body_poses(self, samples: Sequence[dict[str, np.ndarray]]) -> np.ndarray:
+        """(N, k, 7) rows of translation (m) and quaternion (x, y, z, w) of the free bodies in
+        the root frame, in the scene's order, from their world poses (4x4, m) in N samples."""
+        return pose_rows([pose for poses in samples for pose in poses.values()]).reshape(len(samples), -1, 7)
 
     def tf(self, stamps: Sequence[int], samples: Sequence[SampleFrames] | None,
            bodies: Sequence[np.ndarray] | None = None, base: object | None = None) -> list[object]:
@@ -265,7 +266,7 @@ class _Frames:
         if samples is not None:
             blocks.append(np.array([sample.link_poses.reshape(-1) for sample in samples]))
         if bodies is not None and len(self.body_shapes):
-            blocks.append(np.array([rows.reshape(-1) for rows in bodies]))
+            blocks.append(np.reshape(bodies, (len(stamps), -1)))
         values = np.hstack(blocks) if blocks else np.zeros((len(stamps), 0))
 
         def build(stamp_ns: int, values: np.ndarray) -> object:
@@ -282,15 +283,15 @@ class _Frames:
     def free_bodies(self, stamps: Sequence[int], bodies: Sequence[np.ndarray]) -> list[object]:
         """/free_bodies of N samples: the bodies' poses in the root frame, in order."""
         return self._refilled["/free_bodies"].many(
-            stamps, np.array([rows.reshape(-1) for rows in bodies]), lambda stamp_ns, values: messages.pose_array(
+            stamps, np.reshape(bodies, (len(stamps), -1)), lambda stamp_ns, values: messages.pose_array(
                 stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))
 
     def free_body_markers(self, stamps: Sequence[int], poses: Sequence[dict[str, np.ndarray]]) -> list[object]:
         """/free_bodies_markers of N samples: each body's shape at its world pose (4x4, m;
         ``poses`` by name) in the root frame (namespace: the body's name; the same ids every
         sample, so each replaces the last)."""
-        values = np.array([pose_rows([sample[name] @ local for name, locals_ in self._marker_poses.items()
-                                      for local in locals_]).reshape(-1) for sample in poses])
+        values = pose_rows([sample[name] @ local for sample in poses for name, locals_ in self._marker_poses.items()
+                            for local in locals_]).reshape(len(poses), -1)
 
         def build(stamp_ns: int, values: np.ndarray) -> object:
             return messages.marker_array(
@@ -621,7 +622,7 @@ class SimulationSession(_Session):
         base's outputs advance its odometry: one sample at a time. Raises MessageFieldError."""
         wanted = self.wanted
         has_bodies = bool(self.frames.body_shapes)
-        bodies = [self.frames.body_poses(snapshot.bodies) for snapshot in snapshots] if has_bodies else None
+        bodies = self.frames.body_poses([snapshot.bodies for snapshot in snapshots]) if has_bodies else None
         kinematics = self.frames.has_robot and (self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS))
         samples = [self.frames.links.at(snapshot.q) for snapshot in snapshots] if kinematics else None
         per_sample: list[Outputs] = [[] for _ in snapshots]
@@ -668,7 +669,7 @@ class SimulationSession(_Session):
             self.recorder.sample(stamp, snapshot.joint_names, snapshot.q, snapshot.v, snapshot.tau, snapshot.energy,
                                  sample.ee[sample.ee_index, :3])
         if bodies is not None:
-            self.recorder.bodies(stamp, tuple(self.frames.body_shapes), bodies)
+            self.recorder.bodies(stamp, bodies)
         return outputs
 
     def _joint_states_of(self, stamps: Sequence[int], snapshots: Sequence[Snapshot]) -> list[object]:
