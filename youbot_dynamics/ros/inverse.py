@@ -61,11 +61,15 @@ PLAUSIBLE_FACTOR = 10.0
 RESTART_CAUSES = ("backwards", "gap", "non_finite", "implausible")
 """Why the estimate restarted: a sample not after the previous one, a gap longer than
 ``max_gap_ns``, a non-finite estimate, an implausible torque (counted by the session)."""
+_NO_ROWS = np.empty((0, 0))
+"""The q and v rows of an empty stencil."""
 
 
 class AccelerationEstimator:
     """Central differences of velocity over the last three samples of one unbroken stream
-    (see the module docstring); ``max_gap_ns`` (int ns > 0) is the longest spacing."""
+    (see the module docstring); ``max_gap_ns`` (int ns > 0) is the longest spacing. The
+    samples of the stencil (at most three, oldest first) are held as arrays: their stamps
+    (int ns), q and v rows."""
 
     def __init__(self, time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS) -> None:
         if not time_constant >= 0.0:
@@ -76,9 +80,15 @@ class AccelerationEstimator:
         self.restarts = dict.fromkeys(RESTART_CAUSES, 0)
         self.clear()
 
+    @property
+    def samples(self) -> list[JointSample]:
+        """The samples of the stencil, oldest first (at most three)."""
+        return [JointSample(stamp, q, v) for stamp, q, v in zip(self._stamps, self._q, self._v)]
+
     def clear(self) -> None:
         """Forget the samples and the filter state (the next estimate needs three samples)."""
-        self.samples: list[JointSample] = []
+        self._stamps: list[int] = []
+        self._q = self._v = _NO_ROWS
         self.filtered: np.ndarray | None = None
 
     def restart(self, cause: str) -> None:
@@ -86,76 +96,99 @@ class AccelerationEstimator:
         self.restarts[cause] += 1
         self.clear()
 
+    def _break(self, step: int) -> str | None:
+        """The restart cause of a sample ``step`` ns after the previous one (None: same stream)."""
+        return "backwards" if step <= 0 else "gap" if step > self.max_gap_ns else None
+
     def push(self, sample: JointSample) -> tuple[JointSample, np.ndarray] | None:
         """Add a sample; returns (the middle sample, its acceleration estimate rad/s^2) once
         three of one stream are known. A sample not after the previous one, or more than
         ``max_gap_ns`` after it, restarts the stencil with itself. A non-finite estimate
         restarts it and raises ``non_finite``. Time differences are taken between
         integer-nanosecond stamps, exact at any magnitude (wall-clock stamps included)."""
-        if self.samples:
-            step = sample.stamp_ns - self.samples[-1].stamp_ns
-            if step <= 0 or step > self.max_gap_ns:
-                self.restart("backwards" if step <= 0 else "gap")
-        self.samples = [*self.samples[-2:], sample]
-        if len(self.samples) < 3:
+        if self._stamps:
+            cause = self._break(sample.stamp_ns - self._stamps[-1])
+            if cause is not None:
+                self.restart(cause)
+        if self._stamps:
+            self._stamps = [*self._stamps[-2:], sample.stamp_ns]
+            self._q = np.concatenate((self._q[-2:], sample.q[None, :]))
+            self._v = np.concatenate((self._v[-2:], sample.v[None, :]))
+        else:
+            self._stamps, self._q, self._v = [sample.stamp_ns], sample.q[None, :], sample.v[None, :]
+        if len(self._stamps) < 3:
             return None
-        before, middle, after = self.samples
+        before, middle, after = self._stamps
         with np.errstate(over="ignore", invalid="ignore"):     # checked just below
-            estimate = (after.v - before.v) / ((after.stamp_ns - before.stamp_ns) / NS_PER_S)
+            estimate = (self._v[2] - self._v[0]) / ((after - before) / NS_PER_S)
             if self.time_constant > 0.0 and self.filtered is not None:
-                dt = (after.stamp_ns - middle.stamp_ns) / NS_PER_S
+                dt = (after - middle) / NS_PER_S
                 alpha = dt / (self.time_constant + dt)
                 estimate = self.filtered + alpha * (estimate - self.filtered)
         if not np.isfinite(estimate).all():
             self.restart("non_finite")
-            raise InputRejected("non_finite", f"acceleration estimate at {middle.stamp_ns} ns is not finite "
+            raise InputRejected("non_finite", f"acceleration estimate at {middle} ns is not finite "
                                 "(velocities too large to difference)")
         self.filtered = estimate
-        return middle, estimate
+        return JointSample(middle, self._q[1], self._v[1]), estimate
 
-    def push_many(self, samples: Sequence[JointSample | None]) -> list[tuple[int, JointSample, np.ndarray]] | None:
-        """``push`` of each sample in turn (None: ``clear``, for a rejected one), the
-        estimates computed at once: (index of the sample that completed the stencil, the
-        middle sample, its estimate), in order. None, with nothing changed, when a push
-        would have raised (an estimate not finite) or with a filter (``time_constant`` > 0:
-        each estimate depends on the last); then push one by one."""
+    def push_rows(self, stamps: Sequence[int], q: np.ndarray, v: np.ndarray, taken: Sequence[bool]
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        """``push`` of each row in turn (stamps int ns (N,), q (N, nq), v (N, nv); a row not
+        ``taken``, a rejected sample whose stamp and values are ignored: ``clear``), the
+        estimates computed at once: the middle samples' stamps (int64 ns, (M,)), q (M, nq),
+        v (M, nv) and their estimates a (M, nv; rad/s^2), in order. None, with nothing
+        changed, when a push would have raised (an estimate not finite) or with a filter
+        (``time_constant`` > 0: each estimate depends on the last); then push one by one."""
         if self.time_constant > 0.0:
             return None
-        window, restarts, stencils = list(self.samples), dict.fromkeys(RESTART_CAUSES, 0), []
-        for index, sample in enumerate(samples):
-            if sample is None:
-                window = []
+        held = len(self._stamps)
+        run, last, restarts, ends = held, self._stamps[-1] if held else 0, [], []
+        for k, (stamp, ok) in enumerate(zip(stamps, taken)):     # run: samples of the stream ending at k
+            if not ok:
+                run = 0
                 continue
-            if window:
-                step = sample.stamp_ns - window[-1].stamp_ns
-                if step <= 0 or step > self.max_gap_ns:
-                    restarts["backwards" if step <= 0 else "gap"] += 1
-                    window = []
-            window = [*window[-2:], sample]
-            if len(window) == 3:
-                stencils.append((index, *window))
-        if stencils:
-            spans = np.array([after.stamp_ns - before.stamp_ns for _, before, _, after in stencils]) / NS_PER_S
-            with np.errstate(over="ignore", invalid="ignore"):     # checked just below
-                estimates = (np.array([after.v for *_, after in stencils]) -
-                             np.array([before.v for _, before, _, _ in stencils])) / spans[:, None]
-            if not np.isfinite(estimates).all():
-                return None
+            cause = self._break(stamp - last) if run else None
+            if cause is not None:
+                restarts.append(cause)
+                run = 0
+            run, last = run + 1, stamp
+            if run >= 3:
+                ends.append(held + k)
+        all_stamps = np.array([*self._stamps, *stamps], dtype=np.int64)
+        all_q, all_v = (np.concatenate((self._q, q)), np.concatenate((self._v, v))) if held else (q, v)
+        if ends and ends[-1] - ends[0] != len(ends) - 1:     # stencils of several streams: indices
+            after = np.array(ends, dtype=np.intp)
+            before, middle = after - 2, after - 1
+        else:                                               # of one stream (or none): slices
+            first, count = (ends[0], len(ends)) if ends else (2, 0)
+            before, middle, after = (slice(first + d - 2, first + d - 2 + count) for d in range(3))
+        with np.errstate(over="ignore", invalid="ignore"):     # checked just below
+            spans = (all_stamps[after] - all_stamps[before]) / NS_PER_S
+            estimates = (all_v[after] - all_v[before]) / spans[:, None]
+        if not np.isfinite(estimates).all():
+            return None
+        for cause in restarts:
+            self.restarts[cause] += 1
+        if run < 3:
+            self.filtered = None
+        elif ends:
             self.filtered = estimates[-1]
-        self.samples = window
-        for cause, count in restarts.items():
-            self.restarts[cause] += count
-        return [(index, middle, estimate) for (index, _, middle, _), estimate in zip(stencils, estimates)] \
-            if stencils else []
+        keep = min(run, 3)
+        if keep:
+            self._stamps, self._q, self._v = all_stamps[-keep:].tolist(), all_q[-keep:], all_v[-keep:]
+        else:
+            self._stamps, self._q, self._v = [], _NO_ROWS, _NO_ROWS
+        return all_stamps[middle], all_q[middle], all_v[middle], estimates
 
     def state(self) -> tuple:
         """What ``restore`` puts back: the samples, the filter state, the restart counts."""
-        return list(self.samples), self.filtered, dict(self.restarts)
+        return self._stamps, self._q, self._v, self.filtered, dict(self.restarts)
 
     def restore(self, state: tuple) -> None:
         """Back to a ``state()``."""
-        samples, filtered, restarts = state
-        self.samples, self.filtered, self.restarts = list(samples), filtered, dict(restarts)
+        self._stamps, self._q, self._v, self.filtered, restarts = state
+        self.restarts = dict(restarts)
 
 
 def plausible_limit(robot: Robot, quantity: str = "effort") -> np.ndarray:
