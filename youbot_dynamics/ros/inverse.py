@@ -42,6 +42,7 @@ steady state for v (the bristle deflection cannot be measured).
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -161,13 +162,14 @@ class AccelerationEstimator:
             after = np.array(ends, dtype=np.intp)
             before, middle = after - 2, after - 1
         else:                                               # of one stream (or none): slices
-            first, count = (ends[0], len(ends)) if ends else (2, 0)
-            before, middle, after = (slice(first + d - 2, first + d - 2 + count) for d in range(3))
+            end = ends[-1] + 1 if ends else 2
+            before, middle, after = slice(end - 2 - len(ends), end - 2), slice(end - 1 - len(ends), end - 1), \
+                slice(end - len(ends), end)
         with np.errstate(over="ignore", invalid="ignore"):     # checked just below
             spans = (all_stamps[after] - all_stamps[before]) / NS_PER_S
             estimates = (all_v[after] - all_v[before]) / spans[:, None]
-        if not np.isfinite(estimates).all():
-            return None
+            if not math.isfinite(np.add.reduce(estimates, axis=None)):    # one pass; an overflowing sum: push one by one
+                return None
         for cause in restarts:
             self.restarts[cause] += 1
         if run < 3:

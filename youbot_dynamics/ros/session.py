@@ -870,7 +870,7 @@ class InverseSession(_Session):
         name the joints exactly as the last accepted one did; None when they cannot be taken
         as arrays."""
         key, count = self._names_key, len(samples)
-        if key is None or not all(tuple(names) == key for names, *_ in samples):
+        if key is None or not all(tuple(sample[0]) == key for sample in samples):
             return None
         try:
             values = np.array([sample[1] for sample in samples] + [sample[2] for sample in samples], dtype=float)
@@ -879,9 +879,10 @@ class InverseSession(_Session):
         if values.shape != (2 * count, len(key)):
             return None
         within = np.abs(values.reshape(2, count, -1)) <= self._row_bounds
-        good = [True] * count if within.all() else within.all(axis=(0, 2)).tolist()
-        in_range = [not isinstance(s, InputRejected) and 0 <= s < STAMP_LIMIT_NS for s in stamps]
-        return values[:count, self._columns], values[count:, self._columns], [g and r for g, r in zip(good, in_range)]
+        good = [not isinstance(s, InputRejected) and 0 <= s < STAMP_LIMIT_NS for s in stamps]
+        if not within.all():
+            good = [g and w for g, w in zip(good, within.all(axis=(0, 2)).tolist())]
+        return values[:count, self._columns], values[count:, self._columns], good
 
     def _joint_sample(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
                       stamp_ns: int) -> JointSample:
@@ -949,10 +950,9 @@ class InverseSession(_Session):
         tau = self.dynamics.torques(q, v, a)
         if not (np.abs(tau) <= self._effort_bound).all():     # NaN too
             return None
-        stamps = stamps.tolist()
         if self.recorder.samples or not self.wanted.isdisjoint(KINEMATIC_TOPICS):
-            return [output for k, stamp in enumerate(stamps) for output in self._torque_outputs(stamp, q[k], v[k],
-                                                                                                tau[k])]
+            return [output for k, stamp in enumerate(stamps.tolist())
+                    for output in self._torque_outputs(stamp, q[k], v[k], tau[k])]
         outputs: Outputs = []     # /computed_torques alone: refilled at once
         if "/computed_torques" in self.wanted:
             try:
@@ -961,9 +961,9 @@ class InverseSession(_Session):
                 return None
             outputs = [("/computed_torques", message) for message in torques]
             if self.recorder.records("/computed_torques"):
-                for output, stamp in zip(outputs, stamps):
+                for output, stamp in zip(outputs, stamps.tolist()):
                     self.recorder.write([output], stamp)
-        self.stamp_ns, self.samples = stamps[-1], self.samples + len(stamps)
+        self.stamp_ns, self.samples = int(stamps[-1]), self.samples + len(stamps)
         return outputs
 
     def _joint_state(self, stamp_ns: int, values: np.ndarray) -> object:
