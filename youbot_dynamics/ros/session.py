@@ -798,17 +798,18 @@ class InverseSession(_Session):
         received_ns)), the same outputs in the same order, the rejected samples' errors
         returned (counted) instead of raised. The samples are checked, differenced and
         their torques computed as arrays (Pinocchio's batch RNEA); where a torque is
-        implausible or an estimate not finite, they are taken one by one as
-        :meth:`joint_state` takes them, with the same result."""
+        implausible, they are taken one by one as :meth:`joint_state` takes them, with the
+        same result."""
         stamps, q, v, taken, rejected = self._checked(samples)
         if self.odometry is None and len(samples) > 1:     # one sample: cheaper one by one
             state = self.estimator.state()
-            stencils = self.estimator.push_rows(stamps, q, v, taken)
-            if stencils is not None:
-                outputs = self._torques_of(*stencils)
-                if outputs is not None:
-                    return outputs, rejected
-                self.estimator.restore(state)
+            *stencils, failed = self.estimator.push_rows(stamps, q, v, taken)
+            outputs = self._torques_of(*stencils)
+            if outputs is not None:
+                for error in failed:
+                    self.counters.reject(error)
+                return outputs, rejected
+            self.estimator.restore(state)
         return [output for k, ok in enumerate(taken)
                 for output in self._one(JointSample(stamps[k], q[k], v[k]) if ok else None)], rejected
 
@@ -889,10 +890,9 @@ class InverseSession(_Session):
         """One sample checked (``joint_sample`` and the velocity bound); raises InputRejected.
         Remembers the names of an accepted sample for the array checks."""
         sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
-        too_fast = implausible_joints(self.robot, sample.v, "velocity")
-        if too_fast:
+        if not (np.abs(sample.v) <= self._velocity_bound).all():
             raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
-                                f"limit of {', '.join(too_fast)}")
+                                f"limit of {', '.join(implausible_joints(self.robot, sample.v, 'velocity'))}")
         key = tuple(str(name) for name in names)
         if key != self._names_key:
             self._remember_names(key)
@@ -931,12 +931,11 @@ class InverseSession(_Session):
             return odom
         middle, a = estimate
         tau = self.dynamics.torque(middle.q, middle.v, a)
-        implausible = implausible_joints(self.robot, tau)
-        if implausible:
+        if not (np.abs(tau) <= self._effort_bound).all():     # NaN too
             finite = bool(np.isfinite(tau).all())
             self.counters.reject(InputRejected("implausible_torque" if finite else "non_finite",
                                                f"torque at {middle.stamp_ns} ns beyond the effort-limit bound or "
-                                               f"not finite on {', '.join(implausible)}"))
+                                               f"not finite on {', '.join(implausible_joints(self.robot, tau))}"))
             self.estimator.restart("implausible" if finite else "non_finite")
             return []
         return odom + self._torque_outputs(middle.stamp_ns, middle.q, middle.v, tau)
