@@ -51,8 +51,9 @@ def stream(rng: np.random.Generator, count: int) -> list[tuple]:
     return samples
 
 
-def one_by_one(samples: list[tuple], consumed: set[str] | None) -> tuple[list, InverseSession]:
-    session = InverseSession(SCENE)
+def one_by_one(samples: list[tuple], consumed: set[str] | None, time_constant: float = 0.0
+               ) -> tuple[list, InverseSession]:
+    session = InverseSession(SCENE, filter_time_constant=time_constant)
     session.consumed_by(consumed)
     outputs = []
     for sample in samples:
@@ -63,8 +64,9 @@ def one_by_one(samples: list[tuple], consumed: set[str] | None) -> tuple[list, I
     return outputs, session
 
 
-def batched(samples: list[tuple], size: int, consumed: set[str] | None) -> tuple[list, InverseSession, int]:
-    session = InverseSession(SCENE)
+def batched(samples: list[tuple], size: int, consumed: set[str] | None, time_constant: float = 0.0
+            ) -> tuple[list, InverseSession, int]:
+    session = InverseSession(SCENE, filter_time_constant=time_constant)
     session.consumed_by(consumed)
     outputs, rejected = [], 0
     for start in range(0, len(samples), size):
@@ -90,6 +92,18 @@ def test_a_batch_gives_what_one_by_one_gives(seed: int, size: int, consumed: set
     assert reference.samples == session.samples > 100       # the stream did give torques
     assert reference.counters.rejected.get("implausible_torque", 0) > 0   # and the faults happened
     assert reference.estimator.restarts["gap"] > 0 and reference.estimator.restarts["backwards"] > 0
+
+
+@pytest.mark.parametrize("size", [2, 5, 64])
+def test_a_filtered_batch_gives_what_one_by_one_gives(size: int) -> None:
+    """With the acceleration low-pass (each estimate filtered from the last) too."""
+    samples = stream(np.random.default_rng(3), 300)
+    expected, reference = one_by_one(samples, {"/computed_torques"}, 0.02)
+    outputs, session, _ = batched(samples, size, {"/computed_torques"}, 0.02)
+    assert [to_cdr(message) for _, message in outputs] == [to_cdr(message) for _, message in expected]
+    assert session.counters.as_values() == reference.counters.as_values()
+    assert session.estimator.restarts == reference.estimator.restarts
+    assert reference.samples == session.samples > 100
 
 
 def driver_stream(rng: np.random.Generator, count: int) -> list[tuple]:
