@@ -184,6 +184,9 @@ class AccelerationEstimator:
         (M, nv; rad/s^2), in order, and the ``non_finite`` errors ``push`` would have
         raised (the estimate restarted at each)."""
         held, count = len(self._stamps), len(stamps)
+        if not len(q) == len(v) == len(taken) == count or np.ndim(v) != 2:     # the compiled loop trusts them
+            raise ValueError(f"push_rows: {count} stamps need as many rows of q and v and taken flags; got "
+                             f"q {np.shape(q)}, v {np.shape(v)}, {len(taken)} flags")
         all_stamps = np.array([*self._stamps, *stamps], dtype=np.int64)
         all_q, all_v = ((np.concatenate((self._q, q)), np.concatenate((self._v, v))) if held
                         else (q, np.asarray(v, dtype=float)))
