@@ -51,8 +51,9 @@ def stream(rng: np.random.Generator, count: int) -> list[tuple]:
     return samples
 
 
-def one_by_one(samples: list[tuple], consumed: set[str] | None) -> tuple[list, InverseSession]:
-    session = InverseSession(SCENE)
+def one_by_one(samples: list[tuple], consumed: set[str] | None, time_constant: float = 0.0
+               ) -> tuple[list, InverseSession]:
+    session = InverseSession(SCENE, filter_time_constant=time_constant)
     session.consumed_by(consumed)
     outputs = []
     for sample in samples:
@@ -63,8 +64,9 @@ def one_by_one(samples: list[tuple], consumed: set[str] | None) -> tuple[list, I
     return outputs, session
 
 
-def batched(samples: list[tuple], size: int, consumed: set[str] | None) -> tuple[list, InverseSession, int]:
-    session = InverseSession(SCENE)
+def batched(samples: list[tuple], size: int, consumed: set[str] | None, time_constant: float = 0.0
+            ) -> tuple[list, InverseSession, int]:
+    session = InverseSession(SCENE, filter_time_constant=time_constant)
     session.consumed_by(consumed)
     outputs, rejected = [], 0
     for start in range(0, len(samples), size):
@@ -90,3 +92,59 @@ def test_a_batch_gives_what_one_by_one_gives(seed: int, size: int, consumed: set
     assert reference.samples == session.samples > 100       # the stream did give torques
     assert reference.counters.rejected.get("implausible_torque", 0) > 0   # and the faults happened
     assert reference.estimator.restarts["gap"] > 0 and reference.estimator.restarts["backwards"] > 0
+
+
+@pytest.mark.parametrize("size", [2, 5, 64])
+def test_a_filtered_batch_gives_what_one_by_one_gives(size: int) -> None:
+    """With the acceleration low-pass (each estimate filtered from the last) too."""
+    samples = stream(np.random.default_rng(3), 300)
+    expected, reference = one_by_one(samples, {"/computed_torques"}, 0.02)
+    outputs, session, _ = batched(samples, size, {"/computed_torques"}, 0.02)
+    assert [to_cdr(message) for _, message in outputs] == [to_cdr(message) for _, message in expected]
+    assert session.counters.as_values() == reference.counters.as_values()
+    assert session.estimator.restarts == reference.estimator.restarts
+    assert reference.samples == session.samples > 100
+
+
+def driver_stream(rng: np.random.Generator, count: int) -> list[tuple]:
+    """A stream as a driver publishes it: every joint of the robot named (wheels and fingers,
+    which do not move in the scene, too), not in joint order, with faults in those columns
+    and velocities at and beyond the plausible bound (10 x the URDF limit)."""
+    arm = list(SCENE.robot.joint_names)
+    names = ["wheel_joint_fl", "wheel_joint_fr", *reversed(arm), "gripper_finger_joint_l", "gripper_finger_joint_r"]
+    column = {name: names.index(name) for name in arm}
+    bound = 10.0 * np.asarray(SCENE.robot.velocity_limit)
+    samples, stamp = [], 0
+    for k in range(count):
+        stamp += PERIOD_NS
+        t = stamp * 1e-9
+        position, velocity = np.zeros(len(names)), np.full(len(names), 0.01)
+        for i, name in enumerate(arm):
+            position[column[name]] = SCENE.q0[i] + 0.2 * np.sin(3 * t + i)
+            velocity[column[name]] = 0.6 * np.cos(3 * t + i)
+        fault = rng.random()
+        if fault < 0.03:
+            position[0] = np.inf                                  # a wheel: non_finite
+        elif fault < 0.06:
+            velocity[-1] = np.nan                                 # a finger: non_finite
+        elif fault < 0.08:
+            velocity[column[arm[1]]] = bound[1]                   # at the bound: taken
+        elif fault < 0.10:
+            velocity[column[arm[2]]] = -np.nextafter(bound[2], np.inf)   # beyond it: out_of_limits
+        samples.append((names, position.tolist(), velocity.tolist(), stamp, stamp + 7))
+    return samples
+
+
+@pytest.mark.parametrize("size", [2, 5, 64])
+def test_a_batch_of_a_driver_stream_gives_what_one_by_one_gives(size: int) -> None:
+    """Names in another order and of joints that do not move: the array checks (finite on
+    every column, the velocity bound on the moving joints') reject what ``joint_state``
+    rejects, with the same kind, and the torques are the same to the bit."""
+    samples = driver_stream(np.random.default_rng(7), 300)
+    expected, reference = one_by_one(samples, {"/computed_torques"})
+    outputs, session, rejected = batched(samples, size, {"/computed_torques"})
+    assert [to_cdr(message) for _, message in outputs] == [to_cdr(message) for _, message in expected]
+    assert session.counters.as_values() == reference.counters.as_values()
+    assert session.estimator.restarts == reference.estimator.restarts
+    assert reference.counters.rejected["non_finite"] > 0 and reference.counters.rejected["out_of_limits"] > 0
+    assert reference.samples == session.samples > 100

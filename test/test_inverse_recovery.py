@@ -154,3 +154,78 @@ def test_estimator_clears_on_restart() -> None:
     assert estimator.filtered is not None and len(estimator.samples) == 3
     estimator.push(JointSample(100, np.zeros(2), np.zeros(2)))
     assert estimator.filtered is None and len(estimator.samples) == 1 and estimator.restarts["gap"] == 1
+
+
+def central_differences(stamps: list[int], v: np.ndarray, taken: list[bool], time_constant: float,
+                        max_gap_ns: int = 100_000_000) -> tuple[list[tuple[int, int, bytes]], dict[str, int]]:
+    """The module docstring's estimate written out sample by sample: (middle sample's stamp
+    and index, estimate bytes) of each estimate, and the restarts by cause (rows not
+    ``taken`` clear the stencil)."""
+    window: list[int] = []
+    filtered, estimates, restarts = None, [], {"backwards": 0, "gap": 0, "non_finite": 0}
+    for k, stamp in enumerate(stamps):
+        if not taken[k]:
+            window, filtered = [], None
+            continue
+        if window and not 0 < stamp - stamps[window[-1]] <= max_gap_ns:
+            restarts["backwards" if stamp <= stamps[window[-1]] else "gap"] += 1
+            window, filtered = [], None
+        window = [*window[-2:], k]
+        if len(window) < 3:
+            continue
+        before, middle, after = window
+        with np.errstate(over="ignore", invalid="ignore"):
+            estimate = (v[after] - v[before]) / ((stamps[after] - stamps[before]) / 1e9)
+            if time_constant > 0.0 and filtered is not None:
+                dt = (stamps[after] - stamps[middle]) / 1e9
+                estimate = filtered + dt / (time_constant + dt) * (estimate - filtered)
+        if not np.isfinite(estimate).all():
+            restarts["non_finite"] += 1
+            window, filtered = [], None
+            continue
+        filtered = estimate
+        estimates.append((stamps[middle], middle, estimate.tobytes()))
+    return estimates, restarts
+
+
+@pytest.mark.parametrize("time_constant", [0.0, 0.01])
+def test_estimator_pushes_as_written_out(time_constant: float) -> None:
+    """``push`` sample by sample and ``push_rows`` in batches (rejected rows clearing the
+    stencil) give the estimates of the rule written out (:func:`central_differences`), to
+    the bit, with the same restarts (backwards, gap, and non_finite where a velocity
+    difference overflows), whatever the batch boundaries."""
+    from youbot_dynamics.ros.commands import JointSample
+    rng = np.random.default_rng(11)
+    count = 120
+    steps = rng.choice([PERIOD_NS, -3 * PERIOD_NS, 200_000_000, 1], size=count, p=[0.85, 0.05, 0.05, 0.05])
+    stamps = (T0_NS + np.cumsum(steps)).tolist()
+    v = rng.normal(size=(count, 3))
+    v = np.where(rng.random((count, 1)) < 0.08, np.copysign(1.7e308, v), v)     # differences overflow
+    q = rng.normal(size=(count, 3))
+    taken = (rng.random(count) > 0.08).tolist()
+    estimates, restarts = central_differences(stamps, v, taken, time_constant)
+    expected = [(stamp, q[k].tobytes(), v[k].tobytes(), a) for stamp, k, a in estimates]
+    assert restarts["non_finite"] > 0 and restarts["backwards"] > 0 and restarts["gap"] > 0
+    one_by_one, got, errors = AccelerationEstimator(time_constant), [], 0
+    for k in range(count):
+        if not taken[k]:
+            one_by_one.clear()
+            continue
+        try:
+            result = one_by_one.push(JointSample(stamps[k], q[k], v[k]))
+        except InputRejected:
+            errors += 1
+            continue
+        if result is not None:
+            middle, a = result
+            got.append((middle.stamp_ns, middle.q.tobytes(), middle.v.tobytes(), a.tobytes()))
+    assert got == expected and errors == restarts["non_finite"] and one_by_one.restarts == {**restarts, "implausible": 0}
+    for size in (2, 7, count):
+        estimator, got, errors = AccelerationEstimator(time_constant), [], 0
+        for start in range(0, count, size):
+            rows = slice(start, start + size)
+            middle, mq, mv, a, failed = estimator.push_rows(stamps[rows], q[rows], v[rows], taken[rows])
+            got += [(int(middle[i]), mq[i].tobytes(), mv[i].tobytes(), a[i].tobytes()) for i in range(len(middle))]
+            errors += len(failed)
+        assert got == expected and errors == restarts["non_finite"] and estimator.restarts == one_by_one.restarts
+        assert [s.stamp_ns for s in estimator.samples] == [s.stamp_ns for s in one_by_one.samples]

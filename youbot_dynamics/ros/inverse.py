@@ -42,12 +42,14 @@ steady state for v (the bristle deflection cannot be measured).
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
+from numba import njit, types
 
-from youbot_dynamics.dynamics.friction import JointFriction
+from youbot_dynamics.dynamics.friction import JointFriction, unchecked
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics, inverse_dynamics_batch
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.robot import Robot
@@ -61,11 +63,81 @@ PLAUSIBLE_FACTOR = 10.0
 RESTART_CAUSES = ("backwards", "gap", "non_finite", "implausible")
 """Why the estimate restarted: a sample not after the previous one, a gap longer than
 ``max_gap_ns``, a non-finite estimate, an implausible torque (counted by the session)."""
+_NO_ROWS = np.empty((0, 0))
+"""The q and v rows of an empty stencil."""
+_LARGEST_INT64 = 2**63 - 1
+"""A larger ``max_gap_ns`` is no bound (two stamps of builtin_interfaces/Time are less apart)."""
+
+_INTS = types.Array(types.int64, 1, "C")
+_SIGNATURE = types.UniTuple(types.int64, 6)(
+    types.Array(types.int64, 1, "C", readonly=True), types.Array(types.boolean, 1, "C", readonly=True),
+    types.Array(types.float64, 2, "A", readonly=True), types.int64, types.int64, types.float64,
+    types.Array(types.float64, 1, "C"), types.boolean, _INTS, types.Array(types.float64, 2, "C"), _INTS)
+"""(stamps, taken, v, held, max_gap_ns, time_constant, filtered, known, ends, estimates,
+failed) -> (kept, failed, run, backwards, gaps, known): see :func:`_central_differences`."""
+
+
+@njit(_SIGNATURE, cache=True)
+def _central_differences(stamps: np.ndarray, taken: np.ndarray, v: np.ndarray, held: int, max_gap_ns: int,
+                         time_constant: float, filtered: np.ndarray, known: bool, ends: np.ndarray,
+                         estimates: np.ndarray, failed: np.ndarray) -> tuple[int, int, int, int, int, int]:
+    """The stencils of rows pushed one by one (see the module docstring): ``stamps`` (int
+    ns) and ``v`` rows of the ``held`` samples of the stencil, then of the new ones, of which
+    those not ``taken`` (index k - held) clear it. For each new row k that completes three
+    samples of one stream: ends[i] = k and estimates[i] its estimate (rad/s^2), filtered
+    (``time_constant`` > 0 s) from ``filtered`` when ``known``; an estimate not finite
+    restarts the stencil and is not kept (failed[j] = k). ``filtered`` ends as the filter's
+    state. Returns (estimates kept, failed, samples of the stream at the end, restarts
+    backwards, restarts gap, whether ``filtered`` is known)."""
+    run, count, bad, backwards, gaps = held, 0, 0, 0, 0
+    for k in range(held, stamps.shape[0]):
+        if not taken[k - held]:
+            run, known = 0, False
+            continue
+        if run > 0:
+            step = stamps[k] - stamps[k - 1]
+            if step <= 0 or step > max_gap_ns:
+                if step <= 0:
+                    backwards += 1
+                else:
+                    gaps += 1
+                run, known = 0, False
+        run += 1
+        if run < 3:
+            continue
+        span = (stamps[k] - stamps[k - 2]) / NS_PER_S
+        smooth, alpha = time_constant > 0.0 and known, 0.0
+        if smooth:
+            dt = (stamps[k] - stamps[k - 1]) / NS_PER_S
+            alpha = dt / (time_constant + dt)
+        finite = True
+        for j in range(v.shape[1]):
+            estimate = (v[k, j] - v[k - 2, j]) / span
+            if smooth:
+                estimate = filtered[j] + alpha * (estimate - filtered[j])
+            finite = finite and math.isfinite(estimate)
+            estimates[count, j] = estimate
+        if not finite:
+            failed[bad] = k
+            bad += 1
+            run, known = 0, False
+            continue
+        filtered[:] = estimates[count]
+        known = True
+        ends[count] = k
+        count += 1
+    return count, bad, run, backwards, gaps, 1 if known else 0
+
+
+_central_differences_unchecked = unchecked(_central_differences)
+"""The same without numba's type dispatch (callers pass exactly the signature's types)."""
 
 
 class AccelerationEstimator:
     """Central differences of velocity over the last three samples of one unbroken stream
-    (see the module docstring); ``max_gap_ns`` (int ns > 0) is the longest spacing."""
+    (see the module docstring); ``max_gap_ns`` (int ns > 0) is the longest spacing. The
+    samples of the stencil (at most three, oldest first) are held as arrays: their stamps
+    (int ns), q and v rows. One compiled loop pushes a sample or a batch of them."""
 
     def __init__(self, time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS) -> None:
         if not time_constant >= 0.0:
@@ -76,9 +148,15 @@ class AccelerationEstimator:
         self.restarts = dict.fromkeys(RESTART_CAUSES, 0)
         self.clear()
 
+    @property
+    def samples(self) -> list[JointSample]:
+        """The samples of the stencil, oldest first (at most three)."""
+        return [JointSample(stamp, q, v) for stamp, q, v in zip(self._stamps, self._q, self._v)]
+
     def clear(self) -> None:
         """Forget the samples and the filter state (the next estimate needs three samples)."""
-        self.samples: list[JointSample] = []
+        self._stamps: list[int] = []
+        self._q = self._v = _NO_ROWS
         self.filtered: np.ndarray | None = None
 
     def restart(self, cause: str) -> None:
@@ -92,70 +170,56 @@ class AccelerationEstimator:
         ``max_gap_ns`` after it, restarts the stencil with itself. A non-finite estimate
         restarts it and raises ``non_finite``. Time differences are taken between
         integer-nanosecond stamps, exact at any magnitude (wall-clock stamps included)."""
-        if self.samples:
-            step = sample.stamp_ns - self.samples[-1].stamp_ns
-            if step <= 0 or step > self.max_gap_ns:
-                self.restart("backwards" if step <= 0 else "gap")
-        self.samples = [*self.samples[-2:], sample]
-        if len(self.samples) < 3:
-            return None
-        before, middle, after = self.samples
-        with np.errstate(over="ignore", invalid="ignore"):     # checked just below
-            estimate = (after.v - before.v) / ((after.stamp_ns - before.stamp_ns) / NS_PER_S)
-            if self.time_constant > 0.0 and self.filtered is not None:
-                dt = (after.stamp_ns - middle.stamp_ns) / NS_PER_S
-                alpha = dt / (self.time_constant + dt)
-                estimate = self.filtered + alpha * (estimate - self.filtered)
-        if not np.isfinite(estimate).all():
-            self.restart("non_finite")
-            raise InputRejected("non_finite", f"acceleration estimate at {middle.stamp_ns} ns is not finite "
-                                "(velocities too large to difference)")
-        self.filtered = estimate
-        return middle, estimate
+        stamps, q, v, estimates, failed = self.push_rows([sample.stamp_ns], sample.q[None, :], sample.v[None, :],
+                                                         [True])
+        if failed:
+            raise failed[0]
+        return (JointSample(int(stamps[0]), q[0], v[0]), estimates[0]) if len(stamps) else None
 
-    def push_many(self, samples: Sequence[JointSample | None]) -> list[tuple[int, JointSample, np.ndarray]] | None:
-        """``push`` of each sample in turn (None: ``clear``, for a rejected one), the
-        estimates computed at once: (index of the sample that completed the stencil, the
-        middle sample, its estimate), in order. None, with nothing changed, when a push
-        would have raised (an estimate not finite) or with a filter (``time_constant`` > 0:
-        each estimate depends on the last); then push one by one."""
-        if self.time_constant > 0.0:
-            return None
-        window, restarts, stencils = list(self.samples), dict.fromkeys(RESTART_CAUSES, 0), []
-        for index, sample in enumerate(samples):
-            if sample is None:
-                window = []
-                continue
-            if window:
-                step = sample.stamp_ns - window[-1].stamp_ns
-                if step <= 0 or step > self.max_gap_ns:
-                    restarts["backwards" if step <= 0 else "gap"] += 1
-                    window = []
-            window = [*window[-2:], sample]
-            if len(window) == 3:
-                stencils.append((index, *window))
-        if stencils:
-            spans = np.array([after.stamp_ns - before.stamp_ns for _, before, _, after in stencils]) / NS_PER_S
-            with np.errstate(over="ignore", invalid="ignore"):     # checked just below
-                estimates = (np.array([after.v for *_, after in stencils]) -
-                             np.array([before.v for _, before, _, _ in stencils])) / spans[:, None]
-            if not np.isfinite(estimates).all():
-                return None
-            self.filtered = estimates[-1]
-        self.samples = window
-        for cause, count in restarts.items():
-            self.restarts[cause] += count
-        return [(index, middle, estimate) for (index, _, middle, _), estimate in zip(stencils, estimates)] \
-            if stencils else []
+    def push_rows(self, stamps: Sequence[int], q: np.ndarray, v: np.ndarray, taken: Sequence[bool]
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[InputRejected]]:
+        """``push`` of each row in turn (stamps int ns (N,), q (N, nq), v (N, nv); a row not
+        ``taken``, a rejected sample whose stamp and values are ignored: ``clear``): the
+        middle samples' stamps (int64 ns, (M,)), q (M, nq), v (M, nv) and their estimates
+        (M, nv; rad/s^2), in order, and the ``non_finite`` errors ``push`` would have
+        raised (the estimate restarted at each)."""
+        held, count = len(self._stamps), len(stamps)
+        if not len(q) == len(v) == len(taken) == count or np.ndim(v) != 2:     # the compiled loop trusts them
+            raise ValueError(f"push_rows: {count} stamps need as many rows of q and v and taken flags; got "
+                             f"q {np.shape(q)}, v {np.shape(v)}, {len(taken)} flags")
+        all_stamps = np.array([*self._stamps, *stamps], dtype=np.int64)
+        all_q, all_v = ((np.concatenate((self._q, q)), np.concatenate((self._v, v))) if held
+                        else (q, np.asarray(v, dtype=float)))
+        filtered, known = (np.empty(all_v.shape[1]), False) if self.filtered is None else (self.filtered.copy(), True)
+        ends, failed = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
+        estimates = np.empty((count, all_v.shape[1]))
+        kept, bad, run, backwards, gaps, known = _central_differences_unchecked(     # the types it was compiled for
+            all_stamps, np.array(taken, dtype=bool), all_v, held, min(self.max_gap_ns, _LARGEST_INT64),
+            self.time_constant, filtered, known, ends, estimates, failed)
+        if backwards or gaps or bad:
+            self.restarts["backwards"] += backwards
+            self.restarts["gap"] += gaps
+            self.restarts["non_finite"] += bad
+        self.filtered = filtered if known else None
+        keep = min(run, 3)
+        self._stamps, self._q, self._v = ((all_stamps[-keep:].tolist(), all_q[-keep:], all_v[-keep:]) if keep
+                                          else ([], _NO_ROWS, _NO_ROWS))
+        if kept and ends[kept - 1] - ends[0] == kept - 1:     # one stream: slices
+            middle = slice(int(ends[0]) - 1, int(ends[0]) - 1 + kept)
+        else:
+            middle = ends[:kept] - 1
+        errors = [InputRejected("non_finite", f"acceleration estimate at {all_stamps[k - 1]} ns is not finite "
+                                "(velocities too large to difference)") for k in failed[:bad].tolist()] if bad else []
+        return all_stamps[middle], all_q[middle], all_v[middle], estimates[:kept], errors
 
     def state(self) -> tuple:
         """What ``restore`` puts back: the samples, the filter state, the restart counts."""
-        return list(self.samples), self.filtered, dict(self.restarts)
+        return self._stamps, self._q, self._v, self.filtered, dict(self.restarts)
 
     def restore(self, state: tuple) -> None:
         """Back to a ``state()``."""
-        samples, filtered, restarts = state
-        self.samples, self.filtered, self.restarts = list(samples), filtered, dict(restarts)
+        self._stamps, self._q, self._v, self.filtered, restarts = state
+        self.restarts = dict(restarts)
 
 
 def plausible_limit(robot: Robot, quantity: str = "effort") -> np.ndarray:

@@ -756,8 +756,8 @@ class InverseSession(_Session):
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self._torques = Refilled()
         self._names_key: tuple[str, ...] | None = None
-        """The names of the last sample accepted through ``joint_sample`` (``_index``: its
-        positions of the robot's joints)."""
+        """The names of the last sample accepted through ``joint_sample`` (see
+        ``_remember_names``)."""
         self._velocity_bound = plausible_limit(self.robot, "velocity")
         self._effort_bound = plausible_limit(self.robot, "effort")
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
@@ -799,90 +799,118 @@ class InverseSession(_Session):
         received_ns)), the same outputs in the same order, the rejected samples' errors
         returned (counted) instead of raised. The samples are checked, differenced and
         their torques computed as arrays (Pinocchio's batch RNEA); where a torque is
-        implausible or an estimate not finite, they are taken one by one as
-        :meth:`joint_state` takes them, with the same result."""
-        checked = self._checked(samples)
-        rejected = [sample for sample in checked if isinstance(sample, InputRejected)]
-        sequence = [None if isinstance(sample, InputRejected) else sample for sample in checked]
-        if self.odometry is None and len(sequence) > 1:     # one sample: cheaper one by one
+        implausible, they are taken one by one as :meth:`joint_state` takes them, with the
+        same result."""
+        stamps, q, v, taken, rejected = self._checked(samples)
+        if self.odometry is None and len(samples) > 1:     # one sample: cheaper one by one
             state = self.estimator.state()
-            stencils = self.estimator.push_many(sequence)
-            if stencils is not None:
-                outputs = self._torques_of(stencils)
-                if outputs is not None:
-                    return outputs, rejected
-                self.estimator.restore(state)
-        return [output for sample in sequence for output in self._one(sample)], rejected
+            *stencils, failed = self.estimator.push_rows(stamps, q, v, taken)
+            outputs = self._torques_of(*stencils)
+            if outputs is not None:
+                for error in failed:
+                    self.counters.reject(error)
+                return outputs, rejected
+            self.estimator.restore(state)
+        return [output for k, ok in enumerate(taken)
+                for output in self._one(JointSample(stamps[k], q[k], v[k]) if ok else None)], rejected
 
-    def _checked(self, samples: Sequence[tuple]) -> list[JointSample | InputRejected]:
-        """Each sample checked (see :meth:`joint_state`) and counted: a JointSample, or the
-        InputRejected it raised. Samples naming the joints as the last accepted one did are
-        checked as arrays; any that fails, and any other, through ``joint_sample``."""
-        stamps: list[int | InputRejected] = []
-        for _, _, _, stamp_ns, received_ns in samples:
-            unstamped = stamp_ns == 0
-            if unstamped and self.last_unstamped:
-                if received_ns is None:
-                    stamps.append(InputRejected("bad_timing", "joint state not stamped and no receive time given"))
-                    continue
-                stamp_ns = received_ns
-            self.last_unstamped = unstamped
-            stamps.append(stamp_ns)
-        good = self._good_rows(samples, stamps) if len(samples) > 1 else None
-        checked: list[JointSample | InputRejected] = []
+    def _checked(self, samples: Sequence[tuple]
+                 ) -> tuple[list[int], np.ndarray, np.ndarray, list[bool], list[InputRejected]]:
+        """Each sample checked (see :meth:`joint_state`) and counted: the stamps (int ns; 0
+        for a rejected sample), q and v rows in joint order (N, nq) and (N, nv), whether each
+        sample was taken, and the errors of those rejected. Samples naming the joints as the
+        last accepted one did are checked as arrays; any that fails, and any other, through
+        ``_joint_sample``."""
+        stamps = self._stamps_of(samples)
+        rows = self._good_rows(samples, stamps) if len(samples) > 1 else None
+        if rows is not None and all(rows[2]):
+            self.counters.accepted += len(samples)
+            return [int(stamp) for stamp in stamps], rows[0], rows[1], [True] * len(samples), []
+        q, v, good = rows if rows is not None else (np.zeros((len(samples), self.robot.nq)),
+                                                    np.zeros((len(samples), self.robot.nv)), None)
+        taken: list[bool] = []
+        rejected: list[InputRejected] = []
         for k, ((names, position, velocity, _, _), stamp) in enumerate(zip(samples, stamps)):
             try:
                 if isinstance(stamp, InputRejected):
                     raise stamp
-                if good is not None and good[2][k]:
-                    sample = JointSample(int(stamp), good[0][k], good[1][k])
-                else:
+                if good is None or not good[k]:
                     sample = self._joint_sample(names, position, velocity, stamp)
+                    q[k], v[k] = sample.q, sample.v
             except InputRejected as error:
                 self.counters.reject(error)
-                checked.append(error)
+                rejected.append(error)
+                stamps[k] = 0
+                taken.append(False)
                 continue
             self.counters.accepted += 1
-            checked.append(sample)
-        return checked
+            stamps[k] = int(stamp)
+            taken.append(True)
+        return stamps, q, v, taken, rejected
+
+    def _stamps_of(self, samples: Sequence[tuple]) -> list[int | InputRejected]:
+        """The stamp (ns) each sample is taken at: its own, or for the second of two stamped 0
+        in a row, its receive time (``bad_timing`` without one); sets ``last_unstamped``."""
+        stamps: list[int | InputRejected] = [sample[3] for sample in samples]
+        if 0 not in stamps:
+            self.last_unstamped = self.last_unstamped and not stamps
+            return stamps
+        for k, (*_, stamp_ns, received_ns) in enumerate(samples):
+            unstamped = stamp_ns == 0
+            if unstamped and self.last_unstamped:
+                if received_ns is None:
+                    stamps[k] = InputRejected("bad_timing", "joint state not stamped and no receive time given")
+                    continue
+                stamps[k] = received_ns
+            self.last_unstamped = unstamped
+        return stamps
 
     def _good_rows(self, samples: Sequence[tuple], stamps: Sequence[int | InputRejected]
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """(q, v) rows in joint order and which rows pass every check of ``_joint_sample``,
-        for samples that name the joints exactly as the last accepted one did; None when
-        they cannot be taken as arrays."""
-        if self._names_key is None or any(tuple(names) != self._names_key for names, *_ in samples):
+                   ) -> tuple[np.ndarray, np.ndarray, list[bool]] | None:
+        """(q, v) rows in joint order and which rows pass every check of ``_joint_sample``
+        (one comparison: |position| and |velocity| within ``_row_bounds``), for samples that
+        name the joints exactly as the last accepted one did; None when they cannot be taken
+        as arrays."""
+        key, count = self._names_key, len(samples)
+        if key is None or not all(tuple(sample[0]) == key for sample in samples):
             return None
-        width = len(self._names_key)
         try:
-            position = np.array([sample[1] for sample in samples], dtype=float)
-            velocity = np.array([sample[2] for sample in samples], dtype=float)
+            values = np.array([sample[1] for sample in samples] + [sample[2] for sample in samples], dtype=float)
         except (ValueError, TypeError):
             return None
-        if position.shape != (len(samples), width) or velocity.shape != position.shape:
+        if values.shape != (2 * count, len(key)):
             return None
-        stamp = np.array([-1 if isinstance(s, InputRejected) else s for s in stamps], dtype=object)
-        q, v = position[:, self._index], velocity[:, self._index]
-        with np.errstate(invalid="ignore"):
-            good = (np.isfinite(position).all(axis=1) & np.isfinite(velocity).all(axis=1)
-                    & (np.abs(v) <= self._velocity_bound).all(axis=1)
-                    & np.array([0 <= s < STAMP_LIMIT_NS for s in stamp], dtype=bool))
-        return q, v, good
+        within = np.abs(values.reshape(2, count, -1)) <= self._row_bounds
+        good = [not isinstance(s, InputRejected) and 0 <= s < STAMP_LIMIT_NS for s in stamps]
+        if not within.all():
+            good = [g and w for g, w in zip(good, within.all(axis=(0, 2)).tolist())]
+        return values[:count, self._columns], values[count:, self._columns], good
 
     def _joint_sample(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
                       stamp_ns: int) -> JointSample:
         """One sample checked (``joint_sample`` and the velocity bound); raises InputRejected.
         Remembers the names of an accepted sample for the array checks."""
         sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
-        too_fast = implausible_joints(self.robot, sample.v, "velocity")
-        if too_fast:
+        if not (np.abs(sample.v) <= self._velocity_bound).all():
             raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
-                                f"limit of {', '.join(too_fast)}")
+                                f"limit of {', '.join(implausible_joints(self.robot, sample.v, 'velocity'))}")
         key = tuple(str(name) for name in names)
         if key != self._names_key:
-            position_of = {name: i for i, name in enumerate(key)}
-            self._names_key, self._index = key, np.array([position_of[n] for n in self.robot.joint_names])
+            self._remember_names(key)
         return sample
+
+    def _remember_names(self, key: tuple[str, ...]) -> None:
+        """Cache what the array checks need for samples naming ``key``: ``_columns``, the
+        columns of the robot's joints in joint order (a slice when the names are in joint
+        order), and ``_row_bounds`` (2, 1, len(key)), the largest |position| (the largest
+        float: finite) and |velocity| (the velocity bound, finite) of each column."""
+        position_of = {name: i for i, name in enumerate(key)}
+        index = np.array([position_of[n] for n in self.robot.joint_names])
+        largest = np.finfo(float).max
+        bounds = np.full((2, 1, len(key)), largest)
+        bounds[1, 0, index] = np.minimum(self._velocity_bound, largest)
+        in_order = len(key) == len(index) and (index == np.arange(len(index))).all()
+        self._names_key, self._columns, self._row_bounds = key, slice(None) if in_order else index, bounds
 
     def _one(self, sample: JointSample | None) -> Outputs:
         """The outputs of one checked sample (None: a rejected one, which breaks the
@@ -904,55 +932,55 @@ class InverseSession(_Session):
             return odom
         middle, a = estimate
         tau = self.dynamics.torque(middle.q, middle.v, a)
-        implausible = implausible_joints(self.robot, tau)
-        if implausible:
+        if not (np.abs(tau) <= self._effort_bound).all():     # NaN too
             finite = bool(np.isfinite(tau).all())
             self.counters.reject(InputRejected("implausible_torque" if finite else "non_finite",
                                                f"torque at {middle.stamp_ns} ns beyond the effort-limit bound or "
-                                               f"not finite on {', '.join(implausible)}"))
+                                               f"not finite on {', '.join(implausible_joints(self.robot, tau))}"))
             self.estimator.restart("implausible" if finite else "non_finite")
             return []
-        return odom + self._torque_outputs(middle, tau)
+        return odom + self._torque_outputs(middle.stamp_ns, middle.q, middle.v, tau)
 
-    def _torques_of(self, stencils: list[tuple[int, JointSample, np.ndarray]]) -> Outputs | None:
-        """The outputs of the estimates of ``push_many``, torques computed at once; None
-        (nothing done) if a torque is implausible or not finite."""
-        if not stencils:
+    def _torques_of(self, stamps: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> Outputs | None:
+        """The outputs of the estimates of ``push_rows`` (the middle samples' stamps (int64
+        ns), q, v rows and their accelerations), torques computed at once; None (nothing
+        done) if a torque is implausible or not finite."""
+        if not len(stamps):
             return []
-        middles = [middle for _, middle, _ in stencils]
-        tau = self.dynamics.torques(np.array([m.q for m in middles]), np.array([m.v for m in middles]),
-                                    np.array([a for *_, a in stencils]))
-        with np.errstate(invalid="ignore"):
-            if not (np.abs(tau) <= self._effort_bound).all():
-                return None
+        tau = self.dynamics.torques(q, v, a)
+        if not (np.abs(tau) <= self._effort_bound).all():     # NaN too
+            return None
         if self.recorder.samples or not self.wanted.isdisjoint(KINEMATIC_TOPICS):
-            return [output for middle, row in zip(middles, tau) for output in self._torque_outputs(middle, row)]
-        stamps = [middle.stamp_ns for middle in middles]     # /computed_torques alone: refilled at once
-        outputs: Outputs = []
+            return [output for k, stamp in enumerate(stamps.tolist())
+                    for output in self._torque_outputs(stamp, q[k], v[k], tau[k])]
+        outputs: Outputs = []     # /computed_torques alone: refilled at once
         if "/computed_torques" in self.wanted:
-            values = np.hstack([np.array([m.q for m in middles]), np.array([m.v for m in middles]), tau])
             try:
-                torques = self._torques.many(stamps, values, lambda stamp_ns, row: messages.joint_state(
-                    stamp_ns, self.robot.joint_names, *np.split(row, 3)))
+                torques = self._torques.many(stamps, np.concatenate((q, v, tau), axis=1), self._joint_state)
             except messages.MessageFieldError:
                 return None
             outputs = [("/computed_torques", message) for message in torques]
-            for output, stamp in zip(outputs, stamps):
-                self.recorder.write([output], stamp)
-        self.stamp_ns, self.samples = stamps[-1], self.samples + len(stamps)
+            if self.recorder.records("/computed_torques"):
+                for output, stamp in zip(outputs, stamps.tolist()):
+                    self.recorder.write([output], stamp)
+        self.stamp_ns, self.samples = int(stamps[-1]), self.samples + len(stamps)
         return outputs
 
-    def _torque_outputs(self, middle: JointSample, tau: np.ndarray) -> Outputs:
-        """/computed_torques, /ee_pose(s) and /tf of a sample's torque (those wanted), logged."""
-        stamp, wanted = middle.stamp_ns, self.wanted
+    def _joint_state(self, stamp_ns: int, values: np.ndarray) -> object:
+        """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
+        return messages.joint_state(stamp_ns, self.robot.joint_names, *np.split(values, 3))
+
+    def _torque_outputs(self, stamp: int, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> Outputs:
+        """/computed_torques, /ee_pose(s) and /tf of the torque ``tau`` at a sample (stamp
+        int ns, q, v), those wanted, logged."""
+        wanted = self.wanted
         kinematics = self.recorder.samples or not wanted.isdisjoint(KINEMATIC_TOPICS)
-        frames = self.frames.links.at(middle.q) if kinematics else None
+        frames = self.frames.links.at(q) if kinematics else None
         try:
             outputs: Outputs = []
             if "/computed_torques" in wanted:
-                outputs.append(("/computed_torques", self._torques(
-                    stamp, np.concatenate([middle.q, middle.v, tau]), lambda stamp_ns, values: messages.joint_state(
-                        stamp_ns, self.robot.joint_names, *np.split(values, 3)))))
+                outputs.append(("/computed_torques", self._torques(stamp, np.concatenate([q, v, tau]),
+                                                                  self._joint_state)))
             if frames is not None:
                 outputs += self.frames.ee_outputs([stamp], [frames], wanted)[0]
                 if "/tf" in wanted:
@@ -964,9 +992,8 @@ class InverseSession(_Session):
         self.recorder.write(outputs, stamp)
         if self.recorder.samples:
             data = self.dynamics.data
-            energy = kinetic_energy(self.robot, data, middle.q, middle.v) + potential_energy(self.robot, data, middle.q)
-            self.recorder.sample(stamp, self.robot.joint_names, middle.q, middle.v, tau, energy,
-                                 frames.ee[frames.ee_index, :3])
+            energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)
+            self.recorder.sample(stamp, self.robot.joint_names, q, v, tau, energy, frames.ee[frames.ee_index, :3])
         self.stamp_ns, self.samples = stamp, self.samples + 1
         return outputs
 
