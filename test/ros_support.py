@@ -23,6 +23,8 @@ from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
 
 WAIT = 30.0
 """Generous upper bound (s) on any wait for discovery or messages."""
+SPIN_PERIOD = 0.05
+"""Longest wait (s) of one spin_once in :func:`spinning`: how late a stop is noticed."""
 
 
 def domain_id(test_offset: int) -> int:
@@ -63,13 +65,27 @@ def spinning(context: Context, *nodes: Node, single_threaded: bool = False) -> I
     executor = (SingleThreadedExecutor if single_threaded else MultiThreadedExecutor)(context=context)
     for node in nodes:
         executor.add_node(node)
-    thread = threading.Thread(target=executor.spin, daemon=True)
+    stop = threading.Event()
+
+    def spin() -> None:
+        while not stop.is_set() and context.ok():
+            executor.spin_once(timeout_sec=SPIN_PERIOD)
+
+    thread = threading.Thread(target=spin, daemon=True)
     thread.start()
     try:
         yield executor
     finally:
-        executor.shutdown()
+        # Stop taking callbacks and let those under way finish before shutdown() destroys the
+        # executor's guard condition: rclpy's shutdown does not wait for them (it tests its
+        # shutdown flag after setting it), and a callback starting then raised InvalidHandle
+        # in its Task, printed "exception was never retrieved" whenever that Task was
+        # collected, into a later test's captured stderr.
+        stop.set()
         thread.join(timeout=WAIT)
+        for task in list(getattr(executor, "_futures", ())):   # MultiThreadedExecutor's pool
+            wait_until(task.done, what="a callback under way")
+        executor.shutdown()
         for node in nodes:
             node.destroy_node()
 
