@@ -9,7 +9,7 @@
    1 % error (bench/bench_contact_mujoco.py says how, and compares a closed grasp too).
 3. gripping (28 s, two youBots, 7 pairs, constraint stepper PGS at 1 ms): one run of the
    simulator (outputs at the scene's 50 Hz), then the dynamics node's session without ROS
-   (ros/session.py: the simulator advanced sample by sample, solve horizon 0.02 s, the
+   (node/session.py: the simulator advanced sample by sample, solve horizon 0.02 s, the
    messages built) at 50 and 500 Hz (the node's default rate), logs off and on (MCAP in
    rosbag2 form and a Rerun recording, as the node writes them). Real-time factor =
    simulated / wall time; also the sphere's final place, the deepest overlap and the
@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_base import session_wall  # noqa: E402
 from bench_contact_mujoco import (E, H0, ball_drop_mujoco, ball_drop_ours, equal_accuracy,  # noqa: E402
                                   mujoco_module, summary_line, table)
-from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir  # noqa: E402
+from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 #: gripping runs per row; the best wall time is kept (a shared machine slows single runs).

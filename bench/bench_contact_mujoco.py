@@ -49,9 +49,9 @@ import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
 
-from youbot_dynamics.analysis.contact_extremes import ball_drop_data  # noqa: E402
-from youbot_dynamics.sim.integrators import DivergenceError  # noqa: E402
-from youbot_dynamics.sim.scene import Scene, scene_dir  # noqa: E402
+from youbot_dynamics.accuracy.contact_extremes import ball_drop_data  # noqa: E402
+from youbot_dynamics.integrate.integrators import DivergenceError  # noqa: E402
+from youbot_dynamics.scene.schema import Scene, scene_dir  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 E, H0, RADIUS, G = 0.8, 1.0, 0.025, 9.81

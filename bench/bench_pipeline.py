@@ -19,10 +19,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
 
-from youbot_dynamics.sim.integrators import integrate, tolerances_from_tol
-from youbot_dynamics.systems.equations import EXAMPLE_MODELS, modia_pendulum
-from youbot_dynamics.systems.pipeline import run_pipeline
-from youbot_dynamics.systems.uncertain_pendulum import pendulum_rhs
+from youbot_dynamics.integrate.integrators import integrate, tolerances_from_tol
+from youbot_dynamics.studies.equations import EXAMPLE_MODELS, modia_pendulum
+from youbot_dynamics.studies.pipeline import run_pipeline
+from youbot_dynamics.studies.uncertain_pendulum import pendulum_rhs
 
 REPEATS, CALLS = 3, 20000
 

@@ -29,9 +29,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from timing import best_per_call, growth_exponent, machine  # noqa: E402
 from youbot_dynamics.dynamics.friction import JointFriction  # noqa: E402
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics, inverse_dynamics  # noqa: E402
+from youbot_dynamics.integrate.integrators import integrate  # noqa: E402
 from youbot_dynamics.model.robot import Robot, load_robot  # noqa: E402
 from youbot_dynamics.model.screws import fkin_space, jacobian_space, screw_chain  # noqa: E402
-from youbot_dynamics.sim.integrators import integrate  # noqa: E402
 
 DOFS = (5, 10, 20, 40, 60)
 FIGURES = ("PoE FK", "PoE space Jacobian", "RNEA + friction", "ABA + friction", "1 s rk4 simulation")

@@ -32,8 +32,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a sourc
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from timing import best_per_call  # noqa: E402
-from youbot_dynamics.analysis.work_precision import recommend, reference_solution, sweep  # noqa: E402
-from youbot_dynamics.sim.scene import Scene, load_scene  # noqa: E402
+from youbot_dynamics.accuracy.work_precision import recommend, reference_solution, sweep  # noqa: E402
+from youbot_dynamics.scene.schema import Scene, load_scene  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 SCENES = ("arm_swing", "arm_friction", "arm_ptp")

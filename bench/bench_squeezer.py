@@ -14,9 +14,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
-from youbot_dynamics.sim.integrators import IntegrationError  # noqa: E402
-from youbot_dynamics.systems.squeezer import (SEED_FIGURES,  # noqa: E402
-                                              reference_error, simulate_squeezer)
+from youbot_dynamics.integrate.integrators import IntegrationError  # noqa: E402
+from youbot_dynamics.studies.squeezer import SEED_FIGURES, reference_error, simulate_squeezer  # noqa: E402
 
 #: (formulation, integrator, Jacobian: "exact" or "fd" for IDA, "" for ODE integrators)
 CASES = [("index1", "rk45", ""), ("index1", "dop853", ""), ("index1", "cvode_adams", ""),

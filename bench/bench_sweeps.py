@@ -1,7 +1,7 @@
 """Wall time of one sweep serially, on a local Dask cluster of 1 and of 2 worker processes
-(analysis/sweeps.py), and whether the results are identical. The sweep: the BDF1-4
+(accuracy/sweeps.py), and whether the results are identical. The sweep: the BDF1-4
 stability boundary measured by bisection on the solver's own growth along two rays
-(analysis/bdf.py), 8 independent cases. Cluster start-up is timed apart from the sweep.
+(studies/bdf.py), 8 independent cases. Cluster start-up is timed apart from the sweep.
 
 Run: python bench/bench_sweeps.py [--iterations N]
 """
@@ -14,8 +14,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
-from youbot_dynamics.analysis.bdf import measured_boundary_radius  # noqa: E402
-from youbot_dynamics.analysis.sweeps import dask_client, map_cases  # noqa: E402
+from youbot_dynamics.accuracy.sweeps import dask_client, map_cases  # noqa: E402
+from youbot_dynamics.studies.bdf import measured_boundary_radius  # noqa: E402
 
 
 def main() -> int:

@@ -13,8 +13,8 @@ from scipy.linalg import expm
 from youbot_dynamics.dynamics.mobile.base_controller import WheelSpeedPI, wheel_torque_limits
 from youbot_dynamics.dynamics.mobile.mecanum import wheel_speeds, youbot_base
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.integrate.integrators import integrate
 from youbot_dynamics.model.robot import load_robot
-from youbot_dynamics.sim.integrators import integrate
 
 URDF = Path(__file__).resolve().parents[1] / "urdf" / "youbot.urdf"
 BASE = youbot_base()

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import yaml
 
+from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir
 from youbot_dynamics.sim.engine import run
 from youbot_dynamics.sim.model import compile
-from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir
 
 
 def test_the_sphere_rests_while_the_base_drives():

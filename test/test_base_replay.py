@@ -8,8 +8,8 @@ import math
 import numpy as np
 
 from bag_support import read_mcap
-from youbot_dynamics.ros.session import InverseSession, SimulationSession
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.node.session import InverseSession, SimulationSession
+from youbot_dynamics.scene.schema import load_scene
 
 RATE, SAMPLES = 100.0, 250
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from youbot_dynamics.dynamics.mobile.odometry import se2_step
-from youbot_dynamics.ros.commands import InputRejected
-from youbot_dynamics.ros.session import SimulationSession
-from youbot_dynamics.sim.scene import load_scene, scene_dir
+from youbot_dynamics.node.commands import InputRejected
+from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.scene.schema import load_scene, scene_dir
 
 RATE = 100.0
 

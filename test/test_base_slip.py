@@ -18,7 +18,7 @@ from youbot_dynamics.dynamics.mobile.mecanum import roller_normals, youbot_base
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.dynamics.mobile.wheel_floor import (contact_slip_velocities, roller_forces,
                                                          wheel_normal_forces, wheel_spin_torques)
-from youbot_dynamics.sim.integrators import integrate
+from youbot_dynamics.integrate.integrators import integrate
 
 BASE = youbot_base()
 MASS, YAW_INERTIA, WHEEL_INERTIA = 36.06, 3.7, 0.0152  # kg, kg m^2, kg m^2 (the URDF youBot's figures, rounded)

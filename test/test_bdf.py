@@ -9,12 +9,10 @@ import numpy as np
 import pytest
 
 import youbot_dynamics.cli as cli
-from youbot_dynamics.analysis.bdf import (alpha_angle, amplification, bdf_fixed_step,
-                                          coefficients, locus_radius_on_ray,
-                                          measured_growth, root_locus)
-from youbot_dynamics.systems.bdf_study import (SEED_CVODE_ORDER, fixed_step_tables,
-                                               measured_orders)
-from youbot_dynamics.systems.elastic_pendulum import (SEED_STATE0, elastic_pendulum_jacobian,
+from youbot_dynamics.studies.bdf import (alpha_angle, amplification, bdf_fixed_step, coefficients,
+                                         locus_radius_on_ray, measured_growth, root_locus)
+from youbot_dynamics.studies.bdf_study import SEED_CVODE_ORDER, fixed_step_tables, measured_orders
+from youbot_dynamics.studies.elastic_pendulum import (SEED_STATE0, elastic_pendulum_jacobian,
                                                       elastic_pendulum_rhs)
 
 ORDERS = (1, 2, 3, 4)
@@ -143,7 +141,7 @@ def test_explicit_euler_seed_accurate_cells_are_inaccurate_by_position():
 def test_choppy_traces_plot(tmp_path):
     """At rtol = atol = 0.1 both CVODE methods are visibly off the reference (measured
     0.64 m for BDF, 2.29 m for Adams, within 56 and 45 steps)."""
-    from youbot_dynamics.systems.bdf_study import plot_choppy_traces
+    from youbot_dynamics.studies.bdf_study import plot_choppy_traces
     figures = plot_choppy_traces(str(tmp_path / "choppy.png"))
     assert (tmp_path / "choppy.png").stat().st_size > 10_000
     for run in figures.values():

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from youbot_dynamics.analysis import work_precision
+from youbot_dynamics.accuracy import work_precision
 from youbot_dynamics.cli import main
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag
@@ -32,8 +32,8 @@ def no_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(work_precision, "work_precision", ran)
     monkeypatch.setattr("youbot_dynamics.ros.dynamics_node.run", ran)
     monkeypatch.setattr("youbot_dynamics.ros.replay_node.replay_once", ran)
-    monkeypatch.setattr("youbot_dynamics.systems.squeezer.simulate_squeezer", ran)
-    monkeypatch.setattr("youbot_dynamics.systems.woodpecker.Woodpecker.simulate", ran)
+    monkeypatch.setattr("youbot_dynamics.studies.squeezer.simulate_squeezer", ran)
+    monkeypatch.setattr("youbot_dynamics.studies.woodpecker.Woodpecker.simulate", ran)
     monkeypatch.setattr("youbot_dynamics.cli.log_commands.recover_mcap", ran)
 
 

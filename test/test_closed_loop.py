@@ -10,15 +10,14 @@ import pytest
 
 from youbot_dynamics.dynamics.closed_loop import (LoopClosure, holonomic_system_from_robot,
                                                   point_anchor)
-from youbot_dynamics.dynamics.constraints import (HolonomicSystem,
-                                                  accelerations_and_multipliers,
+from youbot_dynamics.dynamics.constraints import (HolonomicSystem, accelerations_and_multipliers,
                                                   consistent_initial_values)
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.integrate.constrained import ConstrainedRun, simulate_holonomic
 from youbot_dynamics.model.robot import Robot, load_robot
-from youbot_dynamics.sim.constrained import ConstrainedRun, simulate_holonomic
-from youbot_dynamics.systems.four_bar import (COUPLER, CRANK, FOUR_BAR_URDF, GROUND,
+from youbot_dynamics.studies.four_bar import (COUPLER, CRANK, FOUR_BAR_URDF, GROUND,
                                               PLANAR_COMPONENTS, ROCKER, four_bar_system)
 
 STEP = 1e-6  # central-difference step (rad, rad/s)

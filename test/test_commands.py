@@ -12,12 +12,12 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.stamps import NS_PER_S as NS
 from youbot_dynamics.model.lie import exp_so3, matrix_from_quaternion
 from youbot_dynamics.model.screws import fkin_space, screw_chain
-from youbot_dynamics.ros.commands import (EffortCommands, InputCounters, InputRejected, JointSample, follow,
-                                          joint_sample, joint_trajectory)
-from youbot_dynamics.ros.frames import LinkFrames
-from youbot_dynamics.ros.inverse import AccelerationEstimator
-from youbot_dynamics.ros.session import InverseSession
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.node.commands import (EffortCommands, InputCounters, InputRejected,
+                                           JointSample, follow, joint_sample, joint_trajectory)
+from youbot_dynamics.node.frames import LinkFrames
+from youbot_dynamics.node.inverse import AccelerationEstimator
+from youbot_dynamics.node.session import InverseSession
+from youbot_dynamics.scene.schema import load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
 

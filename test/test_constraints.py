@@ -12,7 +12,7 @@ from youbot_dynamics.dynamics.constraints import (DAE_FORMULATIONS, HolonomicSys
                                                   consistent_initial_values, dae_form,
                                                   project_positions, project_velocities)
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.constrained import simulate_holonomic
+from youbot_dynamics.integrate.constrained import simulate_holonomic
 
 GRAVITY, LENGTH = 9.81, 0.7
 PENDULUM = HolonomicSystem(

@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from youbot_dynamics.cli import main
-from youbot_dynamics.sim.scene import SceneError, load_scene, scene_dir
+from youbot_dynamics.scene.schema import SceneError, load_scene, scene_dir
 from youbot_dynamics.sim.simulator import Simulator
 
 G = 9.81
@@ -228,7 +228,7 @@ def test_grasp_at_the_friction_cone_limit_creeps_or_slips_as_coulomb_predicts(ca
 
 
 def test_light_body_on_heavy_one_stays_put_with_the_constraint_stepper():
-    from youbot_dynamics.analysis.contact_extremes import light_on_heavy
+    from youbot_dynamics.accuracy.contact_extremes import light_on_heavy
     for row in light_on_heavy():
         assert row["status"] == "ok"
         if row["integrator"].startswith("constraint"):
@@ -254,8 +254,8 @@ def test_stepwise_constraint_stepping_counts_each_contact_event_once():
 def test_first_bounce_of_the_stiffness_sweep_reaches_e_squared_of_the_drop():
     """contact-extremes' bounce figures on the packaged ball_drop (1 m, e = 0.8, exact
     Hunt-Crossley damping): apex e^2 x 1 m, no energy gained at the impact."""
-    from youbot_dynamics.analysis.contact_extremes import (ball_drop_data, first_bounce, integrator_of,
-                                                           run_case)
+    from youbot_dynamics.accuracy.contact_extremes import (ball_drop_data, first_bounce,
+                                                           integrator_of, run_case)
 
     law = {"law": "hunt_crossley", "stiffness": 1e7, "restitution": 0.8, "friction": 0.3}
     simulator, result, status, _ = run_case(ball_drop_data(law, integrator_of("rk45", None), 1.1))

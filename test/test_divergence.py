@@ -15,10 +15,10 @@ import yaml
 
 from youbot_dynamics.cli import main
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.ros.session import SimulationSession
+from youbot_dynamics.integrate.integrators import DivergenceError, StepBudgetError, integrate
+from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.scene.schema import load_scene, scene_dir
 from youbot_dynamics.sim.divergence import DivergenceLimits
-from youbot_dynamics.sim.integrators import (DivergenceError, StepBudgetError, integrate)
-from youbot_dynamics.sim.scene import load_scene, scene_dir
 from youbot_dynamics.sim.simulator import Simulator
 
 
@@ -176,7 +176,7 @@ def test_progress_reports_the_time_reached_at_every_output():
 # ---- 5. no hangs on non-finite values ----------------------------------------------------
 HANG = """
 import numpy as np
-from youbot_dynamics.sim.integrators import DivergenceError, integrate
+from youbot_dynamics.integrate.integrators import DivergenceError, integrate
 try:
     integrate(lambda t, x: np.array([x[1], {g}]), [0.0, {v0}], [0.0, 1.0], "{method}")
 except DivergenceError as error:

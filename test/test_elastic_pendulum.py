@@ -9,14 +9,12 @@ import pytest
 import sympy as sp
 
 import youbot_dynamics.cli as cli
-from youbot_dynamics.sim.integrators import DivergenceError
-from youbot_dynamics.sim.registry import integrator_names
-from youbot_dynamics.systems.elastic_pendulum import (SEED_STATE0, elastic_pendulum_energy,
+from youbot_dynamics.integrate.integrators import DivergenceError
+from youbot_dynamics.integrate.registry import integrator_names
+from youbot_dynamics.studies.elastic_pendulum import (SEED_STATE0, elastic_pendulum_energy,
                                                       elastic_pendulum_jacobian,
-                                                      elastic_pendulum_rhs,
-                                                      elastic_pendulum_study,
-                                                      simulate_elastic_pendulum,
-                                                      stability_verdict)
+                                                      elastic_pendulum_rhs, elastic_pendulum_study,
+                                                      simulate_elastic_pendulum, stability_verdict)
 
 RNG = np.random.default_rng(3)
 STATES = [np.array([1.2, 0.0, 0.0, 0.0]), *(RNG.uniform(-2, 2, size=(4, 4)))]

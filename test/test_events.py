@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from youbot_dynamics.sim.events import Mode, Transition, simulate_hybrid
-from youbot_dynamics.sim.integrators import IntegrationError
+from youbot_dynamics.integrate.events import Mode, Transition, simulate_hybrid
+from youbot_dynamics.integrate.integrators import IntegrationError
 
 G, HEIGHT, RESTITUTION = 9.81, 1.0, 0.8
 
@@ -107,7 +107,7 @@ class BiasedStepper:
 
 
 def test_a_crossing_the_interpolant_does_not_show_falls_back_to_the_step_end():
-    from youbot_dynamics.sim.integration import Event, StateCheck, drive, locate_crossings
+    from youbot_dynamics.integrate.drive import Event, StateCheck, drive, locate_crossings
     names = ("x",)
     solution = drive(BiasedStepper(), "biased", np.array([0.0, 1.0]),
                      [Event("zero", lambda t, x: x[0], 1)], StateCheck("biased", names, None, None),
@@ -125,8 +125,8 @@ def test_sundials_locates_the_guard_itself(integrator):
     """CVODE and IDA stop at the root their own rootfinding located (no Brent step after
     them): the first bounce at sqrt(2 h / g) to 1e-8 relative (measured at rtol 1e-10:
     2.7e-14 with IDA, 4.4e-11 with CVODE BDF)."""
-    from youbot_dynamics.sim.integration import Event
-    from youbot_dynamics.sim.sundials import CvodeStepper, IdaStepper
+    from youbot_dynamics.integrate.drive import Event
+    from youbot_dynamics.integrate.sundials import CvodeStepper, IdaStepper
     ball = bouncing_ball()[0]
     guard = (Event("bounce", lambda t, x: x[0], -1),)
     x0 = np.array([HEIGHT, 0.0])

@@ -10,7 +10,7 @@ import yaml
 
 from youbot_dynamics.dynamics.collision import Shape
 from youbot_dynamics.dynamics.free_body import FreeBody, add_free_flyer
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.scene.schema import load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
 

@@ -1,6 +1,6 @@
 """A free body's rotation coordinates in a scene (``rotation_coordinates: chart | quaternion |
 cardan_adaptive``): each against the closed form of the torque-free axisymmetric top
-(systems/rotations.py, an independent formula), thrown in free fall so that gravity moves the
+(studies/rotations.py, an independent formula), thrown in free fall so that gravity moves the
 centre of mass ballistically and leaves the attitude alone; the tumble through the x-y-z
 sequence's gimbal lock (the adaptive sequence switches, the fixed one of the rotations study
 crawls); the default chart unchanged; the constraint stepper's refusal."""
@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 from youbot_dynamics.model.lie import quaternion_from_matrix
+from youbot_dynamics.model.rotations import SWITCH_ANGLE
+from youbot_dynamics.scene.reader import SceneError
+from youbot_dynamics.scene.schema import Scene
 from youbot_dynamics.sim import engine
 from youbot_dynamics.sim.model import compile
-from youbot_dynamics.sim.scene import Scene
-from youbot_dynamics.sim.scene_reader import SceneError
-from youbot_dynamics.systems.rotations import (RUNS, SWITCH_ANGLE, attitude_error, axisymmetric_top,
+from youbot_dynamics.studies.rotations import (RUNS, attitude_error, axisymmetric_top,
                                                simulate_rotation)
 
 COORDINATES = ("chart", "quaternion", "cardan_adaptive")

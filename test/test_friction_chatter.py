@@ -17,9 +17,9 @@ import pytest
 
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics
+from youbot_dynamics.integrate.integrators import integrate
+from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.model.robot import load_robot
-from youbot_dynamics.sim.integrators import integrate
-from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
 
 INERTIA = 0.01       # kg m^2 about the joint axis
 COULOMB = 0.5        # N m

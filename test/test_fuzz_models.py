@@ -27,7 +27,7 @@ from lxml import etree
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import load_robot
-from youbot_dynamics.sim.scene import find_scene, load_scene
+from youbot_dynamics.scene.schema import find_scene, load_scene
 
 REPO = Path(__file__).resolve().parent.parent
 URDF_TEXT = (REPO / "urdf" / "youbot.urdf").read_text(encoding="utf-8")

@@ -33,10 +33,10 @@ import pytest
 from hypothesis import event, given
 from hypothesis import strategies as st
 
-from youbot_dynamics.ros.session import InverseSession, SimulationSession
-from youbot_dynamics.ros.commands import InputRejected
-from youbot_dynamics.ros.inverse import plausible_limit
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.node.commands import InputRejected
+from youbot_dynamics.node.inverse import plausible_limit
+from youbot_dynamics.node.session import InverseSession, SimulationSession
+from youbot_dynamics.scene.schema import load_scene
 
 try:
     from youbot_dynamics.ros.conversions import to_rclpy

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from youbot_dynamics.sim.scene import IntegratorSpec, load_scene
+from youbot_dynamics.scene.schema import IntegratorSpec, load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
 #: the squeeze has built up by then (s)

@@ -13,7 +13,7 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from youbot_dynamics.sim.scene import SceneError, load_scene, scene_dir
+from youbot_dynamics.scene.schema import SceneError, load_scene, scene_dir
 from youbot_dynamics.sim.simulator import Simulator
 
 RADIUS = 0.025        # m, the sphere's

@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from youbot_dynamics.io.bag_reader import read_bag
-from youbot_dynamics.sim.scene import scene_dir
+from youbot_dynamics.scene.schema import scene_dir
 
 REPO = Path(__file__).resolve().parent.parent
 SIGINT_EXIT_BOUND = 2.0

@@ -1,11 +1,11 @@
-"""IDA's own counters (sim/sundials.py reads them out of SUNDIALS) against what the run
+"""IDA's own counters (integrate/sundials.py reads them out of SUNDIALS) against what the run
 shows from outside: every residual call, and the trial times at which IDA calls it."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from youbot_dynamics.sim.integrators import integrate_dae
+from youbot_dynamics.integrate.integrators import integrate_dae
 
 
 def steep_forced_dae(calls: list):

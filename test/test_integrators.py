@@ -11,9 +11,10 @@ import sksundae
 from scipy.integrate import solve_ivp
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import DivergenceError, Event, IntegratorStats, integrate, integrate_dae
-from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS, integrator_names
-from youbot_dynamics.systems.elastic_pendulum import (STATE_NAMES, elastic_pendulum_jacobian,
+from youbot_dynamics.integrate.integrators import (DivergenceError, Event, IntegratorStats,
+                                                   integrate, integrate_dae)
+from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS, integrator_names
+from youbot_dynamics.studies.elastic_pendulum import (STATE_NAMES, elastic_pendulum_jacobian,
                                                       elastic_pendulum_rhs)
 
 ODE_INTEGRATORS = tuple(name for name in INTEGRATORS if name != "ida")
@@ -340,7 +341,7 @@ def test_bad_arguments_raise_user_input_error(call, message):
 
 
 def test_summary_says_n_a_for_counters_the_backend_does_not_report():
-    from youbot_dynamics.sim.integrators import IntegratorStats
+    from youbot_dynamics.integrate.integrators import IntegratorStats
     stats = IntegratorStats("cvode_bdf", steps=12, rhs_evals=30, jac_evals=2, rejected_steps=None,
                             nonlinear_iterations=None, nonlinear_convergence_failures=None,
                             events=0, wall_time=0.5, simulated_time=2.0)

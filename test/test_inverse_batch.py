@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from youbot_dynamics.ros.commands import InputRejected
+from youbot_dynamics.node.commands import InputRejected
+from youbot_dynamics.node.session import InverseSession
 from youbot_dynamics.ros.conversions import to_cdr
-from youbot_dynamics.ros.session import InverseSession
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.scene.schema import load_scene
 
 SCENE = load_scene("arm_ptp")
 PERIOD_NS = 2_000_000

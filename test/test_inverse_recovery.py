@@ -15,10 +15,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from youbot_dynamics.ros.session import InverseSession
-from youbot_dynamics.ros.commands import InputRejected
-from youbot_dynamics.ros.inverse import PLAUSIBLE_FACTOR, AccelerationEstimator
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.node.commands import InputRejected
+from youbot_dynamics.node.inverse import PLAUSIBLE_FACTOR, AccelerationEstimator
+from youbot_dynamics.node.session import InverseSession
+from youbot_dynamics.scene.schema import load_scene
 
 SCENE = load_scene("arm_ptp")
 ROBOT = SCENE.robot
@@ -148,7 +148,7 @@ def test_unstamped_sample_without_a_receive_time_is_rejected() -> None:
 def test_estimator_clears_on_restart() -> None:
     """A restart forgets the samples and the filter state (``clear``)."""
     estimator = AccelerationEstimator(0.05, max_gap_ns=10)
-    from youbot_dynamics.ros.commands import JointSample
+    from youbot_dynamics.node.commands import JointSample
     for stamp in (1, 2, 3):
         estimator.push(JointSample(stamp, np.zeros(2), np.full(2, float(stamp))))
     assert estimator.filtered is not None and len(estimator.samples) == 3
@@ -194,7 +194,7 @@ def test_estimator_pushes_as_written_out(time_constant: float) -> None:
     stencil) give the estimates of the rule written out (:func:`central_differences`), to
     the bit, with the same restarts (backwards, gap, and non_finite where a velocity
     difference overflows), whatever the batch boundaries."""
-    from youbot_dynamics.ros.commands import JointSample
+    from youbot_dynamics.node.commands import JointSample
     rng = np.random.default_rng(11)
     count = 120
     steps = rng.choice([PERIOD_NS, -3 * PERIOD_NS, 200_000_000, 1], size=count, p=[0.85, 0.05, 0.05, 0.05])

@@ -7,8 +7,8 @@ import pinocchio as pin
 import pytest
 import sympy as sp
 
-from youbot_dynamics.sim.integrators import integrate
-from youbot_dynamics.systems.lagrange import SEED_INITIAL, equilibrium, model
+from youbot_dynamics.integrate.integrators import integrate
+from youbot_dynamics.studies.lagrange import SEED_INITIAL, equilibrium, model
 
 
 def seed_state(name: str) -> np.ndarray:

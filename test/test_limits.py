@@ -19,7 +19,7 @@ import yaml
 
 from youbot_dynamics.model import limits
 from youbot_dynamics.model.robot import URDFError, load_robot
-from youbot_dynamics.sim.scene import SceneError, load_scene
+from youbot_dynamics.scene.schema import SceneError, load_scene
 
 from test_robot_loading import _error, _joint, _link, _two_link, _urdf, _write
 from test_scene import error_of, packaged, write

@@ -10,15 +10,15 @@ import pytest
 import sympy as sp
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import DivergenceError, integrate
-from youbot_dynamics.systems.dummy_derivatives import full_pivot_columns
-from youbot_dynamics.systems.equations import (T, EquationModel, cartesian_pendulum, der,
-                                               first_order_lag, lowpass_filter,
-                                               modia_pendulum, unknown)
-from youbot_dynamics.systems.pipeline import run_pipeline, simulate
-from youbot_dynamics.systems.state_selection import simulate_with_reselection
-from youbot_dynamics.systems.structure import LOWPASS_INCIDENCE, structure_report
-from youbot_dynamics.systems.uncertain_pendulum import pendulum_rhs
+from youbot_dynamics.integrate.integrators import DivergenceError, integrate
+from youbot_dynamics.studies.dummy_derivatives import full_pivot_columns
+from youbot_dynamics.studies.equations import (T, EquationModel, cartesian_pendulum, der,
+                                               first_order_lag, lowpass_filter, modia_pendulum,
+                                               unknown)
+from youbot_dynamics.studies.pipeline import run_pipeline, simulate
+from youbot_dynamics.studies.state_selection import simulate_with_reselection
+from youbot_dynamics.studies.structure import LOWPASS_INCIDENCE, structure_report
+from youbot_dynamics.studies.uncertain_pendulum import pendulum_rhs
 
 
 @pytest.fixture(scope="module")

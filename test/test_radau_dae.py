@@ -1,4 +1,4 @@
-"""Radau IIA (order 5) for DAEs (sim/radau_dae.py): its coefficients against the published
+"""Radau IIA (order 5) for DAEs (integrate/radau_dae.py): its coefficients against the published
 Butcher tableau, an ODE and an index-3 DAE with closed-form solutions, and the effect of
 the index-dependent error scaling."""
 from __future__ import annotations
@@ -8,10 +8,10 @@ import pytest
 
 from youbot_dynamics.dynamics.constraints import HolonomicSystem, dae_form
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim import radau_dae
-from youbot_dynamics.sim.integration import DivergenceError
-from youbot_dynamics.sim.radau_dae import (holonomic_index, integrate_dae_form,
-                                           integrate_radau_dae)
+from youbot_dynamics.integrate import radau_dae
+from youbot_dynamics.integrate.drive import DivergenceError
+from youbot_dynamics.integrate.radau_dae import (holonomic_index, integrate_dae_form,
+                                                 integrate_radau_dae)
 
 SQRT6 = np.sqrt(6.0)
 #: Radau IIA order 5 (Hairer and Wanner, Solving ODEs II, Table IV.5.6).

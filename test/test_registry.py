@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import integrate
-from youbot_dynamics.sim.registry import (FIXED_STEP, INTEGRATORS, REGISTRY, STEPPERS,
-                                          integrator_entry, integrator_kind, integrator_names,
-                                          is_fixed_step)
-from youbot_dynamics.sim.scene import Scene, SceneError
+from youbot_dynamics.integrate.integrators import integrate
+from youbot_dynamics.integrate.registry import (FIXED_STEP, INTEGRATORS, REGISTRY, STEPPERS,
+                                                integrator_entry, integrator_kind, integrator_names,
+                                                is_fixed_step)
+from youbot_dynamics.scene.schema import Scene, SceneError
 
 
 def test_every_name_has_one_kind_and_the_lists_derive_from_the_table():

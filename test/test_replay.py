@@ -26,10 +26,10 @@ from youbot_dynamics.errors import UserInputError  # noqa: E402
 from youbot_dynamics.io import messages  # noqa: E402
 from youbot_dynamics.io.bag_reader import read_bag  # noqa: E402
 from youbot_dynamics.io.mcap_log import McapLogger  # noqa: E402
+from youbot_dynamics.node.session import InverseSession  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.replay_node import ReplayNode  # noqa: E402
-from youbot_dynamics.ros.session import InverseSession  # noqa: E402
-from youbot_dynamics.sim.scene import load_scene  # noqa: E402
+from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
@@ -78,7 +78,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def acceleration_error_bound(times: np.ndarray, q: np.ndarray, h: float) -> np.ndarray:
-    """The torque error the central difference allows at each sample (see ros/inverse.py):
+    """The torque error the central difference allows at each sample (see node/inverse.py):
     sum_j |M_ij(q_k)| max_{|s - t_k| <= h} |a_j(s) - a_j(t_k)|, with a(s) from the
     simulator on a grid 20 times finer than the samples."""
     simulator = Simulator(load_scene("arm_ptp"))

@@ -1,5 +1,5 @@
-"""``youbot-dynamics report`` (analysis/report.py): the studies' tables, the seeds'
-figures drawn from our runs (analysis/figures.py) and one page with a section per study and
+"""``youbot-dynamics report`` (studies/report.py): the studies' tables, the seeds'
+figures drawn from our runs (studies/figures.py) and one page with a section per study and
 a subsection per figure. CI runs a smoke form (a few quick studies, on a local Dask cluster
 of two processes, about 40 s on a loaded machine); the whole short form is marked slow."""
 from __future__ import annotations
@@ -10,11 +10,10 @@ from pathlib import Path
 import pytest
 from PIL import Image
 
-from youbot_dynamics.analysis.figures import all_specs, figure_sets
-from youbot_dynamics.analysis.report import (PAGE, STUDIES, STUDY_NAMES, Study,
-                                             markdown_rows, missing_in_build, run_study,
-                                             verdict_agreement)
 from youbot_dynamics.cli import main
+from youbot_dynamics.studies.figures import all_specs, figure_sets
+from youbot_dynamics.studies.report import (PAGE, STUDIES, STUDY_NAMES, Study, markdown_rows,
+                                            missing_in_build, run_study, verdict_agreement)
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 SMOKE = ("structure-lowpass", "structure-pendulum", "woodpecker", "uncertainty")
@@ -119,13 +118,13 @@ def test_short_report_writes_every_figure(tmp_path):
 
 
 def test_a_figure_set_that_raises_is_reported_failed(tmp_path, monkeypatch):
-    from youbot_dynamics.analysis import figures
+    from youbot_dynamics.studies import figures
 
     def broken(out, full):
         raise RuntimeError("a bug in the figures")
     sets = dict(figures.figure_sets())
     sets["structure-lowpass"] = figures.FigureSet("structure-lowpass", (), broken)
-    monkeypatch.setattr("youbot_dynamics.analysis.report.figure_sets", lambda: sets)
+    monkeypatch.setattr("youbot_dynamics.studies.report.figure_sets", lambda: sets)
     study = next(s for s in STUDIES if s.name == "structure-lowpass")
     result = run_study(study, str(tmp_path), False)
     assert result.status == 0 and result.failed
@@ -140,7 +139,7 @@ def test_list_figures_names_every_figure_without_running(capsys):
 
 
 def test_a_figure_set_must_write_what_it_declares(tmp_path):
-    from youbot_dynamics.analysis.figures import FigureSet, FigureSpec, draw_set
+    from youbot_dynamics.studies.figures import FigureSet, FigureSpec, draw_set
     spec = FigureSpec("a.png", "A", "seed")
     lazy = FigureSet("lazy", (spec,), lambda out, full: {"a.png": ("ours", "difference")})
     with pytest.raises(RuntimeError, match="figure set lazy: did not write a.png"):

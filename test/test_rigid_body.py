@@ -11,13 +11,15 @@ import pinocchio as pin
 import pytest
 
 from youbot_dynamics.dynamics.friction import JointFriction
-from youbot_dynamics.dynamics.rigid_body import (bias_torque, forward_dynamics, forward_dynamics_batch,
-                                                 gravity_torque, inverse_dynamics, inverse_dynamics_batch,
-                                                 kinetic_energy, mass_matrix, potential_energy, symmetrised)
+from youbot_dynamics.dynamics.rigid_body import (bias_torque, forward_dynamics,
+                                                 forward_dynamics_batch, gravity_torque,
+                                                 inverse_dynamics, inverse_dynamics_batch,
+                                                 kinetic_energy, mass_matrix, potential_energy,
+                                                 symmetrised)
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.integrate.integrators import integrate
 from youbot_dynamics.model.configuration import random_configuration
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
-from youbot_dynamics.sim.integrators import integrate
 
 URDF = Path(__file__).resolve().parents[1] / "urdf" / "youbot.urdf"
 ARM = tuple(f"arm_joint_{i}" for i in range(1, 6))

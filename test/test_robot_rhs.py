@@ -8,11 +8,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from youbot_dynamics.scene.reader import read_yaml
+from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir
 from youbot_dynamics.sim.controllers import Reference
 from youbot_dynamics.sim.engine import initial_state, right_hand_side
 from youbot_dynamics.sim.model import compile
-from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir
-from youbot_dynamics.sim.scene_reader import read_yaml
 
 
 class Plain(np.ndarray):

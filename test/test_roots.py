@@ -23,13 +23,12 @@ from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import (bias_torque, forward_dynamics, gravity_torque,
                                                  inverse_dynamics, mass_matrix)
 from youbot_dynamics.errors import URDFError, UserInputError
-from youbot_dynamics.model.configuration import (difference, integrate, neutral,
-                                                 random_configuration)
+from youbot_dynamics.model.configuration import difference, integrate, neutral, random_configuration
 from youbot_dynamics.model.lie import exp_se3, matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
 from youbot_dynamics.model.screws import (fkin_body, fkin_space, jacobian_body, jacobian_space,
                                           screw_chain)
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.scene.schema import load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
 YOUBOT = Path(__file__).resolve().parents[1] / "urdf" / "youbot.urdf"

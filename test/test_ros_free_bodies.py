@@ -20,11 +20,11 @@ from rclpy.parameter import Parameter  # noqa: E402
 
 from youbot_dynamics.errors import UserInputError  # noqa: E402
 from youbot_dynamics.model.lie import quaternion_from_matrix  # noqa: E402
+from youbot_dynamics.node.session import InverseSession, SimulationSession  # noqa: E402
 from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.qos import LATCHED  # noqa: E402
-from youbot_dynamics.ros.session import InverseSession, SimulationSession  # noqa: E402
-from youbot_dynamics.sim.scene import load_scene  # noqa: E402
+from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 RATE, DURATION = 100.0, 1.0

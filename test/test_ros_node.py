@@ -25,10 +25,10 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
 from youbot_dynamics.model.lie import matrix_from_quaternion  # noqa: E402
 from youbot_dynamics.model.screws import fkin_space, screw_chain  # noqa: E402
+from youbot_dynamics.node.session import TOPIC_TYPES, SimulationSession  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
-from youbot_dynamics.ros.session import TOPIC_TYPES, SimulationSession  # noqa: E402
-from youbot_dynamics.sim.scene import load_scene  # noqa: E402
+from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 OUTPUTS = {"/joint_states": "sensor_msgs/msg/JointState", "/ee_pose": "geometry_msgs/msg/PoseStamped",

@@ -5,9 +5,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from youbot_dynamics.model.lie import exp_so3, skew, unskew
-from youbot_dynamics.systems.rotations import (RUNS, SEQUENCES, attitude_error,
-                                               axisymmetric_top, cardan_angles, cardan_matrix,
-                                               cardan_rate_matrix, euler_equations,
+from youbot_dynamics.model.rotations import (SEQUENCES, cardan_angles, cardan_matrix,
+                                             cardan_rate_matrix, euler_equations)
+from youbot_dynamics.studies.rotations import (RUNS, attitude_error, axisymmetric_top,
                                                simulate_rotation)
 
 ANGLES = np.array([0.4, -0.9, 2.1])
@@ -135,9 +135,9 @@ def test_cli_rotations_json_and_plot(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, stand_in", [
-    (["rotations", "--plot"], "youbot_dynamics.systems.rotations.rotations_study"),
-    (["uncertainty", "--plot"], "youbot_dynamics.systems.uncertain_pendulum.linear_propagation"),
-    (["bdf-study", "--choppy"], "youbot_dynamics.systems.bdf_study.fixed_step_tables"),
+    (["rotations", "--plot"], "youbot_dynamics.studies.rotations.rotations_study"),
+    (["uncertainty", "--plot"], "youbot_dynamics.studies.uncertain_pendulum.linear_propagation"),
+    (["bdf-study", "--choppy"], "youbot_dynamics.studies.bdf_study.fixed_step_tables"),
 ])
 def test_study_plot_paths_checked_before_the_run(monkeypatch, capsys, tmp_path, argv, stand_in):
     from youbot_dynamics.cli import main

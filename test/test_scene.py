@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import yaml
 
-import youbot_dynamics.sim.scene as scene_module
+import youbot_dynamics.scene.schema as scene_module
 from youbot_dynamics import default_urdf
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.scene import Scene, SceneError, load_scene, scene_dir
+from youbot_dynamics.scene.schema import Scene, SceneError, load_scene, scene_dir
 from youbot_dynamics.sim.simulator import Simulator
 from youbot_dynamics.sim.state import StateLayout
 

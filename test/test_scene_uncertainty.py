@@ -1,7 +1,7 @@
-"""``value ± sigma`` scene parameters and their propagation (analysis/scene_uncertainty.py):
+"""``value ± sigma`` scene parameters and their propagation (accuracy/scene_uncertainty.py):
 the reader keeps the value and records the parameter; the seed's damped pendulum as a scene
 (config/scenes/uncertain_pendulum.yaml: a one-joint URDF, uncertain mass and damping) against
-systems/uncertain_pendulum.py, an independent implementation (the same pendulum as equations,
+studies/uncertain_pendulum.py, an independent implementation (the same pendulum as equations,
 RK4 at h = 0.01 s, linear propagation by the ``uncertainties`` package's derivatives)."""
 from __future__ import annotations
 
@@ -12,11 +12,11 @@ import warnings
 import numpy as np
 import pytest
 
-from youbot_dynamics.analysis import scene_uncertainty
+from youbot_dynamics.accuracy import scene_uncertainty
 from youbot_dynamics.cli import main
-from youbot_dynamics.sim.scene import Scene, load_scene
-from youbot_dynamics.sim.scene_reader import SceneError
-from youbot_dynamics.systems import uncertain_pendulum
+from youbot_dynamics.scene.reader import SceneError
+from youbot_dynamics.scene.schema import Scene, load_scene
+from youbot_dynamics.studies import uncertain_pendulum
 
 PENDULUM = "uncertain_pendulum"
 MASS, DAMPING = "robot.compose[0].inertials.bob.mass", "friction.joints.pivot.damping"
@@ -72,7 +72,7 @@ def test_a_sample_the_validator_refuses_is_drawn_again(tmp_path):
 
 
 def pendulum_reference(samples: np.ndarray | None = None):
-    """systems/uncertain_pendulum.py with L fixed at 0.8 m (sigma 0)."""
+    """studies/uncertain_pendulum.py with L fixed at 0.8 m (sigma 0)."""
     parameters = {"L": (0.8, 0.0), "m": (1.0, 0.2), "d": (0.5, 0.2)}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)   # uncertainties warns of the zero sigma

@@ -10,9 +10,9 @@ import pinocchio as pin
 import pytest
 from rosbags.highlevel import AnyReader
 
-from youbot_dynamics.ros import frames
-from youbot_dynamics.ros.session import SimulationSession
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.node import frames
+from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.scene.schema import load_scene
 
 SCENE = load_scene("gripping")
 RATE = 500.0

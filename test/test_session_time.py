@@ -12,10 +12,11 @@ from rosbags.highlevel import AnyReader
 
 from youbot_dynamics.io.stamps import NS_PER_S as NS
 from youbot_dynamics.model.robot import keep_joints, load_robot
-from youbot_dynamics.ros.commands import (DEFAULT_EFFORT_LIMIT, FUTURE_LIMIT_NS, MAX_NAMES, MAX_TRAJECTORY_POINTS,
-                                          EffortCommands, InputRejected, joint_trajectory)
-from youbot_dynamics.ros.session import SimulationSession
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.node.commands import (DEFAULT_EFFORT_LIMIT, FUTURE_LIMIT_NS, MAX_NAMES,
+                                           MAX_TRAJECTORY_POINTS, EffortCommands, InputRejected,
+                                           joint_trajectory)
+from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.scene.schema import load_scene
 
 SCENE = load_scene("arm_ptp")
 ROBOT = SCENE.robot

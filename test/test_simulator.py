@@ -16,8 +16,8 @@ from scipy.integrate import solve_ivp
 
 from youbot_dynamics.cli import main
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import DivergenceError
-from youbot_dynamics.sim.scene import IntegratorSpec, load_scene, scene_dir
+from youbot_dynamics.integrate.integrators import DivergenceError
+from youbot_dynamics.scene.schema import IntegratorSpec, load_scene, scene_dir
 from youbot_dynamics.sim.simulator import Simulator
 
 MASS, LENGTH, IYY, G = 2.0, 0.5, 0.01, 9.81

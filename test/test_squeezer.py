@@ -7,11 +7,10 @@ import numpy as np
 import pytest
 
 from youbot_dynamics.cli import main
-from youbot_dynamics.dynamics.constraints import (DAE_FORMULATIONS,
-                                                  consistent_initial_values, dae_form)
-from youbot_dynamics.systems.squeezer import (LAMBDA0, Q0, V0, W0, reference_error,
-                                              simulate_squeezer, squeezer_system,
-                                              suppression_run)
+from youbot_dynamics.dynamics.constraints import (DAE_FORMULATIONS, consistent_initial_values,
+                                                  dae_form)
+from youbot_dynamics.studies.squeezer import (LAMBDA0, Q0, V0, W0, reference_error,
+                                              simulate_squeezer, squeezer_system, suppression_run)
 
 RNG = np.random.default_rng(7)
 

@@ -8,10 +8,9 @@ import pytest
 import sympy as sp
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.systems.structure import (LOWPASS_INCIDENCE, block_lower_triangular,
+from youbot_dynamics.studies.structure import (LOWPASS_INCIDENCE, block_lower_triangular,
                                                cartesian_pendulum_equations, incidence,
-                                               maximum_matching, pantelides,
-                                               structure_report)
+                                               maximum_matching, pantelides, structure_report)
 
 LOWPASS = [{j - 1 for j in vs} for vs in LOWPASS_INCIDENCE]
 UNKNOWNS = [0, 1, 2, 3, 5, 6]          # variable 5 (index 4) is the known state

@@ -1,9 +1,9 @@
-"""The Dask layer (analysis/sweeps.py): a sweep gives the serial run's results, bit for bit,
+"""The Dask layer (accuracy/sweeps.py): a sweep gives the serial run's results, bit for bit,
 on an embedded local cluster and on a real one (a ``dask scheduler`` and two ``dask worker``
 processes on 127.0.0.1), in the cases' order; a failing case is named.
 
 The sweeps: the measured real-axis stability boundary of BDF1-4 (bisection on the solver's
-own growth, analysis/bdf.py), checked also against the analytic root locus; work-precision
+own growth, studies/bdf.py), checked also against the analytic root locus; work-precision
 points on a short youBot scene; the uncertainty study's Monte Carlo samples.
 """
 from __future__ import annotations
@@ -19,10 +19,10 @@ from pathlib import Path
 
 import pytest
 
-from youbot_dynamics.analysis.bdf import locus_radius_on_ray, measured_boundary_radius
-from youbot_dynamics.analysis import sweeps
-from youbot_dynamics.analysis.sweeps import CaseError, map_cases
+from youbot_dynamics.accuracy import sweeps
+from youbot_dynamics.accuracy.sweeps import CaseError, map_cases
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.studies.bdf import locus_radius_on_ray, measured_boundary_radius
 
 ROOT = Path(__file__).resolve().parents[1]
 DASK = Path(sys.executable).with_name("dask")
@@ -113,8 +113,8 @@ def test_both_workers_take_cases(dask_cluster):
 
 
 def test_work_precision_points_on_the_cluster_equal_serial(dask_cluster):
-    from youbot_dynamics.analysis.work_precision import reference_solution, sweep
-    from youbot_dynamics.sim.scene import load_scene
+    from youbot_dynamics.accuracy.work_precision import reference_solution, sweep
+    from youbot_dynamics.scene.schema import load_scene
     scene = load_scene("arm_swing").with_duration(0.05)
     reference = reference_solution(scene)
     grid = {"rk4": (2e-3, 1e-3), "rk45": (1e-4, 1e-6), "cvode_bdf": (1e-5,)}
@@ -131,7 +131,7 @@ def test_work_precision_points_on_the_cluster_equal_serial(dask_cluster):
 def test_monte_carlo_on_the_cluster_equals_serial(dask_cluster):
     import numpy as np
 
-    from youbot_dynamics.systems.uncertain_pendulum import SAMPLES_PER_CASE, monte_carlo
+    from youbot_dynamics.studies.uncertain_pendulum import SAMPLES_PER_CASE, monte_carlo
     n = 3 * SAMPLES_PER_CASE + 17  # four blocks, the last one short
     serial, phi = monte_carlo(n, 2.0)
     remote, phi_remote = monte_carlo(n, 2.0, scheduler=dask_cluster)

@@ -26,10 +26,10 @@ from std_msgs.msg import String  # noqa: E402
 
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
 from youbot_dynamics.io.messages import TYPESTORE  # noqa: E402
+from youbot_dynamics.node.session import SimulationSession  # noqa: E402
 from youbot_dynamics.ros import dynamics_node  # noqa: E402
 from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
-from youbot_dynamics.ros.session import SimulationSession  # noqa: E402
-from youbot_dynamics.sim.scene import load_scene  # noqa: E402
+from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 URDF = REPO / "urdf" / "youbot.urdf"

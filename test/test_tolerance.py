@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 from youbot_dynamics.cli import main
 from youbot_dynamics.cli.common import add_tolerance_arguments, tolerances
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import NOMINAL_FLOOR, tolerances_from_tol
+from youbot_dynamics.integrate.integrators import NOMINAL_FLOOR, tolerances_from_tol
 
 
 def spring_pendulum(t, s, k=1000.0):
@@ -99,8 +99,8 @@ def test_scene_tol_key_sets_rtol_and_a_nominal_atol(tmp_path):
     import yaml
 
     from youbot_dynamics import package_share
-    from youbot_dynamics.sim.scene import load_scene
-    from youbot_dynamics.sim.scene_reader import SceneError
+    from youbot_dynamics.scene.reader import SceneError
+    from youbot_dynamics.scene.schema import load_scene
     data = yaml.safe_load((package_share() / "config" / "scenes" / "arm_swing.yaml").read_text())
     data["integrator"] = {"method": "dop853", "tol": 1e-9}
     path = tmp_path / "swing_tol.yaml"

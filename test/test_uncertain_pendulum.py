@@ -7,11 +7,10 @@ import numpy as np
 import pytest
 
 from youbot_dynamics.cli import main
-from youbot_dynamics.sim.integrators import integrate
-from youbot_dynamics.systems.uncertain_pendulum import (GRAVITY, OUTPUT_EVERY, PARAMETERS,
-                                                        PHI0, STEP, W0, comparison,
-                                                        linear_propagation, monte_carlo,
-                                                        rk4)
+from youbot_dynamics.integrate.integrators import integrate
+from youbot_dynamics.studies.uncertain_pendulum import (GRAVITY, OUTPUT_EVERY, PARAMETERS, PHI0,
+                                                        STEP, W0, comparison, linear_propagation,
+                                                        monte_carlo, rk4)
 
 T_END = 3.0
 

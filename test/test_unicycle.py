@@ -11,7 +11,7 @@ import pytest
 
 import youbot_dynamics.cli as cli
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.systems.unicycle import (Unicycle, heading_and_speeds, simulate_unicycle,
+from youbot_dynamics.studies.unicycle import (Unicycle, heading_and_speeds, simulate_unicycle,
                                               unicycle_closed_form, unicycle_rhs)
 
 MODEL = Unicycle()  # m 10 kg, I_z 0.5 kg m^2, r 0.05 m, d 0.15 m, b 5 N s/m, beta 0.5 N m s/rad

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from youbot_dynamics.systems.woodpecker import (BEAK, BLOCK_II, BLOCK_III, SEED_BEAK_HITS,
+from youbot_dynamics.studies.woodpecker import (BEAK, BLOCK_II, BLOCK_III, SEED_BEAK_HITS,
                                                 SEED_INITIAL_STATE, Woodpecker,
                                                 WoodpeckerParameters)
 

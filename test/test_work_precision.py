@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 import yaml
 
-from youbot_dynamics.analysis import work_precision as wp
+from youbot_dynamics.accuracy import work_precision as wp
 from youbot_dynamics.cli import main
-from youbot_dynamics.ros.session import SimulationSession
-from youbot_dynamics.sim.scene import SceneError, load_scene
+from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.scene.schema import SceneError, load_scene
 
 GRID = {"rk4": (1e-2, 2e-3, 4e-4),
         **{name: (1e-4, 1e-6, 1e-8) for name in ("rk45", "dop853", "radau", "cvode_adams", "cvode_bdf")}}

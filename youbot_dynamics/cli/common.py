@@ -80,7 +80,7 @@ def tolerances(args: argparse.Namespace, x0) -> tuple[float | None, Any]:
     """(rtol, atol) from --tol, --rtol and --atol: an explicit --rtol or --atol wins, the
     other comes from --tol (see sim.integrators.tolerances_from_tol); None where none of
     them gives one (the command's default applies)."""
-    from youbot_dynamics.sim.integrators import tolerances_from_tol
+    from youbot_dynamics.integrate.integrators import tolerances_from_tol
     if args.tol is None:
         return args.rtol, args.atol
     rtol, atol = tolerances_from_tol(args.tol, x0)
@@ -228,7 +228,7 @@ def markdown_table(header: Sequence[str], rows: Iterable[Sequence[Any]], digits:
 
 def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
     """--workers and --scheduler: where a sweep's independent cases run
-    (youbot_dynamics.analysis.sweeps)."""
+    (youbot_dynamics.accuracy.sweeps)."""
     parser.add_argument("--workers", type=int, default=None, metavar="N",
                         help="processes of the embedded Dask cluster (default one per core; "
                              "0: serial, no Dask)")

@@ -1,11 +1,11 @@
 """Sub-command `contact-extremes`: contact at its extremes, as tables (see
-youbot_dynamics.analysis.contact_extremes)."""
+youbot_dynamics.accuracy.contact_extremes)."""
 from __future__ import annotations
 
 import argparse
 import json
 
-from youbot_dynamics.analysis.contact_extremes import TABLES
+from youbot_dynamics.accuracy.contact_extremes import TABLES
 from youbot_dynamics.cli.common import finite_or_none, markdown_table
 
 

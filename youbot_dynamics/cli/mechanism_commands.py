@@ -12,10 +12,10 @@ from collections.abc import Iterable
 from youbot_dynamics.cli.common import output_file
 from youbot_dynamics.dynamics.constraints import FORMULATIONS
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.constrained import DAE_INTEGRATORS
-from youbot_dynamics.sim.integrators import IntegrationError
-from youbot_dynamics.sim.registry import INTEGRATORS
-from youbot_dynamics.systems.structure import STRUCTURE_EXAMPLES, structure_report
+from youbot_dynamics.integrate.constrained import DAE_INTEGRATORS
+from youbot_dynamics.integrate.integrators import IntegrationError
+from youbot_dynamics.integrate.registry import INTEGRATORS
+from youbot_dynamics.studies.structure import STRUCTURE_EXAMPLES, structure_report
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -73,7 +73,7 @@ def format_vector(values: Iterable[float]) -> str:
 def run_squeezer(args: argparse.Namespace) -> int:
     """Simulate the squeezer; print end state, residuals, statistics and the error against
     the reference (or JSON); exit 1 if the integrator fails."""
-    from youbot_dynamics.systems.squeezer import (POSITION_NAMES, T_REFERENCE, plot_drift,
+    from youbot_dynamics.studies.squeezer import (POSITION_NAMES, T_REFERENCE, plot_drift,
                                                   reference_error, simulate_squeezer)
     if args.table:
         return run_suppression_tables(args)
@@ -130,7 +130,7 @@ def run_suppression_tables(args: argparse.Namespace) -> int:
     """Print (or JSON) the suppression grids for index 3 and index 2: per tolerance and
     column, q's largest relative error at t = 0.03 s and the steps, or why the run failed;
     the seed's figures under each table."""
-    from youbot_dynamics.systems.squeezer import (SEED_SUPPRESSION, SUPPRESSION_COLUMNS,
+    from youbot_dynamics.studies.squeezer import (SEED_SUPPRESSION, SUPPRESSION_COLUMNS,
                                                   SUPPRESSION_TOLERANCES, T_REFERENCE,
                                                   suppression_table)
     tolerances = tuple(args.tolerances or SUPPRESSION_TOLERANCES)

@@ -14,11 +14,12 @@ from youbot_dynamics.cli.common import add_tolerance_arguments, tolerances
 from youbot_dynamics.dynamics.mobile.mecanum import base_twist, wheel_speeds, youbot_base
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.integrate.integrators import IntegrationError
+from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.model import limits
-from youbot_dynamics.sim.integrators import IntegrationError
-from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
-from youbot_dynamics.systems.unicycle import (MAX_DURATION, STATE_NAMES, Unicycle, heading_and_speeds,
-                                              simulate_unicycle, unicycle_closed_form)
+from youbot_dynamics.studies.unicycle import (MAX_DURATION, STATE_NAMES, Unicycle,
+                                              heading_and_speeds, simulate_unicycle,
+                                              unicycle_closed_form)
 
 #: dop853 at rtol 1e-10, atol 1e-12 meets the closed forms to about 1e-10 on the defaults.
 DEFAULT_INTEGRATOR, DEFAULT_RTOL, DEFAULT_ATOL = "dop853", 1e-10, 1e-12

@@ -11,15 +11,14 @@ import numpy as np
 
 from youbot_dynamics.cli.common import (add_sweep_arguments, add_tolerance_arguments, cell,
                                         markdown_table, tolerances)
-from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget, progress_bar
+from youbot_dynamics.cli.sim_commands import (add_step_budget_argument, checked_step_budget,
+                                              progress_bar)
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.sim.integrators import IntegrationError, checked_output_spacing
-from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
-from youbot_dynamics.systems.elastic_pendulum import (ACCURATE_ENERGY_ERROR, JACOBIANS,
-                                                      SEED_STATE0,
-                                                      SEED_T_END, STABLE_BOUND,
-                                                      STABLE_ENERGY_ERROR, STATE_NAMES,
-                                                      elastic_pendulum_study,
+from youbot_dynamics.integrate.integrators import IntegrationError, checked_output_spacing
+from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS
+from youbot_dynamics.studies.elastic_pendulum import (ACCURATE_ENERGY_ERROR, JACOBIANS, SEED_STATE0,
+                                                      SEED_T_END, STABLE_BOUND, STABLE_ENERGY_ERROR,
+                                                      STATE_NAMES, elastic_pendulum_study,
                                                       simulate_elastic_pendulum)
 
 
@@ -174,16 +173,14 @@ def run_bdf_study(args: argparse.Namespace) -> int:
     order-cap rows; optionally plot the stability regions."""
     import math
 
-    from youbot_dynamics.analysis.bdf import (alpha_angle, locus_radius_on_ray,
-                                              measured_boundary_radius,
-                                              plot_stability_regions)
-    from youbot_dynamics.analysis.sweeps import map_cases
+    from youbot_dynamics.accuracy.sweeps import map_cases
     from youbot_dynamics.cli.common import output_file
-    from youbot_dynamics.systems.bdf_study import (ENERGY_GROWTH, METHODS,
-                                                   POSITION_TOLERANCE, REFERENCE_TOL,
-                                                   cvode_order_rows, fixed_step_tables,
-                                                   measured_orders, plot_choppy_traces,
-                                                   stability_points)
+    from youbot_dynamics.studies.bdf import (alpha_angle, locus_radius_on_ray,
+                                             measured_boundary_radius, plot_stability_regions)
+    from youbot_dynamics.studies.bdf_study import (ENERGY_GROWTH, METHODS, POSITION_TOLERANCE,
+                                                   REFERENCE_TOL, cvode_order_rows,
+                                                   fixed_step_tables, measured_orders,
+                                                   plot_choppy_traces, stability_points)
     for path, flag in ((args.plot, "--plot"), (args.choppy, "--choppy")):
         if path:
             output_file(path, flag)

@@ -12,11 +12,11 @@ import numpy as np
 
 from youbot_dynamics.cli.common import CommandError, relative_tolerance
 from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget
-from youbot_dynamics.sim.integrators import IntegrationError
-from youbot_dynamics.sim.registry import integrator_names
-from youbot_dynamics.systems.equations import EXAMPLE_MODELS
-from youbot_dynamics.systems.state_selection import simulate_with_reselection
-from youbot_dynamics.systems.pipeline_report import pipeline_report, report_lines
+from youbot_dynamics.integrate.integrators import IntegrationError
+from youbot_dynamics.integrate.registry import integrator_names
+from youbot_dynamics.studies.equations import EXAMPLE_MODELS
+from youbot_dynamics.studies.pipeline_report import pipeline_report, report_lines
+from youbot_dynamics.studies.state_selection import simulate_with_reselection
 
 #: The seed's parameter merge for the ModiaLang pendulum (``Pendulum | Map(L = 0.5)``).
 MODIA_MERGE = {"L": 0.5}

@@ -1,5 +1,5 @@
 """Sub-command ``report``: every study in one Markdown page with its figures, the studies
-run as independent cases on Dask (youbot_dynamics.analysis.report and .sweeps)."""
+run as independent cases on Dask (youbot_dynamics.studies.report and .sweeps)."""
 from __future__ import annotations
 
 import argparse
@@ -9,7 +9,7 @@ from youbot_dynamics.cli.common import CommandError, add_sweep_arguments, output
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``report``."""
-    from youbot_dynamics.analysis.report import PAGE, STUDY_NAMES
+    from youbot_dynamics.studies.report import PAGE, STUDY_NAMES
     parser = subparsers.add_parser(
         "report", help="run every study; write their PNGs and one Markdown page",
         description=f"Run every study (short forms; --full for the seed's sizes) through "
@@ -30,7 +30,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run_report(args: argparse.Namespace) -> int:
     """Write the report; print each study's status and the page's path. Exit status 1 if a
     study failed."""
-    from youbot_dynamics.analysis.report import write_report
+    from youbot_dynamics.studies.report import write_report
     if args.list_figures:
         return list_figures(args.only)
     if args.out is None:
@@ -54,8 +54,8 @@ def run_report(args: argparse.Namespace) -> int:
 def list_figures(only: list[str] | None) -> int:
     """Print the declared figures of the studies (all, or those in ``only``) as a Markdown
     table: file, study, caption."""
-    from youbot_dynamics.analysis.figures import figure_sets
-    from youbot_dynamics.analysis.report import STUDIES
+    from youbot_dynamics.studies.figures import figure_sets
+    from youbot_dynamics.studies.report import STUDIES
     print("| file | study | caption |\n|---|---|---|")
     for study in STUDIES:
         if only and study.name not in only:

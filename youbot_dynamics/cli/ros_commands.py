@@ -85,7 +85,7 @@ def run_main_job(args: argparse.Namespace) -> int:
     """Run the dynamics node on the scene with MCAP and Rerun logs; print the summary table
     (exit 1 if the simulation failed, 2 for bad parameters)."""
     from youbot_dynamics.ros.dynamics_node import run
-    from youbot_dynamics.sim.scene import load_scene
+    from youbot_dynamics.scene.schema import load_scene
 
     scene = load_scene(args.scene)
     duration = scene.duration if args.duration is None else args.duration

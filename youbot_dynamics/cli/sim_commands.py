@@ -13,15 +13,15 @@ from typing import Callable, Iterator
 import numpy as np
 from tqdm import tqdm
 
-from youbot_dynamics.analysis.work_precision import resolve_integrator, work_precision, write_back
-from youbot_dynamics.io.csv_table import write_csv
+from youbot_dynamics.accuracy.work_precision import resolve_integrator, work_precision, write_back
 from youbot_dynamics.cli.common import (CommandError, add_sweep_arguments, add_tolerance_arguments,
                                         finite_or_none, output_file, output_folder)
+from youbot_dynamics.integrate.integrators import (IntegrationError, StepBudgetError,
+                                                   checked_fixed_step, fixed_step_count)
+from youbot_dynamics.integrate.registry import INTEGRATORS, REGISTRY, STEPPERS, integrator_names
+from youbot_dynamics.io.csv_table import write_csv
+from youbot_dynamics.scene.schema import Scene, find_scene, load_scene
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
-from youbot_dynamics.sim.integrators import (IntegrationError, StepBudgetError, checked_fixed_step,
-                                             fixed_step_count)
-from youbot_dynamics.sim.registry import INTEGRATORS, REGISTRY, STEPPERS, integrator_names
-from youbot_dynamics.sim.scene import Scene, find_scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
 

@@ -8,13 +8,13 @@ import argparse
 import json
 
 from youbot_dynamics.cli.common import (add_sweep_arguments, add_tolerance_arguments, cell,
-                                        markdown_table, output_file, positive,
-                                        relative_tolerance, tolerances)
+                                        markdown_table, output_file, positive, relative_tolerance,
+                                        tolerances)
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.integrate.events import HybridSolution
+from youbot_dynamics.integrate.integrators import IntegratorStats
+from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.model import limits
-from youbot_dynamics.sim.events import HybridSolution
-from youbot_dynamics.sim.integrators import IntegratorStats
-from youbot_dynamics.sim.registry import FIXED_STEP, INTEGRATORS
 
 #: Tolerances without --tol/--rtol: the woodpecker's (atol = rtol/100), lagrange's (atol = rtol).
 WOODPECKER_RTOL, LAGRANGE_RTOL = 1e-6, 1e-12
@@ -44,7 +44,7 @@ def stats_table(rows: dict[str, dict]) -> str:
 
 def woodpecker_summary(solution: HybridSolution, stats: IntegratorStats) -> dict:
     """The woodpecker run's figures as plain data."""
-    from youbot_dynamics.systems.woodpecker import BEAK
+    from youbot_dynamics.studies.woodpecker import BEAK
     return {
         "beak_hits": solution.count(BEAK),
         "switches": [{"time": s.time, "kind": s.kind, "from": s.mode_before,
@@ -58,9 +58,8 @@ def woodpecker_summary(solution: HybridSolution, stats: IntegratorStats) -> dict
 def run_woodpecker(args: argparse.Namespace) -> int:
     """Simulate the woodpecker toy; print beak hits, mode switches, final state and the
     statistics beside the seed's (or JSON); optionally plot."""
-    from youbot_dynamics.systems.woodpecker import (SEED_BEAK_HITS, SEED_FIGURES,
-                                                    SEED_INITIAL_STATE, Woodpecker,
-                                                    plot_woodpecker)
+    from youbot_dynamics.studies.woodpecker import (SEED_BEAK_HITS, SEED_FIGURES,
+                                                    SEED_INITIAL_STATE, Woodpecker, plot_woodpecker)
     if args.integrator in FIXED_STEP and args.dt is None:
         raise UserInputError(f"--integrator {args.integrator} is fixed-step: give --dt")
     if args.plot:
@@ -115,8 +114,8 @@ def run_lagrange(args: argparse.Namespace) -> int:
     final state, energy drift and statistics (or JSON)."""
     import numpy as np
 
-    from youbot_dynamics.sim.integrators import integrate
-    from youbot_dynamics.systems.lagrange import SEED_INITIAL, model
+    from youbot_dynamics.integrate.integrators import integrate
+    from youbot_dynamics.studies.lagrange import SEED_INITIAL, model
     lagrange = model(args.problem)
     p = lagrange.parameter_values({**parameter_overrides(args.param), "c": args.friction})
     q0, u0 = SEED_INITIAL[args.problem]
@@ -155,10 +154,9 @@ def run_lagrange(args: argparse.Namespace) -> int:
 def run_uncertainty(args: argparse.Namespace) -> int:
     """The uncertainty study: linear propagation against Monte Carlo, figures (or JSON)
     and optionally the band plot."""
-    from youbot_dynamics.systems.uncertain_pendulum import (FAILURE_FLOOR, FAILURE_RATIO,
-                                                            comparison,
-                                                            linear_propagation, monte_carlo,
-                                                            plot_uncertainty)
+    from youbot_dynamics.studies.uncertain_pendulum import (FAILURE_FLOOR, FAILURE_RATIO,
+                                                            comparison, linear_propagation,
+                                                            monte_carlo, plot_uncertainty)
     if args.plot:
         output_file(args.plot, "--plot")
     if args.samples < 2:
@@ -199,7 +197,7 @@ ROTATION_COLUMNS = ("run", "formulation", "steps", "rhs_evals", "switches", "t_r
 def run_rotations(args: argparse.Namespace) -> int:
     """Every orientation formulation on every run of the rotations study; a table (or
     JSON) of steps, evaluations, errors against the closed-form top and |q| drift."""
-    from youbot_dynamics.systems.rotations import (RUNS, SWITCH_ANGLE, plot_rotations,
+    from youbot_dynamics.studies.rotations import (RUNS, SWITCH_ANGLE, plot_rotations,
                                                    rotations_study, spin_wobble_sweep)
     if args.plot:
         output_file(args.plot, "--plot")
@@ -263,7 +261,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.set_defaults(run=run_lagrange)
 
-    from youbot_dynamics.systems.rotations import RUNS
+    from youbot_dynamics.studies.rotations import RUNS
     parser = subparsers.add_parser("rotations", help="Cardan angles vs adaptive Cardan vs "
                                    "quaternions on a torque-free rigid body",
                                    description="The seed's rotations study: steps, "

@@ -1,5 +1,5 @@
 """Sub-command ``scene-uncertainty``: a scene's ``value ± sigma`` parameters propagated to
-one output (analysis/scene_uncertainty.py), linear band against Monte Carlo."""
+one output (accuracy/scene_uncertainty.py), linear band against Monte Carlo."""
 from __future__ import annotations
 
 import argparse
@@ -12,8 +12,8 @@ SUMMARY = "propagate a scene's value ± sigma parameters to an output: linear ba
 
 def run_scene_uncertainty(args: argparse.Namespace) -> int:
     """Both propagations, the figures at the end time (or JSON) and optionally the plot."""
-    from youbot_dynamics.analysis.scene_uncertainty import linear_propagation, monte_carlo
-    from youbot_dynamics.systems.uncertain_pendulum import comparison, plot_uncertainty
+    from youbot_dynamics.accuracy.scene_uncertainty import linear_propagation, monte_carlo
+    from youbot_dynamics.studies.uncertain_pendulum import comparison, plot_uncertainty
     if args.plot:
         output_file(args.plot, "--plot")
     where = {"workers": args.workers, "scheduler": args.scheduler, "progress": True}

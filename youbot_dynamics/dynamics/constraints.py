@@ -24,9 +24,9 @@ Formulations (names as on the command line):
 Error test. Higher-index variables must be kept out of IDA's local error test: lambda,
 w (and mu) for index 2 and GGL, and also v for index 3 (Hairer's choice; the seed's
 Assimulo run excluded only w and lambda, but then IDA's first step, sized from
-|y0'| = |w0| ~ 1.4e4 in v's weights, collapses at t = 0). Radau IIA (sim/radau_dae.py,
+|y0'| = |w0| ~ 1.4e4 in v's weights, collapses at t = 0). Radau IIA (integrate/radau_dae.py,
 ``radau5``) realises the exclusion as Hairer does, by index-dependent weights. On IDA,
-whose suppress-alg (sim/sundials.py) still fails the squeezer's index 3 at t = 0 in its
+whose suppress-alg (integrate/sundials.py) still fails the squeezer's index 3 at t = 0 in its
 Newton test (``squeezer --table``), :attr:`DaeForm.excluded` is realised by an absolute
 tolerance of EXCLUDED_ATOL on those components (:func:`dae_tolerances`): that takes them
 out of the Newton convergence test as well, so their values are only as good as the converged q and v
@@ -40,7 +40,7 @@ forms, from the system's optional second derivatives (d(M w)/dq, df/dq, df/dv an
 constraint Hessians); without them IDA differences the residual.
 
 This module holds the formulas only (nothing here integrates); the driver that runs them
-with youbot_dynamics.sim.integrators is sim.constrained.simulate_holonomic.
+with youbot_dynamics.integrate.integrators is sim.constrained.simulate_holonomic.
 """
 from __future__ import annotations
 

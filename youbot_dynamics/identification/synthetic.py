@@ -30,11 +30,11 @@ from youbot_dynamics.identification.excitation import FourierTrajectory
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import read_bag
 from youbot_dynamics.io.cdr_template import Refilled
-from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.io.mcap_log import McapLogger
+from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.model.robot import Robot, keep_joints
-from youbot_dynamics.ros.commands import MAX_TRAJECTORY_POINTS   # one /joint_trajectory's points
-from youbot_dynamics.sim.scene import Scene, load_scene, scene_dir
+from youbot_dynamics.node.commands import MAX_TRAJECTORY_POINTS  # one /joint_trajectory's points
+from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir
 
 #: The scene that records an excitation (computed torque, URDF friction, at rest until a
 #: /joint_trajectory arrives).
@@ -115,7 +115,7 @@ def simulate_excitation(scene: Scene, trajectory: FourierTrajectory, rate: float
     """Run ``scene`` in the dynamics node's simulation session at ``rate`` Hz for its
     duration, the trajectory sent at t = 0 as a /joint_trajectory (:func:`trajectory_points`),
     the node logging to the MCAP ``bag``; returns the integrator statistics."""
-    from youbot_dynamics.ros.session import SimulationSession   # the node's session, no rclpy
+    from youbot_dynamics.node.session import SimulationSession  # the node's session, no rclpy
 
     with SimulationSession(scene, rate, mcap_path=bag) as session:
         session.step()

@@ -3,7 +3,7 @@ joint name prefixed, each robot's root link welded to a common ``world`` link at
 link inertials corrected), the empty robot, and another gravity on a model copy.
 
 Plain data in, URDF text or a :class:`~youbot_dynamics.model.robot.Robot` out; the scene
-validator (sim/scene_contacts.py) reads the scene's ``robot: {compose: [...]}`` into
+validator (scene/contacts.py) reads the scene's ``robot: {compose: [...]}`` into
 :class:`Placement` values and turns a :class:`CompositionError` into an error naming the
 scene's key.
 """

@@ -1,7 +1,7 @@
 """Sanity bounds on physical magnitudes and sizes, in one place.
 
 The URDF loader (:mod:`youbot_dynamics.model.robot`) and the scene validator
-(:mod:`youbot_dynamics.sim.scene`, :mod:`youbot_dynamics.sim.scene_contacts`) refuse values
+(:mod:`youbot_dynamics.scene.schema`, :mod:`youbot_dynamics.scene.contacts`) refuse values
 beyond these bounds with a one-line error naming the file and the key (scene) or file:line and
 the element (URDF). Every bound is far beyond any real robot or useful simulation, and far
 inside what double precision survives: the largest product the dynamics forms is about

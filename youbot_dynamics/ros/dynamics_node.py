@@ -1,4 +1,4 @@
-"""The ``dynamics_node``: a thin rclpy adapter around :mod:`youbot_dynamics.ros.session`.
+"""The ``dynamics_node``: a thin rclpy adapter around :mod:`youbot_dynamics.node.session`.
 
 Both modes publish /tf per sample, and /tf_static and /robot_description (the URDF,
 std_msgs/String) once, latched (transient local), as robot_state_publisher does; without
@@ -13,7 +13,7 @@ the contact events), subscribes
 (trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
 (std_srvs/SetBool); with a moving base (scene ``base: kinematic | dynamic``) it also
 subscribes /cmd_vel (geometry_msgs/Twist) and publishes /odom and /base_pose_ground_truth
-(nav_msgs/Odometry) and odom -> base_footprint on /tf (:mod:`youbot_dynamics.ros.mobile_base`).
+(nav_msgs/Odometry) and odom -> base_footprint on /tf (:mod:`youbot_dynamics.node.mobile_base`).
 inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
 default keep-all: a replay as fast as possible loses no sample; best_effort for drivers that
 publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics; the joint
@@ -24,7 +24,7 @@ always); the session builds only those and the ones its MCAP records. Parameters
 applied in the post-set callback.
 
 Names: the topics above are the logged names; on the graph the node uses relative names
-(:mod:`youbot_dynamics.ros.topics`), so ``--ros-args -r __ns:=/youbot1`` publishes
+(:mod:`youbot_dynamics.node.topics`), so ``--ros-args -r __ns:=/youbot1`` publishes
 /youbot1/joint_states, /youbot1/clock, ... and subscribes /youbot1/joint_commands; /tf,
 /tf_static and /diagnostics stay global. Frames on /tf carry ``frame_prefix`` (by default the
 namespace: ``youbot1/arm_link_1``), so two robots on one /tf never name the same frame; the
@@ -33,11 +33,11 @@ namespace: ``youbot1/arm_link_1``), so two robots on one /tf never name the same
 Bounded work per message: the subscriptions take the serialized message and refuse (count
 as ``rejected.too_large``, without deserialising) one over :data:`MAX_MESSAGE_BYTES`; the
 session's checks are linear in the message and refuse more than
-:data:`~youbot_dynamics.ros.commands.MAX_NAMES` names or
-:data:`~youbot_dynamics.ros.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
+:data:`~youbot_dynamics.node.commands.MAX_NAMES` names or
+:data:`~youbot_dynamics.node.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
 callback against ``callback_budget`` and reports overruns in /diagnostics (level WARN,
 ``overruns.<source>``, ``worst_callback_s``). Time semantics of stamps:
-:mod:`youbot_dynamics.ros.commands`; inverse mode gives unstamped samples the node clock's
+:mod:`youbot_dynamics.node.commands`; inverse mode gives unstamped samples the node clock's
 receive time.
 
 No input kills the node: every subscription, timer and service callback runs behind
@@ -87,14 +87,15 @@ from trajectory_msgs.msg import JointTrajectory
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
-from youbot_dynamics.ros.commands import InputRejected
+from youbot_dynamics.node.commands import InputRejected
+from youbot_dynamics.node.session import (LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs,
+                                          SimulationSession)
+from youbot_dynamics.node.topics import graph_name
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr
 from youbot_dynamics.ros.parameters import check_choice, declare_all, frame_prefix_of
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
-from youbot_dynamics.ros.session import LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs, SimulationSession
-from youbot_dynamics.ros.topics import graph_name
-from youbot_dynamics.sim.scene import load_scene
+from youbot_dynamics.scene.schema import load_scene
 
 MAX_BURST = 20
 """Most samples one timer tick publishes (and, at time_scale 0, the samples per tick)."""
@@ -103,7 +104,7 @@ MAX_LAG = 0.25
 real-time factor then drops below the requested time scale)."""
 INVERSE_PERIOD = 0.01
 """Wall seconds between inverse-mode ticks: each takes the joint states received since the
-last as one batch (:meth:`~youbot_dynamics.ros.session.InverseSession.joint_states`)."""
+last as one batch (:meth:`~youbot_dynamics.node.session.InverseSession.joint_states`)."""
 WARN_THROTTLE = 2.0
 """Seconds between repeated warnings about bad input."""
 QUOTED_CHARACTERS = 500
@@ -257,7 +258,7 @@ class DynamicsNode(Node):
     # ---- the node boundary ---------------------------------------------------------------
     def _subscribe(self, msg_type: type, topic: str, callback: Callable, qos: Any, **options) -> None:
         """Subscribe ``callback`` to ``topic`` (its graph name: relative, see
-        :mod:`~youbot_dynamics.ros.topics`) behind the node boundary, taking the serialized
+        :mod:`~youbot_dynamics.node.topics`) behind the node boundary, taking the serialized
         message: one over ``MAX_MESSAGE_BYTES[topic]`` is rejected (counted, ``too_large``)
         before it is deserialised."""
         limit = MAX_MESSAGE_BYTES[topic]

@@ -13,8 +13,8 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.node import Node
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.node.commands import TIMEOUT_ACTIONS
 from youbot_dynamics.ros.qos import SUBSCRIPTION_PROFILES
-from youbot_dynamics.ros.commands import TIMEOUT_ACTIONS
 
 MODES = ("simulate", "inverse")
 AUTO_PREFIX = "auto"

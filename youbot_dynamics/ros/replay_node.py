@@ -14,7 +14,7 @@ bag. Topics recorded latched (/tf_static) are offered transient-local. Types wit
 message package (tf2_msgs with these wheels) are skipped with a warning.
 
 Topic names: each recorded topic goes out under its graph name
-(:func:`~youbot_dynamics.ros.topics.graph_name`): relative to the node's namespace (the
+(:func:`~youbot_dynamics.node.topics.graph_name`): relative to the node's namespace (the
 recorded /joint_states as ``joint_states``), /tf, /tf_static and /diagnostics as they are. In
 the root namespace every topic goes out as recorded; ``--ros-args -r __ns:=/youbot1`` replays
 a dynamics node's bag under /youbot1. The ``topics`` and ``wait_for`` parameters take the
@@ -41,10 +41,10 @@ from rosgraph_msgs.msg import Clock
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import bag_topics, paced, read_bag
+from youbot_dynamics.node.topics import graph_name
 from youbot_dynamics.ros.conversions import rclpy_class, to_rclpy
 from youbot_dynamics.ros.process import ACK_TIMEOUT, stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import RELIABLE_DEEP, profile
-from youbot_dynamics.ros.topics import graph_name
 
 WAIT_FOR_TIMEOUT = 30.0
 """Longest wait (wall s) for a subscriber on ``wait_for`` before replaying anyway."""

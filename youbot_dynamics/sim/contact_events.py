@@ -8,7 +8,7 @@ through 0; disarms); per impulsive pair ``impact`` (gap falling through 0: Newto
 on the plant's velocity); per free body in a chart ``recentre`` (chart rotation reaching
 ``RECENTRE_ANGLE``: the chart folds into the reference pose), per body in adaptive Cardan
 angles ``sequence`` (|middle angle| rising through SWITCH_ANGLE: the same attitude in the
-other sequence, systems/rotations.py). Every reset map is a pure
+other sequence, studies/rotations.py). Every reset map is a pure
 function of (t, x) returning the new x: the flags, speeds and charts are part of x, so
 nothing outside the state changes. The events (:class:`~youbot_dynamics.sim.state
 .ContactEvent`) are derived afterwards from the states on both sides of each switch
@@ -23,11 +23,11 @@ import numpy as np
 import pinocchio as pin
 
 from youbot_dynamics.dynamics.contact import HuntCrossley, NewtonImpact, hunt_crossley_force
-from youbot_dynamics.sim.events import Switch, Transition
-from youbot_dynamics.sim.integrators import IntegrationError
+from youbot_dynamics.integrate.events import Switch, Transition
+from youbot_dynamics.integrate.integrators import IntegrationError
+from youbot_dynamics.model.rotations import SWITCH_ANGLE, switched_angles
 from youbot_dynamics.sim.model import CARDAN_SEQUENCES, MIN_APPROACH_SPEED, RECENTRE_ANGLE, SimModel
 from youbot_dynamics.sim.state import ContactEvent
-from youbot_dynamics.systems.rotations import SWITCH_ANGLE, switched_angles
 
 #: Guard values below this magnitude (m, m/s) read 0: a pair resting exactly at contact
 #: would otherwise flicker across 0 at round-off level between a step's end and the

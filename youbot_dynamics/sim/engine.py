@@ -10,15 +10,15 @@
 
 The equations: the plant's accelerations come from ABA with joint friction and the compliant
 contact forces (:meth:`SimModel.accelerations`); dq/dt = v for the robot joints, the free
-bodies' charts follow their twists. A moving base (:mod:`youbot_dynamics.sim.base`) adds
+bodies' charts follow their twists. A moving base (:mod:`youbot_dynamics.sim.mobile_base`) adds
 its pose rate R(yaw) (vx, vy), wz, the floor's roller forces and the wheel-speed PI (dynamic),
 or imposes its path's motion on the root and the wheels (kinematic); a held twist command
 (``Reference.base_twist``) replaces the path. Every integrator of the registry runs through
-``drive()`` (sim/integration.py) with the same divergence checks: the ODE integrators
+``drive()`` (integrate/drive.py) with the same divergence checks: the ODE integrators
 (through ``integrate`` or, with contact guards, ``simulate_hybrid``), IDA, and the constraint
 stepper (:class:`ConstraintStepping`, a Stepper whose steps are Pinocchio contact solves).
 
-Divergence is a :class:`~youbot_dynamics.sim.integrators.DivergenceError`: a non-finite
+Divergence is a :class:`~youbot_dynamics.integrate.integrators.DivergenceError`: a non-finite
 state, a velocity beyond its bound (``VELOCITY_LIMIT_FACTOR`` x a joint's URDF limit, the
 free bodies' speed and spin limits), a step size that collapses, or a limit of
 :mod:`youbot_dynamics.sim.divergence` exceeded: in a passive scene (no controller, no
@@ -37,18 +37,20 @@ import numpy as np
 
 from youbot_dynamics.dynamics.mobile.wheel_floor import TipOverError
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.integrate.drive import StateCheck, drive
+from youbot_dynamics.integrate.events import Mode, simulate_hybrid
+from youbot_dynamics.integrate.integrators import (DivergenceError, IntegratorStats, Solution,
+                                                   checked_fixed_step, checked_output_spacing,
+                                                   integrate, integrate_dae)
+from youbot_dynamics.integrate.registry import integrator_kind
 from youbot_dynamics.model.lie import matrix_from_quaternion
+from youbot_dynamics.model.rotations import adaptive_angles
+from youbot_dynamics.scene.schema import IntegratorSpec
 from youbot_dynamics.sim.contact_events import MODE, ContactGuards
-from youbot_dynamics.sim.divergence import Monitor, all_of, energy_ledger_monitor, penetration_monitor
-from youbot_dynamics.sim.events import Mode, simulate_hybrid
-from youbot_dynamics.sim.integration import StateCheck, drive
-from youbot_dynamics.sim.integrators import (DivergenceError, IntegratorStats, Solution, checked_fixed_step,
-                                             checked_output_spacing, integrate, integrate_dae)
+from youbot_dynamics.sim.divergence import (Monitor, all_of, energy_ledger_monitor,
+                                            penetration_monitor)
 from youbot_dynamics.sim.model import CARDAN_SEQUENCES, MIN_APPROACH_SPEED, SimModel
-from youbot_dynamics.sim.registry import integrator_kind
-from youbot_dynamics.sim.scene import IntegratorSpec
 from youbot_dynamics.sim.state import ContactEvent, SimState, StateLayout
-from youbot_dynamics.systems.rotations import adaptive_angles
 
 Progress = Callable[[float], None]
 

@@ -17,7 +17,7 @@ The continuous state x (see :mod:`youbot_dynamics.sim.state`) is
          pairs), armed (compliant pairs)]
 
 ``base`` and ``base_v`` exist with a moving base only (scene ``base: kinematic | dynamic``;
-:mod:`youbot_dynamics.sim.base`): the plant then starts with a planar root joint, its
+:mod:`youbot_dynamics.sim.mobile_base`): the plant then starts with a planar root joint, its
 configuration (x, y, cos yaw, sin yaw) built from ``base`` (a global chart of SE(2): no
 guard, no folding), its velocity the body-frame twist ``base_v``, so that the plant's
 generalised velocity is [base_v, v, twist] (an index array into x). ``wheel_i`` holds the
@@ -47,7 +47,7 @@ coordinates per body (``SimModel.coordinates``), the chart block then held at 0:
   angles (a1, a2, a3; a' = B(a)^-1 w) and the sequence (0: x-y-z, 1: x-z-y), switched
   by a state event (contact_events.py) when |a2| passes SWITCH_ANGLE (1.5 rad) to the
   other sequence with the same attitude (Modia3D's remedy for gimbal lock; the formulas
-  are systems/rotations.py's). ``pose``'s quaternion is written from the angles at the
+  are studies/rotations.py's). ``pose``'s quaternion is written from the angles at the
   outputs.
 """
 from __future__ import annotations
@@ -69,24 +69,28 @@ from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper, StepperS
 from youbot_dynamics.dynamics.free_body import add_free_flyer
 from youbot_dynamics.dynamics.friction import (FLOAT, JOINTS, READ_VECTOR, TABLE, WRITTEN_VECTOR,
                                                JointFriction, accumulate_friction_torque,
-                                               friction_left_and_rates_unchecked, left_torque_and_rates, unchecked)
-from youbot_dynamics.dynamics.rigid_body import forward_dynamics, kinetic_energy, potential_energy, symmetrised
+                                               friction_left_and_rates_unchecked,
+                                               left_torque_and_rates, unchecked)
+from youbot_dynamics.dynamics.rigid_body import (forward_dynamics, kinetic_energy, potential_energy,
+                                                 symmetrised)
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.integrate.registry import integrator_kind
 from youbot_dynamics.model.compose import robot_with_gravity
 from youbot_dynamics.model.configuration import require_fixed_root
 from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.base import POSE_LABELS, TWIST_LABELS, BaseModel, BaseMotion, planar_robot
+from youbot_dynamics.model.rotations import (SEQUENCES, cardan_angle_rates, cardan_matrix,
+                                             quaternion_rate)
+from youbot_dynamics.scene.contacts import ROTATION_COORDINATES
+from youbot_dynamics.scene.reader import SceneError
+from youbot_dynamics.scene.schema import IntegratorSpec, Scene
 from youbot_dynamics.sim.controllers import (ComputedTorque, Controller, Reference, clip_to_limits,
                                              commanded_acceleration, make_controller)
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
-from youbot_dynamics.sim.registry import integrator_kind
-from youbot_dynamics.sim.scene import IntegratorSpec, Scene
-from youbot_dynamics.sim.scene_contacts import ROTATION_COORDINATES
-from youbot_dynamics.sim.scene_reader import SceneError
+from youbot_dynamics.sim.mobile_base import (POSE_LABELS, TWIST_LABELS, BaseModel, BaseMotion,
+                                             planar_robot)
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import POINTS, TIMING, PointToPointTrajectory, desired_motion
-from youbot_dynamics.systems.rotations import SEQUENCES, cardan_angle_rates, cardan_matrix, quaternion_rate
 
 #: A joint velocity beyond this multiple of its URDF limit is divergence.
 VELOCITY_LIMIT_FACTOR = 100.0

@@ -20,11 +20,11 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.scene.schema import IntegratorSpec, Scene
 from youbot_dynamics.sim import engine
 from youbot_dynamics.sim.divergence import DivergenceLimits
 from youbot_dynamics.sim.engine import SimulationResult, Snapshot
 from youbot_dynamics.sim.model import ControllerCallback, SimModel, compile
-from youbot_dynamics.sim.scene import IntegratorSpec, Scene
 from youbot_dynamics.sim.state import SimState
 
 #: A torque command: a sequence in joint order or a mapping by joint name (N m, N).

@@ -23,8 +23,8 @@ from typing import Mapping, Sequence
 import numpy as np
 import pinocchio as pin
 
+from youbot_dynamics.integrate.drive import IntegratorStats
 from youbot_dynamics.sim.controllers import Reference
-from youbot_dynamics.sim.integration import IntegratorStats
 
 
 @dataclass(frozen=True)

@@ -1,1 +1,0 @@
-"""analysis/: work-precision sweeps, references, stability probes, plots."""

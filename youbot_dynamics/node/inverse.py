@@ -1,0 +1,263 @@
+"""Inverse dynamics of measured motion: accelerations estimated from joint-state samples,
+then tau = RNEA(q, v, a) + tau_friction(v).
+
+Acceleration estimate (for samples q_k, v_k at times t_k, spacing not necessarily even):
+the central difference of velocity
+
+    a_hat(t_k) = (v_{k+1} - v_{k-1}) / (t_{k+1} - t_{k-1}),
+
+published one sample late (at t_k, with q_k, v_k). Because v is the integral of a, this is
+exactly the mean of a(s) over the window [t_{k-1}, t_{k+1}] (a box-car filter of the
+acceleration, zero phase lag at t_k). Hence the bound used by the tests:
+
+    |a_hat_i(t_k) - a_i(t_k)| <= max_{s in [t_{k-1}, t_{k+1}]} |a_i(s) - a_i(t_k)|,
+
+and the torque error M(q_k) (a_hat - a) satisfies, per joint i,
+
+    |tau_hat_i - tau_i| <= sum_j |M_ij(q_k)| max_s |a_j(s) - a_j(t_k)|,
+
+whatever the smoothness of a (jumps of a_d in a trapezoidal profile included). For smooth a
+and even spacing h it is a''(t_k) h^2 / 6 + O(h^4). Optionally (``time_constant`` > 0 s)
+a first-order low-pass a_f += alpha (a_hat - a_f), alpha = dt / (time_constant + dt), damps
+measurement noise; the bound above then no longer holds (it adds lag).
+
+Restarts: the estimate uses only samples of one unbroken stream. A sample that is not
+later than the previous one (a replay that restarts its time base, a duplicate), or that
+comes more than ``max_gap_ns`` after it (a pause, a one-off stamp of 1e6 s), starts a new
+stencil: the samples before it and the filter state are forgotten (``clear``), and the
+next torque comes after three good samples. So does an estimate that is not finite (an
+overflowing velocity difference): it is rejected, never filtered. ``restarts`` counts the
+restarts by cause.
+
+Plausibility (rule: ``PLAUSIBLE_FACTOR`` = 10 times the URDF's rated limits): a measured
+robot neither moves nor pushes much beyond its ratings. A sample with |v_i| >
+10 x velocity_limit_i on some joint (a velocity jump of 1e6 rad/s, which gave 3e11 N m) is
+rejected (``out_of_limits``) before it enters the stencil; a torque with |tau_i| >
+10 x effort_limit_i (``DEFAULT_EFFORT_LIMIT`` where the URDF has none) comes from bad
+samples (a velocity step within the velocity bound, 10 rad/s in 2 ms) and is not
+published; the estimate then restarts. :func:`implausible_joints` names the joints.
+
+Friction: the scene's model at the measured velocity; LuGre bristles are taken at their
+steady state for v (the bristle deflection cannot be measured).
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+from numba import njit, types
+
+from youbot_dynamics.dynamics.friction import JointFriction, unchecked
+from youbot_dynamics.dynamics.rigid_body import inverse_dynamics, inverse_dynamics_batch
+from youbot_dynamics.io.stamps import NS_PER_S
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.node.commands import DEFAULT_EFFORT_LIMIT, InputRejected, JointSample
+
+DEFAULT_MAX_GAP_NS = 100_000_000
+"""Largest spacing (ns) of two samples in one stencil by default (0.1 s: 50 periods of a
+500 Hz stream); a longer gap restarts the estimate."""
+PLAUSIBLE_FACTOR = 10.0
+"""A velocity or torque beyond this multiple of a joint's URDF limit is implausible."""
+RESTART_CAUSES = ("backwards", "gap", "non_finite", "implausible")
+"""Why the estimate restarted: a sample not after the previous one, a gap longer than
+``max_gap_ns``, a non-finite estimate, an implausible torque (counted by the session)."""
+_NO_ROWS = np.empty((0, 0))
+"""The q and v rows of an empty stencil."""
+_LARGEST_INT64 = 2**63 - 1
+"""A larger ``max_gap_ns`` is no bound (two stamps of builtin_interfaces/Time are less apart)."""
+
+_INTS = types.Array(types.int64, 1, "C")
+_SIGNATURE = types.UniTuple(types.int64, 6)(
+    types.Array(types.int64, 1, "C", readonly=True), types.Array(types.boolean, 1, "C", readonly=True),
+    types.Array(types.float64, 2, "A", readonly=True), types.int64, types.int64, types.float64,
+    types.Array(types.float64, 1, "C"), types.boolean, _INTS, types.Array(types.float64, 2, "C"), _INTS)
+"""(stamps, taken, v, held, max_gap_ns, time_constant, filtered, known, ends, estimates,
+failed) -> (kept, failed, run, backwards, gaps, known): see :func:`_central_differences`."""
+
+
+@njit(_SIGNATURE, cache=True)
+def _central_differences(stamps: np.ndarray, taken: np.ndarray, v: np.ndarray, held: int, max_gap_ns: int,
+                         time_constant: float, filtered: np.ndarray, known: bool, ends: np.ndarray,
+                         estimates: np.ndarray, failed: np.ndarray) -> tuple[int, int, int, int, int, int]:
+    """The stencils of rows pushed one by one (see the module docstring): ``stamps`` (int
+    ns) and ``v`` rows of the ``held`` samples of the stencil, then of the new ones, of which
+    those not ``taken`` (index k - held) clear it. For each new row k that completes three
+    samples of one stream: ends[i] = k and estimates[i] its estimate (rad/s^2), filtered
+    (``time_constant`` > 0 s) from ``filtered`` when ``known``; an estimate not finite
+    restarts the stencil and is not kept (failed[j] = k). ``filtered`` ends as the filter's
+    state. Returns (estimates kept, failed, samples of the stream at the end, restarts
+    backwards, restarts gap, whether ``filtered`` is known)."""
+    run, count, bad, backwards, gaps = held, 0, 0, 0, 0
+    for k in range(held, stamps.shape[0]):
+        if not taken[k - held]:
+            run, known = 0, False
+            continue
+        if run > 0:
+            step = stamps[k] - stamps[k - 1]
+            if step <= 0 or step > max_gap_ns:
+                if step <= 0:
+                    backwards += 1
+                else:
+                    gaps += 1
+                run, known = 0, False
+        run += 1
+        if run < 3:
+            continue
+        span = (stamps[k] - stamps[k - 2]) / NS_PER_S
+        smooth, alpha = time_constant > 0.0 and known, 0.0
+        if smooth:
+            dt = (stamps[k] - stamps[k - 1]) / NS_PER_S
+            alpha = dt / (time_constant + dt)
+        finite = True
+        for j in range(v.shape[1]):
+            estimate = (v[k, j] - v[k - 2, j]) / span
+            if smooth:
+                estimate = filtered[j] + alpha * (estimate - filtered[j])
+            finite = finite and math.isfinite(estimate)
+            estimates[count, j] = estimate
+        if not finite:
+            failed[bad] = k
+            bad += 1
+            run, known = 0, False
+            continue
+        filtered[:] = estimates[count]
+        known = True
+        ends[count] = k
+        count += 1
+    return count, bad, run, backwards, gaps, 1 if known else 0
+
+
+_central_differences_unchecked = unchecked(_central_differences)
+"""The same without numba's type dispatch (callers pass exactly the signature's types)."""
+
+
+class AccelerationEstimator:
+    """Central differences of velocity over the last three samples of one unbroken stream
+    (see the module docstring); ``max_gap_ns`` (int ns > 0) is the longest spacing. The
+    samples of the stencil (at most three, oldest first) are held as arrays: their stamps
+    (int ns), q and v rows. One compiled loop pushes a sample or a batch of them."""
+
+    def __init__(self, time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS) -> None:
+        if not time_constant >= 0.0:
+            raise ValueError(f"acceleration filter time constant must be >= 0 s, got {time_constant}")
+        if not max_gap_ns > 0:
+            raise ValueError(f"largest sample gap must be > 0 ns, got {max_gap_ns}")
+        self.time_constant, self.max_gap_ns = float(time_constant), int(max_gap_ns)
+        self.restarts = dict.fromkeys(RESTART_CAUSES, 0)
+        self.clear()
+
+    @property
+    def samples(self) -> list[JointSample]:
+        """The samples of the stencil, oldest first (at most three)."""
+        return [JointSample(stamp, q, v) for stamp, q, v in zip(self._stamps, self._q, self._v)]
+
+    def clear(self) -> None:
+        """Forget the samples and the filter state (the next estimate needs three samples)."""
+        self._stamps: list[int] = []
+        self._q = self._v = _NO_ROWS
+        self.filtered: np.ndarray | None = None
+
+    def restart(self, cause: str) -> None:
+        """``clear``, counted under ``cause`` (one of ``RESTART_CAUSES``)."""
+        self.restarts[cause] += 1
+        self.clear()
+
+    def push(self, sample: JointSample) -> tuple[JointSample, np.ndarray] | None:
+        """Add a sample; returns (the middle sample, its acceleration estimate rad/s^2) once
+        three of one stream are known. A sample not after the previous one, or more than
+        ``max_gap_ns`` after it, restarts the stencil with itself. A non-finite estimate
+        restarts it and raises ``non_finite``. Time differences are taken between
+        integer-nanosecond stamps, exact at any magnitude (wall-clock stamps included)."""
+        stamps, q, v, estimates, failed = self.push_rows([sample.stamp_ns], sample.q[None, :], sample.v[None, :],
+                                                         [True])
+        if failed:
+            raise failed[0]
+        return (JointSample(int(stamps[0]), q[0], v[0]), estimates[0]) if len(stamps) else None
+
+    def push_rows(self, stamps: Sequence[int], q: np.ndarray, v: np.ndarray, taken: Sequence[bool]
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[InputRejected]]:
+        """``push`` of each row in turn (stamps int ns (N,), q (N, nq), v (N, nv); a row not
+        ``taken``, a rejected sample whose stamp and values are ignored: ``clear``): the
+        middle samples' stamps (int64 ns, (M,)), q (M, nq), v (M, nv) and their estimates
+        (M, nv; rad/s^2), in order, and the ``non_finite`` errors ``push`` would have
+        raised (the estimate restarted at each)."""
+        held, count = len(self._stamps), len(stamps)
+        if not len(q) == len(v) == len(taken) == count or np.ndim(v) != 2:     # the compiled loop trusts them
+            raise ValueError(f"push_rows: {count} stamps need as many rows of q and v and taken flags; got "
+                             f"q {np.shape(q)}, v {np.shape(v)}, {len(taken)} flags")
+        all_stamps = np.array([*self._stamps, *stamps], dtype=np.int64)
+        all_q, all_v = ((np.concatenate((self._q, q)), np.concatenate((self._v, v))) if held
+                        else (q, np.asarray(v, dtype=float)))
+        filtered, known = (np.empty(all_v.shape[1]), False) if self.filtered is None else (self.filtered.copy(), True)
+        ends, failed = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
+        estimates = np.empty((count, all_v.shape[1]))
+        kept, bad, run, backwards, gaps, known = _central_differences_unchecked(     # the types it was compiled for
+            all_stamps, np.array(taken, dtype=bool), all_v, held, min(self.max_gap_ns, _LARGEST_INT64),
+            self.time_constant, filtered, known, ends, estimates, failed)
+        if backwards or gaps or bad:
+            self.restarts["backwards"] += backwards
+            self.restarts["gap"] += gaps
+            self.restarts["non_finite"] += bad
+        self.filtered = filtered if known else None
+        keep = min(run, 3)
+        self._stamps, self._q, self._v = ((all_stamps[-keep:].tolist(), all_q[-keep:], all_v[-keep:]) if keep
+                                          else ([], _NO_ROWS, _NO_ROWS))
+        if kept and ends[kept - 1] - ends[0] == kept - 1:     # one stream: slices
+            middle = slice(int(ends[0]) - 1, int(ends[0]) - 1 + kept)
+        else:
+            middle = ends[:kept] - 1
+        errors = [InputRejected("non_finite", f"acceleration estimate at {all_stamps[k - 1]} ns is not finite "
+                                "(velocities too large to difference)") for k in failed[:bad].tolist()] if bad else []
+        return all_stamps[middle], all_q[middle], all_v[middle], estimates[:kept], errors
+
+    def state(self) -> tuple:
+        """What ``restore`` puts back: the samples, the filter state, the restart counts."""
+        return self._stamps, self._q, self._v, self.filtered, dict(self.restarts)
+
+    def restore(self, state: tuple) -> None:
+        """Back to a ``state()``."""
+        self._stamps, self._q, self._v, self.filtered, restarts = state
+        self.restarts = dict(restarts)
+
+
+def plausible_limit(robot: Robot, quantity: str = "effort") -> np.ndarray:
+    """|tau_i| (N m, N; ``quantity`` "effort") or |v_i| (rad/s, m/s; "velocity") above which
+    a value is implausible: ``PLAUSIBLE_FACTOR`` times the URDF limit; where the URDF has
+    none, ``DEFAULT_EFFORT_LIMIT`` for efforts and no bound for velocities."""
+    limit = np.asarray(robot.effort_limit if quantity == "effort" else robot.velocity_limit, dtype=float)
+    return PLAUSIBLE_FACTOR * np.where(np.isfinite(limit), limit,
+                                       DEFAULT_EFFORT_LIMIT if quantity == "effort" else np.inf)
+
+
+def implausible_joints(robot: Robot, values: np.ndarray, quantity: str = "effort") -> list[str]:
+    """Names of the joints whose ``values`` (joint order; torques or velocities, see
+    :func:`plausible_limit`) are not finite or beyond the plausible bound."""
+    bad = ~(np.abs(values) <= plausible_limit(robot, quantity))
+    return [name for name, flag in zip(robot.joint_names, bad) if flag]
+
+
+class InverseDynamics:
+    """tau = RNEA(q, v, a) + tau_friction(v) for a robot and its friction model (or None),
+    of one sample (``torque``) or of many (``torques``, Pinocchio's batch RNEA)."""
+
+    def __init__(self, robot: Robot, friction: JointFriction | None) -> None:
+        self.robot, self.friction = robot, friction
+        self.data = robot.model.createData()
+        self.pool = pin.ModelPool(robot.model, 1)
+
+    def _bristles(self, v: np.ndarray) -> np.ndarray | None:
+        if self.friction is None or self.friction.lugre is None:
+            return None
+        if v.ndim == 1:
+            return self.friction.steady_state_bristles(v)
+        return np.array([self.friction.steady_state_bristles(row) for row in v])
+
+    def torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Joint torques (N m, N) in joint order."""
+        return inverse_dynamics(self.robot, self.data, q, v, a, self.friction, self._bristles(v))
+
+    def torques(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Joint torques (N, nv) of N samples (rows of q, v, a)."""
+        return inverse_dynamics_batch(self.robot, q, v, a, self.friction, self._bristles(v), pool=self.pool)

@@ -1,0 +1,136 @@
+"""The moving base on ROS (REP-105), without rclpy: /cmd_vel in; /odom, the
+odom -> base_footprint transform and the ground-truth pose out.
+
+- ``/cmd_vel`` (geometry_msgs/Twist, body frame): vx, vy and wz are the base's twist; a
+  non-finite value, a speed beyond ``MAX_LINEAR`` / ``MAX_ANGULAR`` or a non-zero vz, wx or
+  wy (the base moves in the plane only) is rejected and counted like /joint_commands'. A
+  command is held for the session's command timeout, then the base is told to stop (the
+  zero twist), never left running. Before the first command the scene's base path (or rest)
+  is followed.
+- ``/odom`` (nav_msgs/Odometry): the pose of base_footprint in odom from wheel odometry (the
+  measured wheel speeds of each sample held over the increment to the next, integrated
+  exactly on SE(2) by :func:`~youbot_dynamics.dynamics.mobile.odometry.odometry_step`), the
+  twist in base_footprint (the least-squares twist of the wheel speeds), covariances
+  ``POSE_COVARIANCE`` and ``TWIST_COVARIANCE``. The odom frame is the world frame at the
+  start: odometry starts at the base's true initial pose, and restarts there on reset.
+- ``/tf`` carries odom -> base_footprint with the /odom pose, every sample.
+- ``/base_pose_ground_truth`` (nav_msgs/Odometry, frame odom): the simulated pose and twist
+  (zero covariance), so that odometry drift can be measured.
+
+:class:`WheelOdometry` is the odometry alone (/odom and its transform from wheel speeds):
+the simulate mode feeds it the simulated wheel speeds, the inverse mode those of the
+/joint_states it receives, so a recorded run replayed into an inverse-mode node gives the
+recorded /odom again.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase, base_twist
+from youbot_dynamics.dynamics.mobile.odometry import odometry_step
+from youbot_dynamics.io import messages
+from youbot_dynamics.node.commands import InputCounters, InputRejected
+from youbot_dynamics.sim.engine import Snapshot
+from youbot_dynamics.sim.mobile_base import BaseModel
+
+ODOM_FRAME = "odom"
+#: Largest accepted speed (m/s) and turn rate (rad/s) on /cmd_vel (the youBot drives at up
+#: to about 0.8 m/s).
+MAX_LINEAR, MAX_ANGULAR = 5.0, 10.0
+#: /odom covariances (row-major 6x6 diagonals: x, y, z, rotation about x, y, z), the values
+#: of ros2_controllers' diff_drive_controller defaults.
+POSE_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
+TWIST_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
+TOPICS = ("/odom", "/base_pose_ground_truth")
+
+
+def _quaternion_of_yaw(yaw: float) -> tuple[float, float, float, float]:
+    """Unit quaternion (x, y, z, w) of a rotation by ``yaw`` (rad) about z."""
+    return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
+
+
+class WheelOdometry:
+    """Wheel odometry of a mecanum base from ``pose0`` (x, y, yaw in odom): each sample's
+    wheel speeds (rad/s, ``mecanum.names`` order) held over the increment to the next."""
+
+    def __init__(self, mecanum: MecanumBase, pose0, prefix: str = "") -> None:
+        self.mecanum, self.pose0 = mecanum, np.array(pose0, dtype=float)
+        self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + "base_footprint"
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the initial pose, no sample seen."""
+        self.pose = self.pose0.copy()
+        self.last: tuple[float, np.ndarray] | None = None
+
+    def outputs(self, stamp_ns: int, t: float, speeds: np.ndarray) -> tuple[object, object]:
+        """(/odom, the odom -> base_footprint transform) of a sample at time t (s) with wheel
+        speeds ``speeds``; advances the pose by the previous sample's speeds."""
+        if self.last is not None:
+            self.pose = odometry_step(self.mecanum, self.pose, self.last[1], t - self.last[0])
+        self.last = (t, np.array(speeds, dtype=float))
+        x, y, yaw = self.pose
+        twist = base_twist(self.mecanum, speeds)
+        odom = messages.odometry(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0), _quaternion_of_yaw(yaw),
+                                 (twist[0], twist[1], 0.0, 0.0, 0.0, twist[2]), POSE_COVARIANCE, TWIST_COVARIANCE)
+        transform = messages.transform_stamped(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0),
+                                               _quaternion_of_yaw(yaw))
+        return odom, transform
+
+
+class MobileBase:
+    """/cmd_vel, wheel odometry and the base's outputs of a session whose scene has a moving
+    ``base``; ``wheels`` are the wheel joints' indices in the snapshot's v."""
+
+    def __init__(self, base: BaseModel, counters: InputCounters, timeout: float, prefix: str = "") -> None:
+        self.base, self.counters, self.timeout = base, counters, float(timeout)
+        self.odometry = WheelOdometry(base.mecanum, base.pose0, prefix)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the command; odometry back to the base's initial pose."""
+        self.command: np.ndarray | None = None
+        self.command_time = -math.inf
+        self.odometry.reset()
+
+    # ---- /cmd_vel ---------------------------------------------------------------------------
+    def accept(self, linear, angular, t: float) -> None:
+        """A /cmd_vel twist (linear and angular, 3 each, body frame) received at simulated
+        time t (s); raises and counts :class:`InputRejected`."""
+        try:
+            values = np.array([*linear, *angular], dtype=float)
+            if values.shape != (6,) or not np.all(np.isfinite(values)):
+                raise InputRejected("non_finite", f"/cmd_vel: {values.tolist()} must be 6 finite numbers")
+            if np.any(values[[2, 3, 4]] != 0.0):
+                raise InputRejected("out_of_limits", "/cmd_vel: linear.z, angular.x and angular.y must be 0 (the "
+                                    "base moves in the plane)")
+            if math.hypot(values[0], values[1]) > MAX_LINEAR or abs(values[5]) > MAX_ANGULAR:
+                raise InputRejected("out_of_limits", f"/cmd_vel: speed {math.hypot(values[0], values[1]):.3g} m/s "
+                                    f"and turn rate {abs(values[5]):.3g} rad/s must be within {MAX_LINEAR} m/s and "
+                                    f"{MAX_ANGULAR} rad/s")
+        except InputRejected as error:
+            self.counters.reject(error)
+            raise
+        self.counters.accepted += 1
+        self.command, self.command_time = values[[0, 1, 5]], t
+
+    def twist(self, t: float) -> np.ndarray | None:
+        """The twist the base is to follow at t (s): the last command within the timeout,
+        the zero twist after it (stop), None before any command (the scene's path)."""
+        if self.command is None:
+            return None
+        return self.command if t - self.command_time <= self.timeout else np.zeros(3)
+
+    # ---- outputs ---------------------------------------------------------------------------
+    def outputs(self, stamp_ns: int, t: float, snapshot: Snapshot) -> tuple[list[tuple[str, object]], object]:
+        """(/odom and /base_pose_ground_truth, the odom -> base_footprint transform) of the
+        sample at simulated time t (s); advances the odometry by the previous sample's wheel
+        speeds."""
+        odom, transform = self.odometry.outputs(stamp_ns, t, snapshot.v[self.base.wheels])
+        tx, ty, tyaw, vx, vy, wz = snapshot.base
+        frames = self.odometry.odom_frame, self.odometry.child_frame
+        truth = messages.odometry(stamp_ns, *frames, (tx, ty, 0.0), _quaternion_of_yaw(tyaw),
+                                  (vx, vy, 0.0, 0.0, 0.0, wz), np.zeros(36), np.zeros(36))
+        return [("/odom", odom), ("/base_pose_ground_truth", truth)], transform

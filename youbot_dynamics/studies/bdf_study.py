@@ -1,0 +1,239 @@
+"""The seed's fixed-step study of the elastic pendulum (seed 001 sections 1.6-1.9; Tables
+1-4: explicit Euler, BDF2, BDF3, BDF4 over stiffness k and step count N on [0, 20] from
+x0 = 1.2 at rest), with the seed's verdicts beside ours, and CVODE's order-capped runs.
+
+Our criterion, stated:
+
+- unstable: the run diverges (a non-finite state, |x| beyond STABLE_BOUND, or Newton's
+  iteration failing) or its energy GROWS by more than ENERGY_GROWTH (the potential-energy
+  scale m g L = 1). Energy lost by a damping method is no instability.
+- accurate: stable, and the position (x, y) stays within POSITION_TOLERANCE (1 % of the
+  pendulum's length) of a high-accuracy reference (DOP853 at rtol = atol =
+  REFERENCE_TOL) at the outputs every 0.1 s.
+
+Beside it, the energy verdict of ``pendulum-study`` (unstable at max|E - E0| >= 1,
+accurate below 0.01): the two disagree where a method damps the spring (BDF2 at k = 2000
+loses all 40 units of spring energy, "unstable" by energy, bounded and stable in fact) and
+where a small energy error hides a phase error.
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import asdict, dataclass
+from functools import partial
+from typing import Sequence
+
+import numpy as np
+
+from youbot_dynamics.integrate.integrators import DivergenceError, Solution
+from youbot_dynamics.studies.bdf import bdf_fixed_step
+from youbot_dynamics.studies.elastic_pendulum import (ACCURATE_ENERGY_ERROR, SEED_STATE0,
+                                                      SEED_T_END, STABLE_BOUND, STABLE_ENERGY_ERROR,
+                                                      elastic_pendulum_energy,
+                                                      elastic_pendulum_jacobian,
+                                                      elastic_pendulum_rhs,
+                                                      simulate_elastic_pendulum)
+
+#: Energy growth (units of m g L) beyond which a run counts as unstable.
+ENERGY_GROWTH = 1.0
+#: Position error (m; the pendulum is 1 long) below which a run counts as accurate.
+POSITION_TOLERANCE = 1e-2
+#: Tolerance of the DOP853 reference (its outputs agree with rtol 1e-10's to 3e-9 m at
+#: k = 2000, measured).
+REFERENCE_TOL = 1e-12
+#: Output times of the comparison: every 0.1 s; of the reference run: every 0.01 s.
+OUTPUTS, DENSE_OUTPUTS = 201, 2001
+METHODS = ("euler", "bdf2", "bdf3", "bdf4")
+#: The seed's verdicts (benchmarks.md section 3).
+SEED_VERDICTS = {
+    "euler": {(1, 1000): "stable, inaccurate", (1, 10000): "accurate",
+              (20, 1000): "unstable", (20, 10000): "accurate"},
+    "bdf2": {(100, 1000): "stable, inaccurate", (2000, 1000): "stable, inaccurate"},
+    "bdf3": {(500, 1000): "unstable"},
+    "bdf4": {(400, 1000): "unstable"},
+}
+#: The grids of Tables 1-4: stiffnesses k and step counts N.
+GRIDS = {
+    "euler": ((1, 20), (1000, 10000)),
+    "bdf2": ((1, 100, 2000), (1000, 10000)),
+    "bdf3": ((1, 100, 500, 2000), (1000, 10000)),
+    "bdf4": ((1, 100, 400, 2000), (1000, 10000)),
+}
+#: The seed's CVODE BDF step counts at rtol = atol = 1e-6: (k, max order) -> steps.
+SEED_CVODE_ORDER = {(10, 1): 38_501, (50, 1): 76_856, (10, 5): 536, (50, 5): 1100}
+
+
+@dataclass
+class FixedStepRow:
+    """One cell of Tables 1-4: the seed's verdict, ours, the energy verdict and figures."""
+
+    method: str
+    k: float
+    n_steps: int
+    h_omega: float                # h sqrt(k): the spring's |h lambda| on the imaginary axis
+    seed: str
+    verdict: str
+    energy_verdict: str
+    energy_growth: float | None   # max (E - E0)
+    energy_error: float | None    # max |E - E0|
+    position_error: float | None  # max |(x, y) - reference| (m)
+    diverged_at: float | None     # s
+    newton_iterations: int | None
+    wall_time: float | None
+
+    def as_dict(self) -> dict:
+        """The row as plain data."""
+        return asdict(self)
+
+
+@functools.cache
+def reference_solution(k: float, tol: float = REFERENCE_TOL) -> Solution:
+    """The DOP853 reference run at rtol = atol = tol, outputs every 0.01 s (DENSE_OUTPUTS
+    over [0, 20] s); cached per process (the tables and the figures share it)."""
+    solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, "dop853", rtol=tol,
+                                            atol=tol, n_out=DENSE_OUTPUTS)
+    return solution
+
+
+def reference_positions(k: float, tol: float = REFERENCE_TOL) -> np.ndarray:
+    """(x, y) of the DOP853 reference at the OUTPUTS times (OUTPUTS, 2)."""
+    stride = (DENSE_OUTPUTS - 1) // (OUTPUTS - 1)
+    return reference_solution(float(k), tol).x[::stride, :2]
+
+
+def energy_verdict(energy_error: float | None) -> str:
+    """pendulum-study's verdict from max |E - E0| alone (None: diverged)."""
+    if energy_error is None or energy_error >= STABLE_ENERGY_ERROR:
+        return "unstable"
+    return "accurate" if energy_error < ACCURATE_ENERGY_ERROR else "stable, inaccurate"
+
+
+def fixed_step_states(method: str, k: float, n_steps: int, t_end: float = SEED_T_END,
+                      n_out: int = OUTPUTS) -> tuple[np.ndarray, int | None, float]:
+    """The states at n_out equally spaced times of a fixed-step run of n_steps steps over
+    [0, t_end] s (DivergenceError if it diverges; n_steps a multiple of n_out - 1), its
+    Newton iterations (None for Euler) and its wall time (s)."""
+    if method == "euler":
+        solution, _ = simulate_elastic_pendulum(k, SEED_STATE0, t_end, "euler",
+                                                dt=t_end / n_steps, n_out=n_out,
+                                                bounds=STABLE_BOUND)
+        return solution.x, None, solution.stats.wall_time
+    solution = bdf_fixed_step(partial(elastic_pendulum_rhs, k=k), SEED_STATE0, t_end,
+                              n_steps, int(method[-1]),
+                              jac=partial(elastic_pendulum_jacobian, k=k), bound=STABLE_BOUND)
+    stride = n_steps // (n_out - 1)
+    return (solution.x[::stride], solution.stats.nonlinear_iterations,
+            solution.stats.wall_time)
+
+
+def fixed_step_row(method: str, k: float, n_steps: int, reference: np.ndarray) -> FixedStepRow:
+    """Run one cell and judge it by our criterion and by energy."""
+    seed = SEED_VERDICTS.get(method, {}).get((k, n_steps), "")
+    h_omega = SEED_T_END / n_steps * float(np.sqrt(k))
+    try:
+        states, iterations, wall = fixed_step_states(method, k, n_steps)
+    except DivergenceError as error:
+        return FixedStepRow(method, k, n_steps, h_omega, seed, "unstable", "unstable", None,
+                            None, None, error.time, None, None)
+    energy = elastic_pendulum_energy(states, k)
+    growth = float(np.max(energy - energy[0]))
+    error = float(np.max(np.abs(energy - energy[0])))
+    position = float(np.max(np.linalg.norm(states[:, :2] - reference, axis=1)))
+    verdict = ("unstable" if growth > ENERGY_GROWTH else
+               "accurate" if position < POSITION_TOLERANCE else "stable, inaccurate")
+    return FixedStepRow(method, k, n_steps, h_omega, seed, verdict, energy_verdict(error),
+                        growth, error, position, None, iterations, wall)
+
+
+def fixed_step_tables(methods: Sequence[str] = METHODS, seed_only: bool = False,
+                      reference_tol: float = REFERENCE_TOL) -> list[FixedStepRow]:
+    """Tables 1-4 (``seed_only``: just the cells the seed gives a verdict for)."""
+    cells = [(method, k, n) for method in methods for k in GRIDS[method][0]
+             for n in GRIDS[method][1]
+             if not seed_only or (k, n) in SEED_VERDICTS[method]]
+    references = {k: reference_positions(k, reference_tol) for k in {c[1] for c in cells}}
+    return [fixed_step_row(method, k, n, references[k]) for method, k, n in cells]
+
+
+def cvode_order_rows(stiffnesses: Sequence[float] = (10, 50),
+                     orders: Sequence[int] = (1, 5)) -> list[dict]:
+    """CVODE BDF at rtol = atol = 1e-6 with its order capped, CVODE's own difference-
+    quotient Jacobian (as the seed's Assimulo runs), beside the seed's step counts."""
+    rows = []
+    for k in stiffnesses:
+        for order in orders:
+            solution, error = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END,
+                                                        "cvode_bdf", rtol=1e-6, atol=1e-6,
+                                                        max_order=order,
+                                                        jacobian="difference")
+            stats = solution.stats
+            seed = SEED_CVODE_ORDER.get((k, order))
+            rows.append({"k": k, "max_order": order, "steps": stats.steps,
+                         "rhs_evals": stats.rhs_evals, "jac_evals": stats.jac_evals,
+                         "seed_steps": seed,
+                         "difference": None if seed is None else stats.steps / seed - 1.0,
+                         "energy_error": error, "wall_time": stats.wall_time})
+    return rows
+
+
+def measured_orders(orders: Sequence[int] = (1, 2, 3, 4), k: float = 10.0,
+                    t_end: float = 2.0, steps: Sequence[int] = (400, 800)) -> list[dict]:
+    """Order of convergence measured on the elastic pendulum: the final-state max-error
+    against a DOP853 reference at 1e-13 (over [0, t_end] s, k as given) at each step
+    count, and the slope log(e(N1) / e(N2)) / log(N2 / N1) between the last two."""
+    reference, _ = simulate_elastic_pendulum(k, SEED_STATE0, t_end, "dop853", rtol=1e-13,
+                                             atol=1e-13, n_out=2)
+    rows = []
+    for order in orders:
+        errors = [float(np.max(np.abs(bdf_fixed_step(
+            partial(elastic_pendulum_rhs, k=k), SEED_STATE0, t_end, n, order,
+            jac=partial(elastic_pendulum_jacobian, k=k)).x[-1] - reference.x[-1])))
+            for n in steps]
+        rows.append({"order": order, "steps": list(steps), "errors": errors,
+                     "measured_order": float(np.log(errors[-2] / errors[-1])
+                                             / np.log(steps[-1] / steps[-2]))})
+    return rows
+
+
+def stability_points(rows: Sequence[FixedStepRow]) -> dict[str, complex]:
+    """z = h i sqrt(k) of the BDF cells (the spring's eigenvalue near r = 1), labelled."""
+    return {f"{row.method} k={row.k:g} N={row.n_steps}": 1j * row.h_omega
+            for row in rows if row.method != "euler"}
+
+
+#: The seed's loose-tolerance runs: CVODE at rtol = atol = 0.1 on k = 10.
+CHOPPY_TOL, CHOPPY_K = 0.1, 10.0
+
+
+def plot_choppy_traces(path: str,
+                       integrators: Sequence[str] = ("cvode_bdf", "cvode_adams")) -> dict:
+    """PNG of x(t) and y(t) from CVODE (BDF and Adams, or the ``integrators`` given) at
+    rtol = atol = CHOPPY_TOL (k = CHOPPY_K, CVODE's difference-quotient Jacobian) against
+    the DOP853 reference, outputs by CVODE's interpolation every 0.01 s over [0, 20] s.
+    Returns each run's steps and max position error (m)."""
+    from youbot_dynamics.studies.figures import pyplot, save
+    plt = pyplot()
+
+    reference = reference_solution(CHOPPY_K)
+    figure, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    figures = {}
+    for integrator in integrators:
+        solution, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, SEED_T_END,
+                                                integrator, rtol=CHOPPY_TOL, atol=CHOPPY_TOL,
+                                                n_out=DENSE_OUTPUTS, jacobian="difference")
+        error = float(np.max(np.linalg.norm(solution.x[:, :2] - reference.x[:, :2], axis=1)))
+        figures[integrator] = {"steps": solution.stats.steps, "position_error": error}
+        for axis, column in zip(axes, (0, 1)):
+            axis.plot(solution.t, solution.x[:, column], linewidth=0.9,
+                      label=f"{integrator} ({solution.stats.steps} steps)")
+    for axis, column, label in zip(axes, (0, 1), ("x (m)", "y (m)")):
+        axis.plot(reference.t, reference.x[:, column], "k--", linewidth=0.6,
+                  label=f"DOP853 {REFERENCE_TOL:g}")
+        axis.set_ylabel(label)
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize=8, loc="upper right")
+    axes[0].set_title(f"Elastic pendulum k = {CHOPPY_K:g}, CVODE at rtol = atol = "
+                      f"{CHOPPY_TOL:g}", fontsize=10)
+    axes[1].set_xlabel("t (s)")
+    save(figure, path)
+    return figures

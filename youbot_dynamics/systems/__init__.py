@@ -1,1 +1,0 @@
-"""systems/: classic test systems written as equations (squeezer, woodpecker, ...)."""
