@@ -11,7 +11,7 @@ from pathlib import Path
 from setuptools import find_packages, setup
 
 PACKAGE = "youbot_dynamics"
-HERE = Path(__file__).parent
+HERE = Path(__file__).resolve().parent  # the source tree, also when colcon --symlink-install runs a link to this file
 
 
 def tree(folder: str) -> list[tuple[str, list[str]]]:

@@ -31,13 +31,16 @@ def in_workspace(workspace: Path, command: str, **env: str) -> subprocess.Comple
                                "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}", **env})
 
 
-@pytest.fixture(scope="module")
-def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A colcon workspace with this package in src/, built with `colcon build`."""
-    root = tmp_path_factory.mktemp("ws")
+@pytest.fixture(scope="module", params=["copy", "symlink"])
+def workspace(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A colcon workspace with this package in src/, built with `colcon build` or with
+    `colcon build --symlink-install` (the usual development build: setup.py runs as a link
+    in build/, so it must find its files through the link)."""
+    root = tmp_path_factory.mktemp(f"ws_{request.param}")
     shutil.copytree(REPO, root / "src" / "youbot_dynamics", ignore=shutil.ignore_patterns(
         ".git", ".venv", "build", "install", "log", "out", "*.egg-info", "__pycache__", ".pytest_cache"))
-    build = subprocess.run([str(COLCON), "build", "--base-paths", "src"], cwd=root, capture_output=True,
+    symlink = ["--symlink-install"] if request.param == "symlink" else []
+    build = subprocess.run([str(COLCON), "build", "--base-paths", "src", *symlink], cwd=root, capture_output=True,
                            text=True, timeout=WAIT * 10,
                            env={**os.environ, "AMENT_PREFIX_PATH": sys.prefix,
                                 "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"})
@@ -61,7 +64,9 @@ def test_setup_bash_and_the_ament_index_find_the_node(workspace: Path) -> None:
     install = workspace / "install" / "youbot_dynamics"
     assert prefix == install and share == install / "share" / "youbot_dynamics"
     assert (share / "urdf" / "youbot.urdf").is_file() and (share / "package.xml").is_file()
-    assert install in module.parents                      # the built copy, not the source tree
+    # the installed copy; a symlink install links back to the source
+    built = workspace / "src" / "youbot_dynamics" if workspace.name.startswith("ws_symlink") else install
+    assert built in module.resolve().parents
     assert rclpy_prefix == Path(sys.prefix)
     for executable in ("dynamics_node", "replay_node"):
         assert os.access(install / "lib" / "youbot_dynamics" / executable, os.X_OK)
