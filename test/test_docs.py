@@ -1,6 +1,6 @@
 """The README is a short guide and the pages under docs/ hold together: the README within
 300 lines of at most 100 characters, no internal words, every relative link and anchor
-resolves, and docs/benchmarks.md is the page bench/summary.py makes of bench/results.json."""
+resolves, every file named with its folder exists, and docs/benchmarks.md is the page bench/summary.py makes of bench/results.json."""
 from __future__ import annotations
 
 import json
@@ -14,6 +14,8 @@ ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
 PAGES = [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]
 LINK = re.compile(r"\]\(([^)\s]+)\)")
+#: A file named in code style with its folder: `dynamics/friction.py`, `config/scenes/grasp.yaml`.
+NAMED_FILE = re.compile(r"`([\w.-]+(?:/[\w.-]+)+\.(?:py|yaml|sh|txt|urdf))`")
 #: Words that mean something only inside the project's history: the source documents called
 #: by an internal name, issue numbers.
 INTERNAL = re.compile(r"\bthe seeds?\b|\bseeds?'s?(?=\W)|\bseed \d{3}\b|\bissue[- #]?\d+", re.I)
@@ -65,6 +67,13 @@ def test_relative_links_and_anchors_resolve(path):
         elif anchor and linked.suffix == ".md" and anchor not in heading_anchors(linked):
             broken.append(target)
     assert broken == []
+
+
+@pytest.mark.parametrize("path", PAGES, ids=lambda p: p.name)
+def test_named_files_exist(path):
+    """Files named with their folder exist, from the repository's root or the package's."""
+    named = set(NAMED_FILE.findall(path.read_text(encoding="utf-8")))
+    assert sorted(f for f in named if not ((ROOT / f).exists() or (ROOT / "youbot_dynamics" / f).exists())) == []
 
 
 def test_the_benchmarks_page_is_the_latest_results_page():
