@@ -1,7 +1,9 @@
-"""The speed figures of issue 14 in one table: figure, ours, peer, ratio, goal, met or not;
-printed as Markdown and written as JSON (bench/results.json), with the machine stated.
+"""The speed figures in one table: figure, ours, peer, ratio, goal, met or not; printed as
+Markdown, written as JSON (bench/results.json) with the machine and the date, and as the page
+docs/benchmarks.md (bench/benchmarks_page.py).
 
-Run: python bench/summary.py [--quick] [--json bench/results.json] (``make bench``). It
+Run: python bench/summary.py [--quick] [--json bench/results.json] (``make bench``);
+``--page-only`` rewrites docs/benchmarks.md from the saved JSON without measuring. It
 takes the figures of bench_kinematics, bench_dynamics, bench_batch and bench_scaling (each
 checked against Pinocchio or the per-sample functions before it is timed), times the
 command line's start-up, and adds the rows of bench/goal_rows.py: the right-hand sides of
@@ -30,6 +32,7 @@ from bench_dynamics import arm, dynamics_pairs  # noqa: E402
 from bench_kinematics import kinematics_pairs  # noqa: E402
 from bench_scaling import scaling  # noqa: E402
 from goal_rows import gripping_rows, inverse_rows, mujoco_rows, rhs_rows, row, session_rows  # noqa: E402
+from benchmarks_page import markdown, write_page  # noqa: E402
 from timing import best_per_call, machine  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -112,23 +115,18 @@ def scaling_rows(results: dict[str, dict]) -> list[dict]:
     return rows
 
 
-def markdown(rows: list[dict]) -> str:
-    def number(x: float | None) -> str:
-        return "-" if x is None else f"{x:.3g}" if abs(x) < 100 else f"{x:.0f}"
-
-    lines = ["| figure | ours | peer | unit | ratio | goal | met |", "|---|---|---|---|---|---|---|"]
-    for r in rows:
-        met = "-" if r["goal"] == "-" or r["met"] is None else ("yes" if r["met"] else "**no**")
-        lines.append(f"| {r['figure']} | {number(r['ours'])} | {number(r['peer'])} | {r['unit']} | "
-                     f"{number(r['ratio'])} | {r['goal']} | {met} |")
-    return "\n".join(lines)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats (a rougher table in seconds)")
     parser.add_argument("--json", type=Path, default=REPO / "bench" / "results.json")
+    parser.add_argument("--page", type=Path, default=REPO / "docs" / "benchmarks.md",
+                        help="the Markdown page written from the JSON (default docs/benchmarks.md)")
+    parser.add_argument("--page-only", action="store_true",
+                        help="rewrite the page from the saved JSON, measure nothing")
     args = parser.parse_args()
+    if args.page_only:
+        print(f"written {write_page(args.json, args.page)}")
+        return
     start = time.perf_counter()
     repeat = 5 if args.quick else 15
     parts: list[tuple[str, Callable[[], list[dict]]]] = [
@@ -154,6 +152,7 @@ def main() -> None:
     args.json.write_text(json.dumps({"machine": described, "date": datetime.datetime.now(datetime.timezone.utc)
                                      .isoformat(timespec="seconds"), "rows": rows, "scaling": scaled}, indent=1) + "\n")
     print(f"written {args.json}")
+    print(f"written {write_page(args.json, args.page)}")
 
 
 if __name__ == "__main__":

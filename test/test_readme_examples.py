@@ -1,4 +1,5 @@
-"""The README's Python examples run as written and print what the README says they print."""
+"""The Python examples of the README and of docs/python.md run as written and print what the
+text says they print."""
 from __future__ import annotations
 
 import os
@@ -10,22 +11,29 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE = re.compile(r"```python\n(.*?)```\s*```text\n(.*?)```", re.S)
+
+
+def readme_examples() -> list[tuple[str, str]]:
+    """(code, expected output) of every ```python block of the README's "Python API" section
+    that is followed by a ```text block."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = text.split("## Python API", 1)[1].split("\n## ", 1)[0]
+    return EXAMPLE.findall(section)
 
 
 def examples() -> list[tuple[str, str]]:
-    """(code, expected output) of every ```python block of the "Python API" section that is
-    followed by a ```text block."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text.split("## Python API", 1)[1].split("\n## ", 1)[0]
-    return re.findall(r"```python\n(.*?)```\s*```text\n(.*?)```", section, re.S)
+    """The README's examples, then every such pair of docs/python.md."""
+    return readme_examples() + EXAMPLE.findall((ROOT / "docs" / "python.md").read_text(encoding="utf-8"))
 
 
-def test_the_readme_has_examples():
+def test_the_readme_and_the_api_page_have_examples():
+    assert len(readme_examples()) >= 1
     assert len(examples()) >= 2
 
 
 @pytest.mark.parametrize("index", range(len(examples())))
-def test_readme_example_prints_what_the_readme_says(index, tmp_path):
+def test_example_prints_what_the_text_says(index, tmp_path):
     code, expected = examples()[index]
     environment = {**os.environ, "PYTHONPATH": str(ROOT)}
     done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=environment,

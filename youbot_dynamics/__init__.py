@@ -1,7 +1,8 @@
 """youbot_dynamics: robot dynamics for the KUKA youBot and similar mobile manipulators.
 
-Layers (imports point down): ros/ -> io/ -> analysis/ -> sim/ -> dynamics/ -> model/;
-systems/ holds classic test systems written as equations. Nothing below ros/ imports rclpy.
+Layers, bottom to top (imports point down; docs/architecture.md): errors, model, dynamics,
+integrate, scene, sim, io, node, identification, accuracy, ros, studies, cli. Nothing outside
+ros/ imports rclpy; nothing but cli/ imports studies/ (the classic studies).
 
 The public API, importable from here (each loaded on first use, so that importing the
 package stays cheap)::
