@@ -7,9 +7,10 @@ sub-command, however deep, of every module in cli.COMMAND_MODULES):
 - --duration is simulated time in seconds, --rate a float in Hz, --time-scale simulated or
   recorded seconds per wall second (0: as fast as possible), --plot one figure file, --out a
   folder: each with the help text of its cli.common helper;
-- a command takes --tol exactly when its module's ACCURACY says so ("--tol"); every
-  command ACCURACY names exists, and every module declares ACCURACY (the commands that run
-  an integrator, each with "--tol" or the reason its accuracy is not a command-line choice).
+- a command takes --tol (a relative tolerance) exactly when its module's ACCURACY says so
+  ("--tol"); every command ACCURACY names exists, and every module declares ACCURACY (the
+  commands that run an integrator, each with "--tol" or the reason its accuracy is not a
+  command-line choice).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from typing import Iterator
 import pytest
 
 from youbot_dynamics import cli
+from youbot_dynamics.cli.common import relative_tolerance
 
 RETIRED = ("--t-end", "--t", "--fast")
 
@@ -109,18 +111,31 @@ def test_plot_is_a_file_and_out_a_folder(tree, flag: str, metavar: str) -> None:
     assert not wrong, f"{flag} that takes no single {metavar}: {wrong}"
 
 
-def test_tol_exactly_where_accuracy_says(tree) -> None:
-    undeclared = [module for module in tree if not isinstance(getattr(importlib.import_module(module),
-                                                                      "ACCURACY", None), dict)]
+def test_every_module_declares_accuracy(tree) -> None:
+    undeclared = [module for module in tree
+                  if not isinstance(getattr(importlib.import_module(module), "ACCURACY", None), dict)]
     assert not undeclared, f"modules without ACCURACY (command -> '--tol' or why not): {undeclared}"
-    declared = {module: importlib.import_module(module).ACCURACY for module in tree}
-    unknown = [(module, path) for module, accuracy in declared.items() for path in accuracy
+
+
+@pytest.fixture(scope="module")
+def accuracy(tree) -> dict[str, dict[str, str]]:
+    """module -> its ACCURACY (command path -> "--tol" or the reason it takes none)."""
+    return {module: getattr(importlib.import_module(module), "ACCURACY", {}) for module in tree}
+
+
+def test_accuracy_names_registered_commands_and_reasons(tree, accuracy) -> None:
+    unknown = [(module, path) for module, declared in accuracy.items() for path in declared
                if path not in tree[module]]
     assert not unknown, f"ACCURACY names commands its module does not register: {unknown}"
+    bare = [path for declared in accuracy.values() for path, source in declared.items()
+            if source != "--tol" and len(source) < 20]
+    assert not bare, f"give the reason a command that integrates takes no --tol: {bare}"
+
+
+def test_tol_exactly_where_accuracy_says(tree, accuracy) -> None:
     with_tol = {path for path, _ in _every(tree, "--tol")}
-    wanted = {path for accuracy in declared.values() for path, source in accuracy.items() if source == "--tol"}
+    wanted = {path for declared in accuracy.values() for path, source in declared.items() if source == "--tol"}
     assert with_tol == wanted, (f"--tol but not declared: {sorted(with_tol - wanted)}; "
                                 f"declared but no --tol: {sorted(wanted - with_tol)}")
-    reasons = [path for accuracy in declared.values() for path, source in accuracy.items()
-               if source != "--tol" and len(source) < 20]
-    assert not reasons, f"give the reason a command that integrates takes no --tol: {reasons}"
+    wrong = [path for path, action in _every(tree, "--tol") if action.type is not relative_tolerance]
+    assert not wrong, f"--tol that is no relative tolerance (cli.common.relative_tolerance): {wrong}"
