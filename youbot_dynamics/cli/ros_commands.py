@@ -36,8 +36,9 @@ ACCURACY = {"main-job": "the scene's integrator block, as the node runs it (simu
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add `replay` and `main-job`."""
     replay = subparsers.add_parser("replay", help="publish a recorded bag on its ROS 2 topics",
-                                   description="As fast as possible (--time-scale 0) the replay drives /clock "
-                                   "and its topics are reliable, keep-all: it waits for slow readers, so a "
+                                   description="Publish a bag's messages on their topics with the recorded "
+                                   "timing, scaled by --time-scale, driving /clock. As fast as possible "
+                                   "(--time-scale 0) its topics are reliable, keep-all: it waits for slow readers, so a "
                                    "keep-all subscriber (the inverse-mode node) gets every message, and it waits "
                                    "for their acknowledgements (up to 30 s) before leaving.")
     replay.add_argument("bag", help=".mcap file or rosbag2 folder (with metadata.yaml)")
@@ -52,7 +53,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     job.add_argument("--scene", default=DEFAULT_SCENE, help=f"scene name or file (default {DEFAULT_SCENE})")
     add_duration(job, default_text="the scene's own")
     add_out_folder(job, "the logs", "out")
-    add_rate(job, 500.0, "publish rate, samples per simulated second")
+    add_rate(job, 500.0, "publish rate (samples per simulated second)")
     add_time_scale(job, "simulated")
     add_json(job)
     job.set_defaults(run=run_main_job)
