@@ -123,7 +123,8 @@ def run_mecanum(args: argparse.Namespace) -> int:
     back = base_twist(base, speeds)
     pose = odometry_step(base, np.zeros(3), speeds, args.duration)
     record = {"twist": twist.tolist(), "wheel_speeds": dict(zip(base.names, speeds.tolist())),
-              "twist_from_wheels": back.tolist(), "duration": args.duration, "pose": dict(zip(("x", "y", "theta"), pose.tolist()))}
+              "twist_from_wheels": back.tolist(), "duration": args.duration,
+              "pose": dict(zip(("x", "y", "theta"), pose.tolist()))}
     if args.json:
         print(json.dumps(record))
         return 0

@@ -38,8 +38,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     replay = subparsers.add_parser("replay", help="publish a recorded bag on its ROS 2 topics",
                                    description="Publish a bag's messages on their topics with the recorded "
                                    "timing, scaled by --time-scale, driving /clock. As fast as possible "
-                                   "(--time-scale 0) its topics are reliable, keep-all: it waits for slow readers, so a "
-                                   "keep-all subscriber (the inverse-mode node) gets every message, and it waits "
+                                   "(--time-scale 0) its topics are reliable, keep-all: it waits for slow readers, "
+                                   "so a keep-all subscriber (the inverse-mode node) gets every message, and it waits "
                                    "for their acknowledgements (up to 30 s) before leaving.")
     replay.add_argument("bag", help=".mcap file or rosbag2 folder (with metadata.yaml)")
     add_time_scale(replay, "recorded")
