@@ -190,14 +190,14 @@ def test_c_a_rosbags_written_bag_replays_into_the_node_and_another_process(tmp_p
 
 
 def test_cli_replay_publishes_with_the_recorded_timing(recorded: Path) -> None:
-    """`youbot-dynamics replay BAG --rate 2` in a process of its own: the /joint_states here
+    """`youbot-dynamics replay BAG --time-scale 2` in a process of its own: the /joint_states here
     equal the bag's, in order, and /clock follows the log times."""
     with ros_context(15) as (context, domain):
         collector = Collector(context, {"/joint_states": "sensor_msgs/msg/JointState",
                                         "/clock": "rosgraph_msgs/msg/Clock"})
         with spinning(context, collector):
             process = subprocess.run(
-                [sys.executable, "-m", "youbot_dynamics", "replay", str(recorded), "--rate", "2",
+                [sys.executable, "-m", "youbot_dynamics", "replay", str(recorded), "--time-scale", "2",
                  "--topic", "/joint_states", "--wait-for", "/joint_states"],
                 cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain)}, capture_output=True, text=True,
                 timeout=120)
@@ -213,7 +213,7 @@ def test_cli_replay_publishes_with_the_recorded_timing(recorded: Path) -> None:
 
 
 def test_cli_fast_replay_loses_nothing_into_a_slower_inverse_node(tmp_path: Path) -> None:
-    """`youbot-dynamics replay BAG --fast` in a process of its own, 3000 samples into an
+    """`youbot-dynamics replay BAG --time-scale 0` in a process of its own, 3000 samples into an
     inverse-mode node that handles them more slowly than the replay sends them: keep-all on both
     sides, the replay retrying while its writer's history is full and waiting for the
     acknowledgements before it leaves, so there is a torque for every interior sample."""
@@ -233,7 +233,7 @@ def test_cli_fast_replay_loses_nothing_into_a_slower_inverse_node(tmp_path: Path
             wait_until(lambda: node.publishers_["/computed_torques"].get_subscription_count() > 0,
                        what="the collector")
             process = subprocess.run(
-                [sys.executable, "-m", "youbot_dynamics", "replay", str(bag), "--fast",
+                [sys.executable, "-m", "youbot_dynamics", "replay", str(bag), "--time-scale", "0",
                  "--wait-for", "/joint_states"],
                 cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain)}, capture_output=True, text=True,
                 timeout=120)
@@ -246,13 +246,13 @@ def test_cli_fast_replay_loses_nothing_into_a_slower_inverse_node(tmp_path: Path
 
 def test_replay_refuses_topics_the_bag_does_not_replay(recorded: Path) -> None:
     """A --topic the bag lacks, or a --wait-for topic that is not replayed, is a user error
-    naming the topic and what the bag has; so is a rate out of range (one line, exit 2)."""
+    naming the topic and what the bag has; so is a time scale out of range (one line, exit 2)."""
     with ros_context(16) as (context, _):
         with pytest.raises(UserInputError, match=r"has no topic /nope \(it has /clock, /diagnostics"):
             ReplayNode(recorded, 1.0, ["/nope", "/clock"], context=context)
         with pytest.raises(UserInputError, match=r"wait_for /tf is not a replayed topic .*replayed: /clock\)"):
             ReplayNode(recorded, 1.0, ["/clock"], wait_for="/tf", context=context)
-    process = subprocess.run([sys.executable, "-m", "youbot_dynamics", "replay", str(recorded), "--rate", "5000"],
+    process = subprocess.run([sys.executable, "-m", "youbot_dynamics", "replay", str(recorded), "--time-scale", "5000"],
                              cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain_id(17))},
                              capture_output=True, text=True, timeout=120)
     lines = process.stderr.strip().splitlines()

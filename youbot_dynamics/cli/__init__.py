@@ -5,6 +5,15 @@ with ``set_defaults(run=function)``; ``function(args) -> int`` does the work. Us
 raise :class:`youbot_dynamics.cli.common.CommandError` (or a library error that subclasses
 ``UserInputError``) and end with a one-line message and exit status 2.
 
+One vocabulary (cli/common.py's ``add_*`` helpers; test_cli_vocabulary walks the parser
+tree to check it): ``--duration S`` simulated seconds, ``--rate HZ`` a rate in Hz and nothing
+else, ``--time-scale X`` simulated (or recorded) seconds per wall second with 0 as fast as
+possible, ``--plot PATH`` a figure file, ``--out DIR`` a folder of outputs, ``--json`` on
+every command, ``--tol`` on the commands that choose an integrator's accuracy. Each module
+declares ``ACCURACY``: its commands that run an integrator, each mapped to ``"--tol"`` or
+to the reason its accuracy is not a command-line choice (it sweeps the tolerances, or runs
+a scene's pinned integrator).
+
 Start-up: :func:`main` imports only the module of the command it runs (COMMANDS says which),
 so ``--help`` imports none of them (no numpy, Pinocchio, scipy, sympy, rerun) and a command
 pays only for what its own module needs. COMMANDS holds each command's one-line summary for

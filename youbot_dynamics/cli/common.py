@@ -1,4 +1,19 @@
-"""Helpers shared by the sub-commands: robot loading, joint-value parsing, output.
+"""Helpers shared by the sub-commands: the shared option vocabulary, robot loading,
+joint-value parsing, output.
+
+The vocabulary (one ``add_*`` function per option, so each has one spelling and one help
+text; test_cli_vocabulary walks the parser tree to check it):
+
+- ``--duration S``: simulated time, s (:func:`add_duration`);
+- ``--rate HZ``: a rate in Hz, and nothing else (:func:`add_rate`);
+- ``--time-scale X``: simulated (or recorded) seconds per wall second, 0 as fast as
+  possible (:func:`add_time_scale`);
+- ``--plot PATH``: a figure file (:func:`add_plot`); ``--out DIR``: a folder of outputs
+  (:func:`add_out_folder`);
+- ``--json``: one JSON document on stdout instead of the table (:func:`add_json`; every
+  command takes it);
+- ``--tol`` (with ``--rtol``/``--atol`` for experts): the accuracy of a command that runs an
+  integrator (:func:`add_tolerance_arguments`).
 
 Joint values on the command line come either in model order (``--q 0.1,0.2,...``, one per
 coordinate, Pinocchio's order as ``info`` lists it: with a floating or planar ``--root`` the
@@ -14,7 +29,7 @@ import json
 import math
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -30,13 +45,61 @@ class CommandError(UserInputError):
     """A bad command-line argument: one line, exit status 2."""
 
 
+def add_json(parser: argparse.ArgumentParser) -> None:
+    """--json: print one JSON document (an object, or an array) instead of the table."""
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON document on stdout instead of the table")
+
+
+def add_duration(parser: argparse.ArgumentParser, default: float | None = None, *,
+                 default_text: str | None = None, parse: Callable[[str], float] = float) -> None:
+    """--duration S: simulated time in seconds (``default``; ``default_text`` says what None
+    means, e.g. "the scene's")."""
+    shown = default_text if default is None else f"{default:g}"
+    parser.add_argument("--duration", type=parse, default=default, metavar="S",
+                        help=f"simulated time, s (default {shown})")
+
+
+def add_rate(parser: argparse.ArgumentParser, default: float, meaning: str, *,
+             parse: Callable[[str], float] = float) -> None:
+    """--rate HZ: a rate in Hz (``meaning`` says of what); the only use of the name."""
+    parser.add_argument("--rate", type=parse, default=default, metavar="HZ",
+                        help=f"{meaning}, Hz (default {default:g})")
+
+
+def time_scale(text: str) -> float:
+    """An argparse type: a time scale, finite and >= 0 (0: as fast as possible)."""
+    value = float(text)
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f"must be finite and >= 0 (0: as fast as possible), got {text}")
+    return value
+
+
+def add_time_scale(parser: argparse.ArgumentParser, clock: str) -> None:
+    """--time-scale X: ``clock`` seconds (simulated, recorded) per wall second; default 1
+    (real time), 0 as fast as possible."""
+    parser.add_argument("--time-scale", type=time_scale, default=1.0, metavar="X",
+                        help=f"{clock} seconds per wall second (default 1: real time; 0: as fast as possible)")
+
+
+def add_plot(parser: argparse.ArgumentParser, figure: str) -> None:
+    """--plot PATH: write ``figure`` to a file (PNG)."""
+    parser.add_argument("--plot", metavar="PATH", help=f"write {figure} to PATH (PNG)")
+
+
+def add_out_folder(parser: argparse.ArgumentParser, outputs: str, default: str | None = None) -> None:
+    """--out DIR: the folder ``outputs`` are written in (created if needed)."""
+    parser.add_argument("--out", default=default, metavar="DIR",
+                        help=f"folder for {outputs}" + (f" (default {default}/)" if default else ""))
+
+
 def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
     """--urdf, --strict and --json, which every model sub-command takes."""
     parser.add_argument("--urdf", help="URDF file (default: the packaged youBot)")
     parser.add_argument("--strict", action="store_true",
                         help="refuse a URDF with warnings (physically invalid inertias, a "
                         "singular mass matrix) instead of listing them in the fidelity report")
-    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_json(parser)
 
 
 def add_joint_argument(parser: argparse.ArgumentParser, flag: str, meaning: str) -> None:
@@ -78,7 +141,7 @@ def add_tolerance_arguments(parser: argparse.ArgumentParser, rtol: float | None 
 
 def tolerances(args: argparse.Namespace, x0) -> tuple[float | None, Any]:
     """(rtol, atol) from --tol, --rtol and --atol: an explicit --rtol or --atol wins, the
-    other comes from --tol (see sim.integrators.tolerances_from_tol); None where none of
+    other comes from --tol (see integrate.integrators.tolerances_from_tol); None where none of
     them gives one (the command's default applies)."""
     from youbot_dynamics.integrate.integrators import tolerances_from_tol
     if args.tol is None:

@@ -6,7 +6,11 @@ import argparse
 import json
 
 from youbot_dynamics.accuracy.contact_extremes import TABLES
-from youbot_dynamics.cli.common import finite_or_none, markdown_table
+from youbot_dynamics.cli.common import add_json, finite_or_none, markdown_table
+
+#: The commands here that run an integrator, and where their accuracy comes from (see
+#: youbot_dynamics.cli: "--tol" or the reason the command takes none).
+ACCURACY = {"contact-extremes": "each table runs the integrators, tolerances and steps it measures"}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -19,7 +23,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "friction-cone limit. The stiffness sweep takes about 90 s.")
     command.add_argument("--table", action="append", choices=sorted(TABLES),
                          help="only this table (repeatable; default: all)")
-    command.add_argument("--json", action="store_true", help="print JSON")
+    add_json(command)
     command.set_defaults(run=run_contact_extremes)
 
 

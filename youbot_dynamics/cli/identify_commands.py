@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from youbot_dynamics import default_urdf
-from youbot_dynamics.cli.common import CommandError, positive, print_json, robot_from, table
+from youbot_dynamics.cli.common import (CommandError, add_json, add_plot, add_rate, positive, print_json,
+                                        robot_from, table)
 from youbot_dynamics.identification.base_parameters import base_parameters
 from youbot_dynamics.identification.consistency import (PRIOR_WEIGHT, consistent_fit, pseudo_inertia_eigenvalues,
                                                         standard_from_base)
@@ -33,6 +34,9 @@ from youbot_dynamics.identification.measurements import STATES
 from youbot_dynamics.identification.regressor import FRICTION_TERMS
 from youbot_dynamics.identification.urdf_output import body_links, identified_urdf
 from youbot_dynamics.model.robot import load_robot
+
+#: No command here runs an integrator (see youbot_dynamics.cli).
+ACCURACY: dict[str, str] = {}
 
 
 def _names(text: str, flag: str, allowed: tuple[str, ...] | None = None) -> tuple[str, ...]:
@@ -50,7 +54,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--friction", default=",".join(FRICTION_TERMS),
                         help=f"friction terms per joint, comma-separated from {', '.join(FRICTION_TERMS)} "
                              "(default all; empty for none)")
-    parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    add_json(parser)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -63,7 +67,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     excite.add_argument("--iterations", type=int, default=60, help="SLSQP iterations (default 60)")
     excite.add_argument("--acceleration", type=positive, default=ExcitationLimits.acceleration,
                         help="acceleration limit, rad/s^2 (the URDF has none)")
-    excite.add_argument("--rate", type=positive, default=100.0, help="sample rate of the written points, Hz")
+    add_rate(excite, 100.0, "sample rate of the written points", parse=positive)
     excite.add_argument("--seed", type=int, default=0, help="seed of the random starting series")
     excite.set_defaults(run=run_excite)
 
@@ -76,7 +80,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                           help="evaluate the regressor at low-passed q, v (default) or at the recorded ones "
                                "(exact states, e.g. a simulator's)")
     identify.add_argument("--decimation", type=int, help="keep every N-th sample (default: down to 2 x cut-off)")
-    identify.add_argument("--plot", help="save measured vs predicted effort and residuals as this PNG")
+    add_plot(identify, "measured vs predicted effort and the residuals")
     identify.add_argument("--write-urdf", metavar="OUT", help="write the URDF with identified inertials "
                           "(physically consistent by construction) and friction")
     identify.add_argument("--prior-weight", type=positive, default=PRIOR_WEIGHT,

@@ -6,15 +6,20 @@
   defaults to ``BROKEN.recovered.mcap`` beside the input; the input is never changed.
 - ``log recover BROKEN.rrd [-o FIXED.rrd]``: the same for a Rerun recording, through
   Rerun's own command line (see :mod:`youbot_dynamics.io.rrd_recover`).
+
+``--json`` prints the recovery's figures (paths as strings, log times in ns) instead.
 """
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from youbot_dynamics.cli.common import CommandError, output_file
+from youbot_dynamics.cli.common import CommandError, add_json, output_file, print_json
 from youbot_dynamics.io.mcap_recover import recover_mcap
 from youbot_dynamics.io.rrd_recover import recover_rrd
+
+#: No command here runs an integrator (see youbot_dynamics.cli).
+ACCURACY: dict[str, str] = {}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -25,6 +30,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     recover.add_argument("broken", help="the truncated .mcap file (or .rrd Rerun recording)")
     recover.add_argument("-o", "--output", default=None,
                          help="where to write the recovered file (default BROKEN.recovered.mcap or .rrd)")
+    add_json(recover)
     recover.set_defaults(run=run_recover)
 
 
@@ -38,9 +44,16 @@ def run_recover(args: argparse.Namespace) -> int:
         output_file(args.output, "-o")
     if kind == ".rrd":
         rrd = recover_rrd(args.broken, args.output)
+        if args.json:
+            print_json({"kind": "rrd", "source": str(rrd.source), "target": str(rrd.target), "chunks": rrd.chunks})
+            return 0
         print(f"log recover: {rrd.chunks} chunks from {rrd.source}; wrote {rrd.target} (with its footer)")
         return 0
     result = recover_mcap(args.broken, args.output)
+    if args.json:
+        print_json({"kind": "mcap", **result._asdict(), "source": str(result.source), "target": str(result.target),
+                    "topics": list(result.topics)})
+        return 0
     span = ("no messages" if result.first_log_time_ns is None else
             f"log time {result.first_log_time_ns * 1e-9:.3f} .. {result.last_log_time_ns * 1e-9:.3f} s")
     state = ("it was complete" if result.complete else

@@ -10,7 +10,7 @@ from dataclasses import asdict
 
 import numpy as np
 
-from youbot_dynamics.cli.common import add_tolerance_arguments, tolerances
+from youbot_dynamics.cli.common import add_duration, add_json, add_tolerance_arguments, tolerances
 from youbot_dynamics.dynamics.mobile.mecanum import base_twist, wheel_speeds, youbot_base
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.errors import UserInputError
@@ -24,6 +24,10 @@ from youbot_dynamics.studies.unicycle import (MAX_DURATION, STATE_NAMES, Unicycl
 #: dop853 at rtol 1e-10, atol 1e-12 meets the closed forms to about 1e-10 on the defaults.
 DEFAULT_INTEGRATOR, DEFAULT_RTOL, DEFAULT_ATOL = "dop853", 1e-10, 1e-12
 OUTPUTS = 101
+#: The commands here that run an integrator, and where their accuracy comes from (see
+#: youbot_dynamics.cli: "--tol" or the reason the command takes none); mecanum's odometry is
+#: the closed-form SE(2) exponential.
+ACCURACY = {"unicycle": "--tol"}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -50,10 +54,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     base = subparsers.add_parser("mecanum", help="youBot base: wheel speeds of a twist, and its odometry",
                                  description="Wheel speeds (rad/s; wheel_joint_fl, fr, bl, br, positive "
                                  "rolls forward) of the youBot base for a twist in base_footprint, the "
-                                 "twist back from them, and the pose reached holding it for --t seconds.")
+                                 "twist back from them, and the pose reached holding it for --duration seconds.")
     base.add_argument("--twist", default="0.2,0.1,0.5", help="vx,vy,wz in m/s, m/s, rad/s (default 0.2,0.1,0.5)")
-    base.add_argument("--t", type=float, default=1.0, help="time the twist is held, s (default 1)")
-    base.add_argument("--json", action="store_true", help="print JSON")
+    add_duration(base, 1.0)
+    add_json(base)
     base.set_defaults(run=run_mecanum)
 
 
@@ -111,15 +115,16 @@ def run_mecanum(args: argparse.Namespace) -> int:
         raise UserInputError(f"--twist must be three numbers vx,vy,wz (m/s, m/s, rad/s), got {args.twist!r}")
     problem = (limits.SPEED.problem(twist[0]) or limits.SPEED.problem(twist[1])
                or limits.ANGULAR_SPEED.problem(twist[2]))
-    if problem or not (math.isfinite(args.t) and 0.0 <= args.t <= MAX_DURATION):
+    if problem or not (math.isfinite(args.duration) and 0.0 <= args.duration <= MAX_DURATION):
         raise UserInputError(f"--twist {args.twist}: {problem}" if problem else
-                             f"--t must be a time in [0, {MAX_DURATION:g}] s, got {args.t!r}")
+                             f"--duration must be a time in [0, {MAX_DURATION:g}] s, got {args.duration!r}")
     base = youbot_base()
     speeds = wheel_speeds(base, twist)
     back = base_twist(base, speeds)
-    pose = odometry_step(base, np.zeros(3), speeds, args.t)
+    pose = odometry_step(base, np.zeros(3), speeds, args.duration)
     record = {"twist": twist.tolist(), "wheel_speeds": dict(zip(base.names, speeds.tolist())),
-              "twist_from_wheels": back.tolist(), "t": args.t, "pose": dict(zip(("x", "y", "theta"), pose.tolist()))}
+              "twist_from_wheels": back.tolist(), "duration": args.duration,
+              "pose": dict(zip(("x", "y", "theta"), pose.tolist()))}
     if args.json:
         print(json.dumps(record))
         return 0
@@ -127,6 +132,6 @@ def run_mecanum(args: argparse.Namespace) -> int:
           f"y = +-{base.positions[0, 1]:g} m), twist vx, vy, wz = {', '.join(f'{v:g}' for v in twist)}")
     print("wheel speeds (rad/s): " + ", ".join(f"{k} {v:.9g}" for k, v in record["wheel_speeds"].items()))
     print("twist from the wheel speeds: " + ", ".join(f"{v:.12g}" for v in back))
-    print(f"pose after {args.t:g} s (odom, SE(2) exponential): x {pose[0]:.9g} m, y {pose[1]:.9g} m, "
+    print(f"pose after {args.duration:g} s (odom, SE(2) exponential): x {pose[0]:.9g} m, y {pose[1]:.9g} m, "
           f"theta {pose[2]:.9g} rad")
     return 0

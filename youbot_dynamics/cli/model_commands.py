@@ -26,6 +26,8 @@ if TYPE_CHECKING:  # imported where used: `info` needs no compiled kernels (numb
     from youbot_dynamics.dynamics.friction import JointFriction
 
 TWIST_ROWS = ("wx", "wy", "wz", "vx", "vy", "vz")  # ours: (omega, v)
+#: No command here runs an integrator (see youbot_dynamics.cli).
+ACCURACY: dict[str, str] = {}
 PINOCCHIO_ROWS = ("vx", "vy", "vz", "wx", "wy", "wz")  # Pinocchio Motion: (v, omega)
 PINOCCHIO_FRAMES = {"world": pin.WORLD, "local": pin.LOCAL,
                     "local_world_aligned": pin.LOCAL_WORLD_ALIGNED}

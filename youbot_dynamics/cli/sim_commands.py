@@ -14,8 +14,9 @@ import numpy as np
 from tqdm import tqdm
 
 from youbot_dynamics.accuracy.work_precision import resolve_integrator, work_precision, write_back
-from youbot_dynamics.cli.common import (CommandError, add_sweep_arguments, add_tolerance_arguments,
-                                        finite_or_none, output_file, output_folder)
+from youbot_dynamics.cli.common import (CommandError, add_duration, add_json, add_out_folder,
+                                        add_sweep_arguments, add_tolerance_arguments, finite_or_none,
+                                        output_file, output_folder)
 from youbot_dynamics.integrate.integrators import (IntegrationError, StepBudgetError,
                                                    checked_fixed_step, fixed_step_count)
 from youbot_dynamics.integrate.registry import INTEGRATORS, REGISTRY, STEPPERS, integrator_names
@@ -23,6 +24,11 @@ from youbot_dynamics.io.csv_table import write_csv
 from youbot_dynamics.scene.schema import Scene, find_scene, load_scene
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
 from youbot_dynamics.sim.simulator import Simulator
+
+#: The commands here that run an integrator, and where their accuracy comes from (see
+#: youbot_dynamics.cli: "--tol" or the reason the command takes none).
+ACCURACY = {"simulate": "--tol",
+            "work-precision": "it sweeps every integrator over tolerances or steps against a tight reference"}
 
 
 def add_step_budget_argument(parser: argparse.ArgumentParser) -> None:
@@ -67,10 +73,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      "before the run; pin it with work-precision --write-back)")
     run.add_argument("--dt", type=float, help="step size of a fixed-step integrator, s")
     add_tolerance_arguments(run)
-    run.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
+    add_duration(run, default_text="the scene's")
     run.add_argument("--output", metavar="FILE.csv", help="write the trajectory as CSV")
     add_step_budget_argument(run)
-    run.add_argument("--json", action="store_true", help="print JSON")
+    add_json(run)
     run.set_defaults(run=run_simulate)
     study = subparsers.add_parser("work-precision", help="speed versus accuracy on a scene",
                                   description="Sweep every integrator over step sizes or "
@@ -84,10 +90,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study.add_argument("--write-back", action="store_true",
                        help="pin the recommended method and tolerance (or dt) into the scene file's integrator "
                        "block (its comments and other keys kept)")
-    study.add_argument("--duration", type=float, help="simulated time, s (default: the scene's)")
-    study.add_argument("--out", default="out/work_precision", metavar="DIR", help="output folder")
+    add_duration(study, default_text="the scene's")
+    add_out_folder(study, "the CSV, markdown and PNG", "out/work_precision")
     add_sweep_arguments(study)
-    study.add_argument("--json", action="store_true", help="print JSON")
+    add_json(study)
     study.set_defaults(run=run_work_precision)
 
 

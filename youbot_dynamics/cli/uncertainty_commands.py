@@ -5,8 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 
-from youbot_dynamics.cli.common import add_sweep_arguments, output_file, positive
+from youbot_dynamics.cli.common import (add_duration, add_json, add_plot, add_sweep_arguments, output_file,
+                                        positive)
 
+#: The commands here that run an integrator, and where their accuracy comes from (see
+#: youbot_dynamics.cli: "--tol" or the reason the command takes none).
+ACCURACY = {"scene-uncertainty": "the scene's integrator block: every run is the scene as written, its "
+                                 "uncertain parameters aside (work-precision --write-back pins one)"}
 SUMMARY = "propagate a scene's value ± sigma parameters to an output: linear band against Monte Carlo"
 
 
@@ -51,8 +56,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="a state component, e.g. 'q[pivot]' or 'pose[ball.z]'")
     parser.add_argument("--samples", type=int, default=1000, help="Monte Carlo samples (default 1000)")
     parser.add_argument("--seed", type=int, default=0, help="random seed of the samples")
-    parser.add_argument("--duration", type=positive, help="simulated time (s; default the scene's)")
-    parser.add_argument("--plot", metavar="PNG", help="write the band plot")
+    add_duration(parser, default_text="the scene's", parse=positive)
+    add_plot(parser, "the band plot")
     add_sweep_arguments(parser)
-    parser.add_argument("--json", action="store_true", help="print JSON")
+    add_json(parser)
     parser.set_defaults(run=run_scene_uncertainty)

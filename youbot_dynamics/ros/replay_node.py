@@ -21,7 +21,7 @@ a dynamics node's bag under /youbot1. The ``topics`` and ``wait_for`` parameters
 recorded names.
 
 Run: ``ros2 run youbot_dynamics replay_node --ros-args -p bag:=out/run.mcap -p rate:=0.0``
-or ``youbot-dynamics replay BAG [--rate R | --fast]``.
+or ``youbot-dynamics replay BAG [--time-scale X]`` (X is ``rate``; 0: as fast as possible).
 """
 from __future__ import annotations
 
