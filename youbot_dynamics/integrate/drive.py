@@ -275,6 +275,42 @@ def root_on_interpolant(function: Callable[[float, np.ndarray], float], t_a: flo
     return brentq(g, t_a, t_b, xtol=xtol)
 
 
+class _Outputs:
+    """The states at the output times (and y' there, with ``derivative_at``), each checked
+    by ``check.output`` as it is recorded."""
+
+    def __init__(self, t0: float, x0: np.ndarray, check: StateCheck,
+                 derivative_at: Callable[[float], np.ndarray] | None) -> None:
+        self.t, self.x = [t0], [x0]
+        self.xp = [] if derivative_at is None else [derivative_at(t0)]
+        self.check, self.derivative_at = check, derivative_at
+
+    def emit(self, t: float, x: np.ndarray, h: float) -> None:
+        """Record the state x at output time t (s), reached by a step of size h (s)."""
+        self.check.output(t, x, h)
+        self.t.append(t)
+        self.x.append(x)
+        if self.derivative_at is not None:
+            self.xp.append(self.derivative_at(t))
+
+    def solution(self, stats: IntegratorStats, names: tuple[str, ...], records: list[EventRecord],
+                 terminated_by: str | None) -> Solution:
+        """The run's Solution, its statistics' event count and simulated time (s) filled in."""
+        stats.events = len(records)
+        stats.simulated_time = self.t[-1] - self.t[0]
+        return Solution(np.asarray(self.t), np.asarray(self.x), stats, names, records,
+                        terminated_by, None if self.derivative_at is None else np.asarray(self.xp))
+
+
+def _step_budget_error(integrator: str, t: float, h: float, steps: int, max_steps: int,
+                       t_end: float) -> StepBudgetError:
+    """The error of a run stopped at t (s, step h s) after ``steps`` steps short of t_end."""
+    return StepBudgetError(t, integrator, h, max_steps,
+                           f"{integrator} stopped at t={t:.6g} s (step {h:.3g} s): "
+                           f"{steps} steps did not reach t={t_end:.6g} s, "
+                           f"over its step budget of {max_steps} steps")
+
+
 def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequence[Event],
           check: StateCheck, names: tuple[str, ...],
           derivative_at: Callable[[float], np.ndarray] | None = None,
@@ -288,20 +324,13 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
     The caller sets ``stats.wall_time`` around the whole run (solver set-up included).
     """
     stats = IntegratorStats(integrator)
-    t_out, x_out = [float(t_eval[0])], [stepper.x.copy()]
-    xp_out = [] if derivative_at is None else [derivative_at(float(t_eval[0]))]
+    outputs = _Outputs(float(t_eval[0]), stepper.x.copy(), check, derivative_at)
+    emit, t_out = outputs.emit, outputs.t
     records: list[EventRecord] = []
     terminated_by = None
     own_roots = located_by_stepper(stepper)
     g_old = [] if own_roots else [e.function(stepper.t, stepper.x) for e in events]
     k, n_out = 1, len(t_eval)
-
-    def emit(t: float, x: np.ndarray, h: float) -> None:
-        check.output(t, x, h)
-        t_out.append(t)
-        x_out.append(x)
-        if derivative_at is not None:
-            xp_out.append(derivative_at(t))
 
     with np.errstate(over="ignore", invalid="ignore"):
         while k < n_out and terminated_by is None:
@@ -310,10 +339,7 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
             t_b, h = stepper.t, stepper.h
             check.step(t_b, stepper.x, h)
             if max_steps is not None and stepper.steps > max_steps:
-                raise StepBudgetError(t_b, integrator, h, max_steps,
-                                      f"{integrator} stopped at t={t_b:.6g} s (step {h:.3g} s): "
-                                      f"{stepper.steps} steps did not reach t={t_eval[-1]:.6g} s, "
-                                      f"over its step budget of {max_steps} steps")
+                raise _step_budget_error(integrator, t_b, h, stepper.steps, max_steps, t_eval[-1])
             stop_at = t_b
             if events:
                 if own_roots:
@@ -338,7 +364,4 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
             if terminated_by is not None and t_out[-1] < stop_at:
                 emit(stop_at, records[-1].state.copy(), h)
     stepper.finish(stats)
-    stats.events = len(records)
-    stats.simulated_time = t_out[-1] - t_out[0]
-    return Solution(np.asarray(t_out), np.asarray(x_out), stats, names, records,
-                    terminated_by, None if derivative_at is None else np.asarray(xp_out))
+    return outputs.solution(stats, names, records, terminated_by)
