@@ -1,5 +1,6 @@
-"""What every integrator backend shares: statistics, events, the solution, typed errors,
-the divergence checks and the one output/event loop that drives a stepper.
+"""What every integrator backend shares: events, the solution, the divergence checks and
+the one output/event loop that drives a stepper (the statistics are integrate/statistics.py's,
+the typed errors integrate/errors.py's).
 
 A backend supplies a *stepper* (see :class:`Stepper`): ``advance`` takes one step (or, for
 fixed-step methods without events, the steps up to the next output time) and
@@ -11,72 +12,15 @@ itself (SUNDIALS' rootfinding), terminal events, and the checks that make diverg
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import Callable, Protocol, Sequence
 
 import numpy as np
 from scipy.optimize import brentq
 
 from youbot_dynamics.errors import UserInputError
-
-#: Counters a backend may not expose: ``None`` means "not reported by this backend".
-COUNTERS = ("steps", "rhs_evals", "jac_evals", "rejected_steps", "nonlinear_iterations",
-            "nonlinear_convergence_failures", "events")
-
-
-@dataclass
-class IntegratorStats:
-    """Cost of one run (or, after ``+=``, of several segments of a hybrid run).
-
-    A counter is ``None`` when the backend does not report it (for example scikit-sundae
-    exposes no error-test failures), never a made-up zero. Times in seconds.
-    """
-
-    integrator: str
-    steps: int | None = 0
-    rhs_evals: int | None = 0
-    jac_evals: int | None = 0
-    rejected_steps: int | None = 0
-    nonlinear_iterations: int | None = 0
-    nonlinear_convergence_failures: int | None = 0
-    events: int | None = 0
-    wall_time: float = 0.0
-    simulated_time: float = 0.0
-
-    @property
-    def real_time_factor(self) -> float:
-        """Simulated seconds per wall-clock second (inf for an instantaneous run)."""
-        return self.simulated_time / self.wall_time if self.wall_time > 0 else math.inf
-
-    def as_dict(self) -> dict:
-        """Every field plus ``real_time_factor``."""
-        result = {f.name: getattr(self, f.name) for f in fields(self)}
-        result["real_time_factor"] = self.real_time_factor
-        return result
-
-    def summary(self) -> str:
-        """One readable line: every counter (``n/a`` where the backend reports none), the
-        wall time and the real-time factor."""
-        labels = ("steps", "rhs evaluations", "Jacobians", "rejected steps",
-                  "nonlinear iterations", "convergence failures", "events")
-        counts = ", ".join(f"{'n/a' if getattr(self, name) is None else getattr(self, name)} {label}"
-                           for name, label in zip(COUNTERS, labels))
-        return (f"{self.integrator}: {counts}; wall {self.wall_time:.3f} s, "
-                f"real-time factor {self.real_time_factor:.3g}")
-
-    def merge(self, other: IntegratorStats) -> IntegratorStats:
-        """Add ``other``'s counters and times to this one (a counter unknown in either
-        stays unknown); returns self."""
-        for name in COUNTERS:
-            mine, theirs = getattr(self, name), getattr(other, name)
-            setattr(self, name, None if mine is None or theirs is None else mine + theirs)
-        self.wall_time += other.wall_time
-        self.simulated_time += other.simulated_time
-        return self
-
-    def __iadd__(self, other: IntegratorStats) -> IntegratorStats:
-        return self.merge(other)
-
+from youbot_dynamics.integrate.errors import DivergenceError, StepBudgetError
+from youbot_dynamics.integrate.statistics import IntegratorStats
 
 @dataclass(frozen=True)
 class Event:
@@ -115,38 +59,6 @@ class Solution:
     events: list[EventRecord] = field(default_factory=list)
     terminated_by: str | None = None
     xp: np.ndarray | None = None
-
-
-class IntegrationError(RuntimeError):
-    """The solver failed for a reason other than divergence; the message is the solver's."""
-
-
-class DivergenceError(IntegrationError):
-    """The solution diverged: non-finite state, a bound exceeded, a monitor's complaint or a
-    collapsed step size. Says when (``time``, s), with what (``integrator``, ``step_size``,
-    s), why (``reason``) and which state components (``components``: name -> value)."""
-
-    def __init__(self, time: float, integrator: str, step_size: float, reason: str,
-                 components: dict[str, float] | None = None) -> None:
-        self.time = time
-        self.integrator = integrator
-        self.step_size = step_size
-        self.reason = reason
-        self.components = dict(components or {})
-        listed = ", ".join(f"{name}={value:.6g}" for name, value in self.components.items())
-        super().__init__(f"{integrator} diverged at t={time:.6g} s (step {step_size:.3g} s): "
-                         f"{reason}" + (f": {listed}" if listed else ""))
-
-
-class StepBudgetError(DivergenceError):
-    """A run needed more steps than its budget (``budget``): refused up front for fixed
-    steps, stopped when spent for adaptive ones (a step size collapsing without end)."""
-
-    def __init__(self, time: float, integrator: str, step_size: float, budget: int,
-                 message: str) -> None:
-        IntegrationError.__init__(self, message)
-        self.time, self.integrator, self.step_size = time, integrator, step_size
-        self.reason, self.components, self.budget = f"step budget of {budget} steps spent", {}, budget
 
 
 def finite_rhs(rhs: Callable[[float, np.ndarray], np.ndarray],
