@@ -11,8 +11,8 @@ calls, one per part of the model (what each part holds: :mod:`youbot_dynamics.si
 - :func:`build_control`: the controller, its reference and a Python callback's period;
 - :func:`build_stepper`: the constraint stepper of a ``pgs``/``admm`` scene.
 
-The builders run in the order the checks of a scene have always run, so a scene with two
-mistakes reports the same one first.
+Each builder checks what it builds; :func:`compile` calls them in a fixed order, so a scene
+with two mistakes always reports the same one.
 """
 from __future__ import annotations
 

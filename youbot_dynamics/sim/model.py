@@ -153,8 +153,9 @@ CARDAN_SEQUENCES = tuple(SEQUENCES)
 @dataclass(frozen=True, eq=False)
 class SimModel:
     """A compiled scene (immutable). ``plant`` is the one Pinocchio model; ``robot`` the
-    scene's reduced Robot (its model is the plant's leading joints); ``contact`` is None in a
-    scene without contact pairs and free bodies."""
+    scene's reduced Robot (its model is the plant's leading joints); ``control`` the
+    controller, its default reference and a Python callback's period; ``contact`` is None in
+    a scene without contact pairs and free bodies."""
 
     scene: Scene
     integrator: IntegratorSpec
