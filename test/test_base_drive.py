@@ -20,8 +20,8 @@ from youbot_dynamics.dynamics.mobile.mecanum import roller_normals
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.dynamics.mobile.wheel_floor import contact_slip_velocities
 from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir
+from youbot_dynamics.sim.build import compile
 from youbot_dynamics.sim.engine import run
-from youbot_dynamics.sim.model import compile
 
 MU, VELOCITY_SCALE, G = 0.5, 0.01, 9.81
 #: The largest acceleration four 45-degree rollers can give the base (m/s^2).

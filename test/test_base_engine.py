@@ -25,8 +25,8 @@ from youbot_dynamics.dynamics.mobile.odometry import se2_step
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import DivergenceError
 from youbot_dynamics.scene.schema import Scene, SceneError, load_scene, scene_dir
+from youbot_dynamics.sim.build import compile
 from youbot_dynamics.sim.engine import advance, initial_state, robot_torque, run
-from youbot_dynamics.sim.model import compile
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
 ARM = ["arm_joint_1", "arm_joint_2", "arm_joint_3", "arm_joint_4", "arm_joint_5"]

@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir
+from youbot_dynamics.sim.build import compile
 from youbot_dynamics.sim.engine import run
-from youbot_dynamics.sim.model import compile
 
 
 def test_the_sphere_rests_while_the_base_drives():

@@ -5,8 +5,8 @@ import numpy as np
 import pinocchio as pin
 
 from youbot_dynamics.scene.schema import load_scene
+from youbot_dynamics.sim.build import compile as compile_scene
 from youbot_dynamics.sim.engine import initial_state
-from youbot_dynamics.sim.model import compile as compile_scene
 
 
 def test_placements_are_the_frame_poses_times_the_placements_and_centres_their_origins():

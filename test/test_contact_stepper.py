@@ -11,7 +11,7 @@ from youbot_dynamics.dynamics import contact_stepper
 from youbot_dynamics.dynamics.contact_stepper import ContactSet, contact_rotation
 from youbot_dynamics.scene.schema import load_scene
 from youbot_dynamics.sim import engine
-from youbot_dynamics.sim.model import compile as compile_scene
+from youbot_dynamics.sim.build import compile as compile_scene
 
 
 def stepped(model, steps: int, afresh: bool) -> tuple[np.ndarray, np.ndarray, list[int]]:

@@ -10,8 +10,8 @@ import yaml
 from youbot_dynamics.dynamics.contact_model import ContactModel
 from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir
 from youbot_dynamics.sim import engine
+from youbot_dynamics.sim.build import compile
 from youbot_dynamics.sim.controllers import Reference
-from youbot_dynamics.sim.model import compile
 from youbot_dynamics.sim.simulator import Simulator
 
 LAWS = {

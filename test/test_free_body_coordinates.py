@@ -14,7 +14,7 @@ from youbot_dynamics.model.rotations import SWITCH_ANGLE
 from youbot_dynamics.scene.reader import SceneError
 from youbot_dynamics.scene.schema import Scene
 from youbot_dynamics.sim import engine
-from youbot_dynamics.sim.model import compile
+from youbot_dynamics.sim.build import compile
 from youbot_dynamics.studies.rotations import (RUNS, attitude_error, axisymmetric_top,
                                                simulate_rotation)
 

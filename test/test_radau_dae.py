@@ -9,7 +9,6 @@ import pytest
 from youbot_dynamics.dynamics.constraints import HolonomicSystem, dae_form
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate import radau_dae
-from youbot_dynamics.integrate.drive import DivergenceError
 from youbot_dynamics.integrate.radau_dae import (holonomic_index, integrate_dae_form,
                                                  integrate_radau_dae)
 

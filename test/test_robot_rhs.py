@@ -10,9 +10,9 @@ import pytest
 
 from youbot_dynamics.scene.reader import read_yaml
 from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir
+from youbot_dynamics.sim.build import compile
 from youbot_dynamics.sim.controllers import Reference
 from youbot_dynamics.sim.engine import initial_state, right_hand_side
-from youbot_dynamics.sim.model import compile
 
 
 class Plain(np.ndarray):
@@ -56,7 +56,7 @@ def test_a_wrong_torque_size_still_names_it(scene):
 def test_computed_torque_equals_its_formula():
     model = compile(load_scene(scene_dir() / "arm_ptp.yaml"))
     state = initial_state(model)
-    controller, friction, robot = model.controller, model.friction, model.robot
+    controller, friction, robot = model.control.controller, model.friction, model.robot
     assert controller.kind == "computed_torque" and friction is not None
     data = robot.model.createData()
     torque, rhs = right_hand_side(model, state.data, state.reference)
@@ -102,7 +102,7 @@ class _Sampled:
 def test_the_fused_computed_torque_rhs_equals_the_controller_then_robot_derivative(lugre):
     model = _computed_torque_scene(lugre)
     state = initial_state(model)
-    controller, robot = model.controller, model.robot
+    controller, robot = model.control.controller, model.robot
     q_block, v_block, z_block = model.slices["q"], model.slices["v"], model.slices["z"]
     assert (z_block.stop - z_block.start == 2) == lugre
     rng = np.random.default_rng(6)

@@ -27,7 +27,7 @@ _PUBLIC = {
     "forward_dynamics": "youbot_dynamics.dynamics.rigid_body",
     "mass_matrix": "youbot_dynamics.dynamics.rigid_body", "JointFriction": "youbot_dynamics.dynamics.friction",
     "load_scene": "youbot_dynamics.scene.schema", "Scene": "youbot_dynamics.scene.schema",
-    "compile": "youbot_dynamics.sim.model", "SimModel": "youbot_dynamics.sim.model",
+    "compile": "youbot_dynamics.sim.build", "SimModel": "youbot_dynamics.sim.model",
     "SimState": "youbot_dynamics.sim.state", "initial_state": "youbot_dynamics.sim.engine",
     "advance": "youbot_dynamics.sim.engine", "run": "youbot_dynamics.sim.engine",
     "Simulator": "youbot_dynamics.sim.simulator",

@@ -16,7 +16,7 @@ import numpy as np
 import yaml
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.integrate.drive import IntegrationError
+from youbot_dynamics.integrate.errors import IntegrationError
 from youbot_dynamics.integrate.registry import STEPPERS
 from youbot_dynamics.scene.schema import Scene, scene_dir
 from youbot_dynamics.sim.simulator import SimulationResult, Simulator

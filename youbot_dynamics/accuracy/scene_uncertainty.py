@@ -28,7 +28,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.scene.reader import SceneError
 from youbot_dynamics.scene.schema import Scene, find_scene, load_scene
 from youbot_dynamics.sim import engine
-from youbot_dynamics.sim.model import compile
+from youbot_dynamics.sim.build import compile
 from youbot_dynamics.studies.uncertain_pendulum import Propagation
 
 #: Finite-difference step of the sensitivities, as a fraction of each parameter's sigma:

@@ -337,29 +337,46 @@ def with_integrator_block(text: str, settings: Mapping[str, Any], note: str) -> 
     else:
         match = _TOP_KEY.match(lines[head])
         comment = f"  {match['comment']}" if match["comment"] else ""
-        end, kept, indent = head + 1, [], None
-        for j in range(head + 1, len(lines)):
-            line = lines[j]
-            if line[:1] in (" ", "\t") and line.strip():
-                end = j + 1
-            elif line.strip() and not line.startswith("#"):
-                break
-        inner = lines[head + 1:end]
+        end = _block_end(lines, head)
         flow = match["value"].strip()
-        if flow:  # integrator: {method: ..., ...}: its other keys become block lines
-            data = read_yaml(flow.encode("utf-8"), "integrator")
-            items = data.items() if isinstance(data, Mapping) else ()
-            inner = [f"  {key}: {yaml_scalar(value)}" for key, value in items]
-        for line in inner:
-            found = _INNER_KEY.match(line)
-            if found and indent is None:
-                indent = found["indent"]
-            if not (found and found["key"] in PINNED_KEYS or line.strip().startswith(f"# {PIN_NOTE}")):
-                kept.append(line)
+        kept, indent = _unpinned_lines(_flow_lines(flow) if flow else lines[head + 1:end])
         start, indent = head, indent or "  "
     values = [f"{indent}{key}: {yaml_scalar(value)}" for key, value in settings.items()]
     block = [f"integrator:{comment}", f"{indent}# {PIN_NOTE}: {note}", *values, *kept]
     return "\n".join(lines[:start] + block + lines[end:]) + "\n"
+
+
+def _block_end(lines: list[str], head: int) -> int:
+    """The index after the last indented non-blank line of the block whose key is at line
+    ``head`` (blank lines and top-level comments inside it do not end it)."""
+    end = head + 1
+    for j in range(head + 1, len(lines)):
+        line = lines[j]
+        if line[:1] in (" ", "\t") and line.strip():
+            end = j + 1
+        elif line.strip() and not line.startswith("#"):
+            break
+    return end
+
+
+def _flow_lines(flow: str) -> list[str]:
+    """A flow mapping's (``{method: ..., ...}``) keys as block lines."""
+    data = read_yaml(flow.encode("utf-8"), "integrator")
+    items = data.items() if isinstance(data, Mapping) else ()
+    return [f"  {key}: {yaml_scalar(value)}" for key, value in items]
+
+
+def _unpinned_lines(inner: list[str]) -> tuple[list[str], str | None]:
+    """(the block's lines but its PINNED_KEYS and an earlier pin note; the indent of its
+    first key, None without one)."""
+    kept, indent = [], None
+    for line in inner:
+        found = _INNER_KEY.match(line)
+        if found and indent is None:
+            indent = found["indent"]
+        if not (found and found["key"] in PINNED_KEYS or line.strip().startswith(f"# {PIN_NOTE}")):
+            kept.append(line)
+    return kept, indent
 
 
 def write_back(path: str | Path, spec: IntegratorSpec, note: str) -> str:

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 from numba import njit, types
+from numba.extending import register_jitable
 
 from youbot_dynamics.dynamics.contact_model import ContactModel
 from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR
@@ -131,6 +132,60 @@ def _contact_placements(normal: np.ndarray, point1: np.ndarray, point2: np.ndarr
             out_translation[i] = rotation[0, i] * d0 + rotation[1, i] * d1 + rotation[2, i] * d2
 
 
+# The three parts of _delassus_and_drift, inlined there (numba IR inlining: the same
+# operations in the same order, no call).
+@register_jitable(inline="always")
+def _inverse_mass_jt(upper: np.ndarray, jacobian: np.ndarray, mass_jt: np.ndarray) -> None:
+    """mass_jt = M^-1 J^T (nv x 3p) from the upper triangle of M^-1 (nv x nv) and J (3p x nv)."""
+    rows, nv = jacobian.shape
+    for a in range(nv):
+        for i in range(rows):
+            total = 0.0
+            for b in range(a):  # M^-1[a, b] = upper[b, a] below the diagonal
+                total += upper[b, a] * jacobian[i, b]
+            for b in range(a, nv):
+                total += upper[a, b] * jacobian[i, b]
+            mass_jt[a, i] = total
+
+
+@register_jitable(inline="always")
+def _delassus_and_free_drift(jacobian: np.ndarray, mass_jt: np.ndarray, v_free: np.ndarray, delassus: np.ndarray,
+                             drift: np.ndarray) -> None:
+    """delassus = J M^-1 J^T (3p x 3p, symmetric to the bit) and drift = J v_free (m/s)."""
+    rows, nv = jacobian.shape
+    for i in range(rows):
+        for j in range(i, rows):
+            total = 0.0
+            for a in range(nv):
+                total += jacobian[i, a] * mass_jt[a, j]
+            delassus[i, j] = total
+            delassus[j, i] = total
+        total = 0.0
+        for a in range(nv):
+            total += jacobian[i, a] * v_free[a]
+        drift[i] = total
+
+
+@register_jitable(inline="always")
+def _add_gap_drift(jacobian: np.ndarray, v: np.ndarray, gaps: np.ndarray, restitutions: np.ndarray, h: float,
+                   threshold: float, baumgarte: float, drift: np.ndarray) -> None:
+    """Add to each point's normal row (3i + 2) of the drift: the rebound restitution J_n v if
+    the approach speed J_n v before the step is below ``threshold`` (m/s, negative) and the
+    gap (m) closes within h (s), else gap / h for a gap, ``baumgarte`` gap / h for an overlap."""
+    nv = jacobian.shape[1]
+    for point in range(gaps.shape[0]):
+        row, gap = 3 * point + 2, gaps[point]
+        before = 0.0
+        for a in range(nv):
+            before += jacobian[row, a] * v[a]
+        if before < threshold and gap + h * before < 0.0:
+            drift[row] += restitutions[point] * before
+        elif gap > 0.0:
+            drift[row] += gap / h
+        else:
+            drift[row] += baumgarte * gap / h
+
+
 @njit(types.void(_READ_MATRIX, _READ_MATRIX, READ_VECTOR, READ_VECTOR, READ_VECTOR, READ_VECTOR, types.float64,
                  types.float64, types.float64, _WRITTEN_MATRIX, _WRITTEN_MATRIX, WRITTEN_VECTOR), cache=True)
 def _delassus_and_drift(upper: np.ndarray, jacobian: np.ndarray, v_free: np.ndarray, v: np.ndarray,
@@ -150,36 +205,9 @@ def _delassus_and_drift(upper: np.ndarray, jacobian: np.ndarray, v_free: np.ndar
             or drift.shape[0] != rows):
         raise ValueError("contact step: M^-1 (nv x nv), J (3p x nv), velocities (nv,), gaps and restitutions "
                          "(p,) and outputs of matching sizes")
-    for a in range(nv):
-        for i in range(rows):
-            total = 0.0
-            for b in range(a):  # M^-1[a, b] = upper[b, a] below the diagonal
-                total += upper[b, a] * jacobian[i, b]
-            for b in range(a, nv):
-                total += upper[a, b] * jacobian[i, b]
-            mass_jt[a, i] = total
-    for i in range(rows):
-        for j in range(i, rows):
-            total = 0.0
-            for a in range(nv):
-                total += jacobian[i, a] * mass_jt[a, j]
-            delassus[i, j] = total
-            delassus[j, i] = total
-        total = 0.0
-        for a in range(nv):
-            total += jacobian[i, a] * v_free[a]
-        drift[i] = total
-    for point in range(gaps.shape[0]):
-        row, gap = 3 * point + 2, gaps[point]
-        before = 0.0
-        for a in range(nv):
-            before += jacobian[row, a] * v[a]
-        if before < threshold and gap + h * before < 0.0:
-            drift[row] += restitutions[point] * before
-        elif gap > 0.0:
-            drift[row] += gap / h
-        else:
-            drift[row] += baumgarte * gap / h
+    _inverse_mass_jt(upper, jacobian, mass_jt)
+    _delassus_and_free_drift(jacobian, mass_jt, v_free, delassus, drift)
+    _add_gap_drift(jacobian, v, gaps, restitutions, h, threshold, baumgarte, drift)
 
 
 @njit(types.void(READ_VECTOR, _READ_MATRIX, READ_VECTOR, WRITTEN_VECTOR), cache=True)

@@ -21,7 +21,8 @@ from typing import Callable
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
 
-from youbot_dynamics.integrate.drive import DivergenceError, IntegrationError, IntegratorStats
+from youbot_dynamics.integrate.errors import DivergenceError, IntegrationError
+from youbot_dynamics.integrate.statistics import IntegratorStats
 
 SCIPY_SOLVERS = {"rk45": RK45, "dop853": DOP853, "radau": Radau, "bdf": BDF, "lsoda": LSODA}
 EXPLICIT = ("rk45", "dop853")

@@ -1,5 +1,6 @@
-"""What every integrator backend shares: statistics, events, the solution, typed errors,
-the divergence checks and the one output/event loop that drives a stepper.
+"""What every integrator backend shares: events, the solution, the divergence checks and
+the one output/event loop that drives a stepper (the statistics are integrate/statistics.py's,
+the typed errors integrate/errors.py's).
 
 A backend supplies a *stepper* (see :class:`Stepper`): ``advance`` takes one step (or, for
 fixed-step methods without events, the steps up to the next output time) and
@@ -11,72 +12,15 @@ itself (SUNDIALS' rootfinding), terminal events, and the checks that make diverg
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import Callable, Protocol, Sequence
 
 import numpy as np
 from scipy.optimize import brentq
 
 from youbot_dynamics.errors import UserInputError
-
-#: Counters a backend may not expose: ``None`` means "not reported by this backend".
-COUNTERS = ("steps", "rhs_evals", "jac_evals", "rejected_steps", "nonlinear_iterations",
-            "nonlinear_convergence_failures", "events")
-
-
-@dataclass
-class IntegratorStats:
-    """Cost of one run (or, after ``+=``, of several segments of a hybrid run).
-
-    A counter is ``None`` when the backend does not report it (for example scikit-sundae
-    exposes no error-test failures), never a made-up zero. Times in seconds.
-    """
-
-    integrator: str
-    steps: int | None = 0
-    rhs_evals: int | None = 0
-    jac_evals: int | None = 0
-    rejected_steps: int | None = 0
-    nonlinear_iterations: int | None = 0
-    nonlinear_convergence_failures: int | None = 0
-    events: int | None = 0
-    wall_time: float = 0.0
-    simulated_time: float = 0.0
-
-    @property
-    def real_time_factor(self) -> float:
-        """Simulated seconds per wall-clock second (inf for an instantaneous run)."""
-        return self.simulated_time / self.wall_time if self.wall_time > 0 else math.inf
-
-    def as_dict(self) -> dict:
-        """Every field plus ``real_time_factor``."""
-        result = {f.name: getattr(self, f.name) for f in fields(self)}
-        result["real_time_factor"] = self.real_time_factor
-        return result
-
-    def summary(self) -> str:
-        """One readable line: every counter (``n/a`` where the backend reports none), the
-        wall time and the real-time factor."""
-        labels = ("steps", "rhs evaluations", "Jacobians", "rejected steps",
-                  "nonlinear iterations", "convergence failures", "events")
-        counts = ", ".join(f"{'n/a' if getattr(self, name) is None else getattr(self, name)} {label}"
-                           for name, label in zip(COUNTERS, labels))
-        return (f"{self.integrator}: {counts}; wall {self.wall_time:.3f} s, "
-                f"real-time factor {self.real_time_factor:.3g}")
-
-    def merge(self, other: IntegratorStats) -> IntegratorStats:
-        """Add ``other``'s counters and times to this one (a counter unknown in either
-        stays unknown); returns self."""
-        for name in COUNTERS:
-            mine, theirs = getattr(self, name), getattr(other, name)
-            setattr(self, name, None if mine is None or theirs is None else mine + theirs)
-        self.wall_time += other.wall_time
-        self.simulated_time += other.simulated_time
-        return self
-
-    def __iadd__(self, other: IntegratorStats) -> IntegratorStats:
-        return self.merge(other)
-
+from youbot_dynamics.integrate.errors import DivergenceError, StepBudgetError
+from youbot_dynamics.integrate.statistics import IntegratorStats
 
 @dataclass(frozen=True)
 class Event:
@@ -115,38 +59,6 @@ class Solution:
     events: list[EventRecord] = field(default_factory=list)
     terminated_by: str | None = None
     xp: np.ndarray | None = None
-
-
-class IntegrationError(RuntimeError):
-    """The solver failed for a reason other than divergence; the message is the solver's."""
-
-
-class DivergenceError(IntegrationError):
-    """The solution diverged: non-finite state, a bound exceeded, a monitor's complaint or a
-    collapsed step size. Says when (``time``, s), with what (``integrator``, ``step_size``,
-    s), why (``reason``) and which state components (``components``: name -> value)."""
-
-    def __init__(self, time: float, integrator: str, step_size: float, reason: str,
-                 components: dict[str, float] | None = None) -> None:
-        self.time = time
-        self.integrator = integrator
-        self.step_size = step_size
-        self.reason = reason
-        self.components = dict(components or {})
-        listed = ", ".join(f"{name}={value:.6g}" for name, value in self.components.items())
-        super().__init__(f"{integrator} diverged at t={time:.6g} s (step {step_size:.3g} s): "
-                         f"{reason}" + (f": {listed}" if listed else ""))
-
-
-class StepBudgetError(DivergenceError):
-    """A run needed more steps than its budget (``budget``): refused up front for fixed
-    steps, stopped when spent for adaptive ones (a step size collapsing without end)."""
-
-    def __init__(self, time: float, integrator: str, step_size: float, budget: int,
-                 message: str) -> None:
-        IntegrationError.__init__(self, message)
-        self.time, self.integrator, self.step_size = time, integrator, step_size
-        self.reason, self.components, self.budget = f"step budget of {budget} steps spent", {}, budget
 
 
 def finite_rhs(rhs: Callable[[float, np.ndarray], np.ndarray],
@@ -275,6 +187,42 @@ def root_on_interpolant(function: Callable[[float, np.ndarray], float], t_a: flo
     return brentq(g, t_a, t_b, xtol=xtol)
 
 
+class _Outputs:
+    """The states at the output times (and y' there, with ``derivative_at``), each checked
+    by ``check.output`` as it is recorded."""
+
+    def __init__(self, t0: float, x0: np.ndarray, check: StateCheck,
+                 derivative_at: Callable[[float], np.ndarray] | None) -> None:
+        self.t, self.x = [t0], [x0]
+        self.xp = [] if derivative_at is None else [derivative_at(t0)]
+        self.check, self.derivative_at = check, derivative_at
+
+    def emit(self, t: float, x: np.ndarray, h: float) -> None:
+        """Record the state x at output time t (s), reached by a step of size h (s)."""
+        self.check.output(t, x, h)
+        self.t.append(t)
+        self.x.append(x)
+        if self.derivative_at is not None:
+            self.xp.append(self.derivative_at(t))
+
+    def solution(self, stats: IntegratorStats, names: tuple[str, ...], records: list[EventRecord],
+                 terminated_by: str | None) -> Solution:
+        """The run's Solution, its statistics' event count and simulated time (s) filled in."""
+        stats.events = len(records)
+        stats.simulated_time = self.t[-1] - self.t[0]
+        return Solution(np.asarray(self.t), np.asarray(self.x), stats, names, records,
+                        terminated_by, None if self.derivative_at is None else np.asarray(self.xp))
+
+
+def _step_budget_error(integrator: str, t: float, h: float, steps: int, max_steps: int,
+                       t_end: float) -> StepBudgetError:
+    """The error of a run stopped at t (s, step h s) after ``steps`` steps short of t_end."""
+    return StepBudgetError(t, integrator, h, max_steps,
+                           f"{integrator} stopped at t={t:.6g} s (step {h:.3g} s): "
+                           f"{steps} steps did not reach t={t_end:.6g} s, "
+                           f"over its step budget of {max_steps} steps")
+
+
 def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequence[Event],
           check: StateCheck, names: tuple[str, ...],
           derivative_at: Callable[[float], np.ndarray] | None = None,
@@ -288,20 +236,13 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
     The caller sets ``stats.wall_time`` around the whole run (solver set-up included).
     """
     stats = IntegratorStats(integrator)
-    t_out, x_out = [float(t_eval[0])], [stepper.x.copy()]
-    xp_out = [] if derivative_at is None else [derivative_at(float(t_eval[0]))]
+    outputs = _Outputs(float(t_eval[0]), stepper.x.copy(), check, derivative_at)
+    emit, t_out = outputs.emit, outputs.t
     records: list[EventRecord] = []
     terminated_by = None
     own_roots = located_by_stepper(stepper)
     g_old = [] if own_roots else [e.function(stepper.t, stepper.x) for e in events]
     k, n_out = 1, len(t_eval)
-
-    def emit(t: float, x: np.ndarray, h: float) -> None:
-        check.output(t, x, h)
-        t_out.append(t)
-        x_out.append(x)
-        if derivative_at is not None:
-            xp_out.append(derivative_at(t))
 
     with np.errstate(over="ignore", invalid="ignore"):
         while k < n_out and terminated_by is None:
@@ -310,10 +251,7 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
             t_b, h = stepper.t, stepper.h
             check.step(t_b, stepper.x, h)
             if max_steps is not None and stepper.steps > max_steps:
-                raise StepBudgetError(t_b, integrator, h, max_steps,
-                                      f"{integrator} stopped at t={t_b:.6g} s (step {h:.3g} s): "
-                                      f"{stepper.steps} steps did not reach t={t_eval[-1]:.6g} s, "
-                                      f"over its step budget of {max_steps} steps")
+                raise _step_budget_error(integrator, t_b, h, stepper.steps, max_steps, t_eval[-1])
             stop_at = t_b
             if events:
                 if own_roots:
@@ -338,7 +276,4 @@ def drive(stepper: Stepper, integrator: str, t_eval: np.ndarray, events: Sequenc
             if terminated_by is not None and t_out[-1] < stop_at:
                 emit(stop_at, records[-1].state.copy(), h)
     stepper.finish(stats)
-    stats.events = len(records)
-    stats.simulated_time = t_out[-1] - t_out[0]
-    return Solution(np.asarray(t_out), np.asarray(x_out), stats, names, records,
-                    terminated_by, None if derivative_at is None else np.asarray(xp_out))
+    return outputs.solution(stats, names, records, terminated_by)

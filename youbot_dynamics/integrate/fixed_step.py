@@ -12,7 +12,8 @@ from typing import Callable
 
 import numpy as np
 
-from youbot_dynamics.integrate.drive import IntegratorStats, StateCheck
+from youbot_dynamics.integrate.drive import StateCheck
+from youbot_dynamics.integrate.statistics import IntegratorStats
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
 

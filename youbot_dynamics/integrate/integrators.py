@@ -20,10 +20,11 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.integrate.drive import (DivergenceError, Event, EventRecord, IntegrationError,
-                                             IntegratorStats, Solution, StateCheck, StepBudgetError,
-                                             drive, state_names_or_default)
+from youbot_dynamics.integrate.drive import (Event, EventRecord, Solution, StateCheck, drive,
+                                             state_names_or_default)
+from youbot_dynamics.integrate.errors import DivergenceError, IntegrationError, StepBudgetError
 from youbot_dynamics.integrate.registry import REGISTRY, OdeProblem, integrator_names
+from youbot_dynamics.integrate.statistics import IntegratorStats
 from youbot_dynamics.integrate.sundials import CVODE_METHODS, IdaStepper
 
 __all__ = ["IntegratorStats", "Event", "EventRecord", "Solution", "IntegrationError",

@@ -40,9 +40,10 @@ from scipy.linalg import lu_factor, lu_solve
 
 from youbot_dynamics.dynamics.constraints import DaeForm
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.integrate.drive import (DivergenceError, IntegratorStats, Solution, StateCheck,
-                                             drive, state_names_or_default)
+from youbot_dynamics.integrate.drive import Solution, StateCheck, drive, state_names_or_default
+from youbot_dynamics.integrate.errors import DivergenceError
 from youbot_dynamics.integrate.integrators import checked_positive, checked_state, checked_times
+from youbot_dynamics.integrate.statistics import IntegratorStats
 
 __all__ = ["Radau5Dae", "integrate_radau_dae", "holonomic_index", "integrate_dae_form"]
 

@@ -34,8 +34,9 @@ from sksundae.cvode import CVODE
 from sksundae.ida import IDA
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.integrate.drive import (DivergenceError, Event, IntegrationError,
-                                             IntegratorStats)
+from youbot_dynamics.integrate.drive import Event
+from youbot_dynamics.integrate.errors import DivergenceError, IntegrationError
+from youbot_dynamics.integrate.statistics import IntegratorStats
 
 #: SUNDIALS' logger writes warnings straight to stderr. The one these runs raise says that a
 #: guard reads exactly 0 at a restart (the sleeve sitting at its stop), which is the rule

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -86,35 +86,49 @@ def read_base(reader: SceneReader, value: Any, robot: Robot) -> BaseSpec:
         if extra:
             raise SceneError(reader.source, f"base.{extra[0]}", "not used by a fixed base", data[extra[0]])
         return BaseSpec()
-    wheels = tuple(data.get("wheels", WHEEL_JOINTS))
-    for i, name in enumerate(wheels):
-        if name not in robot.joint_names:
-            raise SceneError(reader.source, f"base.wheels[{i}]", "must be a moving joint of the scene (list it "
-                             f"under 'moving'); moving: {', '.join(robot.joint_names)}", name)
+    wheels = _wheels(reader, data, robot)
     initial = reader.mapping(data.get("initial", {}), "base.initial", ("pose", "twist"))
     pose0 = tuple(reader.vector3(initial.get("pose", [0.0, 0.0, 0.0]), "base.initial.pose"))
     twist0 = tuple(reader.vector3(initial.get("twist", [0.0, 0.0, 0.0]), "base.initial.twist"))
     path = _path(reader, data["path"], pose0) if "path" in data else None
-    floor = reader.mapping(data.get("floor", {}), "base.floor", ("mu", "velocity_scale"))
-    mu = reader.number(floor.get("mu", 0.0), "base.floor.mu")
-    if mu < 0.0:
-        raise SceneError(reader.source, "base.floor.mu", "must be >= 0", mu)
-    scale = reader.positive(floor.get("velocity_scale", 1e-3), "base.floor.velocity_scale")
-    controller = None
-    if "controller" in data:
-        spec = reader.mapping(data["controller"], "base.controller", ("kp", "ki", "torque_limit", "release"))
-        missing = [key for key in ("kp", "ki", "torque_limit") if key not in spec]
-        if missing:
-            raise SceneError(reader.source, f"base.controller.{missing[0]}", "missing: the wheel-speed PI needs "
-                             "kp (N m s/rad), ki (N m/rad) and torque_limit (N m)")
-        release = reader.positive(spec["release"], "base.controller.release") if "release" in spec else math.inf
-        controller = BaseControllerSpec(*(reader.positive(spec[k], f"base.controller.{k}")
-                                          for k in ("kp", "ki", "torque_limit")), release)
+    mu, scale = _floor(reader, data.get("floor", {}))
+    controller = _controller(reader, data["controller"]) if "controller" in data else None
     if mode == "kinematic" and (controller is not None or "floor" in data):
         key = "controller" if controller is not None else "floor"
         raise SceneError(reader.source, f"base.{key}", "not used by a kinematic base (it follows the path "
                          "exactly)", data[key])
     return BaseSpec(mode, wheels, pose0, twist0, path, mu, scale, controller)
+
+
+def _wheels(reader: SceneReader, data: Mapping[str, Any], robot: Robot) -> tuple[str, ...]:
+    """``base.wheels``: the four wheel joints, each a moving joint of the scene."""
+    wheels = tuple(data.get("wheels", WHEEL_JOINTS))
+    for i, name in enumerate(wheels):
+        if name not in robot.joint_names:
+            raise SceneError(reader.source, f"base.wheels[{i}]", "must be a moving joint of the scene (list it "
+                             f"under 'moving'); moving: {', '.join(robot.joint_names)}", name)
+    return wheels
+
+
+def _floor(reader: SceneReader, value: Any) -> tuple[float, float]:
+    """``base.floor``: the rollers' Coulomb coefficient mu (>= 0) and velocity scale (m/s)."""
+    floor = reader.mapping(value, "base.floor", ("mu", "velocity_scale"))
+    mu = reader.number(floor.get("mu", 0.0), "base.floor.mu")
+    if mu < 0.0:
+        raise SceneError(reader.source, "base.floor.mu", "must be >= 0", mu)
+    return mu, reader.positive(floor.get("velocity_scale", 1e-3), "base.floor.velocity_scale")
+
+
+def _controller(reader: SceneReader, value: Any) -> BaseControllerSpec:
+    """``base.controller``: the wheel-speed PI's gains and torque limit, and its release time."""
+    spec = reader.mapping(value, "base.controller", ("kp", "ki", "torque_limit", "release"))
+    missing = [key for key in ("kp", "ki", "torque_limit") if key not in spec]
+    if missing:
+        raise SceneError(reader.source, f"base.controller.{missing[0]}", "missing: the wheel-speed PI needs "
+                         "kp (N m s/rad), ki (N m/rad) and torque_limit (N m)")
+    release = reader.positive(spec["release"], "base.controller.release") if "release" in spec else math.inf
+    return BaseControllerSpec(*(reader.positive(spec[k], f"base.controller.{k}")
+                                for k in ("kp", "ki", "torque_limit")), release)
 
 
 def _path(reader: SceneReader, value: Any, pose0: tuple[float, ...]) -> BasePathSpec:

@@ -287,81 +287,124 @@ def load_scene(name_or_path: str | Path, values: Mapping[str, float] | None = No
 
 def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None,
                      values: Mapping[str, float] | None = None) -> Scene:
-    """Validate and freeze a scene's mapping (see :meth:`Scene.from_dict`)."""
+    """Validate and freeze a scene's mapping (see :meth:`Scene.from_dict`), its sections in
+    the order their mistakes are reported."""
     reader = SceneReader(source, values)
     data = reader.mapping(data, "(top level)", TOP_KEYS)
-    urdf_source = _robot_source(reader, data.get("robot"), base_dir)
-    try:
-        full = load_robot(urdf_source)
-    except UserInputError as error:
-        raise SceneError(source, "robot", str(error), data.get("robot")) from None
-    # the text as the file holds it, for /robot_description (a byte that is no UTF-8 is
-    # replaced there, never in the model, which load_robot read by the file's encoding)
-    urdf, urdf_path = ((urdf_source, None) if isinstance(urdf_source, str) else
-                       (urdf_source.read_text(encoding="utf-8", errors="replace"), urdf_source))
-
-    moving = reader.joint_list(data.get("moving", list(full.joint_names)), "moving", full) if full.nv else ()
-    locked_raw = reader.joint_values(data.get("locked", {}), "locked", full)
-    for name in locked_raw:
-        if name in moving:
-            raise SceneError(source, f"locked.{name}", "joint is also listed under 'moving'", name)
-    locked = {n: locked_raw.get(n, 0.0) for n in full.joint_names if n not in moving}
-    for name, value in locked.items():
-        reader.within_limits(full, name, value, f"locked.{name}")
-    gravity = reader.vector3(data.get("gravity", [0.0, 0.0, -9.81]), "gravity", limits.GRAVITY)
-    robot = robot_with_gravity(keep_joints(full, moving, locked), gravity)
-
-    initial = reader.mapping(data.get("initial", {}), "initial", ("q", "v"))
-    q0 = _moving_vector(reader, robot, initial.get("q", {}), "initial.q", 0.0)
-    for name, value in zip(robot.joint_names, q0):
-        reader.within_limits(robot, name, value, f"initial.q.{name}")
-    v0 = _moving_vector(reader, robot, initial.get("v", {}), "initial.v", 0.0, limits.JOINT_SPEED)
-
-    friction = reader.mapping(data.get("friction", {}), "friction", ("default", "joints"))
-    friction_default = friction.get("default", "urdf")
-    if friction_default not in FRICTION_DEFAULTS:
-        raise SceneError(source, "friction.default", f"expected one of {', '.join(FRICTION_DEFAULTS)}",
-                         friction_default)
-    joint_friction = {}
-    for name, spec in reader.mapping(friction.get("joints", {}), "friction.joints").items():
-        key = f"friction.joints.{name}"
-        if name not in robot.joint_names:
-            raise SceneError(source, key, "not a moving joint of the scene "
-                             f"(moving: {', '.join(robot.joint_names)})", name)
-        spec = dict(reader.mapping(spec, key))
-        if "law" not in spec:
-            raise SceneError(source, f"{key}.law", "missing: give the friction law")
-        for parameter, value in spec.items():
-            if parameter != "law":
-                spec[parameter] = reader.number(value, f"{key}.{parameter}")
-        joint_friction[name] = MappingProxyType(spec)
-
+    full, urdf, urdf_path = _full_robot(reader, data, base_dir)
+    robot, locked, gravity = _reduced_robot(reader, data, full)
+    q0, v0 = _initial_state(reader, robot, data.get("initial", {}))
+    friction_default, joint_friction = _friction(reader, robot, data.get("friction", {}))
     controller = _controller(reader, robot, data.get("controller", {"type": "none"}), q0)
     integrator = _integrator(reader, data.get("integrator", {"method": "rk45"}), "integrator")
     duration = reader.positive(data.get("duration", 1.0), "duration")
-    outputs = reader.mapping(data.get("outputs", {}), "outputs", ("rate", "record"))
-    record = outputs.get("record", ("q", "v", "energy"))
-    if not isinstance(record, (list, tuple)):
-        raise SceneError(source, "outputs.record", f"expected a list of {', '.join(RECORDABLE)}", record)
-    record = tuple(record)
-    for i, item in enumerate(record):
-        if item not in RECORDABLE:
-            raise SceneError(source, f"outputs.record[{i}]", f"expected one of {', '.join(RECORDABLE)}", item)
-
-    rate = reader.positive(outputs.get("rate", 100.0), "outputs.rate", limits.RATE)
-    _check_samples(reader, duration, rate)
+    outputs = _outputs(reader, data.get("outputs", {}), duration)
     default_name = Path(source).stem if Path(source).suffix in (".yaml", ".yml") else "scene"
     scene = Scene(
         name=str(data.get("name", default_name)), description=str(data.get("description", "")),
         source=source, robot=robot, urdf=urdf, urdf_path=urdf_path, moving=robot.joint_names,
         locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0), gravity=_frozen(gravity),
         friction_default=friction_default, friction=MappingProxyType(joint_friction), controller=controller,
-        integrator=integrator, duration=duration, outputs=OutputSpec(rate, record),
+        integrator=integrator, duration=duration, outputs=outputs,
         base=read_base(reader, data.get("base"), robot))
     try:
         scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
     except UserInputError as error:
         raise SceneError(source, "friction.joints", str(error)) from None
+    bodies, geometries, contacts = _contact_sections(reader, data, robot, integrator)
+    reader.unused_values()
+    return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts,
+                               uncertain=MappingProxyType(dict(reader.uncertain)))
+
+
+def _full_robot(reader: SceneReader, data: Mapping[str, Any], base_dir: Path | None
+                ) -> tuple[Robot, str, Path | None]:
+    """(the full robot of ``robot:``, loaded with a fixed root; its URDF text as the file
+    holds it, for /robot_description; the file, None for a composed robot or none)."""
+    urdf_source = _robot_source(reader, data.get("robot"), base_dir)
+    try:
+        full = load_robot(urdf_source)
+    except UserInputError as error:
+        raise SceneError(reader.source, "robot", str(error), data.get("robot")) from None
+    # the text as the file holds it, for /robot_description (a byte that is no UTF-8 is
+    # replaced there, never in the model, which load_robot read by the file's encoding)
+    if isinstance(urdf_source, str):
+        return full, urdf_source, None
+    return full, urdf_source.read_text(encoding="utf-8", errors="replace"), urdf_source
+
+
+def _reduced_robot(reader: SceneReader, data: Mapping[str, Any], full: Robot
+                   ) -> tuple[Robot, dict[str, float], np.ndarray]:
+    """(the robot the scene simulates: ``moving`` joints only, the others locked, the scene's
+    gravity; the locked joints' values, rad or m; the gravity, m/s^2 in the world frame)."""
+    moving = reader.joint_list(data.get("moving", list(full.joint_names)), "moving", full) if full.nv else ()
+    locked_raw = reader.joint_values(data.get("locked", {}), "locked", full)
+    for name in locked_raw:
+        if name in moving:
+            raise SceneError(reader.source, f"locked.{name}", "joint is also listed under 'moving'", name)
+    locked = {n: locked_raw.get(n, 0.0) for n in full.joint_names if n not in moving}
+    for name, value in locked.items():
+        reader.within_limits(full, name, value, f"locked.{name}")
+    gravity = reader.vector3(data.get("gravity", [0.0, 0.0, -9.81]), "gravity", limits.GRAVITY)
+    return robot_with_gravity(keep_joints(full, moving, locked), gravity), locked, gravity
+
+
+def _initial_state(reader: SceneReader, robot: Robot, value: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``initial``: q0 (rad or m, within the joint limits) and v0 (rad/s or m/s), 0 where unnamed."""
+    initial = reader.mapping(value, "initial", ("q", "v"))
+    q0 = _moving_vector(reader, robot, initial.get("q", {}), "initial.q", 0.0)
+    for name, q in zip(robot.joint_names, q0):
+        reader.within_limits(robot, name, q, f"initial.q.{name}")
+    return q0, _moving_vector(reader, robot, initial.get("v", {}), "initial.v", 0.0, limits.JOINT_SPEED)
+
+
+def _friction(reader: SceneReader, robot: Robot, value: Any) -> tuple[str, dict[str, Mapping[str, Any]]]:
+    """``friction``: the default for unlisted joints and each listed moving joint's spec (its
+    law and numeric parameters; the law's own checks run in Scene.joint_friction)."""
+    friction = reader.mapping(value, "friction", ("default", "joints"))
+    friction_default = friction.get("default", "urdf")
+    if friction_default not in FRICTION_DEFAULTS:
+        raise SceneError(reader.source, "friction.default", f"expected one of {', '.join(FRICTION_DEFAULTS)}",
+                         friction_default)
+    joint_friction = {}
+    for name, spec in reader.mapping(friction.get("joints", {}), "friction.joints").items():
+        key = f"friction.joints.{name}"
+        if name not in robot.joint_names:
+            raise SceneError(reader.source, key, "not a moving joint of the scene "
+                             f"(moving: {', '.join(robot.joint_names)})", name)
+        spec = dict(reader.mapping(spec, key))
+        if "law" not in spec:
+            raise SceneError(reader.source, f"{key}.law", "missing: give the friction law")
+        for parameter, number in spec.items():
+            if parameter != "law":
+                spec[parameter] = reader.number(number, f"{key}.{parameter}")
+        joint_friction[name] = MappingProxyType(spec)
+    return friction_default, joint_friction
+
+
+def _outputs(reader: SceneReader, value: Any, duration: float) -> OutputSpec:
+    """``outputs``: the rate (Hz; at most limits.MAX_OUTPUT_SAMPLES over ``duration`` s) and
+    what to record (RECORDABLE)."""
+    outputs = reader.mapping(value, "outputs", ("rate", "record"))
+    record = outputs.get("record", ("q", "v", "energy"))
+    if not isinstance(record, (list, tuple)):
+        raise SceneError(reader.source, "outputs.record", f"expected a list of {', '.join(RECORDABLE)}", record)
+    record = tuple(record)
+    for i, item in enumerate(record):
+        if item not in RECORDABLE:
+            raise SceneError(reader.source, f"outputs.record[{i}]", f"expected one of {', '.join(RECORDABLE)}",
+                             item)
+    rate = reader.positive(outputs.get("rate", 100.0), "outputs.rate", limits.RATE)
+    _check_samples(reader, duration, rate)
+    return OutputSpec(rate, record)
+
+
+def _contact_sections(reader: SceneReader, data: Mapping[str, Any], robot: Robot, integrator: IntegratorSpec
+                      ) -> tuple[tuple[FreeBodySpec, ...], tuple, tuple[ContactPairSpec, ...]]:
+    """``free_bodies``, the geometries (``world``, ``geometry``) and ``contacts``, within the
+    bound on degrees of freedom; pairs with law ``constraint`` if and only if the integrator
+    is the constraint stepper."""
+    source = reader.source
     bodies = read_free_bodies(reader, data.get("free_bodies", []))
     dofs = robot.nv + 6 * len(bodies)
     if dofs > limits.MAX_DOFS:
@@ -377,9 +420,7 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     if stepper and integrator.method not in STEPPERS:
         raise SceneError(source, "integrator.method", f"pairs with law 'constraint' ({', '.join(stepper)}) need "
                          f"the constraint stepper: one of {', '.join(STEPPERS)}", integrator.method)
-    reader.unused_values()
-    return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts,
-                               uncertain=MappingProxyType(dict(reader.uncertain)))
+    return bodies, geometries, contacts
 
 
 def _robot_source(reader: SceneReader, value: Any, base_dir: Path | None) -> str | Path:
@@ -476,15 +517,7 @@ def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
     if method != AUTO and (not isinstance(method, str) or method not in REGISTRY):
         raise SceneError(reader.source, f"{key}.method", f"expected auto or one of {', '.join(REGISTRY)}", method)
     options = ("tol", "rtol", "atol") if method == AUTO else REGISTRY[method].options
-    numbers = {name: reader.number(data[name], f"{key}.{name}") for name in
-               ("dt", "tol", "rtol", "atol", "target_error", "energy_tolerance") if data.get(name) is not None}
-    for name, number in numbers.items():
-        if number < 0:
-            raise SceneError(reader.source, f"{key}.{name}", "must not be negative", number)
-        if number == 0 and name != "energy_tolerance":
-            raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
-        if name in ("tol", "rtol") and limits.tolerance_problem(number):
-            raise SceneError(reader.source, f"{key}.{name}", limits.tolerance_problem(number))
+    numbers = _integrator_numbers(reader, data, key)
     if "dt" in options and "dt" not in numbers:
         raise SceneError(reader.source, f"{key}.dt", f"missing: fixed-step method {method!r} needs dt (s)")
     if "dt" not in options and "dt" in numbers:
@@ -500,3 +533,18 @@ def _integrator(reader: SceneReader, value: Any, key: str) -> IntegratorSpec:
         raise SceneError(reader.source, f"{key}.target_error", "missing: method 'auto' needs the target "
                          "final joint-space error (rad)")
     return IntegratorSpec(method, **numbers)
+
+
+def _integrator_numbers(reader: SceneReader, data: Mapping[str, Any], key: str) -> dict[str, float]:
+    """The integrator's numbers that are given: each non-negative, positive but
+    ``energy_tolerance`` (J), the tolerances within limits.tolerance_problem's range."""
+    numbers = {name: reader.number(data[name], f"{key}.{name}") for name in
+               ("dt", "tol", "rtol", "atol", "target_error", "energy_tolerance") if data.get(name) is not None}
+    for name, number in numbers.items():
+        if number < 0:
+            raise SceneError(reader.source, f"{key}.{name}", "must not be negative", number)
+        if number == 0 and name != "energy_tolerance":
+            raise SceneError(reader.source, f"{key}.{name}", "must be positive", number)
+        if name in ("tol", "rtol") and limits.tolerance_problem(number):
+            raise SceneError(reader.source, f"{key}.{name}", limits.tolerance_problem(number))
+    return numbers

@@ -21,18 +21,22 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Callable, Protocol
 
 import numpy as np
 import pinocchio as pin
 from numba import njit, types
 from numba.extending import register_jitable
 
-from youbot_dynamics.dynamics.friction import (FLOAT, NO_BRISTLES, READ_VECTOR, WRITTEN_VECTOR, JointFriction,
-                                               add_friction_torque_unchecked, unchecked)
+from youbot_dynamics.dynamics.friction import (FLOAT, NO_BRISTLES, READ_VECTOR, WRITTEN_VECTOR,
+                                               JointFriction, add_friction_torque_unchecked,
+                                               unchecked)
 from youbot_dynamics.dynamics.rigid_body import gravity_torque, inverse_dynamics
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+
+#: A Python controller: (t s, q rad, v rad/s) of the robot's moving joints -> joint torques (N m).
+ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -192,3 +196,15 @@ def make_controller(kind: str, robot: Robot, kp: np.ndarray, kd: np.ndarray,
     if kind == "pd":
         return GravityCompensatedPD(robot, kp, kd)
     return ComputedTorque(robot, kp, kd, friction)
+
+
+@dataclass(frozen=True)
+class Control:
+    """What drives a compiled scene's joints: the scene's ``controller`` law and the
+    ``reference`` it tracks by default, or a Python ``callback`` (t, q, v) -> tau asked every
+    ``period`` (s), its torque held in between (both None without one)."""
+
+    controller: Controller
+    reference: Reference
+    callback: ControllerCallback | None = None
+    period: float | None = None

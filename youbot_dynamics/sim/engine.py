@@ -19,8 +19,8 @@ or imposes its path's motion on the root and the wheels (kinematic); a held twis
 stepper (:class:`ConstraintStepping`, a Stepper whose steps are Pinocchio contact solves).
 
 Divergence is a :class:`~youbot_dynamics.integrate.integrators.DivergenceError`: a non-finite
-state, a velocity beyond its bound (``VELOCITY_LIMIT_FACTOR`` x a joint's URDF limit, the
-free bodies' speed and spin limits), a step size that collapses, or a limit of
+state, a velocity beyond its bound (``VELOCITY_LIMIT_FACTOR`` of sim/build.py x a joint's URDF
+limit, the free bodies' speed and spin limits), a step size that collapses, or a limit of
 :mod:`youbot_dynamics.sim.divergence` exceeded: in a passive scene (no controller, no
 commanded effort) a stored energy that grows by more than ``integrator.energy_tolerance``
 (J, checked at outputs), a pair overlapping too deep, or a step budget spent.
@@ -161,9 +161,9 @@ def initial_state(model: SimModel, q: np.ndarray | None = None, v: np.ndarray | 
     if model.base is not None:
         blocks.update(base=model.base.pose0, base_v=model.base.twist0)
     x = model.imposed(model.layout.pack(**blocks), model.base_motion(0.0))
-    state = SimState(0.0, x, model.reference, np.zeros(robot.nv), model.plant.model.createData(),
+    state = SimState(0.0, x, model.control.reference, np.zeros(robot.nv), model.plant.model.createData(),
                      IntegratorStats(model.integrator.method))
-    if model.callback is None:  # a Python controller is first asked when the run starts
+    if model.control.callback is None:  # a Python controller is first asked when the run starts
         state.tau = robot_torque(model, state.reference, 0.0, x, None)
     return state
 
@@ -173,7 +173,7 @@ def robot_torque(model: SimModel, reference, t: float, x: np.ndarray, command: n
     scene's controller tracking ``reference``."""
     if command is not None:
         return command
-    tau = model.controller.torque(t, x[model.block("q")], x[model.block("v")], reference)
+    tau = model.control.controller.torque(t, x[model.block("q")], x[model.block("v")], reference)
     if model.base is None:
         return tau
     base = model.base
@@ -218,13 +218,13 @@ class HeldTorque:
     in between (zero-order hold, clipped to the effort limits)."""
 
     def __init__(self, model: SimModel, t: float, x: np.ndarray) -> None:
-        self.model, self.period = model, model.control_period
+        self.model, self.period = model, model.control.period
         self.value = self._ask(t, x)
         self.next = (math.floor(t / self.period + 1e-9) + 1) * self.period
         self.applied: dict[float, np.ndarray] = {t: self.value}
 
     def _ask(self, t: float, x: np.ndarray) -> np.ndarray:
-        tau = self.model.callback(t, x[self.model.block("q")].copy(), x[self.model.block("v")].copy())
+        tau = self.model.control.callback(t, x[self.model.block("q")].copy(), x[self.model.block("v")].copy())
         return self.model.clipped(tau)
 
     def ticks(self, t_end: float) -> np.ndarray:
@@ -376,7 +376,7 @@ def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None
         def torque(t: float, x: np.ndarray) -> np.ndarray:
             return command
     elif model.base is None:
-        controller, q_block, v_block = model.controller, model.slices["q"], model.slices["v"]
+        controller, q_block, v_block = model.control.controller, model.slices["q"], model.slices["v"]
 
         def torque(t: float, x: np.ndarray) -> np.ndarray:
             return controller.torque(t, x[q_block], x[v_block], reference)
@@ -403,7 +403,7 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
     data = state.data
     x0 = model.recentred(state.x)
     monitor = _monitor(model, state, command, energy0)
-    held = HeldTorque(model, state.t, x0) if model.callback is not None and command is None else None
+    held = HeldTorque(model, state.t, x0) if model.control.callback is not None and command is None else None
     grid = t_eval
     if held is not None:
         grid = np.union1d(t_eval, held.ticks(t_eval[-1]))
@@ -537,7 +537,7 @@ def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | No
     series = _series(model, state, solution, wanted, outcome.held)
     energy_error = float(np.max(np.abs(series["energy"] - series["energy"][0]))) if model.conservative else None
     dissipated = None
-    if model.passive and model.callback is None:
+    if model.passive and model.control.callback is None:
         dissipated = model.stored_energy(state.data, x0) - model.stored_energy(state.data, solution.x[-1])
     return SimulationResult(scene.name, model.integrator, model.layout, solution.t, solution.x, series,
                             solution.stats, model.conservative, energy_error, outcome.events,

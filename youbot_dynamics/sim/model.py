@@ -1,12 +1,14 @@
-"""The compiled scene: :func:`compile` turns a Scene into a frozen :class:`SimModel`.
+"""The compiled scene, a frozen :class:`SimModel` (:func:`~youbot_dynamics.sim.build.compile`
+turns a Scene into one, in sim/build.py).
 
 One Pinocchio model (the plant) holds the scene's robot (locked joints removed, the scene's
 gravity) followed by one free-flyer joint per free body, as Drake's MultibodyPlant holds
 every body of a scene. ABA, the mass matrix, the energies and ``pin.integrate`` so treat
 robot joints and free bodies alike, and one :class:`~youbot_dynamics.dynamics.contact_model
 .ContactModel` on that plant serves the compliant, impulsive and constraint-based laws. The
-model also holds the joint friction, the controller and its gains, the default reference,
-the state layout and the divergence bounds; it never changes after compilation. What the
+model also holds the joint friction, the control (the controller and its gains, the default
+reference, or a Python callback: :class:`~youbot_dynamics.sim.controllers.Control`), the
+state layout and the divergence bounds; it never changes after compilation. What the
 simulation is doing lives in a :class:`~youbot_dynamics.sim.state.SimState`.
 
 The continuous state x (see :mod:`youbot_dynamics.sim.state`) is
@@ -47,15 +49,13 @@ coordinates per body (``SimModel.coordinates``), the chart block then held at 0:
   angles (a1, a2, a3; a' = B(a)^-1 w) and the sequence (0: x-y-z, 1: x-z-y), switched
   by a state event (contact_events.py) when |a2| passes SWITCH_ANGLE (1.5 rad) to the
   other sequence with the same attitude (Modia3D's remedy for gimbal lock; the formulas
-  are studies/rotations.py's). ``pose``'s quaternion is written from the angles at the
+  are model/rotations.py's). ``pose``'s quaternion is written from the angles at the
   outputs.
 """
 from __future__ import annotations
 
-import dataclasses
 import functools
-import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Callable, Mapping
 
@@ -63,44 +63,32 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
-from youbot_dynamics.dynamics.contact import HuntCrossley, NewtonImpact
-from youbot_dynamics.dynamics.contact_model import ContactModel, Pair
-from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper, StepperSettings
-from youbot_dynamics.dynamics.free_body import add_free_flyer
+from youbot_dynamics.dynamics.contact_model import ContactModel
+from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper
 from youbot_dynamics.dynamics.friction import (FLOAT, JOINTS, READ_VECTOR, TABLE, WRITTEN_VECTOR,
                                                JointFriction, accumulate_friction_torque,
                                                friction_left_and_rates_unchecked,
                                                left_torque_and_rates, unchecked)
 from youbot_dynamics.dynamics.rigid_body import (forward_dynamics, kinetic_energy, potential_energy,
                                                  symmetrised)
-from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.integrate.registry import integrator_kind
-from youbot_dynamics.model.compose import robot_with_gravity
-from youbot_dynamics.model.configuration import require_fixed_root
 from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_matrix
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.model.rotations import (SEQUENCES, cardan_angle_rates, cardan_matrix,
                                              quaternion_rate)
 from youbot_dynamics.scene.contacts import ROTATION_COORDINATES
-from youbot_dynamics.scene.reader import SceneError
 from youbot_dynamics.scene.schema import IntegratorSpec, Scene
-from youbot_dynamics.sim.controllers import (ComputedTorque, Controller, Reference, clip_to_limits,
-                                             commanded_acceleration, make_controller)
-from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
-from youbot_dynamics.sim.mobile_base import (POSE_LABELS, TWIST_LABELS, BaseModel, BaseMotion,
-                                             planar_robot)
+from youbot_dynamics.sim.controllers import (ComputedTorque, Control, Reference, clip_to_limits,
+                                             commanded_acceleration)
+from youbot_dynamics.sim.divergence import DivergenceLimits
+from youbot_dynamics.sim.mobile_base import BaseModel, BaseMotion
 from youbot_dynamics.sim.state import StateLayout
-from youbot_dynamics.sim.trajectory import POINTS, TIMING, PointToPointTrajectory, desired_motion
+from youbot_dynamics.sim.trajectory import POINTS, TIMING, desired_motion
 
-#: A joint velocity beyond this multiple of its URDF limit is divergence.
-VELOCITY_LIMIT_FACTOR = 100.0
 #: Rotation (rad) of a free body's chart at which it is folded into the reference pose.
 RECENTRE_ANGLE = 1.0
 #: Floor (m/s) of the approach speed the hysteresis factor is derived from; pairs in
 #: contact at t = 0 start with it.
 MIN_APPROACH_SPEED = 1e-2
-#: A Python controller: (t s, q rad, v rad/s) of the robot's moving joints -> joint torques (N m).
-ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
 
 # The computed-torque right-hand side of a robot alone (SimModel.computed_torque_derivative)
@@ -158,9 +146,6 @@ _computed_torque_derivative_unchecked = unchecked(_computed_torque_derivative)
 
 #: Every block a state may hold (see the module docstring), in state order.
 BLOCKS = ("q", "v", "base", "base_v", "wheel_i", "twist", "z", "pose", "chart", "cardan", "s", "armed")
-_POSE = ("x", "y", "z", "qx", "qy", "qz", "qw")
-_TWIST = ("vx", "vy", "vz", "wx", "wy", "wz")
-_CARDAN = ("a1", "a2", "a3", "sequence")
 #: The Cardan sequences by their number in the ``cardan`` block.
 CARDAN_SEQUENCES = tuple(SEQUENCES)
 
@@ -168,8 +153,9 @@ CARDAN_SEQUENCES = tuple(SEQUENCES)
 @dataclass(frozen=True, eq=False)
 class SimModel:
     """A compiled scene (immutable). ``plant`` is the one Pinocchio model; ``robot`` the
-    scene's reduced Robot (its model is the plant's leading joints); ``contact`` is None in a
-    scene without contact pairs and free bodies."""
+    scene's reduced Robot (its model is the plant's leading joints); ``control`` the
+    controller, its default reference and a Python callback's period; ``contact`` is None in
+    a scene without contact pairs and free bodies."""
 
     scene: Scene
     integrator: IntegratorSpec
@@ -178,10 +164,7 @@ class SimModel:
     plant: Robot
     body_names: tuple[str, ...]
     friction: JointFriction | None
-    controller: Controller
-    reference: Reference
-    callback: ControllerCallback | None
-    control_period: float | None
+    control: Control
     contact: ContactModel | None
     compliant: tuple[int, ...]
     impulsive: tuple[int, ...]
@@ -193,7 +176,7 @@ class SimModel:
     passive: bool
     ee_frame: int
     velocity_index: slice | np.ndarray | None = None
-    slices: Mapping[str, slice] = dataclasses.field(default_factory=dict)
+    slices: Mapping[str, slice] = field(default_factory=dict)
     base: BaseModel | None = None
     coordinates: tuple[str, ...] = ()
 
@@ -288,7 +271,7 @@ class SimModel:
         compiled calls cannot (not a float64 vector, or a size they refuse). None where the
         fused path does not apply: another controller, no compiled :meth:`robot_derivative`
         path, a reference whose trajectory has no compiled form (``Reference.compiled``)."""
-        fast, compiled, controller = self._compiled_derivative, reference.compiled, self.controller
+        fast, compiled, controller = self._compiled_derivative, reference.compiled, self.control.controller
         if (fast is None or compiled is None or not isinstance(controller, ComputedTorque)
                 or controller.friction is not self.friction):
             return None
@@ -512,111 +495,4 @@ class SimModel:
 
     def is_passive(self, command: np.ndarray | None) -> bool:
         """Whether nothing feeds energy in: no controller, and no or a zero command."""
-        return self.passive and self.callback is None and (command is None or not np.any(command))
-
-
-def _plant(robot: Robot, scene: Scene) -> tuple[Robot, list[int | None]]:
-    """The plant (the robot's model with a free-flyer per body appended) and the frame id of
-    each of the scene's geometries (None: world)."""
-    bodies = [spec.body for spec in scene.free_bodies]
-    if not bodies:
-        plant = robot
-        body_frames = {}
-    else:
-        model = pin.Model(robot.model)
-        body_frames = {body.name: add_free_flyer(model, body)[1] for body in bodies}
-        plant = dataclasses.replace(robot, model=model)
-    frames = [None if g.owner == "world" else body_frames[g.owner_name] if g.owner == "body"
-              else robot.frame_id(g.owner_name) for g in scene.geometries]
-    return plant, frames
-
-
-def _layout(robot: Robot, scene: Scene, friction: JointFriction | None, compliant: list[str],
-            base: BaseModel | None) -> StateLayout:
-    names = [spec.body.name for spec in scene.free_bodies]
-    cardan = [spec.body.name for spec in scene.free_bodies if spec.rotation_coordinates == "cardan_adaptive"]
-    lugre = [] if friction is None else list(friction.lugre_joints)
-    moving = base is not None
-    return StateLayout.for_joints(robot.joint_names, {
-        "base": POSE_LABELS if moving else (),
-        "base_v": TWIST_LABELS if moving else (),
-        "wheel_i": [f"{n}.integral" for n in base.mecanum.names] if moving and base.pi else (),
-        "twist": [f"{n}.{a}" for n in names for a in _TWIST],
-        "z": lugre,
-        "pose": [f"{n}.{a}" for n in names for a in _POSE],
-        "chart": [f"{n}.d{a}" for n in names for a in _TWIST],
-        "cardan": [f"{n}.{a}" for n in cardan for a in _CARDAN],
-        "s": compliant,
-        "armed": compliant})
-
-
-def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: DivergenceLimits | None = None,
-            controller: ControllerCallback | None = None, control_rate: float | None = None) -> SimModel:
-    """The SimModel of ``scene`` (with another ``integrator`` or divergence ``limits`` if
-    given). ``controller`` replaces the scene's controller by a Python callback
-    (t, q, v) -> tau run at ``control_rate`` (Hz, default the output rate), its torque held
-    in between (the integrator is not restarted at the control ticks)."""
-    integrator = integrator or scene.integrator
-    limits = limits or DivergenceLimits()
-    if integrator.method == "auto":
-        integrator = scene.pinned_integrator()   # a one-line error naming the command to run
-    robot = scene.robot
-    require_fixed_root(robot, scene.source)
-    friction = scene.joint_friction(robot)
-    base = None
-    if scene.base.mode == "fixed":
-        plant, frames = _plant(robot, scene)
-    else:
-        plant, frames = _plant(robot_with_gravity(planar_robot(scene.urdf_path or scene.urdf, scene.moving,
-                                                               scene.locked), scene.gravity), scene)
-        base = BaseModel.compile(scene.base, robot, plant.nv, scene.gravity)
-        if plant.mimic or (base.mode == "kinematic" and integrator_kind(integrator.method) == "stepper"):
-            raise UserInputError(f"{scene.source}: base: a {base.mode} base takes neither mimic joints nor, "
-                                 "when kinematic, the constraint stepper")
-    pairs = [Pair(p.name, *(next(i for i, g in enumerate(scene.geometries) if g.name == name)
-                            for name in (p.geometry1, p.geometry2)), p.law) for p in scene.contacts]
-    contact = ContactModel(plant.model, scene.geometries, frames, pairs) if scene.has_contact else None
-    compliant = tuple(k for k, p in enumerate(pairs) if isinstance(p.law, HuntCrossley))
-    impulsive = tuple(k for k, p in enumerate(pairs) if isinstance(p.law, NewtonImpact))
-    layout = _layout(robot, scene, friction, [pairs[k].name for k in compliant], base)
-    spec = scene.controller
-    trajectory = None if spec.trajectory is None else PointToPointTrajectory.through(
-        np.vstack([scene.q0, spec.trajectory.waypoints]), spec.trajectory.v_max,
-        spec.trajectory.a_max, spec.trajectory.dwell)
-    bounds = layout.velocity_bounds(robot.velocity_limit, VELOCITY_LIMIT_FACTOR)
-    twist = layout.slice("twist")
-    bounds[twist] = np.tile(np.repeat([limits.body_speed, limits.body_spin], 3), len(scene.free_bodies))
-    if base is not None:  # the base's twist within the free bodies' speed and spin limits
-        bounds[layout.slice("base_v")] = [limits.body_speed, limits.body_speed, limits.body_spin]
-    shapes = {g.name: g.shape for g in scene.geometries}
-    period = None
-    if controller is not None:
-        period = 1.0 / (control_rate or scene.outputs.rate)
-        if not math.isfinite(period) or period <= 0.0:
-            raise UserInputError(f"{scene.source}: control_rate {control_rate!r} Hz must be positive")
-    stepper = ConstraintStepper(contact, StepperSettings(solver=integrator.method)) \
-        if integrator_kind(integrator.method) == "stepper" else None
-    for i, body in enumerate(scene.free_bodies):
-        if stepper is not None and body.rotation_coordinates != "chart":
-            raise SceneError(scene.source, f"free_bodies[{i}].rotation_coordinates", "the constraint stepper "
-                             f"({integrator.method}) moves free bodies on SE(3) with pin.integrate: give chart "
-                             "(the default) or an ODE integrator", body.rotation_coordinates)
-    velocity = layout.slice("v")
-    velocity_index = slice(velocity.start, velocity.stop + 6 * len(scene.free_bodies))  # [v, twist]
-    if base is not None:  # [base_v, v, twist], with base, base_v and wheel_i between v and twist
-        velocity_index = np.r_[layout.slice("base_v"), velocity, layout.slice("twist")]
-    passive = spec.type == "none" and (base is None or (base.dynamic and base.pi is None))
-    return SimModel(
-        scene=scene, integrator=integrator, limits=limits, robot=robot, plant=plant,
-        body_names=tuple(s.body.name for s in scene.free_bodies), friction=friction,
-        controller=make_controller(spec.type, robot, spec.kp, spec.kd, friction),
-        reference=Reference(scene.q0, trajectory), callback=controller, control_period=period,
-        contact=contact, compliant=compliant, impulsive=impulsive, stepper=stepper, layout=layout,
-        bounds=bounds,
-        penetration_limits={p.name: penetration_limit(shapes[p.geometry1], shapes[p.geometry2],
-                                                      limits.penetration_fraction) for p in scene.contacts},
-        conservative=(passive and friction is None and not scene.contacts and controller is None
-                      and (base is None or base.mu == 0.0)),
-        passive=passive, ee_frame=plant.frame_id(robot.end_effectors[0]), velocity_index=velocity_index, base=base,
-        slices=MappingProxyType({symbol: layout.slice(symbol) for symbol in BLOCKS}),
-        coordinates=tuple(spec.rotation_coordinates for spec in scene.free_bodies))
+        return self.passive and self.control.callback is None and (command is None or not np.any(command))

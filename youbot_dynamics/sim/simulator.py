@@ -1,6 +1,6 @@
 """A convenience wrapper that keeps one compiled scene and one state together.
 
-``Simulator(scene)`` is :func:`~youbot_dynamics.sim.model.compile` plus a
+``Simulator(scene)`` is :func:`~youbot_dynamics.sim.build.compile` plus a
 :class:`~youbot_dynamics.sim.state.SimState`; its methods call the engine's free functions
 (:mod:`youbot_dynamics.sim.engine`):
 
@@ -22,9 +22,11 @@ import numpy as np
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.scene.schema import IntegratorSpec, Scene
 from youbot_dynamics.sim import engine
+from youbot_dynamics.sim.build import compile
+from youbot_dynamics.sim.controllers import ControllerCallback
 from youbot_dynamics.sim.divergence import DivergenceLimits
 from youbot_dynamics.sim.engine import SimulationResult, Snapshot
-from youbot_dynamics.sim.model import ControllerCallback, SimModel, compile
+from youbot_dynamics.sim.model import SimModel
 from youbot_dynamics.sim.state import SimState
 
 #: A torque command: a sequence in joint order or a mapping by joint name (N m, N).
@@ -66,7 +68,7 @@ class Simulator:
 
     @property
     def controller(self):
-        return self.model.controller
+        return self.model.control.controller
 
     @property
     def conservative(self) -> bool:
@@ -75,7 +77,7 @@ class Simulator:
     @property
     def trajectory(self):
         """The scene's trajectory (None without one)."""
-        return self.model.reference.trajectory
+        return self.model.control.reference.trajectory
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -104,12 +106,12 @@ class Simulator:
         """What one rhs evaluation computes, by count: the state dimension, the plant's
         degrees of freedom and bodies (ABA is O(nv) over them), the friction laws evaluated
         and the controller's extra rigid-body pass (RNEA or gravity: O(nv))."""
-        model = self.model
+        model, kind = self.model, self.model.control.controller.kind
         laws = () if model.friction is None else sorted(set(model.friction.laws))
         z = model.block("z")
         return {"state_dim": model.layout.size, "nv": model.plant.model.nv, "bodies": model.plant.model.nbodies,
                 "lugre_states": z.stop - z.start, "friction_laws": ",".join(laws) or "none",
-                "controller": model.controller.kind, "rigid_body_passes": 1 + (model.controller.kind != "none"),
+                "controller": kind, "rigid_body_passes": 1 + (kind != "none"),
                 "free_bodies": len(model.body_names), "contact_pairs": len(model.scene.contacts)}
 
     def energy_of(self, x: np.ndarray) -> float:

@@ -23,7 +23,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pinocchio as pin
 
-from youbot_dynamics.integrate.drive import IntegratorStats
+from youbot_dynamics.integrate.statistics import IntegratorStats
 from youbot_dynamics.sim.controllers import Reference
 
 

@@ -29,7 +29,7 @@ import sympy as sp
 from youbot_dynamics.dynamics.constraints import DAE_FORMULATIONS, HolonomicSystem, dae_form
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.constrained import ConstrainedRun, simulate_holonomic
-from youbot_dynamics.integrate.drive import IntegrationError
+from youbot_dynamics.integrate.errors import IntegrationError
 from youbot_dynamics.integrate.integrators import integrate_dae
 from youbot_dynamics.integrate.radau_dae import integrate_dae_form
 
