@@ -18,14 +18,14 @@ PYTEST_ARGS ?= -m "not slow"
 
 .PHONY: run test test-all bench bench-all install lock clean
 
-# tf2_msgs (no PyPI wheel) built from interfaces/ into the venv once; skipped where a ROS 2
-# Jazzy provides it. Needs cmake and a C/C++ compiler (Debian: apt-get install cmake g++).
-TF2_MSGS := $(VENV)/.tf2_msgs
-$(TF2_MSGS): requirements.txt requirements-build.txt interfaces/build.sh \
-		$(wildcard interfaces/tf2_msgs/* interfaces/tf2_msgs/msg/*)
+# The message packages without a PyPI wheel (interfaces/*: tf2_msgs, control_msgs) built into
+# the venv once, one stamp per package; skipped where a ROS 2 Jazzy provides them. Needs cmake
+# and a C/C++ compiler (Debian: apt-get install cmake g++).
+INTERFACES := $(patsubst interfaces/%/package.xml,$(VENV)/.%,$(wildcard interfaces/*/package.xml))
+$(INTERFACES) &: requirements.txt requirements-build.txt $(shell find interfaces -type f)
 	PYTHON=$(PYTHON) interfaces/build.sh $(VENV)
 
-$(STAMP): requirements.txt requirements-test.txt $(LOCK) setup.py package.xml $(TF2_MSGS)
+$(STAMP): requirements.txt requirements-test.txt $(LOCK) setup.py package.xml $(INTERFACES)
 	@$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "Python 3.11+ is needed"'
 	@$(PYTHON) -m venv $(VENV) || { echo "python3 -m venv failed: apt-get install python3-venv"; exit 1; }
 	$(PY) -m pip install --quiet --upgrade pip
