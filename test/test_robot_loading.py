@@ -14,8 +14,8 @@ import pytest
 from youbot_dynamics import default_urdf
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics, inverse_dynamics
 from youbot_dynamics.errors import SingularMassMatrixError, UserInputError
-from youbot_dynamics.model.robot import (INERTIA_RTOL, URDFError, keep_joints, load_robot,
-                                         lock_joints)
+from youbot_dynamics.model.fidelity import INERTIA_RTOL
+from youbot_dynamics.model.robot import URDFError, keep_joints, load_robot, lock_joints
 
 from test_example_robots import URDFS
 
