@@ -246,12 +246,6 @@ def test_frames_by_type_when_a_link_and_a_joint_share_a_name() -> None:
         robot.frame_id("base", kind="joint")
 
 
-def test_lower_limit_above_upper(tmp_path: Path) -> None:
-    limit = '<limit lower="1.5" upper="-0.5" effort="5" velocity="2"/>'
-    message = _error(tmp_path, _two_link(j1=_joint("j1", "base", "l1", limit=limit)))
-    assert "joint 'j1'" in message and "lower limit 1.5 is above upper limit -0.5" in message
-
-
 def test_link_that_is_child_of_two_joints(tmp_path: Path) -> None:
     text = _urdf(_link("base"), _link("a"), _link("b"), _joint("ja", "base", "a"),
                  _joint("jb", "base", "b"), _joint("jc", "a", "b"))

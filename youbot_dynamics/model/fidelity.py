@@ -4,7 +4,7 @@ or approximate, and the warnings about physically invalid data.
 Every note is one line of text. Warnings (a physically invalid inertia, a singular joint-space
 mass matrix, a ``<mimic>`` of no moving joint) start with :data:`WARNING`; ``strict`` loading
 (:func:`youbot_dynamics.model.robot.load_robot`) turns them into errors. The other notes say
-what is ignored (soft limits, calibration, collision shapes, meshes, sensors, ``<contact>``,
+what is ignored (soft limits, calibration, collision shapes, meshes, shapes of no URDF type, sensors, ``<contact>``,
 ``<ros2_control>``, ``<transmission>``, ``<gazebo>``) or approximated (continuous joints as
 unbounded revolute ones, floating and planar joints fixed at their origin, massless links).
 
@@ -31,6 +31,8 @@ INERTIA_ATOL = 1e-12
 #: is below this fraction of the largest one (example-robot-data: the singular ones have 0 and
 #: round-off -1e-17, the regular ones 2.2e-7 (tiago_no_hand) and more).
 MASS_MATRIX_RTOL = 1e-12
+#: The geometry types urdfdom reads; another one is "Unknown geometry type" to it.
+URDF_SHAPES = ("box", "cylinder", "sphere", "mesh")
 GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))  # rad, for the sample configuration of that test
 
 
@@ -118,8 +120,13 @@ def _ignored_element_notes(root: etree._Element) -> list[str]:
 
 
 def _geometry_notes(root: etree._Element) -> list[str]:
-    """Collision shapes and meshes: neither enters the dynamics."""
+    """Collision shapes and meshes: neither enters the dynamics; shapes of no URDF type."""
     notes = []
+    for link in root.findall("link"):
+        for shape in link.iterfind("*/geometry/*"):
+            if isinstance(shape.tag, str) and shape.tag not in URDF_SHAPES:
+                notes.append(f"link '{link.get('name')}' (line {shape.sourceline}): <{shape.getparent().getparent().tag}> "
+                             f"geometry <{shape.tag}> is no URDF shape (urdfdom: \"Unknown geometry type\"), ignored")
     shapes = Counter(shape.tag for shape in root.iterfind("link/collision/geometry/*") if isinstance(shape.tag, str))
     if shapes:
         notes.append("<collision> geometry not used (contact shapes come from the scene): "

@@ -51,9 +51,10 @@ import pinocchio as pin
 from youbot_dynamics.errors import SingularMassMatrixError, URDFError, UserInputError
 from youbot_dynamics.model.fidelity import WARNING, fidelity_notes, inertial_warnings, mass_matrix_defect
 from youbot_dynamics.model.lie import exp_se3
-from youbot_dynamics.model.pinocchio_model import ROOT_JOINT_NAME, pinocchio_model
+from youbot_dynamics.model.lenient_urdf import add_point_mass_inertias, reversed_limit_notes
+from youbot_dynamics.model.pinocchio_model import ROOT_JOINT_NAME, pinocchio_model, root_joint_name
 from youbot_dynamics.model.urdf import (Joint, Mimic, TreeJoint, check_urdf, kinematic_tree, mimic_relations,
-                                        moving_joint, parse_urdf, read_source, where)
+                                        moving_joint, parse_urdf, read_source)
 
 #: Names of the root joint's coordinates in q and in v, per root kind (Pinocchio's layout).
 ROOT_COORDINATES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -332,32 +333,34 @@ def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False)
     missing file, malformed XML, a ``<robot>`` without a name, a duplicate link or joint name,
     an attribute that is not the numbers urdfdom expects, a missing ``<mass value>``,
     ``<inertia>`` moment or ``<limit>`` effort / velocity, an unknown joint type, a missing
-    parent or child link, a lower limit above the upper one, a zero axis on a moving joint, a
-    ``<mimic>`` of no moving joint, a kinematic loop, or (with a floating or planar root) a
-    URDF joint named ROOT_JOINT_NAME. Physically invalid inertias are warnings in the fidelity
-    report (``Robot.warnings``), errors with ``strict=True``; so is a singular joint-space
-    mass matrix.
+    parent or child link, a zero axis on a moving joint, a ``<mimic>`` of no moving joint or a
+    kinematic loop. Physically invalid inertias are warnings in the fidelity report
+    (``Robot.warnings``), errors with ``strict=True``; so is a singular joint-space mass
+    matrix. What urdfdom forgives is forgiven and noted in the fidelity report
+    (:mod:`youbot_dynamics.model.lenient_urdf`: an XML declaration after blank lines or of
+    version 0.0, undeclared namespace prefixes, a point-mass <inertial>, reversed limits; a
+    malformed <visual>); a URDF joint named ROOT_JOINT_NAME makes a floating or planar root
+    joint take the next free name (:func:`~youbot_dynamics.model.pinocchio_model.root_joint_name`).
     """
     if root not in ROOTS:
         raise UserInputError(f"root '{root}' is unknown: expected one of {', '.join(ROOTS)}")
     text, label = read_source(source)
-    element = parse_urdf(text, label)
+    element, forgiven = parse_urdf(text, label)
     try:
-        check_urdf(element, label)
-        joint = element.find(f"joint[@name='{ROOT_JOINT_NAME}']")
-        if root != "fixed" and joint is not None:
-            raise URDFError(f"{where(label, joint)}: the name is reserved for the {root} root joint; "
-                            "rename the joint or load with root 'fixed'")
+        forgiven += add_point_mass_inertias(element)
+        forgiven += check_urdf(element, label)
+        forgiven += reversed_limit_notes(element)
+        root_joint = ROOT_JOINT_NAME if root == "fixed" else root_joint_name(element)
         tree, root_link = kinematic_tree(element)
         relations, mimic_warnings = mimic_relations(element, label)
-        model, mimic, mimic_notes = pinocchio_model(element, relations, root)
+        model, mimic, mimic_notes = pinocchio_model(element, relations, root, root_joint)
         first = 1 if root == "fixed" else 2  # Pinocchio joint 0 is the universe, 1 the root joint
         by_name = {joint.get("name"): joint for joint in element.findall("joint")}
         joints = tuple(moving_joint(by_name[model.names[i]]) for i in range(first, model.njoints)
                        if model.names[i] not in mimic)
         robot = Robot(name=element.get("name"), source=label, model=model, joints=joints, tree=tree,
                       root_link=root_link,
-                      fidelity=(_root_note(root, root_link), *mimic_warnings, *inertial_warnings(element),
+                      fidelity=(_root_note(root, root_link, root_joint), *forgiven, *mimic_warnings, *inertial_warnings(element),
                                 *fidelity_notes(element), *mimic_notes),
                       mimic=mimic, root=root)
         if strict and robot.warnings:
@@ -371,13 +374,15 @@ def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False)
     return robot
 
 
-def _root_note(root: str, root_link: str) -> str:
-    """The fidelity report's line on the root joint."""
+def _root_note(root: str, root_link: str, root_joint: str) -> str:
+    """The fidelity report's line on the root joint (named ``root_joint`` in Pinocchio's model)."""
     if root == "fixed":
         return (f"root: fixed: link '{root_link}' is welded to the world "
                 "(load with root 'floating' or 'planar' to free it)")
     q_names, v_names = ROOT_COORDINATES[root]
-    return (f"root: {root}: joint '{ROOT_JOINT_NAME}' between the world and link '{root_link}' "
+    renamed = (f" (not '{ROOT_JOINT_NAME}': the URDF has a joint of that name)"
+               if root_joint != ROOT_JOINT_NAME else "")
+    return (f"root: {root}: joint '{root_joint}'{renamed} between the world and link '{root_link}' "
             f"(q starts {', '.join(q_names)}; v starts {', '.join(v_names)}, in the link's frame)")
 
 

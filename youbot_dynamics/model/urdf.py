@@ -25,6 +25,7 @@ from lxml import etree
 from youbot_dynamics.errors import URDFError
 from youbot_dynamics.model import limits
 from youbot_dynamics.model.fidelity import INERTIA_KEYS, WARNING
+from youbot_dynamics.model.lenient_urdf import lenient_xml, reversed_limits
 
 MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
 KNOWN_JOINT_TYPES = (*MOVING_JOINT_TYPES, "fixed", "floating", "planar")
@@ -57,6 +58,8 @@ ATTRIBUTE_BOUNDS = {
 #: Attributes urdfdom refuses to do without.
 REQUIRED_ATTRIBUTES = {"mass": ("value",), "inertia": INERTIA_KEYS, "limit": ("effort", "velocity"),
                        "mimic": ("joint",)}
+#: The parts of a link whose malformed numbers urdfdom drops with the part (never used here).
+FORGIVING_PARTS = ("visual", "collision")
 _XML_DECLARATION = re.compile(r"^\s*<\?xml\b[^>]*\?>")
 
 
@@ -119,20 +122,28 @@ def read_source(source: str | Path) -> tuple[str | bytes, str]:
     return path.read_bytes(), str(path)
 
 
-def parse_urdf(text: str | bytes, label: str) -> etree._Element:
-    """The XML tree of a <robot> with a name. A str is already decoded, so its encoding
-    declaration (which lxml refuses in a str) is dropped; the lines keep their numbers."""
+def parse_urdf(text: str | bytes, label: str) -> tuple[etree._Element, list[str]]:
+    """The XML tree of a <robot> with a name, and the notes of what was forgiven to read it.
+
+    A str is already decoded, so its encoding declaration (which lxml refuses in a str) is
+    dropped. Text the strict parser refuses is read again after the pre-pass of
+    :func:`~youbot_dynamics.model.lenient_urdf.lenient_xml` (what urdfdom forgives); the lines
+    keep their numbers either way."""
     if isinstance(text, str):
         text = _XML_DECLARATION.sub("", text, count=1)
     try:
-        root = etree.fromstring(text)
-    except etree.XMLSyntaxError as error:
-        raise URDFError(f"{label}: malformed XML: {error}") from None
+        root, notes = etree.fromstring(text), []
+    except etree.XMLSyntaxError:
+        mended, notes = lenient_xml(text)
+        try:
+            root = etree.fromstring(mended)
+        except etree.XMLSyntaxError as error:
+            raise URDFError(f"{label}: malformed XML: {error}") from None
     if root.tag != "robot":
         raise URDFError(f"{label}:{root.sourceline}: root element is <{root.tag}>, expected <robot>")
     if not root.get("name"):
         raise URDFError(f"{label}:{root.sourceline}: <robot> has no name attribute")
-    return root
+    return root, notes
 
 
 def where(label: str, element: etree._Element) -> str:
@@ -147,17 +158,19 @@ def _floats(element: etree._Element | None, attribute: str, default: str) -> np.
 # ---------------------------------------------------------------------------------------
 # Checking
 # ---------------------------------------------------------------------------------------
-def check_urdf(root: etree._Element, label: str) -> None:
+def check_urdf(root: etree._Element, label: str) -> list[str]:
     """Refuse, as urdfdom does, a URDF beyond the size bounds, with duplicate names, no link,
     malformed numbers, a malformed joint, links that form no single tree or an <inertial>
-    without <mass> and <inertia>."""
+    without <mass> and <inertia>. Malformed numbers in a <visual> or <collision> (which the
+    dynamics never use and urdfdom drops) are notes instead, returned; numbers beyond their
+    bounds are errors there too."""
     _check_sizes(root, label)
     _check_unique_names(root, label)
     links = {link.get("name"): link for link in root.findall("link")}
     if not links:
         raise URDFError(f"{label}: the robot has no <link>")
-    for owner, element in _urdf_elements(root):
-        _check_numbers(owner, element, label)
+    notes = [note for owner, part, element in _urdf_elements(root)
+             for note in _check_numbers(owner, element, label, part)]
     parent_link: dict[str, str] = {}  # child link -> parent link
     parent_of: dict[str, str] = {}  # child link -> its joint's name
     for joint in root.findall("joint"):
@@ -169,6 +182,7 @@ def check_urdf(root: etree._Element, label: str) -> None:
         inertial = link.find("inertial")
         if inertial is not None and (inertial.find("mass") is None or inertial.find("inertia") is None):
             raise URDFError(f"{where(label, link)}: <inertial> needs a <mass> and an <inertia>")
+    return notes
 
 
 def _check_sizes(root: etree._Element, label: str) -> None:
@@ -198,8 +212,9 @@ def _check_unique_names(root: etree._Element, label: str) -> None:
 def _check_joint(joint: etree._Element, links: dict[str, etree._Element], parent_of: dict[str, str],
                  label: str) -> None:
     """A known type, defined parent and child links, a child no other joint has (``parent_of``:
-    child link -> joint, of the joints before), a <limit> with lower <= upper on a revolute or
-    prismatic joint and a non-zero axis on a moving one."""
+    child link -> joint, of the joints before), a <limit> on a revolute or prismatic joint
+    (lower > upper means no limit: :func:`~youbot_dynamics.model.lenient_urdf.reversed_limits`)
+    and a non-zero axis on a moving one."""
     at = where(label, joint)
     kind = joint.get("type")
     if kind not in KNOWN_JOINT_TYPES:
@@ -215,13 +230,8 @@ def _check_joint(joint: etree._Element, links: dict[str, etree._Element], parent
     if child in parent_of:
         raise URDFError(f"{at}: kinematic loop: link '{child}' is already the child of "
                         f"joint '{parent_of[child]}' (closed chains are not supported in URDF)")
-    limit = joint.find("limit")
-    if kind in ("revolute", "prismatic"):
-        if limit is None:
-            raise URDFError(f"{at}: a {kind} joint needs a <limit>")
-        lower, upper = float(limit.get("lower", 0)), float(limit.get("upper", 0))
-        if lower > upper:
-            raise URDFError(f"{at}: lower limit {lower} is above upper limit {upper}")
+    if kind in ("revolute", "prismatic") and joint.find("limit") is None:
+        raise URDFError(f"{at}: a {kind} joint needs a <limit>")
     if kind in MOVING_JOINT_TYPES:
         axis = _floats(joint.find("axis"), "xyz", "1 0 0")
         if np.linalg.norm(axis) < 1e-12:
@@ -244,50 +254,66 @@ def _check_single_tree(links: dict[str, etree._Element], parent_link: dict[str, 
             link = parent_link[link]
 
 
-def _urdf_elements(root: etree._Element) -> Iterator[tuple[etree._Element, etree._Element]]:
-    """(owner, element) for every element whose attributes urdfdom reads: a joint's children,
-    and the children of a link's <inertial>, <visual> and <collision> with their shapes."""
+def _urdf_elements(root: etree._Element) -> Iterator[tuple[etree._Element, str, etree._Element]]:
+    """(owner, part, element) for every element whose attributes urdfdom reads: a joint's
+    children (part ``"joint"``), and the children of a link's <inertial>, <visual> and
+    <collision> (the part) with their shapes."""
     for joint in root.findall("joint"):
         for child in joint:
-            yield joint, child
+            yield joint, "joint", child
     for link in root.findall("link"):
         for part in link:
             if part.tag not in ("inertial", "visual", "collision"):
                 continue
             for child in part:
-                yield link, child
+                yield link, part.tag, child
                 if child.tag == "geometry":
-                    yield from ((link, shape) for shape in child)
+                    yield from ((link, part.tag, shape) for shape in child)
 
 
-def _check_numbers(owner: etree._Element, element: etree._Element, label: str) -> None:
+def _check_numbers(owner: etree._Element, element: etree._Element, label: str, part: str) -> list[str]:
     """Every numeric attribute of ``element`` holds as many finite numbers as urdfdom reads,
-    and the attributes urdfdom requires are there."""
+    within the bounds of youbot_dynamics.model.limits, and the attributes urdfdom requires are
+    there. In a <visual> or <collision> (``part``, the owner's element that holds ``element``:
+    FORGIVING_PARTS) a wrong count or a non-number is a returned note, not an error; a number
+    beyond its bound stays an error."""
     spec = NUMERIC_ATTRIBUTES.get(element.tag)
     if spec is None:
-        return
+        return []
     at = f"{label}:{element.sourceline}: {owner.tag} '{owner.get('name')}': <{element.tag}>"
     for attribute in REQUIRED_ATTRIBUTES.get(element.tag, ()):
         if element.get(attribute) is None:
             raise URDFError(f"{at}: missing attribute '{attribute}'")
+    notes = []
     for attribute, count in spec.items():
         text = element.get(attribute)
         if text is None:
             continue
         parts = text.split()
-        if len(parts) != count:
-            raise URDFError(f"{at}: {attribute}=\"{text}\" is not {count} number(s)")
-        for part in parts:
-            try:
-                value = float(part)
-            except ValueError:
-                value = math.nan
+        malformed = f" is not {count} number(s)" if len(parts) != count else ""
+        for part in parts if not malformed else ():
+            value = _finite_or_nan(part)
             if not math.isfinite(value):
-                raise URDFError(f"{at}: {attribute}=\"{text}\": '{part}' is not a finite number")
+                malformed = f": '{part}' is not a finite number"
+                break
             bound = ATTRIBUTE_BOUNDS.get(element.tag, {}).get(attribute)
             problem = bound.problem(value) if bound is not None else ""
             if problem:
                 raise URDFError(f"{at}: {attribute}=\"{text}\": {problem}")
+        if malformed and part not in FORGIVING_PARTS:
+            raise URDFError(f"{at}: {attribute}=\"{text}\"{malformed}")
+        if malformed:
+            notes.append(f"{at}: {attribute}=\"{text}\"{malformed} (in a <{part}>, which urdfdom drops "
+                         "and the dynamics never use: ignored)")
+    return notes
+
+
+def _finite_or_nan(text: str) -> float:
+    """float(text), NaN when it is no number."""
+    try:
+        return float(text)
+    except ValueError:
+        return math.nan
 
 
 # ---------------------------------------------------------------------------------------
@@ -333,7 +359,8 @@ def _origin(element: etree._Element | None) -> np.ndarray:
 
 def moving_joint(joint: etree._Element) -> Joint:
     """A moving joint's limits and dynamics from its checked XML; a bound the file leaves
-    out is infinite (a continuous joint has no position limits), damping and friction 0."""
+    out is infinite (a continuous joint, or one whose limits are reversed, has no position
+    limits), damping and friction 0."""
     limit, dynamics = joint.find("limit"), joint.find("dynamics")
     kind = joint.get("type")
 
@@ -341,7 +368,7 @@ def moving_joint(joint: etree._Element) -> Joint:
         text = None if element is None else element.get(attribute)
         return default if text is None else float(text)
 
-    unbounded = kind == "continuous"
+    unbounded = kind == "continuous" or reversed_limits(joint)
     lower = -math.inf if unbounded else value(limit, "lower", -math.inf)
     upper = math.inf if unbounded else value(limit, "upper", math.inf)
     return Joint(joint.get("name"), kind, lower, upper, value(limit, "velocity", math.inf),
