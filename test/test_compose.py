@@ -57,6 +57,21 @@ def test_errors_name_the_placement_and_its_part(tmp_path):
     assert (caught.value.index, caught.value.part) == (0, "urdf")
 
 
+def test_a_file_that_urdfdom_forgives_composes(tmp_path):
+    """Blank lines before a version-0.0 declaration and an undeclared prefix (pybullet_data's,
+    Drake's files), read as load_robot reads them."""
+    text = URDF.read_text(encoding="utf-8").split("?>", 1)[-1]
+    forgiven = tmp_path / "forgiven.urdf"
+    forgiven.write_text('\n<?xml version="0.0" ?>' + text.replace("<robot ", '<robot drake:tag="x" ', 1),
+                        encoding="utf-8")
+    composed = load_robot(composed_urdf([Placement(URDF, "a_"), Placement(forgiven, "b_")]))
+    assert composed.nv == 2 * load_robot(URDF).nv
+    missing = tmp_path / "missing.urdf"
+    with pytest.raises(CompositionError, match=f"URDF file not found: {missing}") as caught:
+        composed_urdf([Placement(missing)])
+    assert (caught.value.index, caught.value.part) == (0, "urdf")
+
+
 def test_gravity_on_a_copy_leaves_the_loaded_model_alone():
     robot = load_robot(URDF)
     moon = robot_with_gravity(robot, [0.0, 0.0, -1.62])

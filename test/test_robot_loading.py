@@ -14,8 +14,8 @@ import pytest
 from youbot_dynamics import default_urdf
 from youbot_dynamics.dynamics.rigid_body import forward_dynamics, inverse_dynamics
 from youbot_dynamics.errors import SingularMassMatrixError, UserInputError
-from youbot_dynamics.model.robot import (INERTIA_RTOL, URDFError, keep_joints, load_robot,
-                                         lock_joints)
+from youbot_dynamics.model.fidelity import INERTIA_RTOL
+from youbot_dynamics.model.robot import URDFError, keep_joints, load_robot, lock_joints
 
 from test_example_robots import URDFS
 
@@ -244,12 +244,6 @@ def test_frames_by_type_when_a_link_and_a_joint_share_a_name() -> None:
     assert robot.model.frames[joint].type == pin.FrameType.JOINT
     with pytest.raises(UserInputError, match="unknown frame 'base': no joint of that name"):
         robot.frame_id("base", kind="joint")
-
-
-def test_lower_limit_above_upper(tmp_path: Path) -> None:
-    limit = '<limit lower="1.5" upper="-0.5" effort="5" velocity="2"/>'
-    message = _error(tmp_path, _two_link(j1=_joint("j1", "base", "l1", limit=limit)))
-    assert "joint 'j1'" in message and "lower limit 1.5 is above upper limit -0.5" in message
 
 
 def test_link_that_is_child_of_two_joints(tmp_path: Path) -> None:

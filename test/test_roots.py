@@ -22,7 +22,7 @@ from youbot_dynamics.cli import main
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import (bias_torque, forward_dynamics, gravity_torque,
                                                  inverse_dynamics, mass_matrix)
-from youbot_dynamics.errors import URDFError, UserInputError
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import difference, integrate, neutral, random_configuration
 from youbot_dynamics.model.lie import exp_se3, matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
@@ -101,7 +101,7 @@ def test_unknown_root_is_a_one_line_error() -> None:
         load_robot(YOUBOT, root="wheeled")
 
 
-def test_a_urdf_joint_named_like_the_root_joint_is_refused_with_a_movable_root() -> None:
+def test_a_urdf_joint_named_like_the_root_joint_leaves_its_name_to_the_file() -> None:
     urdf = """<robot name="clash">
   <link name="base"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
   <link name="arm"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
@@ -109,9 +109,9 @@ def test_a_urdf_joint_named_like_the_root_joint_is_refused_with_a_movable_root()
     <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
 </robot>"""
     assert load_robot(urdf).joint_names == ("root_joint",)
-    with pytest.raises(URDFError, match=r"^<URDF string>:4: joint 'root_joint': the name is reserved "
-                                        r"for the planar root joint; rename the joint or load with root 'fixed'$"):
-        load_robot(urdf, root="planar")
+    robot = load_robot(urdf, root="planar")  # the root joint takes another name (test_lenient_urdf)
+    assert robot.joint_names == ("root_joint",) and robot.model.names[1] == "root_joint_1"
+    assert robot.v_names == ("root_vx", "root_vy", "root_wz", "root_joint")
 
 
 def test_vector_by_name_fills_the_root_with_its_neutral_pose_and_normalises_it() -> None:

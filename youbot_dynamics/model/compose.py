@@ -18,8 +18,9 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
-from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.errors import URDFError, UserInputError
 from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.model.urdf import parse_urdf, read_source
 
 #: The URDF of a scene without a robot (``robot: none``): one link, no joint.
 EMPTY_ROBOT = '<robot name="none"><link name="world"/></robot>'
@@ -61,9 +62,10 @@ def composed_urdf(placements: Sequence[Placement]) -> str:
     world = etree.Element("robot", name="composed")
     etree.SubElement(world, "link", name="world")
     for index, placement in enumerate(placements):
+        text, label = _read(placement, index)
         try:
-            root = etree.parse(str(placement.urdf)).getroot()
-        except (etree.XMLSyntaxError, OSError) as error:
+            root, _ = parse_urdf(text, label)  # as load_robot reads it: what urdfdom forgives, forgiven
+        except URDFError as error:
             raise CompositionError(index, "urdf", f"{placement.urdf} is not valid XML: {error}") from None
         corrected_inertials(root, placement.inertials, index)
         prefix = placement.prefix
@@ -85,6 +87,15 @@ def composed_urdf(placements: Sequence[Placement]) -> str:
         etree.SubElement(joint, "origin", xyz=" ".join(repr(float(x)) for x in pose[:3, 3]),
                          rpy=" ".join(repr(float(x)) for x in rpy))
     return etree.tostring(world, encoding="unicode")
+
+
+def _read(placement: Placement, index: int) -> tuple[str | bytes, str]:
+    """The placement's URDF file as bytes, and its label; a missing or oversized file is a
+    CompositionError of the placement's ``urdf``."""
+    try:
+        return read_source(Path(placement.urdf))
+    except URDFError as error:
+        raise CompositionError(index, "urdf", str(error)) from None
 
 
 def corrected_inertials(root: etree._Element, corrections: Mapping[str, InertialCorrection],

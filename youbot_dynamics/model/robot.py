@@ -1,6 +1,8 @@
-"""URDF -> Robot: the immutable description of what a robot IS.
+"""URDF -> Robot: the immutable description of what a robot IS, and :func:`load_robot`.
 
-A :class:`Robot` holds the Pinocchio model of the URDF (for the rigid-body algorithms), the
+Loading reads and checks the file (:mod:`youbot_dynamics.model.urdf`), builds the Pinocchio
+model (:mod:`youbot_dynamics.model.pinocchio_model`) and the fidelity report
+(:mod:`youbot_dynamics.model.fidelity`). A :class:`Robot` holds the Pinocchio model of the URDF (for the rigid-body algorithms), the
 kinematic tree as the URDF states it (for the screw axes, independent of Pinocchio), the
 moving joints in Pinocchio's order with their limits, damping and friction, and a fidelity
 report of what the model ignores or approximates. What the robot is DOING lives elsewhere
@@ -39,66 +41,20 @@ offending link named); ``strict=True`` makes warnings errors. A malformed file i
 from __future__ import annotations
 
 import math
-import re
-from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin
-from lxml import etree
 
 from youbot_dynamics.errors import SingularMassMatrixError, URDFError, UserInputError
-from youbot_dynamics.model import limits
+from youbot_dynamics.model.fidelity import WARNING, fidelity_notes, inertial_warnings, mass_matrix_defect
 from youbot_dynamics.model.lie import exp_se3
-
-MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
-KNOWN_JOINT_TYPES = (*MOVING_JOINT_TYPES, "fixed", "floating", "planar")
-UNBOUNDED = 1e10  # position limit handed to Pinocchio for continuous joints, rad
-#: A principal moment of inertia counts as zero within this fraction of the link's largest
-#: one (round-off such as -2e-22 next to 3e-6 kg m^2 is 7e-17 of it; the smallest physical
-#: violation among example-robot-data's files is 1.8e-3 of it) ...
-INERTIA_RTOL = 1e-6
-#: ... or below this, kg m^2 (iCub's "zero" inertias are 1e-20..4e-18 kg m^2).
-INERTIA_ATOL = 1e-12
-#: A joint-space mass matrix is singular where a diagonal entry, or its smallest eigenvalue,
-#: is below this fraction of the largest one (example-robot-data: the singular ones have 0 and
-#: round-off -1e-17, the regular ones 2.2e-7 (tiago_no_hand) and more).
-MASS_MATRIX_RTOL = 1e-12
-GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))  # rad, for the sample configuration of that test
-WARNING = "warning: "  # prefix of the fidelity notes that strict loading turns into errors
-INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-#: Numeric attributes urdfdom reads, by element, with how many numbers each holds.
-NUMERIC_ATTRIBUTES = {
-    "origin": {"xyz": 3, "rpy": 3},
-    "axis": {"xyz": 3},
-    "mass": {"value": 1},
-    "inertia": dict.fromkeys(INERTIA_KEYS, 1),
-    "limit": dict.fromkeys(("lower", "upper", "effort", "velocity"), 1),
-    "dynamics": {"damping": 1, "friction": 1},
-    "mimic": {"multiplier": 1, "offset": 1},
-    "safety_controller": dict.fromkeys(("soft_lower_limit", "soft_upper_limit", "k_position", "k_velocity"), 1),
-    "calibration": {"rising": 1, "falling": 1},
-    "box": {"size": 3},
-    "cylinder": {"radius": 1, "length": 1},
-    "sphere": {"radius": 1},
-    "mesh": {"scale": 3},
-}
-#: Magnitude bounds (youbot_dynamics.model.limits) on numeric attributes, by element.
-ATTRIBUTE_BOUNDS = {
-    "origin": {"xyz": limits.LENGTH},
-    "mass": {"value": limits.MASS},
-    "inertia": dict.fromkeys(INERTIA_KEYS, limits.INERTIA),
-    "dynamics": {"damping": limits.DAMPING, "friction": limits.FRICTION},
-    "box": {"size": limits.LENGTH},
-    "cylinder": {"radius": limits.LENGTH, "length": limits.LENGTH},
-    "sphere": {"radius": limits.LENGTH},
-}
-#: Attributes urdfdom refuses to do without.
-REQUIRED_ATTRIBUTES = {"mass": ("value",), "inertia": INERTIA_KEYS, "limit": ("effort", "velocity"),
-                       "mimic": ("joint",)}
-_XML_DECLARATION = re.compile(r"^\s*<\?xml\b[^>]*\?>")
+from youbot_dynamics.model.lenient_urdf import add_point_mass_inertias, reversed_limit_notes
+from youbot_dynamics.model.pinocchio_model import ROOT_JOINT_NAME, pinocchio_model, root_joint_name
+from youbot_dynamics.model.urdf import (Joint, Mimic, TreeJoint, check_urdf, kinematic_tree, mimic_relations,
+                                        moving_joint, parse_urdf, read_source)
 
 #: Names of the root joint's coordinates in q and in v, per root kind (Pinocchio's layout).
 ROOT_COORDINATES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -108,50 +64,6 @@ ROOT_COORDINATES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "planar": (("root_x", "root_y", "root_cos", "root_sin"), ("root_vx", "root_vy", "root_wz")),
 }
 ROOTS = tuple(ROOT_COORDINATES)
-ROOT_JOINT_NAME = "root_joint"  # the Pinocchio joint of a floating or planar root
-_ROOT_JOINT_MODELS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}
-
-
-@dataclass(frozen=True)
-class TreeJoint:
-    """One URDF joint as an edge of the kinematic tree.
-
-    ``origin`` is the 4x4 pose of the child frame in the parent link frame at zero joint
-    value; ``axis`` is the unit joint axis in the child (joint) frame. Locked joints appear
-    with ``type == "fixed"`` and their locked value folded into ``origin``.
-    """
-
-    name: str
-    type: str
-    parent: str
-    child: str
-    origin: np.ndarray
-    axis: np.ndarray
-
-
-@dataclass(frozen=True)
-class Joint:
-    """A moving joint: limits (rad or m, rad/s or m/s, N m or N) and URDF dynamics."""
-
-    name: str
-    type: str
-    lower: float
-    upper: float
-    velocity_limit: float
-    effort_limit: float
-    damping: float
-    friction: float
-
-
-@dataclass(frozen=True)
-class Mimic:
-    """A joint that follows another: q_joint = multiplier q_primary + offset (rad or m), the
-    primary an independent moving joint (chains of mimics are resolved to their root)."""
-
-    joint: str
-    primary: str
-    multiplier: float
-    offset: float
 
 
 @dataclass(frozen=True)
@@ -182,7 +94,7 @@ class Robot:
     mass_matrix_defect: str = field(init=False, default="")
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "mass_matrix_defect", _mass_matrix_defect(self.model, self.source))
+        object.__setattr__(self, "mass_matrix_defect", mass_matrix_defect(self.model, self.source))
 
     @property
     def warnings(self) -> tuple[str, ...]:
@@ -421,32 +333,35 @@ def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False)
     missing file, malformed XML, a ``<robot>`` without a name, a duplicate link or joint name,
     an attribute that is not the numbers urdfdom expects, a missing ``<mass value>``,
     ``<inertia>`` moment or ``<limit>`` effort / velocity, an unknown joint type, a missing
-    parent or child link, a lower limit above the upper one, a zero axis on a moving joint, a
-    ``<mimic>`` of no moving joint, a kinematic loop, or (with a floating or planar root) a
-    URDF joint named ROOT_JOINT_NAME. Physically invalid inertias are warnings in the fidelity
-    report (``Robot.warnings``), errors with ``strict=True``; so is a singular joint-space
-    mass matrix.
+    parent or child link, a zero axis on a moving joint, a ``<mimic>`` of no moving joint or a
+    kinematic loop. Physically invalid inertias are warnings in the fidelity report
+    (``Robot.warnings``), errors with ``strict=True``; so is a singular joint-space mass
+    matrix. What urdfdom forgives is forgiven and noted in the fidelity report
+    (:mod:`youbot_dynamics.model.lenient_urdf`: an XML declaration after blank lines or of
+    version 0.0, undeclared namespace prefixes, a point-mass <inertial>, reversed limits; a
+    malformed <visual>); a URDF joint named ROOT_JOINT_NAME makes a floating or planar root
+    joint take the next free name (:func:`~youbot_dynamics.model.pinocchio_model.root_joint_name`).
     """
     if root not in ROOTS:
         raise UserInputError(f"root '{root}' is unknown: expected one of {', '.join(ROOTS)}")
-    text, label = _read_source(source)
-    element = _parse_xml(text, label)
+    text, label = read_source(source)
+    element, forgiven = parse_urdf(text, label)
     try:
-        fidelity = _check_urdf(element, label)
-        joint = element.find(f"joint[@name='{ROOT_JOINT_NAME}']")
-        if root != "fixed" and joint is not None:
-            raise URDFError(f"{_where(label, joint)}: the name is reserved for the {root} root joint; "
-                            "rename the joint or load with root 'fixed'")
-        tree, root_link = _kinematic_tree(element)
-        relations, mimic_warnings = _mimic_relations(element, label)
-        model, mimic, mimic_notes = _pinocchio_model(element, relations, root)
+        forgiven += add_point_mass_inertias(element)
+        forgiven += check_urdf(element, label)
+        forgiven += reversed_limit_notes(element)
+        root_joint = ROOT_JOINT_NAME if root == "fixed" else root_joint_name(element)
+        tree, root_link = kinematic_tree(element)
+        relations, mimic_warnings = mimic_relations(element, label)
+        model, mimic, mimic_notes = pinocchio_model(element, relations, root, root_joint)
         first = 1 if root == "fixed" else 2  # Pinocchio joint 0 is the universe, 1 the root joint
         by_name = {joint.get("name"): joint for joint in element.findall("joint")}
-        joints = tuple(_joint_of(by_name[model.names[i]]) for i in range(first, model.njoints)
+        joints = tuple(moving_joint(by_name[model.names[i]]) for i in range(first, model.njoints)
                        if model.names[i] not in mimic)
         robot = Robot(name=element.get("name"), source=label, model=model, joints=joints, tree=tree,
                       root_link=root_link,
-                      fidelity=(_root_note(root, root_link), *mimic_warnings, *fidelity, *mimic_notes),
+                      fidelity=(_root_note(root, root_link, root_joint), *forgiven, *mimic_warnings, *inertial_warnings(element),
+                                *fidelity_notes(element), *mimic_notes),
                       mimic=mimic, root=root)
         if strict and robot.warnings:
             raise URDFError(f"{label}: strict loading refuses {len(robot.warnings)} warning(s): "
@@ -459,13 +374,15 @@ def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False)
     return robot
 
 
-def _root_note(root: str, root_link: str) -> str:
-    """The fidelity report's line on the root joint."""
+def _root_note(root: str, root_link: str, root_joint: str) -> str:
+    """The fidelity report's line on the root joint (named ``root_joint`` in Pinocchio's model)."""
     if root == "fixed":
         return (f"root: fixed: link '{root_link}' is welded to the world "
                 "(load with root 'floating' or 'planar' to free it)")
     q_names, v_names = ROOT_COORDINATES[root]
-    return (f"root: {root}: joint '{ROOT_JOINT_NAME}' between the world and link '{root_link}' "
+    renamed = (f" (not '{ROOT_JOINT_NAME}': the URDF has a joint of that name)"
+               if root_joint != ROOT_JOINT_NAME else "")
+    return (f"root: {root}: joint '{root_joint}'{renamed} between the world and link '{root_link}' "
             f"(q starts {', '.join(q_names)}; v starts {', '.join(v_names)}, in the link's frame)")
 
 
@@ -504,397 +421,6 @@ def keep_joints(robot: Robot, moving: Sequence[str], positions: Mapping[str, flo
     return lock_joints(robot, {n: float(positions.get(n, 0.0)) for n in robot.joint_names if n not in moving})
 
 
-# ---------------------------------------------------------------------------------------
-# Helpers: reading, checking, converting
-# ---------------------------------------------------------------------------------------
-def _read_source(source: str | Path) -> tuple[str | bytes, str]:
-    """The URDF text and a label for messages: a string as given, a file as bytes (so that
-    the XML parser honours its encoding declaration)."""
-    if isinstance(source, str) and source.lstrip().startswith("<"):
-        return source, "<URDF string>"
-    path = Path(source)
-    if not path.is_file():
-        raise URDFError(f"URDF file not found: {path}")
-    size = path.stat().st_size
-    if size > limits.MAX_URDF_BYTES:
-        raise URDFError(f"{path}: {size} bytes is beyond the bound of {limits.MAX_URDF_BYTES} bytes on a URDF file")
-    return path.read_bytes(), str(path)
-
-
-def _parse_xml(text: str | bytes, label: str) -> etree._Element:
-    """The XML tree. A str is already decoded, so its encoding declaration (which lxml
-    refuses in a str) is dropped; the lines keep their numbers."""
-    if isinstance(text, str):
-        text = _XML_DECLARATION.sub("", text, count=1)
-    try:
-        root = etree.fromstring(text)
-    except etree.XMLSyntaxError as error:
-        raise URDFError(f"{label}: malformed XML: {error}") from None
-    if root.tag != "robot":
-        raise URDFError(f"{label}:{root.sourceline}: root element is <{root.tag}>, expected <robot>")
-    if not root.get("name"):
-        raise URDFError(f"{label}:{root.sourceline}: <robot> has no name attribute")
-    return root
-
-
-def _where(label: str, element: etree._Element) -> str:
-    return f"{label}:{element.sourceline}: {element.tag} '{element.get('name')}'"
-
-
-def _floats(element: etree._Element | None, attribute: str, default: str) -> np.ndarray:
-    return np.array([float(x) for x in (element.get(attribute, default) if element is not None else default).split()])
-
-
-def _urdf_elements(root: etree._Element) -> Iterator[tuple[etree._Element, etree._Element]]:
-    """(owner, element) for every element whose attributes urdfdom reads: a joint's children,
-    and the children of a link's <inertial>, <visual> and <collision> with their shapes."""
-    for joint in root.findall("joint"):
-        for child in joint:
-            yield joint, child
-    for link in root.findall("link"):
-        for part in link:
-            if part.tag not in ("inertial", "visual", "collision"):
-                continue
-            for child in part:
-                yield link, child
-                if child.tag == "geometry":
-                    yield from ((link, shape) for shape in child)
-
-
-def _check_numbers(owner: etree._Element, element: etree._Element, label: str) -> None:
-    """Every numeric attribute of ``element`` holds as many finite numbers as urdfdom reads,
-    and the attributes urdfdom requires are there."""
-    spec = NUMERIC_ATTRIBUTES.get(element.tag)
-    if spec is None:
-        return
-    where = f"{label}:{element.sourceline}: {owner.tag} '{owner.get('name')}': <{element.tag}>"
-    for attribute in REQUIRED_ATTRIBUTES.get(element.tag, ()):
-        if element.get(attribute) is None:
-            raise URDFError(f"{where}: missing attribute '{attribute}'")
-    for attribute, count in spec.items():
-        text = element.get(attribute)
-        if text is None:
-            continue
-        parts = text.split()
-        if len(parts) != count:
-            raise URDFError(f"{where}: {attribute}=\"{text}\" is not {count} number(s)")
-        for part in parts:
-            try:
-                value = float(part)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise URDFError(f"{where}: {attribute}=\"{text}\": '{part}' is not a finite number")
-            bound = ATTRIBUTE_BOUNDS.get(element.tag, {}).get(attribute)
-            problem = bound.problem(value) if bound is not None else ""
-            if problem:
-                raise URDFError(f"{where}: {attribute}=\"{text}\": {problem}")
-
-
-def _check_urdf(root: etree._Element, label: str) -> list[str]:
-    """Validate the URDF; returns the fidelity notes: warnings first, then what the model
-    ignores."""
-    sizes = {"<link> elements": (limits.MAX_LINKS, sum(1 for e in root if e.tag == "link")),
-             "<joint> elements": (limits.MAX_LINKS, sum(1 for e in root if e.tag == "joint")),
-             "moving joints": (limits.MAX_MOVING_JOINTS, sum(1 for e in root if e.tag == "joint"
-                                                             and e.get("type") in MOVING_JOINT_TYPES))}
-    for what, (most, count) in sizes.items():
-        if count > most:
-            raise URDFError(f"{label}: {count} {what}, beyond the bound of {most} (see "
-                            "youbot_dynamics.model.limits; the largest example robot has 130 links, 101 moving joints)")
-    first_line: dict[tuple[str, str], int] = {}  # (tag, name) -> line
-    for element in root:
-        if element.tag in ("link", "joint"):
-            key = (element.tag, element.get("name"))
-            if key in first_line:
-                raise URDFError(f"{_where(label, element)}: the name is already used by the "
-                                f"{element.tag} at line {first_line[key]}")
-            first_line[key] = element.sourceline
-    links = {link.get("name"): link for link in root.findall("link")}
-    if not links:
-        raise URDFError(f"{label}: the robot has no <link>")
-    for owner, element in _urdf_elements(root):
-        _check_numbers(owner, element, label)
-    parent_of: dict[str, str] = {}  # child link -> its joint's name
-    parent_link: dict[str, str] = {}  # child link -> parent link
-    for joint in root.findall("joint"):
-        where = _where(label, joint)
-        kind = joint.get("type")
-        if kind not in KNOWN_JOINT_TYPES:
-            raise URDFError(f"{where}: unknown joint type '{kind}' (expected one of {', '.join(KNOWN_JOINT_TYPES)})")
-        for role in ("parent", "child"):
-            element = joint.find(role)
-            name = element.get("link") if element is not None else None
-            if name is None:
-                raise URDFError(f"{where}: missing <{role} link=...>")
-            if name not in links:
-                raise URDFError(f"{where}: {role} link '{name}' is not defined")
-        child = joint.find("child").get("link")
-        if child in parent_of:
-            raise URDFError(f"{where}: kinematic loop: link '{child}' is already the child of "
-                            f"joint '{parent_of[child]}' (closed chains are not supported in URDF)")
-        parent_of[child] = joint.get("name")
-        parent_link[child] = joint.find("parent").get("link")
-        limit = joint.find("limit")
-        if kind in ("revolute", "prismatic"):
-            if limit is None:
-                raise URDFError(f"{where}: a {kind} joint needs a <limit>")
-            lower, upper = float(limit.get("lower", 0)), float(limit.get("upper", 0))
-            if lower > upper:
-                raise URDFError(f"{where}: lower limit {lower} is above upper limit {upper}")
-        if kind in MOVING_JOINT_TYPES:
-            axis = _floats(joint.find("axis"), "xyz", "1 0 0")
-            if np.linalg.norm(axis) < 1e-12:
-                raise URDFError(f"{where}: axis {axis.tolist()} is not a non-zero 3-vector")
-    roots = [name for name in links if name not in parent_of]
-    if len(roots) != 1:
-        raise URDFError(f"{label}: the links form {'no tree (kinematic loop)' if not roots else 'several trees'}; "
-                        f"links without a parent joint: {', '.join(roots) or 'none'}")
-    # A cycle with one root elsewhere: walk up from every link.
-    for start in links:
-        seen, link = set(), start
-        while link in parent_of:
-            if link in seen:
-                raise URDFError(f"{label}: kinematic loop through link '{link}'")
-            seen.add(link)
-            link = parent_link[link]
-    warnings = [warning for link in links.values() for warning in _inertial_warnings(link, label)]
-    return warnings + _fidelity_notes(root)
-
-
-def _inertial_warnings(link: etree._Element, label: str) -> list[str]:
-    """Warnings for a physically invalid <inertial> (a negative mass, a negative principal
-    moment, the triangle inequality violated), each naming the link and its line. Zero mass
-    and point masses are valid; principal moments within INERTIA_RTOL of the largest (or
-    below INERTIA_ATOL) count as zero."""
-    inertial = link.find("inertial")
-    if inertial is None:
-        return []
-    if inertial.find("mass") is None or inertial.find("inertia") is None:
-        raise URDFError(f"{_where(label, link)}: <inertial> needs a <mass> and an <inertia>")
-    mass = float(inertial.find("mass").get("value"))
-    c = {k: float(inertial.find("inertia").get(k)) for k in INERTIA_KEYS}
-    inertia = np.array([[c["ixx"], c["ixy"], c["ixz"]], [c["ixy"], c["iyy"], c["iyz"]], [c["ixz"], c["iyz"], c["izz"]]])
-    principal = np.linalg.eigvalsh(inertia)
-    tolerance = max(INERTIA_RTOL * float(np.abs(principal).max()), INERTIA_ATOL)
-    at = f"{WARNING}link '{link.get('name')}' (line {link.sourceline})"
-    moments = f"principal moments {np.array2string(principal, precision=6)} kg m^2"
-    warnings = [f"{at}: negative mass {mass:g} kg"] if mass < 0.0 else []
-    a, b, c3 = principal
-    if a < -tolerance:
-        warnings.append(f"{at}: inertia has a negative principal moment ({moments})")
-    elif a + b < c3 - tolerance:
-        warnings.append(f"{at}: inertia violates the triangle inequality ({moments}: "
-                        f"{a:.6g} + {b:.6g} < {c3:.6g}; no rigid body has it)")
-    return warnings
-
-
-def _fidelity_notes(root: etree._Element) -> list[str]:
-    """What of the URDF the model ignores or approximates."""
-    notes = []
-    for joint in root.findall("joint"):
-        name, kind = joint.get("name"), joint.get("type")
-        if joint.find("safety_controller") is not None:
-            notes.append(f"joint '{name}': <safety_controller> ignored (soft limits not enforced)")
-        if joint.find("calibration") is not None:
-            notes.append(f"joint '{name}': <calibration> ignored")
-        if kind == "continuous":
-            notes.append(f"joint '{name}': continuous, modelled as revolute without position limits (angle not wrapped)")
-        if kind in ("floating", "planar"):
-            notes.append(f"joint '{name}': {kind} joint treated as fixed at its origin (free bodies are scene objects)")
-    for link in root.findall("link"):
-        contact = link.find("contact")
-        if contact is not None:
-            values = ", ".join(f"{c.tag} {c.get('value')}" for c in contact if isinstance(c.tag, str))
-            notes.append(f"link '{link.get('name')}': <contact> ({values}) ignored; "
-                         "contact laws and friction come from the scene")
-    controls = root.findall("ros2_control")
-    if controls:
-        notes.append(f"{len(controls)} <ros2_control> element(s) ignored: "
-                     + ", ".join(f"'{c.get('name')}'" for c in controls))
-    for tag in ("transmission", "gazebo"):
-        count = len(root.findall(tag))
-        if count:
-            notes.append(f"{count} <{tag}> element(s) ignored")
-    sensors = len(list(root.iter("sensor")))
-    if sensors:
-        notes.append(f"{sensors} <sensor> element(s) ignored (no sensors are simulated)")
-    shapes = Counter(shape.tag for shape in root.iterfind("link/collision/geometry/*") if isinstance(shape.tag, str))
-    if shapes:
-        notes.append("<collision> geometry not used (contact shapes come from the scene): "
-                     + ", ".join(f"{count} {kind}" for kind, count in sorted(shapes.items())))
-    meshes = root.findall(".//mesh")
-    if meshes:
-        notes.append(f"{len(meshes)} mesh geometries not loaded (inertia comes from <inertial> only)")
-    for link in root.findall("link"):
-        if link.find("inertial") is None:
-            notes.append(f"link '{link.get('name')}': no <inertial>, massless")
-    return notes
-
-
-def _mimic_relations(root: etree._Element, label: str) -> tuple[dict[str, Mimic], list[str]]:
-    """The <mimic> of every moving joint, chains (a mimic of a mimic) resolved to their
-    independent primary: q_a = m1 q_b + o1 and q_b = m2 q_c + o2 give q_a = m1 m2 q_c + m1 o2 + o1.
-    A <mimic> of no other moving joint is ignored with a warning (urdfdom loads it)."""
-    joints = {joint.get("name"): joint for joint in root.findall("joint")}
-    direct: dict[str, tuple[str, float, float]] = {}
-    warnings = []
-    for name, joint in joints.items():
-        element = joint.find("mimic")
-        if element is None or joint.get("type") not in MOVING_JOINT_TYPES:
-            continue
-        primary = element.get("joint")
-        if primary == name or joints.get(primary) is None or joints[primary].get("type") not in MOVING_JOINT_TYPES:
-            warnings.append(f"{WARNING}joint '{name}' (line {element.sourceline}): <mimic joint=\"{primary}\"> "
-                            "names no other moving joint; ignored, the joint moves independently")
-            continue
-        direct[name] = (primary, float(element.get("multiplier", 1.0)), float(element.get("offset", 0.0)))
-    relations = {}
-    for name, (primary, multiplier, offset) in direct.items():
-        seen = {name}
-        while primary in direct:
-            if primary in seen:
-                raise URDFError(f"{_where(label, joints[name])}: <mimic> joints form a cycle through '{primary}'")
-            seen.add(primary)
-            primary, factor, shift = direct[primary]
-            multiplier, offset = multiplier * factor, multiplier * shift + offset
-        relations[name] = Mimic(name, primary, multiplier, offset)
-    return relations, warnings
-
-
-def _pinocchio_model(element: etree._Element, mimic: dict[str, Mimic],
-                     root: str) -> tuple[pin.Model, dict[str, Mimic], list[str]]:
-    """Pinocchio's model with the chosen root joint (named ROOT_JOINT_NAME) and its mimic
-    joints, the relations it holds and the fidelity notes.
-
-    Pinocchio 4.1 adds a mimic joint only after its primary in its depth-first joint order; a
-    mimic joint above its primary moves independently (noted).
-    """
-    order = _pinocchio_build(_pinocchio_xml(element, {}), root, mimic=False)
-    if not mimic:
-        return order, {}, []
-    kept = {name: m for name, m in mimic.items() if order.getJointId(m.primary) < order.getJointId(name)}
-    notes = [f"joint '{name}': <mimic> of '{m.primary}' ignored (Pinocchio needs the primary "
-             "before it in the tree); the joint moves independently"
-             for name, m in mimic.items() if name not in kept]
-    notes += [f"joint '{name}': mimics '{m.primary}' (q = {m.multiplier:g} q_{m.primary} + {m.offset:g}); "
-              "no coordinate of its own, its <limit> and <dynamics> unused" for name, m in kept.items()]
-    return _pinocchio_build(_pinocchio_xml(element, kept), root, mimic=True), kept, notes
-
-
-def _pinocchio_build(xml: str, root: str, *, mimic: bool) -> pin.Model:
-    """pin.buildModelFromXML of the URDF text with the chosen root joint."""
-    if root == "fixed":
-        return pin.buildModelFromXML(xml, mimic=mimic)
-    return pin.buildModelFromXML(xml, _ROOT_JOINT_MODELS[root](), ROOT_JOINT_NAME, mimic=mimic)
-
-
-def _mass_matrix_defect(model: pin.Model, source: str) -> str:
-    """Why forward dynamics is undefined for ``model`` ('' when the joint-space mass matrix is
-    positive definite at a sample configuration: neutral moved by a fixed pseudo-random
-    displacement). Joints whose diagonal entry is below MASS_MATRIX_RTOL of the largest have
-    no mass (or no inertia about their axis) in their subtree."""
-    if model.nv == 0:
-        return ""
-    # A fixed displacement spread over [-1, 1] (sines of multiples of the golden angle, rad):
-    # generic like a random one, without importing numpy.random (start-up of `info`).
-    q = pin.integrate(model, pin.neutral(model), np.sin(1.0 + GOLDEN_ANGLE * np.arange(model.nv)))
-    upper = pin.crba(model, model.createData(), q)
-    mass = np.triu(upper) + np.triu(upper, 1).T
-    diagonal = np.diag(mass)
-    threshold = MASS_MATRIX_RTOL * diagonal.max()
-    massless = [f"'{model.names[j]}'" for j in range(1, model.njoints) if model.joints[j].nv
-                and np.any(diagonal[model.joints[j].idx_v:model.joints[j].idx_v + model.joints[j].nv] <= threshold)]
-    eigenvalues = np.linalg.eigvalsh(mass)
-    if not massless and eigenvalues[0] > MASS_MATRIX_RTOL * eigenvalues[-1]:
-        return ""
-    if massless:
-        return (f"{source}: the mass matrix is singular: no mass moves with joint(s) {', '.join(massless)} "
-                "(their subtrees carry no mass, or no inertia about the joint axis), so forward "
-                "dynamics is undefined; give those links an <inertial> or lock the joints")
-    return (f"{source}: the mass matrix is not positive definite (eigenvalues {eigenvalues[0]:.3g} to "
-            f"{eigenvalues[-1]:.3g}), so forward dynamics is undefined; see the inertia warnings")
-
-
-def _kinematic_tree(root: etree._Element) -> tuple[tuple[TreeJoint, ...], str]:
-    """URDF joints ordered root first (parents before children), children in file order;
-    read from the checked XML (:func:`_check_urdf`): one root link, no loop."""
-    joints = root.findall("joint")
-    children: dict[str, list[etree._Element]] = {}
-    for j in joints:
-        children.setdefault(j.find("parent").get("link"), []).append(j)
-    child_links = {j.find("child").get("link") for j in joints}
-    root_link = next(l.get("name") for l in root.findall("link") if l.get("name") not in child_links)
-    ordered, stack = [], [root_link]
-    while stack:
-        link = stack.pop()
-        for j in reversed(children.get(link, [])):
-            kind, child = j.get("type"), j.find("child").get("link")
-            origin = _origin(j.find("origin"))
-            origin.setflags(write=False)
-            # Moving joints have a non-zero axis (checked); a fixed joint's axis is unused and
-            # may be zero in the file (tiago_pro, Talos): it stays the URDF default x.
-            axis = _floats(j.find("axis"), "xyz", "1 0 0")
-            norm = np.linalg.norm(axis)
-            axis = axis / norm if norm > 0.0 else np.array([1.0, 0.0, 0.0])
-            axis.setflags(write=False)
-            ordered.append(TreeJoint(j.get("name"), "fixed" if kind in ("floating", "planar") else kind,
-                                     link, child, origin, axis))
-            stack.append(child)
-    return tuple(ordered), root_link
-
-
-def _origin(element: etree._Element | None) -> np.ndarray:
-    """The 4x4 pose of an ``<origin xyz rpy>`` (identity without one): translation xyz (m),
-    rotation Rz(yaw) Ry(pitch) Rx(roll) (URDF's fixed-axis roll, pitch, yaw; rad)."""
-    pose = np.eye(4)
-    if element is not None:
-        pose[:3, :3] = pin.rpy.rpyToMatrix(_floats(element, "rpy", "0 0 0"))
-        pose[:3, 3] = _floats(element, "xyz", "0 0 0")
-    return pose
-
-
-def _pinocchio_xml(root: etree._Element, mimic: Mapping[str, Mimic]) -> str:
-    """The URDF as Pinocchio should see it: continuous -> unbounded revolute, floating and
-    planar -> fixed, <mimic> only for the joints in ``mimic`` (naming their resolved primary)."""
-    root = etree.fromstring(etree.tostring(root))
-    for joint in root.findall("joint"):
-        kind = joint.get("type")
-        for element in joint.findall("mimic"):
-            joint.remove(element)
-        relation = mimic.get(joint.get("name"))
-        if relation is not None:
-            etree.SubElement(joint, "mimic", joint=relation.primary, multiplier=repr(relation.multiplier),
-                             offset=repr(relation.offset))
-        if kind == "continuous":
-            joint.set("type", "revolute")
-            limit = joint.find("limit")
-            if limit is None:
-                limit = etree.SubElement(joint, "limit", effort="0", velocity="0")
-            limit.set("lower", str(-UNBOUNDED))
-            limit.set("upper", str(UNBOUNDED))
-        elif kind in ("floating", "planar"):
-            joint.set("type", "fixed")
-    return etree.tostring(root, encoding="unicode")
-
-
-def _joint_of(joint: etree._Element) -> Joint:
-    """A moving joint's limits and dynamics from its checked XML; a bound the file leaves
-    out is infinite (a continuous joint has no position limits), damping and friction 0."""
-    limit, dynamics = joint.find("limit"), joint.find("dynamics")
-    kind = joint.get("type")
-
-    def value(element: etree._Element | None, attribute: str, default: float) -> float:
-        text = None if element is None else element.get(attribute)
-        return default if text is None else float(text)
-
-    unbounded = kind == "continuous"
-    lower = -math.inf if unbounded else value(limit, "lower", -math.inf)
-    upper = math.inf if unbounded else value(limit, "upper", math.inf)
-    return Joint(joint.get("name"), kind, lower, upper, value(limit, "velocity", math.inf),
-                 value(limit, "effort", math.inf), value(dynamics, "damping", 0.0),
-                 value(dynamics, "friction", 0.0))
-
 
 def _locked(joint: TreeJoint, value: float) -> TreeJoint:
     """The joint as a fixed one: its origin times exp([X] value), X = (0, axis) for a
@@ -904,3 +430,4 @@ def _locked(joint: TreeJoint, value: float) -> TreeJoint:
     origin = joint.origin @ exp_se3(screw * value)
     origin.setflags(write=False)
     return TreeJoint(joint.name, "fixed", joint.parent, joint.child, origin, joint.axis)
+
