@@ -47,6 +47,7 @@ class InverseSession(Session):
     mode = "inverse"
     odometry: WheelOdometry | None = None
     """Wheel odometry of a scene with a moving base (/odom from the joint states' wheel speeds)."""
+
     def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS,
                  frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
                  rrd_path: str | Path | None = None, callback_budget: float = 0.05, frame_prefix: str = "",
@@ -72,7 +73,6 @@ class InverseSession(Session):
         self.stamp_ns, self.samples = 0, 0
         self.last_unstamped = False
         """True when the last sample taken was stamped 0."""
-        self.failure: str | None = None
 
     @property
     def t(self) -> float:

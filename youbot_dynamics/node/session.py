@@ -55,6 +55,8 @@ class Session(ClosesOnExit):
 
     mode: str
     stamp_ns: int
+    failure: str | None = None
+    """Why the session stopped publishing (None while it runs)."""
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
                  mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float,

@@ -4,30 +4,14 @@
 services and parameters are the tables of :mod:`youbot_dynamics.node.interface` (and
 docs/node.md); this module creates them.
 
-Both modes publish /tf per sample, and /tf_static and /robot_description (the URDF,
-std_msgs/String) once, latched (transient local), as robot_state_publisher does; without
-tf2_msgs (see interfaces/) they skip /tf and /tf_static with one warning.
+Without tf2_msgs (see interfaces/) the node skips /tf and /tf_static with one warning (the
+MCAP still logs them). Messages are published as CDR bytes and only on topics with
+subscribers (the latched ones and /diagnostics always); the session builds only those and
+the ones its MCAP records. Inverse mode takes the joint states received in each
+``INVERSE_PERIOD`` (10 ms) tick as one batch. Parameters are checked (all or nothing) in the
+on-set callback and applied in the post-set callback.
 
-simulate mode publishes /clock, /joint_states, /ee_pose (/ee_poses for composed robots),
-/free_bodies (geometry_msgs/PoseArray) and /free_bodies_markers (visualization_msgs/
-MarkerArray) when the scene has free bodies (a scene without a robot has no /joint_states
-and /ee_pose), /scene_markers (latched) when it has static geometry, and /diagnostics (with
-the contact events), subscribes
-/joint_commands (sensor_msgs/JointState efforts by joint name) and /joint_trajectory
-(trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
-(std_srvs/SetBool); with a moving base (scene ``base: kinematic | dynamic``) it also
-subscribes /cmd_vel (geometry_msgs/Twist) and publishes /odom and /base_pose_ground_truth
-(nav_msgs/Odometry) and odom -> base_footprint on /tf (:mod:`youbot_dynamics.node.mobile_base`).
-inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
-default keep-all: a replay as fast as possible loses no sample; best_effort for drivers that
-publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics; the joint
-states received in each ``INVERSE_PERIOD`` (10 ms) tick are taken as one batch. Messages are
-published as CDR bytes and only on topics with subscribers (the latched ones and /diagnostics
-always); the session builds only those and the ones its MCAP records. Parameters:
-:data:`youbot_dynamics.node.interface.PARAMETERS`, checked (all or nothing) in the on-set
-callback and applied in the post-set callback.
-
-Names: the topics above are the logged names; on the graph the node uses relative names
+Names: the table's topics are the logged names; on the graph the node uses relative names
 (:mod:`youbot_dynamics.node.topics`), so ``--ros-args -r __ns:=/youbot1`` publishes
 /youbot1/joint_states, /youbot1/clock, ... and subscribes /youbot1/joint_commands; /tf,
 /tf_static and /diagnostics stay global. Frames on /tf carry ``frame_prefix`` (by default the
@@ -50,8 +34,8 @@ about; any other exception is counted in /diagnostics under its cause (``failed.
 <exception type>``), logged once per cause with the message that caused it, and the node
 keeps its last good state and goes on publishing.
 
-Timing (simulate): a steady-clock timer paces the samples (:mod:`youbot_dynamics.node.pacing`). With
-``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched the sample
+Timing (simulate): a steady-clock timer paces the samples (:mod:`youbot_dynamics.node.pacing`).
+With ``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched the sample
 topic, /joint_states or, without a robot, /free_bodies (or after ``wait_timeout`` wall
 seconds), so a subscriber started with the node misses none of the first samples. On
 leaving, the node waits (up to :data:`~youbot_dynamics.ros.process.ACK_TIMEOUT`) until its
@@ -98,7 +82,7 @@ from youbot_dynamics.ros.qos import PROFILES, SUBSCRIPTION_PROFILES
 
 INVERSE_PERIOD = 0.01
 """Wall seconds between inverse-mode ticks: each takes the joint states received since the
-last as one batch (:meth:`~youbot_dynamics.node.session.InverseSession.joint_states`)."""
+last as one batch (:meth:`~youbot_dynamics.node.inverse_session.InverseSession.joint_states`)."""
 WARN_THROTTLE = 2.0
 """Seconds between repeated warnings about bad input."""
 QUOTED_CHARACTERS = 500
