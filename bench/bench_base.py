@@ -1,7 +1,7 @@
 """Real-time factor of mobile_pick next to gripping's (measured figures, not tests).
 
 Both scenes over their first ``DURATION`` seconds through the dynamics node's session
-without ROS (node/session.py: the simulator advanced sample by sample, solve horizon 0.02 s,
+without ROS (node/simulate.py: the simulator advanced sample by sample, solve horizon 0.02 s,
 the messages built) at the node's 500 Hz, logs off and on (MCAP in rosbag2 form and a Rerun
 recording, as the node writes them), in one run of this script. Real-time factor =
 simulated / wall time, the best of ``REPEATS`` runs (a shared machine slows single runs).
@@ -17,7 +17,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
 
-from youbot_dynamics.node.session import SimulationSession  # noqa: E402
+from youbot_dynamics.node.simulate import SimulationSession  # noqa: E402
 from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 
 RATE, REPEATS = 500.0, 2

@@ -41,7 +41,7 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 
 from youbot_dynamics.cli.common import table  # noqa: E402
-from youbot_dynamics.node.session import SimulationSession  # noqa: E402
+from youbot_dynamics.node.simulate import SimulationSession  # noqa: E402
 from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
 from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 
@@ -128,7 +128,7 @@ def main_job_figures(duration: float = 4.0, source: Path = REPO) -> tuple[float,
 OUTPUT_COST = r'''
 import json, sys, tempfile, time
 from pathlib import Path
-from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene
 costs = []
 for logs in (False, True):
@@ -180,7 +180,7 @@ def inverse_cost(samples: int = 2000, batch: int = 20) -> tuple[float, float]:
     import pinocchio as pin
 
     from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch
-    from youbot_dynamics.node.session import InverseSession
+    from youbot_dynamics.node.inverse_session import InverseSession
 
     scene = load_scene(SCENE)
     names, n = list(scene.robot.joint_names), len(scene.robot.joint_names)

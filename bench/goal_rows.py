@@ -37,7 +37,7 @@ from bench_simulation import rhs_pair  # noqa: E402
 from bench_contact_mujoco import TARGETS, UNITS, comparisons, equal_accuracy  # noqa: E402
 from timing import best_per_call  # noqa: E402
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch  # noqa: E402
-from youbot_dynamics.node.session import InverseSession  # noqa: E402
+from youbot_dynamics.node.inverse_session import InverseSession  # noqa: E402
 from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 from youbot_dynamics.sim import engine  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402

@@ -8,7 +8,8 @@ import math
 import numpy as np
 
 from bag_support import read_mcap
-from youbot_dynamics.node.session import InverseSession, SimulationSession
+from youbot_dynamics.node.inverse_session import InverseSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene
 
 RATE, SAMPLES = 100.0, 250

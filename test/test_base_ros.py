@@ -9,7 +9,7 @@ import pytest
 
 from youbot_dynamics.dynamics.mobile.odometry import se2_step
 from youbot_dynamics.node.commands import InputRejected
-from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene, scene_dir
 
 RATE = 100.0

@@ -16,7 +16,7 @@ from youbot_dynamics.node.commands import (EffortCommands, InputCounters, InputR
                                            JointSample, follow, joint_sample, joint_trajectory)
 from youbot_dynamics.node.frames import LinkFrames
 from youbot_dynamics.node.inverse import AccelerationEstimator
-from youbot_dynamics.node.session import InverseSession
+from youbot_dynamics.node.inverse_session import InverseSession
 from youbot_dynamics.scene.schema import load_scene
 from youbot_dynamics.sim.simulator import Simulator
 

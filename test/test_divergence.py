@@ -16,7 +16,7 @@ import yaml
 from youbot_dynamics.cli import main
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import DivergenceError, StepBudgetError, integrate
-from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene, scene_dir
 from youbot_dynamics.sim.divergence import DivergenceLimits
 from youbot_dynamics.sim.simulator import Simulator

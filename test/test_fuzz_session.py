@@ -35,7 +35,8 @@ from hypothesis import strategies as st
 
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.inverse import plausible_limit
-from youbot_dynamics.node.session import InverseSession, SimulationSession
+from youbot_dynamics.node.inverse_session import InverseSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene
 
 try:

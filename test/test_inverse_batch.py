@@ -1,6 +1,7 @@
 """Inverse mode on a batch of joint states (``InverseSession.joint_states``: checks,
 differences and Pinocchio's batch RNEA as arrays) against the same samples taken one by one
-(``joint_state``, the per-sample path): the same messages in the same order, bit for bit,
+(``joint_state``: batches of one, so a fault restarts the estimate at its own sample whatever
+the batch): the same messages in the same order, bit for bit,
 the same counters and estimator restarts, whatever the stream holds (gaps, stamps going
 back, unstamped samples, NaN, unknown or missing joints, velocity jumps that give
 implausible torques)."""
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 from youbot_dynamics.node.commands import InputRejected
-from youbot_dynamics.node.session import InverseSession
+from youbot_dynamics.node.inverse_session import InverseSession
 from youbot_dynamics.ros.conversions import to_cdr
 from youbot_dynamics.scene.schema import load_scene
 

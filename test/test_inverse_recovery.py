@@ -17,7 +17,7 @@ import pytest
 
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.inverse import PLAUSIBLE_FACTOR, AccelerationEstimator
-from youbot_dynamics.node.session import InverseSession
+from youbot_dynamics.node.inverse_session import InverseSession
 from youbot_dynamics.scene.schema import load_scene
 
 SCENE = load_scene("arm_ptp")
@@ -224,7 +224,7 @@ def test_estimator_pushes_as_written_out(time_constant: float) -> None:
         estimator, got, errors = AccelerationEstimator(time_constant), [], 0
         for start in range(0, count, size):
             rows = slice(start, start + size)
-            middle, mq, mv, a, failed = estimator.push_rows(stamps[rows], q[rows], v[rows], taken[rows])
+            middle, mq, mv, a, failed, _ = estimator.push_rows(stamps[rows], q[rows], v[rows], taken[rows])
             got += [(int(middle[i]), mq[i].tobytes(), mv[i].tobytes(), a[i].tobytes()) for i in range(len(middle))]
             errors += len(failed)
         assert got == expected and errors == restarts["non_finite"] and estimator.restarts == one_by_one.restarts

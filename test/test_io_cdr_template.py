@@ -11,7 +11,7 @@ from youbot_dynamics.dynamics.collision import Shape
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.cdr_template import CdrTemplate, Refilled, Serialized
 from youbot_dynamics.model.lie import matrix_from_quaternion
-from youbot_dynamics.node.session import marker_stamped
+from youbot_dynamics.node.frame_messages import marker_stamped
 
 RNG = np.random.default_rng(3)
 STAMPS = [0, 1, 999_999_999, 1_700_000_000_123_456_789]

@@ -17,10 +17,11 @@ pytestmark = [pytest.mark.ros, pytest.mark.timeout(240)]
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 
-from youbot_dynamics.node.session import SimulationSession  # noqa: E402
+from youbot_dynamics.node.configure import frame_prefix_of  # noqa: E402
+from youbot_dynamics.node.interface import AUTO_PREFIX  # noqa: E402
+from youbot_dynamics.node.simulate import SimulationSession  # noqa: E402
 from youbot_dynamics.node.topics import graph_name  # noqa: E402
 from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
-from youbot_dynamics.ros.parameters import AUTO_PREFIX, frame_prefix_of  # noqa: E402
 from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent

@@ -26,7 +26,7 @@ from youbot_dynamics.errors import UserInputError  # noqa: E402
 from youbot_dynamics.io import messages  # noqa: E402
 from youbot_dynamics.io.bag_reader import read_bag  # noqa: E402
 from youbot_dynamics.io.mcap_log import McapLogger  # noqa: E402
-from youbot_dynamics.node.session import InverseSession  # noqa: E402
+from youbot_dynamics.node.inverse_session import InverseSession  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.replay_node import ReplayNode  # noqa: E402
 from youbot_dynamics.scene.schema import load_scene  # noqa: E402

@@ -20,7 +20,8 @@ from rclpy.parameter import Parameter  # noqa: E402
 
 from youbot_dynamics.errors import UserInputError  # noqa: E402
 from youbot_dynamics.model.lie import quaternion_from_matrix  # noqa: E402
-from youbot_dynamics.node.session import InverseSession, SimulationSession  # noqa: E402
+from youbot_dynamics.node.inverse_session import InverseSession  # noqa: E402
+from youbot_dynamics.node.simulate import SimulationSession  # noqa: E402
 from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.qos import LATCHED  # noqa: E402

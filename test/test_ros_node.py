@@ -25,7 +25,8 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
 from youbot_dynamics.model.lie import matrix_from_quaternion  # noqa: E402
 from youbot_dynamics.model.screws import fkin_space, screw_chain  # noqa: E402
-from youbot_dynamics.node.session import TOPIC_TYPES, SimulationSession  # noqa: E402
+from youbot_dynamics.node.interface import TOPIC_TYPES  # noqa: E402
+from youbot_dynamics.node.simulate import SimulationSession  # noqa: E402
 from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
 from youbot_dynamics.scene.schema import load_scene  # noqa: E402

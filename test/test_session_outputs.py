@@ -11,7 +11,7 @@ import pytest
 from rosbags.highlevel import AnyReader
 
 from youbot_dynamics.node import frames
-from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene
 
 SCENE = load_scene("gripping")

@@ -14,8 +14,10 @@ from ros_support import ros_context
 rclpy = pytest.importorskip("rclpy")
 from rclpy.parameter import Parameter  # noqa: E402
 
+from youbot_dynamics.node import pacing  # noqa: E402
+from youbot_dynamics.node.pacing import MAX_LAG  # noqa: E402
 from youbot_dynamics.ros import dynamics_node  # noqa: E402
-from youbot_dynamics.ros.dynamics_node import MAX_LAG, DynamicsNode  # noqa: E402
+from youbot_dynamics.ros.dynamics_node import DynamicsNode  # noqa: E402
 
 RATE = 500.0
 
@@ -41,8 +43,9 @@ class CountingSession:
 @pytest.mark.parametrize("stall", [0.0, 0.05, 2 * MAX_LAG])
 def test_pacing_holds_the_rate_within_one_percent(monkeypatch: pytest.MonkeyPatch, stall: float) -> None:
     clock = types.SimpleNamespace(now=0.0)
-    monkeypatch.setattr(dynamics_node, "time", types.SimpleNamespace(monotonic=lambda: clock.now,
-                                                                     perf_counter=lambda: clock.now))
+    fake_time = types.SimpleNamespace(monotonic=lambda: clock.now, perf_counter=lambda: clock.now)
+    monkeypatch.setattr(dynamics_node, "time", fake_time)
+    monkeypatch.setattr(pacing, "time", fake_time)
     rng = np.random.default_rng(0)
     with ros_context(25) as (context, _):
         node = DynamicsNode(context=context, parameter_overrides=[
@@ -56,9 +59,9 @@ def test_pacing_holds_the_rate_within_one_percent(monkeypatch: pytest.MonkeyPatc
                 clock.now += 1.0 / RATE + rng.uniform(0.0, 0.002)     # every tick late by up to 2 ms
                 if stall and abs(clock.now - 5.0) < 1.0 / RATE:
                     clock.now += stall                                # one stall at t = 5 s
-                before = node._pace_start
+                before = node.pacing.start
                 node._on_tick()
-                restarts += node._pace_start != before
+                restarts += node.pacing.start != before
                 ahead = max(ahead, session.k - (clock.now - start) * RATE)
         finally:
             node.destroy_node()

@@ -15,7 +15,7 @@ from youbot_dynamics.model.robot import keep_joints, load_robot
 from youbot_dynamics.node.commands import (DEFAULT_EFFORT_LIMIT, FUTURE_LIMIT_NS, MAX_NAMES,
                                            MAX_TRAJECTORY_POINTS, EffortCommands, InputRejected,
                                            joint_trajectory)
-from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene
 
 SCENE = load_scene("arm_ptp")

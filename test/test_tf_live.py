@@ -26,7 +26,7 @@ from std_msgs.msg import String  # noqa: E402
 
 from youbot_dynamics.io.bag_reader import bag_topics, read_bag  # noqa: E402
 from youbot_dynamics.io.messages import TYPESTORE  # noqa: E402
-from youbot_dynamics.node.session import SimulationSession  # noqa: E402
+from youbot_dynamics.node.simulate import SimulationSession  # noqa: E402
 from youbot_dynamics.ros import dynamics_node  # noqa: E402
 from youbot_dynamics.ros.conversions import from_rclpy, rclpy_class  # noqa: E402
 from youbot_dynamics.scene.schema import load_scene  # noqa: E402

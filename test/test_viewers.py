@@ -17,7 +17,7 @@ from mcap.reader import make_reader
 from rerun.chunk import RrdReader
 
 from bag_support import read_mcap
-from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene
 from youbot_dynamics.sim.simulator import Simulator
 

@@ -19,7 +19,7 @@ import yaml
 
 from youbot_dynamics.accuracy import work_precision as wp
 from youbot_dynamics.cli import main
-from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import SceneError, load_scene
 
 GRID = {"rk4": (1e-2, 2e-3, 4e-4),

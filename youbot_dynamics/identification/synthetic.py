@@ -115,7 +115,7 @@ def simulate_excitation(scene: Scene, trajectory: FourierTrajectory, rate: float
     """Run ``scene`` in the dynamics node's simulation session at ``rate`` Hz for its
     duration, the trajectory sent at t = 0 as a /joint_trajectory (:func:`trajectory_points`),
     the node logging to the MCAP ``bag``; returns the integrator statistics."""
-    from youbot_dynamics.node.session import SimulationSession  # the node's session, no rclpy
+    from youbot_dynamics.node.simulate import SimulationSession  # the node's session, no rclpy
 
     with SimulationSession(scene, rate, mcap_path=bag) as session:
         session.step()

@@ -44,13 +44,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
 from youbot_dynamics.dynamics.friction import JointFriction, unchecked
-from youbot_dynamics.dynamics.rigid_body import inverse_dynamics, inverse_dynamics_batch
+from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.node.commands import DEFAULT_EFFORT_LIMIT, InputRejected, JointSample
@@ -133,6 +134,20 @@ _central_differences_unchecked = unchecked(_central_differences)
 """The same without numba's type dispatch (callers pass exactly the signature's types)."""
 
 
+class Estimates(NamedTuple):
+    """The estimates of rows pushed (:meth:`AccelerationEstimator.push_rows`), in order: the
+    middle samples' stamps (int64 ns, (M,)), q (M, nq), v (M, nv), their accelerations
+    ``a`` (M, nv; rad/s^2), the ``non_finite`` errors of the estimates dropped, and ``ends``
+    (int64, (M,)): the index, among the rows pushed, of each estimate's last sample."""
+
+    stamps: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    errors: list[InputRejected]
+    ends: np.ndarray
+
+
 class AccelerationEstimator:
     """Central differences of velocity over the last three samples of one unbroken stream
     (see the module docstring); ``max_gap_ns`` (int ns > 0) is the longest spacing. The
@@ -170,19 +185,17 @@ class AccelerationEstimator:
         ``max_gap_ns`` after it, restarts the stencil with itself. A non-finite estimate
         restarts it and raises ``non_finite``. Time differences are taken between
         integer-nanosecond stamps, exact at any magnitude (wall-clock stamps included)."""
-        stamps, q, v, estimates, failed = self.push_rows([sample.stamp_ns], sample.q[None, :], sample.v[None, :],
-                                                         [True])
-        if failed:
-            raise failed[0]
-        return (JointSample(int(stamps[0]), q[0], v[0]), estimates[0]) if len(stamps) else None
+        pushed = self.push_rows([sample.stamp_ns], sample.q[None, :], sample.v[None, :], [True])
+        if pushed.errors:
+            raise pushed.errors[0]
+        return (JointSample(int(pushed.stamps[0]), pushed.q[0], pushed.v[0]), pushed.a[0]) if len(pushed.stamps) \
+            else None
 
-    def push_rows(self, stamps: Sequence[int], q: np.ndarray, v: np.ndarray, taken: Sequence[bool]
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[InputRejected]]:
+    def push_rows(self, stamps: Sequence[int], q: np.ndarray, v: np.ndarray, taken: Sequence[bool]) -> Estimates:
         """``push`` of each row in turn (stamps int ns (N,), q (N, nq), v (N, nv); a row not
         ``taken``, a rejected sample whose stamp and values are ignored: ``clear``): the
-        middle samples' stamps (int64 ns, (M,)), q (M, nq), v (M, nv) and their estimates
-        (M, nv; rad/s^2), in order, and the ``non_finite`` errors ``push`` would have
-        raised (the estimate restarted at each)."""
+        :class:`Estimates`, with the ``non_finite`` errors ``push`` would have raised (the
+        estimate restarted at each)."""
         held, count = len(self._stamps), len(stamps)
         if not len(q) == len(v) == len(taken) == count or np.ndim(v) != 2:     # the compiled loop trusts them
             raise ValueError(f"push_rows: {count} stamps need as many rows of q and v and taken flags; got "
@@ -210,7 +223,8 @@ class AccelerationEstimator:
             middle = ends[:kept] - 1
         errors = [InputRejected("non_finite", f"acceleration estimate at {all_stamps[k - 1]} ns is not finite "
                                 "(velocities too large to difference)") for k in failed[:bad].tolist()] if bad else []
-        return all_stamps[middle], all_q[middle], all_v[middle], estimates[:kept], errors
+        return Estimates(all_stamps[middle], all_q[middle], all_v[middle], estimates[:kept], errors,
+                         ends[:kept] - held)
 
     def state(self) -> tuple:
         """What ``restore`` puts back: the samples, the filter state, the restart counts."""
@@ -240,24 +254,21 @@ def implausible_joints(robot: Robot, values: np.ndarray, quantity: str = "effort
 
 class InverseDynamics:
     """tau = RNEA(q, v, a) + tau_friction(v) for a robot and its friction model (or None),
-    of one sample (``torque``) or of many (``torques``, Pinocchio's batch RNEA)."""
+    of many samples at once (``torques``, Pinocchio's batch RNEA; ``torque``: a batch of
+    one). ``data`` is a Pinocchio Data of the robot for other uses (energies)."""
 
     def __init__(self, robot: Robot, friction: JointFriction | None) -> None:
         self.robot, self.friction = robot, friction
         self.data = robot.model.createData()
         self.pool = pin.ModelPool(robot.model, 1)
 
-    def _bristles(self, v: np.ndarray) -> np.ndarray | None:
-        if self.friction is None or self.friction.lugre is None:
-            return None
-        if v.ndim == 1:
-            return self.friction.steady_state_bristles(v)
-        return np.array([self.friction.steady_state_bristles(row) for row in v])
-
     def torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """Joint torques (N m, N) in joint order."""
-        return inverse_dynamics(self.robot, self.data, q, v, a, self.friction, self._bristles(v))
+        """Joint torques (N m, N) in joint order of one sample."""
+        return self.torques(np.asarray(q)[None, :], np.asarray(v)[None, :], np.asarray(a)[None, :])[0]
 
     def torques(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """Joint torques (N, nv) of N samples (rows of q, v, a)."""
-        return inverse_dynamics_batch(self.robot, q, v, a, self.friction, self._bristles(v), pool=self.pool)
+        """Joint torques (N, nv; N m, N) of N samples (rows of q, v, a); LuGre bristles at
+        their steady state for v."""
+        bristles = None if self.friction is None or self.friction.lugre is None else \
+            np.array([self.friction.steady_state_bristles(row) for row in v])
+        return inverse_dynamics_batch(self.robot, q, v, a, self.friction, bristles, pool=self.pool)

@@ -43,7 +43,6 @@ MAX_LINEAR, MAX_ANGULAR = 5.0, 10.0
 #: of ros2_controllers' diff_drive_controller defaults.
 POSE_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
 TWIST_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
-TOPICS = ("/odom", "/base_pose_ground_truth")
 
 
 def _quaternion_of_yaw(yaw: float) -> tuple[float, float, float, float]:

@@ -1,29 +1,17 @@
-"""The ``dynamics_node``: a thin rclpy adapter around :mod:`youbot_dynamics.node.session`.
+"""The ``dynamics_node``: a thin rclpy adapter around the sessions of
+:mod:`youbot_dynamics.node` (:mod:`~youbot_dynamics.node.simulate`,
+:mod:`~youbot_dynamics.node.inverse_session`): parameters in, messages out. Its topics,
+services and parameters are the tables of :mod:`youbot_dynamics.node.interface` (and
+docs/node.md); this module creates them.
 
-Both modes publish /tf per sample, and /tf_static and /robot_description (the URDF,
-std_msgs/String) once, latched (transient local), as robot_state_publisher does; without
-tf2_msgs (see interfaces/) they skip /tf and /tf_static with one warning.
+Without tf2_msgs (see interfaces/) the node skips /tf and /tf_static with one warning (the
+MCAP still logs them). Messages are published as CDR bytes and only on topics with
+subscribers (the latched ones and /diagnostics always); the session builds only those and
+the ones its MCAP records. Inverse mode takes the joint states received in each
+``INVERSE_PERIOD`` (10 ms) tick as one batch. Parameters are checked (all or nothing) in the
+on-set callback and applied in the post-set callback.
 
-simulate mode publishes /clock, /joint_states, /ee_pose (/ee_poses for composed robots),
-/free_bodies (geometry_msgs/PoseArray) and /free_bodies_markers (visualization_msgs/
-MarkerArray) when the scene has free bodies (a scene without a robot has no /joint_states
-and /ee_pose), /scene_markers (latched) when it has static geometry, and /diagnostics (with
-the contact events), subscribes
-/joint_commands (sensor_msgs/JointState efforts by joint name) and /joint_trajectory
-(trajectory_msgs/JointTrajectory), and serves ~/reset (std_srvs/Trigger) and ~/pause
-(std_srvs/SetBool); with a moving base (scene ``base: kinematic | dynamic``) it also
-subscribes /cmd_vel (geometry_msgs/Twist) and publishes /odom and /base_pose_ground_truth
-(nav_msgs/Odometry) and odom -> base_footprint on /tf (:mod:`youbot_dynamics.node.mobile_base`).
-inverse mode subscribes /joint_states (QoS ``joint_states_qos``; the
-default keep-all: a replay as fast as possible loses no sample; best_effort for drivers that
-publish best effort) and publishes /computed_torques, /ee_pose and /diagnostics; the joint
-states received in each ``INVERSE_PERIOD`` (10 ms) tick are taken as one batch. Messages are
-published as CDR bytes and only on topics with subscribers (the latched ones and /diagnostics
-always); the session builds only those and the ones its MCAP records. Parameters:
-:mod:`youbot_dynamics.ros.parameters`, checked (all or nothing) in the on-set callback and
-applied in the post-set callback.
-
-Names: the topics above are the logged names; on the graph the node uses relative names
+Names: the table's topics are the logged names; on the graph the node uses relative names
 (:mod:`youbot_dynamics.node.topics`), so ``--ros-args -r __ns:=/youbot1`` publishes
 /youbot1/joint_states, /youbot1/clock, ... and subscribes /youbot1/joint_commands; /tf,
 /tf_static and /diagnostics stay global. Frames on /tf carry ``frame_prefix`` (by default the
@@ -31,7 +19,7 @@ namespace: ``youbot1/arm_link_1``), so two robots on one /tf never name the same
 /diagnostics status carries the node's full name (``/youbot1/dynamics_node: ...``).
 
 Bounded work per message: the subscriptions take the serialized message and refuse (count
-as ``rejected.too_large``, without deserialising) one over :data:`MAX_MESSAGE_BYTES`; the
+as ``rejected.too_large``, without deserialising) one over its ``max_bytes`` in the table; the
 session's checks are linear in the message and refuse more than
 :data:`~youbot_dynamics.node.commands.MAX_NAMES` names or
 :data:`~youbot_dynamics.node.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
@@ -46,12 +34,8 @@ about; any other exception is counted in /diagnostics under its cause (``failed.
 <exception type>``), logged once per cause with the message that caused it, and the node
 keeps its last good state and goes on publishing.
 
-Timing (simulate): a steady-clock timer paces the samples at ``publish_rate x time_scale``
-per wall second; a late tick publishes the samples that are due (up to ``MAX_BURST``, the
-rest at the next ticks), so the average rate holds while the simulation keeps up; only
-after falling ``MAX_LAG`` wall seconds behind does the pacing restart from now. Simulated
-time itself advances by fixed increments, independent of the wall clock. With
-``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched the sample
+Timing (simulate): a steady-clock timer paces the samples (:mod:`youbot_dynamics.node.pacing`).
+With ``wait_for_subscribers`` N > 0 it starts only once N subscribers have matched the sample
 topic, /joint_states or, without a robot, /free_bodies (or after ``wait_timeout`` wall
 seconds), so a subscriber started with the node misses none of the first samples. On
 leaving, the node waits (up to :data:`~youbot_dynamics.ros.process.ACK_TIMEOUT`) until its
@@ -67,7 +51,6 @@ import sys
 import time
 import traceback
 from collections.abc import Callable
-from typing import Any
 
 import rclpy
 import rclpy.executors
@@ -88,32 +71,22 @@ from trajectory_msgs.msg import JointTrajectory
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.node.commands import InputRejected
-from youbot_dynamics.node.session import (LATCHED_TOPICS, TOPIC_TYPES, InverseSession, Outputs,
-                                          SimulationSession)
+from youbot_dynamics.node.configure import session_from_parameters
+from youbot_dynamics.node.interface import SERVICES, Outputs, Topic, check_choice, topics_of
+from youbot_dynamics.node.pacing import Pacing, RealTimeFactor
 from youbot_dynamics.node.topics import graph_name
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr
-from youbot_dynamics.ros.parameters import check_choice, declare_all, frame_prefix_of
+from youbot_dynamics.ros.parameters import declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
-from youbot_dynamics.ros.qos import LATCHED, RELIABLE_DEEP, SUBSCRIPTION_PROFILES
-from youbot_dynamics.scene.schema import load_scene
+from youbot_dynamics.ros.qos import PROFILES, SUBSCRIPTION_PROFILES
 
-MAX_BURST = 20
-"""Most samples one timer tick publishes (and, at time_scale 0, the samples per tick)."""
-MAX_LAG = 0.25
-"""Wall seconds the samples may fall behind their pacing before it restarts from now (the
-real-time factor then drops below the requested time scale)."""
 INVERSE_PERIOD = 0.01
 """Wall seconds between inverse-mode ticks: each takes the joint states received since the
-last as one batch (:meth:`~youbot_dynamics.node.session.InverseSession.joint_states`)."""
+last as one batch (:meth:`~youbot_dynamics.node.inverse_session.InverseSession.joint_states`)."""
 WARN_THROTTLE = 2.0
 """Seconds between repeated warnings about bad input."""
 QUOTED_CHARACTERS = 500
 """Characters of the message that made a callback fail quoted in the log."""
-MAX_MESSAGE_BYTES = {"/cmd_vel": 1024, "/joint_commands": 64 * 1024, "/joint_states": 64 * 1024, "/joint_trajectory": 1024 * 1024}
-"""Largest serialized message (bytes) each subscription deserialises: 64 KiB holds a
-JointState of MAX_NAMES (256) joints four times over; 1 MiB a trajectory of
-MAX_TRAJECTORY_POINTS (1000) points of 16 joints with positions, velocities,
-accelerations and efforts (0.5 MB)."""
 
 
 class DynamicsNode(Node):
@@ -123,65 +96,45 @@ class DynamicsNode(Node):
         super().__init__("dynamics_node", **node_options)
         self.params = declare_all(self)
         p = self.params
-        scene = load_scene(p["scene"])
-        logs = {"mcap_path": p["mcap_path"] or None, "rrd_path": p["rrd_path"] or None,
-                "frame_id": p["frame_id"], "ee_link": p["ee_link"],
-                "frame_prefix": frame_prefix_of(p["frame_prefix"], self.get_namespace()),
-                "node_name": self.get_fully_qualified_name()}
-        if p["mode"] == "simulate":
-            self.session = SimulationSession(
-                scene, p["publish_rate"], command_timeout=p["command_timeout"], on_timeout=p["on_timeout"],
-                samples_per_solve=max(1, round(p["solve_horizon"] * p["publish_rate"])),
-                default_effort_limit=p["default_effort_limit"], callback_budget=p["callback_budget"], **logs)
-        else:
-            self.session = InverseSession(scene, filter_time_constant=p["acceleration_filter"],
-                                          max_gap_ns=round(p["max_sample_gap"] * NS_PER_S),
-                                          callback_budget=p["callback_budget"], **logs)
+        self.session = session_from_parameters(p, self.get_namespace(), self.get_fully_qualified_name())
         self.finished = False
         self._failures_logged: set[str] = set()
         self._create_publishers()
+        self._create_subscriptions_and_services()
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         if p["mode"] == "simulate":
-            self._subscribe(JointState, "/joint_commands", self._on_command, RELIABLE_DEEP)
-            self._subscribe(JointTrajectory, "/joint_trajectory", self._on_trajectory, RELIABLE_DEEP)
-            if self.session.moving_base is not None:
-                self._subscribe(Twist, "/cmd_vel", self._on_cmd_vel, RELIABLE_DEEP)
-            self.create_service(Trigger, "~/reset", self._guarded("~/reset", self._on_reset))
-            self.create_service(SetBool, "~/pause", self._guarded("~/pause", self._on_pause))
             self._wait_deadline = time.monotonic() + p["wait_timeout"]
             self._waiting = p["wait_for_subscribers"] > 0
-            self._restart_pacing()
+            self.pacing = Pacing(self.session.k)
             self.create_timer(1.0 / p["publish_rate"], self._guarded("step timer", self._on_tick), clock=steady)
         else:
             self._inbox: list[tuple] = []
-            self._subscribe(JointState, "/joint_states", self._on_joint_state,
-                            SUBSCRIPTION_PROFILES[p["joint_states_qos"]],
-                            event_callbacks=SubscriptionEventCallbacks(
-                                incompatible_qos=self._on_incompatible_joint_states))
             self.create_timer(INVERSE_PERIOD, self._guarded("joint states batch", self._on_joint_states),
                               clock=steady)
-        self._diagnostics_mark = (time.monotonic(), self.session.t)
+        self._real_time = RealTimeFactor(self.session.t)
         self.create_timer(p["diagnostics_period"], self._guarded("diagnostics timer", self._on_diagnostics),
                           clock=steady)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
+        scene = self.session.scene
         self.get_logger().info(f"{p['mode']} {scene.name} ({scene.source}); logs: "
                                f"{', '.join(map(str, self.session.recorder.paths)) or 'none'}")
 
     # ---- output ------------------------------------------------------------------------
     def _create_publishers(self) -> None:
-        """A publisher per session topic (latched ones transient local), then the latched
-        messages. A topic whose message package is not installed (tf2_msgs without
-        ``make``'s build) is left out, with one warning; it is still logged."""
+        """A publisher per session topic (latched ones transient local; type and QoS from the
+        interface table), then the latched messages. A topic whose message package is not
+        installed (tf2_msgs without ``make``'s build) is left out, with one warning; it is
+        still logged."""
         self.publishers_, self._unpublished = {}, set()
-        for topic in (*self.session.topics, *(t for t, _ in self.session.latched)):
+        mode, features = self.session.mode, self.session.features
+        for topic in (*topics_of(mode, "pub", features), *topics_of(mode, "pub", features, latched=True)):
             try:
-                cls = rclpy_class(TOPIC_TYPES[topic])
+                cls = rclpy_class(topic.type)
             except ImportError:
-                self._unpublished.add(topic)
+                self._unpublished.add(topic.name)
                 continue
-            qos = LATCHED if topic in LATCHED_TOPICS else RELIABLE_DEEP
-            self.publishers_[topic] = self.create_publisher(cls, graph_name(topic), qos)
+            self.publishers_[topic.name] = self.create_publisher(cls, graph_name(topic.name), PROFILES[topic.qos])
         if self._unpublished:
             self.get_logger().warning(f"not publishing {', '.join(sorted(self._unpublished))}: their message "
                                       "package is not installed (tf2_msgs: `make` builds it from interfaces/, "
@@ -202,8 +155,23 @@ class DynamicsNode(Node):
         self.session.consumed_by(subscribed)
         return subscribed
 
+    def _create_subscriptions_and_services(self) -> None:
+        """The subscriptions and services of the interface table for the session's mode and
+        scene, each behind the node boundary (:meth:`_guarded`)."""
+        callbacks = {"/joint_commands": self._on_command, "/joint_trajectory": self._on_trajectory,
+                     "/cmd_vel": self._on_cmd_vel, "/joint_states": self._on_joint_state}
+        for topic in topics_of(self.session.mode, "sub", self.session.features):
+            options = {"event_callbacks": SubscriptionEventCallbacks(
+                incompatible_qos=self._on_incompatible_joint_states)} if topic.name == "/joint_states" else {}
+            self._subscribe(topic, callbacks[topic.name], **options)
+        handlers = {"~/reset": self._on_reset, "~/pause": self._on_pause}
+        for service in SERVICES:
+            if self.session.mode in service.modes:
+                self.create_service(rclpy_class(service.type), service.name,
+                                    self._guarded(service.name, handlers[service.name]))
+
     def _restart_pacing(self) -> None:
-        self._pace_start, self._pace_k0 = time.monotonic(), self.session.k
+        self.pacing.restart(self.session.k)
 
     def _subscribers_ready(self) -> bool:
         """False while simulated time waits for ``wait_for_subscribers`` subscribers on the
@@ -217,20 +185,16 @@ class DynamicsNode(Node):
                                       f"{self.params['wait_timeout']:g} s; starting anyway")
         self._waiting = False
         self._restart_pacing()
-        self._diagnostics_mark = (time.monotonic(), self.session.t)
+        self._real_time.mark(self.session.t)
         return True
 
     def _on_tick(self) -> None:
         session, p = self.session, self.params
         if self.finished or session.paused or session.failure or (self._waiting and not self._subscribers_ready()):
             return
-        rate = p["publish_rate"] * p["time_scale"]    # samples per wall s
-        due = MAX_BURST if rate == 0.0 else \
-            int((time.monotonic() - self._pace_start) * rate) - (session.k - self._pace_k0)
-        if due > MAX_LAG * rate:
-            self._restart_pacing()
+        due = self.pacing.due(session.k, p["publish_rate"] * p["time_scale"])     # samples per wall s
         subscribed = self._subscribed()
-        for _ in range(min(max(0, due), MAX_BURST)):
+        for _ in range(due):
             self._publish(session.step(), subscribed)
             if session.failure:
                 self.get_logger().error(session.failure)
@@ -246,22 +210,21 @@ class DynamicsNode(Node):
 
     def _real_time_factor(self) -> float:
         """Simulated seconds per wall second since the last /diagnostics."""
-        now, t = time.monotonic(), self.session.t
-        start, t0 = self._diagnostics_mark
-        self._diagnostics_mark = (now, t)
-        return (t - t0) / (now - start) if now > start else 0.0
+        return self._real_time.since_last(self.session.t)
 
     def _on_diagnostics(self) -> None:
         if not self.finished:
             self._publish(self.session.diagnostics(self._real_time_factor()))
 
     # ---- the node boundary ---------------------------------------------------------------
-    def _subscribe(self, msg_type: type, topic: str, callback: Callable, qos: Any, **options) -> None:
+    def _subscribe(self, topic: Topic, callback: Callable, **options) -> None:
         """Subscribe ``callback`` to ``topic`` (its graph name: relative, see
-        :mod:`~youbot_dynamics.node.topics`) behind the node boundary, taking the serialized
-        message: one over ``MAX_MESSAGE_BYTES[topic]`` is rejected (counted, ``too_large``)
-        before it is deserialised."""
-        limit = MAX_MESSAGE_BYTES[topic]
+        :mod:`~youbot_dynamics.node.topics`; its QoS: the table's, or the profile of the
+        parameter it names) behind the node boundary, taking the serialized message: one
+        over ``topic.max_bytes`` is rejected (counted, ``too_large``) before it is
+        deserialised."""
+        limit, msg_type = topic.max_bytes, rclpy_class(topic.type)
+        qos = SUBSCRIPTION_PROFILES[self.params[topic.qos]] if topic.qos in self.params else PROFILES[topic.qos]
 
         def decode(data: bytes) -> object:
             if len(data) > limit:
@@ -270,8 +233,8 @@ class DynamicsNode(Node):
                 raise error
             return deserialize_message(data, msg_type)
 
-        self.create_subscription(msg_type, graph_name(topic), self._guarded(topic, callback, decode), qos, raw=True,
-                                 **options)
+        self.create_subscription(msg_type, graph_name(topic.name), self._guarded(topic.name, callback, decode), qos,
+                                 raw=True, **options)
 
     def _guarded(self, source: str, callback: Callable, decode: Callable | None = None) -> Callable:
         """``callback`` (of a subscription, timer or service, named ``source``) behind the

@@ -1,7 +1,10 @@
-"""QoS profiles of the package's topics."""
+"""QoS profiles of the package's topics, by the names of
+:data:`youbot_dynamics.node.interface.QOS`."""
 from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from youbot_dynamics.node.interface import SUBSCRIPTION_QOS
 
 RELIABLE_DEEP = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE,
                            durability=DurabilityPolicy.VOLATILE)
@@ -24,7 +27,9 @@ BEST_EFFORT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliabilit
 """Best effort, keep the last 1000: hears best-effort and reliable publishers alike (a
 reliable subscription matches no best-effort publisher), but may lose samples."""
 
-SUBSCRIPTION_PROFILES = {"best_effort": BEST_EFFORT, "reliable": RELIABLE_DEEP, "keep_all": RELIABLE_ALL}
+PROFILES = {"reliable": RELIABLE_DEEP, "latched": LATCHED, "best_effort": BEST_EFFORT, "keep_all": RELIABLE_ALL}
+"""Every profile by its name in the node's interface table."""
+SUBSCRIPTION_PROFILES = {name: PROFILES[name] for name in SUBSCRIPTION_QOS}
 """The choices of a subscription's QoS parameter (inverse mode's ``joint_states_qos``)."""
 
 

@@ -1,0 +1,331 @@
+"""The inverse-mode session: torques from measured joint states, taken in batches (a single
+sample is a batch of one). Each batch is checked (:mod:`youbot_dynamics.node.commands`; the
+samples that name the joints as the last accepted one did as arrays), differenced
+(:class:`~youbot_dynamics.node.inverse.AccelerationEstimator`), its torques computed at once
+(Pinocchio's batch RNEA and the friction model, :class:`~youbot_dynamics.node.inverse.InverseDynamics`)
+and its messages built together; what is built and logged: :mod:`youbot_dynamics.node.session`.
+
+An implausible torque (beyond the effort-limit bound, or not finite) or a message that
+cannot be built (non-finite kinematics) is not published and restarts the estimate at its
+sample, as if the samples had come one by one: the rows after it are differenced again from
+there. A scene with a moving base also gives /odom from the wheel speeds of each sample
+taken (:class:`~youbot_dynamics.node.mobile_base.WheelOdometry`).
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from youbot_dynamics.dynamics.mobile.mecanum import mecanum_base_from_robot
+from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_template import Refilled
+from youbot_dynamics.io.stamps import NS_PER_S
+from youbot_dynamics.node.commands import STAMP_LIMIT_NS, InputRejected, JointSample, joint_sample
+from youbot_dynamics.node.frames import SampleFrames
+from youbot_dynamics.node.interface import Outputs
+from youbot_dynamics.node.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, Estimates,
+                                          InverseDynamics, implausible_joints, plausible_limit)
+from youbot_dynamics.node.mobile_base import WheelOdometry
+from youbot_dynamics.node.session import Session
+from youbot_dynamics.scene.schema import Scene
+
+JointStateFields = tuple[Sequence[str], Sequence[float], Sequence[float], int, int | None]
+"""One /joint_states sample as the node hands it over: (names, position, velocity,
+stamp_ns, received_ns)."""
+Built = list[tuple[Outputs, SampleFrames | None]]
+"""Each torque's messages and, when built, its sample's kinematics."""
+
+
+class InverseSession(Session):
+    """Torques from measured joint states: accelerations by central differences (see
+    :mod:`youbot_dynamics.node.inverse`), tau = RNEA + friction of the scene's robot."""
+
+    mode = "inverse"
+    odometry: WheelOdometry | None = None
+    """Wheel odometry of a scene with a moving base (/odom from the joint states' wheel speeds)."""
+
+    def __init__(self, scene: Scene, *, filter_time_constant: float = 0.0, max_gap_ns: int = DEFAULT_MAX_GAP_NS,
+                 frame_id: str = "", ee_link: str = "", mcap_path: str | Path | None = None,
+                 rrd_path: str | Path | None = None, callback_budget: float = 0.05, frame_prefix: str = "",
+                 node_name: str = "dynamics_node") -> None:
+        robot = scene.robot  # reduced, with the scene's gravity
+        if not robot.tree:
+            raise UserInputError(f"{scene.source}: inverse mode needs a robot; the scene has none")
+        if scene.base.mode != "fixed":  # /odom from the wheel speeds of the joint states
+            self.odometry = WheelOdometry(mecanum_base_from_robot(robot, scene.base.wheels), scene.base.pose0,
+                                          frame_prefix)
+            self.wheels = np.array([robot.joint_index(name) for name in scene.base.wheels])
+        super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget, frame_prefix,
+                         node_name, moving_base=self.odometry is not None)
+        self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
+        self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
+        self._torques = Refilled()
+        self._names_key: tuple[str, ...] | None = None
+        """The names of the last sample accepted through ``joint_sample`` (see
+        ``_remember_names``)."""
+        self._velocity_bound = plausible_limit(self.robot, "velocity")
+        self._effort_bound = plausible_limit(self.robot, "effort")
+        self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
+        self.stamp_ns, self.samples = 0, 0
+        self.last_unstamped = False
+        """True when the last sample taken was stamped 0."""
+
+    @property
+    def t(self) -> float:
+        """Time (s) of the last sample torques were computed for."""
+        return self.stamp_ns / NS_PER_S
+
+    def joint_state(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
+                    stamp_ns: int, received_ns: int | None = None) -> Outputs:
+        """Take one /joint_states sample; returns /computed_torques and /ee_pose of the
+        previous sample once three are known. Stamp 0 is ambiguous (unset, or the first
+        sample of a stream in simulated time, which starts at 0): a sample stamped 0 right
+        after another stamped 0 takes the receive time ``received_ns`` (int ns of the node's
+        clock; without it, it is rejected as ``bad_timing``), any other is taken at 0. So a
+        stream stamped from 0 loses nothing, and an unstamped stream runs on receive times
+        after its first sample (whose jump to the node clock restarts the estimate). Raises
+        and counts :class:`InputRejected`; a rejected sample breaks the difference stencil
+        (no torque is computed across it: the next torque needs three good samples after
+        it), and so does a gap or a jump back in the stamps (see
+        :mod:`youbot_dynamics.node.inverse`). A sample whose velocity is beyond the
+        velocity-limit bound is rejected (``out_of_limits``). A torque that is implausible
+        (beyond the effort-limit bound) or not finite is not published: the sample counts as
+        accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
+        estimate restarts."""
+        outputs, rejected = self.joint_states([(names, position, velocity, stamp_ns, received_ns)])
+        if rejected:
+            raise rejected[0]
+        return outputs
+
+    def joint_states(self, samples: Sequence[JointStateFields]) -> tuple[Outputs, list[InputRejected]]:
+        """:meth:`joint_state` of each sample in turn ((names, position, velocity, stamp_ns,
+        received_ns)), the same outputs in the same order, the rejected samples' errors
+        returned (counted) instead of raised. The samples are checked, differenced and
+        their torques computed as arrays (Pinocchio's batch RNEA)."""
+        stamps, q, v, taken, rejected = self._checked(samples)
+        outputs: Outputs = []
+        start = 0
+        while start < len(stamps):
+            start = self._torques_from(stamps, q, v, taken, start, outputs)
+        return outputs, rejected
+
+    def _checked(self, samples: Sequence[tuple]
+                 ) -> tuple[list[int], np.ndarray, np.ndarray, list[bool], list[InputRejected]]:
+        """Each sample checked (see :meth:`joint_state`) and counted: the stamps (int ns; 0
+        for a rejected sample), q and v rows in joint order (N, nq) and (N, nv), whether each
+        sample was taken, and the errors of those rejected. Samples naming the joints as the
+        last accepted one did are checked as arrays; any that fails, and any other, through
+        ``_joint_sample``."""
+        stamps = self._stamps_of(samples)
+        rows = self._good_rows(samples, stamps)
+        if rows is not None and all(rows[2]):
+            self.counters.accepted += len(samples)
+            return [int(stamp) for stamp in stamps], rows[0], rows[1], [True] * len(samples), []
+        q, v, good = rows if rows is not None else (np.zeros((len(samples), self.robot.nq)),
+                                                    np.zeros((len(samples), self.robot.nv)), None)
+        taken: list[bool] = []
+        rejected: list[InputRejected] = []
+        for k, ((names, position, velocity, _, _), stamp) in enumerate(zip(samples, stamps)):
+            try:
+                if isinstance(stamp, InputRejected):
+                    raise stamp
+                if good is None or not good[k]:
+                    sample = self._joint_sample(names, position, velocity, stamp)
+                    q[k], v[k] = sample.q, sample.v
+            except InputRejected as error:
+                self.counters.reject(error)
+                rejected.append(error)
+                stamps[k] = 0
+                taken.append(False)
+                continue
+            self.counters.accepted += 1
+            stamps[k] = int(stamp)
+            taken.append(True)
+        return stamps, q, v, taken, rejected
+
+    def _stamps_of(self, samples: Sequence[tuple]) -> list[int | InputRejected]:
+        """The stamp (ns) each sample is taken at: its own, or for the second of two stamped 0
+        in a row, its receive time (``bad_timing`` without one); sets ``last_unstamped``."""
+        stamps: list[int | InputRejected] = [sample[3] for sample in samples]
+        if 0 not in stamps:
+            self.last_unstamped = self.last_unstamped and not stamps
+            return stamps
+        for k, (*_, stamp_ns, received_ns) in enumerate(samples):
+            unstamped = stamp_ns == 0
+            if unstamped and self.last_unstamped:
+                if received_ns is None:
+                    stamps[k] = InputRejected("bad_timing", "joint state not stamped and no receive time given")
+                    continue
+                stamps[k] = received_ns
+            self.last_unstamped = unstamped
+        return stamps
+
+    def _good_rows(self, samples: Sequence[tuple], stamps: Sequence[int | InputRejected]
+                   ) -> tuple[np.ndarray, np.ndarray, list[bool]] | None:
+        """(q, v) rows in joint order and which rows pass every check of ``_joint_sample``
+        (one comparison: |position| and |velocity| within ``_row_bounds``), for samples that
+        name the joints exactly as the last accepted one did; None when they cannot be taken
+        as arrays."""
+        key, count = self._names_key, len(samples)
+        if key is None or not all(tuple(sample[0]) == key for sample in samples):
+            return None
+        try:
+            values = np.array([sample[1] for sample in samples] + [sample[2] for sample in samples], dtype=float)
+        except (ValueError, TypeError):
+            return None
+        if values.shape != (2 * count, len(key)):
+            return None
+        within = np.abs(values.reshape(2, count, -1)) <= self._row_bounds
+        good = [not isinstance(s, InputRejected) and 0 <= s < STAMP_LIMIT_NS for s in stamps]
+        if not within.all():
+            good = [g and w for g, w in zip(good, within.all(axis=(0, 2)).tolist())]
+        return values[:count, self._columns], values[count:, self._columns], good
+
+    def _joint_sample(self, names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
+                      stamp_ns: int) -> JointSample:
+        """One sample checked (``joint_sample`` and the velocity bound); raises InputRejected.
+        Remembers the names of an accepted sample for the array checks."""
+        sample = joint_sample(self.robot, self.known, names, position, velocity, stamp_ns)
+        if not (np.abs(sample.v) <= self._velocity_bound).all():
+            raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
+                                f"limit of {', '.join(implausible_joints(self.robot, sample.v, 'velocity'))}")
+        key = tuple(str(name) for name in names)
+        if key != self._names_key:
+            self._remember_names(key)
+        return sample
+
+    def _remember_names(self, key: tuple[str, ...]) -> None:
+        """Cache what the array checks need for samples naming ``key``: ``_columns``, the
+        columns of the robot's joints in joint order (a slice when the names are in joint
+        order), and ``_row_bounds`` (2, 1, len(key)), the largest |position| (the largest
+        float: finite) and |velocity| (the velocity bound, finite) of each column."""
+        position_of = {name: i for i, name in enumerate(key)}
+        index = np.array([position_of[n] for n in self.robot.joint_names])
+        largest = np.finfo(float).max
+        bounds = np.full((2, 1, len(key)), largest)
+        bounds[1, 0, index] = np.minimum(self._velocity_bound, largest)
+        in_order = len(key) == len(index) and (index == np.arange(len(index))).all()
+        self._names_key, self._columns, self._row_bounds = key, slice(None) if in_order else index, bounds
+
+    def _torques_from(self, stamps: list[int], q: np.ndarray, v: np.ndarray, taken: list[bool], start: int,
+                      outputs: Outputs) -> int:
+        """Difference the checked rows from ``start`` on (stamps int ns, q and v rows in joint
+        order, which were ``taken``), compute their torques and append (and log) the outputs
+        of each row taken in turn: /odom, then the torque of the middle sample once three are
+        known. Up to and including the first implausible torque or message that cannot be
+        built (not published; the estimate restarts there, counted); returns the row after
+        the last one done."""
+        state = self.estimator.state()
+        estimates = self.estimator.push_rows(stamps[start:], q[start:], v[start:], taken[start:])
+        tau = self.dynamics.torques(estimates.q, estimates.v, estimates.a)
+        plausible = (np.abs(tau) <= self._effort_bound).all(axis=1)     # NaN too
+        count = len(tau) if plausible.all() else int(np.argmin(plausible))
+        built, failure = self._torque_messages(estimates.stamps[:count].tolist(), estimates.q, estimates.v, tau)
+        bad = None if failure is None and count == len(tau) else len(built)
+        end = len(stamps)
+        if bad is not None:     # the estimate restarts at its last sample: the rows up to it again
+            end = start + int(estimates.ends[bad]) + 1
+            self.estimator.restore(state)
+            estimates = self.estimator.push_rows(stamps[start:end], q[start:end], v[start:end], taken[start:end])
+        for error in estimates.errors:
+            self.counters.reject(error)
+        torque_at = {start + int(row): k for k, row in enumerate(estimates.ends.tolist())}
+        for row in range(start, end):
+            if not taken[row]:
+                continue
+            odom = self._odometry(stamps[row], v[row])
+            k = torque_at.get(row)
+            if k is not None and k == bad:
+                outputs += self._rejected_torque(estimates, tau[k], failure, odom)
+            elif k is not None:
+                outputs += odom + self._logged(estimates.stamps[k], estimates.q[k], estimates.v[k], tau[k], *built[k])
+            else:
+                outputs += odom
+        return end
+
+    def _odometry(self, stamp: int, v: np.ndarray) -> Outputs:
+        """/odom of a sample taken (stamp int ns, v in joint order), logged; none without a
+        moving base."""
+        if self.odometry is None:
+            return []
+        odom = [("/odom", self.odometry.outputs(stamp, stamp / NS_PER_S, v[self.wheels])[0])]
+        self.recorder.write(odom, stamp)
+        return odom
+
+    def _rejected_torque(self, estimates: Estimates, tau: np.ndarray, failure: Exception | None,
+                         odom: Outputs) -> Outputs:
+        """Count the last of ``estimates`` rejected (``implausible_torque`` or
+        ``non_finite``: ``tau`` beyond the effort-limit bound or not finite; ``failure``: its
+        message could not be built) and restart the estimate; the outputs of its sample (the
+        sample's /odom is logged, and published only after a message failure)."""
+        if failure is not None:
+            self.counters.reject(InputRejected("non_finite", str(failure)))
+            self.estimator.restart("non_finite")
+            return odom
+        finite = bool(np.isfinite(tau).all())
+        self.counters.reject(InputRejected("implausible_torque" if finite else "non_finite",
+                                           f"torque at {estimates.stamps[-1]} ns beyond the effort-limit bound or "
+                                           f"not finite on {', '.join(implausible_joints(self.robot, tau))}"))
+        self.estimator.restart("implausible" if finite else "non_finite")
+        return []
+
+    def _torque_messages(self, stamps: list[int], q: np.ndarray, v: np.ndarray, tau: np.ndarray
+                         ) -> tuple[Built, Exception | None]:
+        """The messages of the first len(``stamps``) torques (rows of q, v, tau), built
+        together; when one cannot be built, those before it, one at a time, and its error."""
+        try:
+            return self._torque_batch(stamps, q, v, tau), None
+        except messages.MessageFieldError:
+            pass
+        built: Built = []
+        for k in range(len(stamps)):
+            try:
+                built += self._torque_batch(stamps[k:k + 1], q[k:k + 1], v[k:k + 1], tau[k:k + 1])
+            except messages.MessageFieldError as error:
+                return built, error
+        return built, None
+
+    def _torque_batch(self, stamps: list[int], q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> Built:
+        """/computed_torques, /ee_pose(s) and /tf of N torques (stamps int ns; rows of q, v,
+        tau), those wanted, with each sample's kinematics (None when nothing takes it).
+        Raises MessageFieldError."""
+        wanted, count = self.wanted, len(stamps)
+        samples = [self.frames.links.at(row) for row in q[:count]] if self.kinematics_wanted else None
+        columns: list[tuple[str, list[object]]] = []
+        if "/computed_torques" in wanted:
+            columns.append(("/computed_torques", self._torques.many(
+                stamps, np.concatenate((q[:count], v[:count], tau[:count]), axis=1), self._joint_state)))
+        if samples is not None:
+            columns += self.frames.ee_messages(stamps, samples, wanted)
+            if "/tf" in wanted:
+                columns.append(("/tf", self.frames.tf(stamps, samples)))
+        return [([(topic, messages_[k]) for topic, messages_ in columns], None if samples is None else samples[k])
+                for k in range(count)]
+
+    def _joint_state(self, stamp_ns: int, values: np.ndarray) -> object:
+        """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
+        return messages.joint_state(stamp_ns, self.robot.joint_names, *np.split(values, 3))
+
+    def _logged(self, stamp: int, q: np.ndarray, v: np.ndarray, tau: np.ndarray, outputs: Outputs,
+                sample: SampleFrames | None) -> Outputs:
+        """``outputs``, the messages of the torque ``tau`` at a sample (stamp int ns, q, v),
+        logged (the Rerun recording takes the sample, its energy (J) and end effector)."""
+        stamp = int(stamp)
+        self.recorder.write(outputs, stamp)
+        if self.recorder.samples:
+            data = self.dynamics.data
+            energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)
+            self.recorder.sample(stamp, self.robot.joint_names, q, v, tau, energy, sample.ee[sample.ee_index, :3])
+        self.stamp_ns, self.samples = stamp, self.samples + 1
+        return outputs
+
+    def diagnostics(self, real_time_factor: float) -> Outputs:
+        """/diagnostics now: samples processed, input counters and the estimator's restarts
+        by cause (``estimator.restarts.<cause>``)."""
+        values = {"torques_published": self.samples, **self.counters.as_values(),
+                  **{f"estimator.restarts.{cause}": count for cause, count in self.estimator.restarts.items()}}
+        return self._diagnostic_outputs("OK", "running", values)

@@ -1,0 +1,87 @@
+"""The logs of one node run: an MCAP in rosbag2 form (:class:`~youbot_dynamics.io.mcap_log.McapLogger`)
+of the session's topics, and a Rerun recording (:class:`~youbot_dynamics.io.rerun_log.RerunLogger`)
+of the robot, the scene's static geometry and (simulate mode) its free bodies. Log times are
+the messages' stamps: simulated time (simulate mode) or the sender's (inverse mode), in int ns.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from youbot_dynamics.io.mcap_log import McapLogger
+from youbot_dynamics.io.rerun_log import RerunLogger
+from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.node.interface import LATCHED_TOPICS, TOPIC_TYPES, Outputs
+from youbot_dynamics.scene.schema import Scene
+
+
+def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
+    """The URDF file of the scene's robot for Rerun: None without a robot; the scene's file;
+    or, for a composed robot (no file of its own), its URDF text written next to the
+    recording as ``<rrd name>.urdf``."""
+    if not robot.tree:
+        return None
+    if scene.urdf_path is not None:
+        return scene.urdf_path
+    path = rrd_path.with_suffix(".urdf")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(scene.urdf, encoding="utf-8")
+    return path
+
+
+class Recorder:
+    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (those in
+    :data:`LATCHED_TOPICS` offered latched), and a Rerun recording (``rrd_path``) of the
+    robot, the scene's static geometry and (simulate mode) its free bodies; either may be
+    None. ``close`` finalises both and may be called more than once."""
+
+    def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
+                 mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
+        self.mcap = McapLogger(mcap_path) if mcap_path else None
+        if self.mcap is not None:
+            for topic in topics:
+                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic in LATCHED_TOPICS)
+        self.rerun = RerunLogger(
+            rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
+            geometries=[g for g in scene.geometries if mode == "simulate" or g.owner != "body"],
+            world_frame=root_frame) if rrd_path else None
+
+    @property
+    def paths(self) -> list[Path]:
+        """The log files being written."""
+        return [log.path for log in (self.mcap, self.rerun) if log is not None]
+
+    def write(self, outputs: Outputs, stamp_ns: int) -> None:
+        """Log messages at ``stamp_ns`` (log and publish time)."""
+        if self.mcap is not None and not self.mcap.closed:
+            self.mcap.write_all(outputs, stamp_ns)
+
+    def sample(self, stamp_ns: int, names: Sequence[str], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+               energy: float, ee_position: np.ndarray) -> None:
+        """One Rerun sample at simulated time ``stamp_ns`` (ns)."""
+        if self.rerun is not None and not self.rerun.closed:
+            self.rerun.log_sample(stamp_ns, names, q, v, tau, energy, ee_position)
+
+    def bodies(self, stamp_ns: int, rows: np.ndarray) -> None:
+        """The free bodies' poses (rows of translation (m) and quaternion (x, y, z, w), root
+        frame, in the scene's order, as the recording's ``bodies``) in the Rerun recording
+        at ``stamp_ns`` (ns)."""
+        if self.rerun is not None and not self.rerun.closed:
+            self.rerun.log_body_rows(stamp_ns, rows)
+
+    def records(self, topic: str) -> bool:
+        """True if the MCAP log records ``topic`` (so its messages must be built)."""
+        return self.mcap is not None and not self.mcap.closed and topic in self.mcap.topics
+
+    @property
+    def samples(self) -> bool:
+        """True if the Rerun recording takes samples (joint values, energy, end effector)."""
+        return self.rerun is not None and not self.rerun.closed
+
+    def close(self) -> None:
+        """Finalise both logs (idempotent)."""
+        for log in (self.mcap, self.rerun):
+            if log is not None:
+                log.close()
