@@ -262,8 +262,7 @@ def draw_cartesian_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]
 
 def draw_modia_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The ModiaLang damped pendulum's figures, with the seed's L = 0.5 merge."""
-    from youbot_dynamics.cli.pipeline_commands import MODIA_MERGE
-    from youbot_dynamics.studies.equations import modia_pendulum
+    from youbot_dynamics.studies.equations import MODIA_MERGE, modia_pendulum
     drawn = {}
     modia = modia_pendulum()
     runs = {"L = 0.8 (defaults)": run_model(modia, tol=1e-8),

@@ -1,6 +1,7 @@
-"""The seeds' figures, each drawn from our own runs: the registry the report reads.
+"""What every study's figures share: the declared figure, the figure set, matplotlib set-up.
 
-A *figure set* belongs to one study of the report (studies/report.py): it declares its
+A *figure set* belongs to one study of the report (studies/report.py, whose catalogue lists
+the sets of every study): it declares its
 figures up front (:class:`FigureSpec`: PNG file name, caption, what the seed shows or
 says), and its function ``draw(out_dir, full) -> {file: (ours, difference)}`` runs the
 study's cases, writes every declared PNG into ``out_dir`` and says for each what our run
@@ -14,7 +15,6 @@ one PNG only where the seed drew them together.
 """
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -104,22 +104,3 @@ def draw_set(figure_set: FigureSet, out_dir: Path | str, full: bool = False) -> 
                            + ("; " if missing and extra else "")
                            + (f"wrote undeclared {', '.join(extra)}" if extra else ""))
     return [Figure(spec, *drawn[spec.file]) for spec in figure_set.specs]
-
-
-def all_specs() -> list[FigureSpec]:
-    """Every declared figure of every set, in page order."""
-    return [spec for figure_set in figure_sets().values() for spec in figure_set.specs]
-
-
-@functools.cache
-def figure_sets() -> dict[str, FigureSet]:
-    """name -> FigureSet, from the modules that declare them (imported on first call:
-    they import this module)."""
-    from youbot_dynamics.studies import (equation_figures, lagrange_figures, mechanism_figures,
-                                         pendulum_figures, seed000_figures)
-    sets = [pendulum_figures.PENDULUM_SET, pendulum_figures.BDF_SET,
-            mechanism_figures.SQUEEZER_SET, mechanism_figures.WOODPECKER_SET,
-            lagrange_figures.LAGRANGE_2D_SET, lagrange_figures.LAGRANGE_3D_SET,
-            *equation_figures.STRUCTURE_SETS, *equation_figures.PIPELINE_SETS,
-            seed000_figures.ROTATIONS_SET, seed000_figures.UNCERTAINTY_SET]
-    return {figure_set.name: figure_set for figure_set in sets}

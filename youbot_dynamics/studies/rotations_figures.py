@@ -1,27 +1,69 @@
-"""Figures of seed 000's rotation and uncertainty items, drawn with those studies' own
-plot functions where they have one (studies/rotations.py, studies/uncertain_pendulum.py)
-and from the same runs otherwise: one PNG per rotation run (attitude error against the
-closed-form top, middle Cardan angle, |q| drift), Cardan's steps against the quaternion's
-as the spin loses its wobble, and the uncertain pendulum's band, the sample histogram at
-the end and the ratio of the two standard deviations.
+"""Figures of the rotations study (seed 000 item 1; studies/rotations.py): one PNG per
+rotation run (attitude error against the closed-form top in rad, middle Cardan angle in
+rad, |q| drift), and Cardan's steps against the quaternion's as the spin loses its wobble.
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
+from youbot_dynamics.model.rotations import SWITCH_ANGLE
 from youbot_dynamics.studies.figures import FigureSet, panels, save, specs
+from youbot_dynamics.studies.rotations import (RUNS, RotationResult, attitude_error,
+                                               axisymmetric_top, rotations_study,
+                                               spin_wobble_sweep)
 
-#: Monte Carlo samples of the short and the full form.
-SAMPLES_SHORT, SAMPLES_FULL = 200, 1000
 ROTATION_RUNS = ("spin", "tumble", "top")
+
+
+def plot_rotations(results: list[RotationResult], path: str) -> None:
+    """PNG (matplotlib, Agg): per run, the attitude error against the closed form (log
+    scale) of each formulation, and the middle angle of the Cardan formulations."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs = list(dict.fromkeys(result.run for result in results))
+    figure, axes = plt.subplots(2, len(runs), figsize=(5 * len(runs), 7), squeeze=False)
+    for column, name in enumerate(runs):
+        top, bottom = axes[0, column], axes[1, column]
+        for result in (r for r in results if r.run == name):
+            run = RUNS[name]
+            inertia = np.array(run.inertia, dtype=float)
+            references, _ = axisymmetric_top(inertia, run.rotation0, np.array(run.w0),
+                                             result.t)
+            error = np.maximum(attitude_error(result.rotations, references), 1e-17)
+            label = (f"{result.formulation} ({result.stats.steps} steps)"
+                     if result.failure is None else f"{result.formulation} (failed)")
+            top.semilogy(result.t, error, label=label, linewidth=0.9)
+            if result.middle_angle is not None:
+                bottom.plot(result.t, result.middle_angle, label=result.formulation,
+                            linewidth=0.9)
+            if result.quaternion_norm is not None:
+                drift = bottom.twinx()
+                drift.plot(result.t, result.quaternion_norm - 1.0, color="tab:green",
+                           label="quaternion |q| - 1 (right)", linewidth=0.9)
+                drift.set_ylabel("|q| - 1")
+                drift.legend(fontsize=7, loc="lower right")
+        for level in (SWITCH_ANGLE, -SWITCH_ANGLE, math.pi / 2, -math.pi / 2):
+            bottom.axhline(level, color="grey", linewidth=0.5,
+                           linestyle=":" if abs(level) == SWITCH_ANGLE else "--")
+        top.set_title(f"{name}: {RUNS[name].purpose}", fontsize=9)
+        top.set_ylabel("attitude error vs closed form (rad)")
+        bottom.set_ylabel("middle Cardan angle a2 (rad)")
+        bottom.set_xlabel("t (s)")
+        for axis in (top, bottom):
+            axis.grid(True, alpha=0.3)
+            axis.legend(fontsize=7, loc="upper left")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
 
 
 def draw_rotations(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of ROTATIONS_SET."""
-    from youbot_dynamics.studies.rotations import (RUNS, plot_rotations, rotations_study,
-                                                   spin_wobble_sweep)
     results = rotations_study()
     drawn = {}
     for name in ROTATION_RUNS:
@@ -94,58 +136,6 @@ ROTATION_DIFFERENCE = {"spin": _spin_difference, "tumble": _tumble_difference,
                        "top": _top_difference}
 
 
-def draw_uncertainty(out: Path, full: bool) -> dict[str, tuple[str, str]]:
-    """The figures of UNCERTAINTY_SET."""
-    from youbot_dynamics.studies.uncertain_pendulum import (FAILURE_FLOOR, FAILURE_RATIO,
-                                                            comparison, linear_propagation,
-                                                            monte_carlo, plot_uncertainty)
-    samples = SAMPLES_FULL if full else SAMPLES_SHORT
-    linear = linear_propagation()
-    sampled, phi = monte_carlo(samples)
-    figures = comparison(linear, sampled)
-    plot_uncertainty(linear, sampled, phi, str(out / "uncertainty.png"))
-    fails = figures["linearisation_fails_at"]
-    drawn = {"uncertainty.png": (
-        f"at t = {figures['t_end']:g} s the 2-sigma band is {figures['band_width_linear_end']:.3g}"
-        f" rad wide by linear propagation, {figures['band_width_monte_carlo_end']:.3g} rad by "
-        f"{samples} Monte Carlo samples",
-        "The seed draws the linear band only (Measurements.jl); the Monte Carlo shows where it "
-        + ("holds throughout." if fails is None else f"fails: first at t = {fails:g} s."))}
-    figure, axis = panels(size=(6.5, 3.8))
-    end = phi[-1]
-    axis.hist(end, bins=30, density=True, alpha=0.6, label=f"{samples} samples")
-    grid = np.linspace(end.min(), end.max(), 200)
-    sigma, mean = linear.sigma[-1], linear.mean[-1]
-    axis.plot(grid, np.exp(-0.5 * ((grid - mean) / sigma) ** 2) / (sigma * np.sqrt(2 * np.pi)),
-              label="linear propagation (normal)")
-    axis.set_xlabel(f"phi at t = {linear.t[-1]:g} s (rad)")
-    axis.set_ylabel("density")
-    axis.legend(fontsize=7)
-    save(figure, out / "uncertainty_histogram.png",
-         "Uncertain pendulum: the Monte Carlo's phi at the end against the linear normal")
-    drawn["uncertainty_histogram.png"] = (
-        f"samples: mean {end.mean():.3g} rad, sigma {end.std(ddof=1):.3g} rad; linear: mean "
-        f"{mean:.3g} rad, sigma {sigma:.3g} rad",
-        "No seed figure: the samples' spread at the end is not the linear normal.")
-    figure, axis = panels(size=(7.0, 3.4))
-    ratio = np.divide(linear.sigma, sampled.sigma, out=np.ones_like(linear.sigma),
-                      where=sampled.sigma > 0)
-    axis.plot(linear.t, ratio, linewidth=0.8)
-    axis.axhspan(1 - FAILURE_RATIO, 1 + FAILURE_RATIO, color="green", alpha=0.15,
-                 label=f"within {FAILURE_RATIO:.0%}")
-    axis.set_xlabel("t (s)")
-    axis.set_ylabel("sigma linear / sigma Monte Carlo")
-    axis.legend(fontsize=7)
-    save(figure, out / "uncertainty_sigma_ratio.png",
-         "Uncertain pendulum: linear against Monte Carlo standard deviation")
-    drawn["uncertainty_sigma_ratio.png"] = (
-        f"ratio from {figures['min_ratio']:.2g} to {figures['max_ratio']:.2g}",
-        f"Linearisation counts as failed where the sigmas differ by more than "
-        f"{FAILURE_RATIO:.0%} and {FAILURE_FLOOR:g} rad: "
-        + ("never." if fails is None else f"first at t = {fails:g} s."))
-    return drawn
-
-
 ROTATIONS_SET = FigureSet("rotations", specs(
     ("rotations_spin.png", "Spin about one axis: attitude error and middle angle of Cardan, "
      "adaptive Cardan, quaternion", "Seed: Cardan takes larger steps here."),
@@ -157,12 +147,3 @@ ROTATIONS_SET = FigureSet("rotations", specs(
      "quaternion steps", "The seed's claim about step sizes, as a curve."),
 ), draw_rotations)
 
-UNCERTAINTY_SET = FigureSet("uncertainty", specs(
-    ("uncertainty.png", "Uncertain damped pendulum: phi with the linear and Monte Carlo "
-     "+-sigma bands (two panels, as the seed's band plus the sigmas)",
-     "Measurements.jl's band of phi(t)."),
-    ("uncertainty_histogram.png", "Uncertain damped pendulum: phi at t = 10 s, samples "
-     "against the linear normal", "No seed figure."),
-    ("uncertainty_sigma_ratio.png", "Uncertain damped pendulum: sigma linear / sigma Monte "
-     "Carlo over time", "No seed figure."),
-), draw_uncertainty)
