@@ -10,7 +10,8 @@ from youbot_dynamics.cli.common import CommandError, add_sweep_arguments, output
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``report``."""
-    from youbot_dynamics.studies.report import PAGE, SECTION_NAMES
+    from youbot_dynamics.studies.catalog import SECTION_NAMES
+    from youbot_dynamics.studies.report import PAGE
     parser = subparsers.add_parser(
         "report", help="run every study; write their PNGs and one Markdown page",
         description=f"Run every study (short forms; --full for the seed's sizes) through "

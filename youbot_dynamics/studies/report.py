@@ -21,7 +21,7 @@ from typing import Sequence
 
 from youbot_dynamics.accuracy.sweeps import map_cases
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.studies.catalog import FIGURE_SETS, SECTION_NAMES, SECTIONS, Section  # noqa: F401 (SECTION_NAMES: the --only choices)
+from youbot_dynamics.studies.catalog import FIGURE_SETS, SECTION_NAMES, SECTIONS, Section
 from youbot_dynamics.studies.figures import Figure, FigureSpec, draw_set
 
 #: Name of the Markdown page in the report folder.
