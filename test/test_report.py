@@ -112,7 +112,7 @@ def test_short_report_writes_every_figure(tmp_path):
 def test_a_figure_set_that_raises_is_reported_failed(tmp_path, monkeypatch):
     from youbot_dynamics.studies import figures
 
-    def broken(out, full):
+    def broken(result, out, full):
         raise RuntimeError("a bug in the figures")
     monkeypatch.setitem(FIGURE_SETS, "structure-lowpass",
                         figures.FigureSet("structure-lowpass", (), broken))
@@ -131,7 +131,7 @@ def test_list_figures_names_every_figure_without_running(capsys):
 def test_a_figure_set_must_write_what_it_declares(tmp_path):
     from youbot_dynamics.studies.figures import FigureSet, FigureSpec, draw_set
     spec = FigureSpec("a.png", "A", "seed")
-    lazy = FigureSet("lazy", (spec,), lambda out, full: {"a.png": ("ours", "difference")})
+    lazy = FigureSet("lazy", (spec,), lambda result, out, full: {"a.png": ("ours", "difference")})
     with pytest.raises(RuntimeError, match="figure set lazy: did not write a.png"):
         draw_set(lazy, tmp_path)
 

@@ -3,9 +3,11 @@
 A *figure set* belongs to one study of the report (studies/report.py, whose catalogue lists
 the sets of every study): it declares its
 figures up front (:class:`FigureSpec`: PNG file name, caption, what the seed shows or
-says), and its function ``draw(out_dir, full) -> {file: (ours, difference)}`` runs the
-study's cases, writes every declared PNG into ``out_dir`` and says for each what our run
-measured and how that differs from the seed. ``full`` runs the seed's sizes; the default
+says), and its function ``draw(result, out_dir, full) -> {file: (ours, difference)}``
+draws from the study's ``result`` (what its ``run(config)`` returned in the report; None:
+not run) where that holds what the figures need, runs the cases it lacks, writes every
+declared PNG into ``out_dir`` and says for each what our run measured and how that
+differs from the seed. ``full`` runs the seed's sizes; the default
 (short) form keeps every set to seconds. The declared list is what the report's page and
 its test enumerate, so a set that does not write one of its files is an error here, not a
 missing image on the page.
@@ -46,11 +48,11 @@ class Figure:
 @dataclass(frozen=True)
 class FigureSet:
     """The figures of one study: its name, the declared specs in page order and the
-    drawing function ``draw(out_dir, full) -> {file: (ours, difference)}``."""
+    drawing function ``draw(result, out_dir, full) -> {file: (ours, difference)}``."""
 
     name: str
     specs: tuple[FigureSpec, ...]
-    draw: Callable[[Path, bool], dict[str, tuple[str, str]]]
+    draw: Callable[[object, Path, bool], dict[str, tuple[str, str]]]
 
 
 def specs(*rows: tuple[str, str, str]) -> tuple[FigureSpec, ...]:
@@ -90,11 +92,12 @@ def save(figure, path: Path | str, title: str | None = None) -> None:
     pyplot().close(figure)
 
 
-def draw_set(figure_set: FigureSet, out_dir: Path | str, full: bool = False) -> list[Figure]:
+def draw_set(figure_set: FigureSet, out_dir: Path | str, full: bool = False,
+             result: object = None) -> list[Figure]:
     """Draw one set into ``out_dir``; its figures in declared order. RuntimeError naming
     the set and the files if it did not write exactly its declared PNGs."""
     out = Path(out_dir)
-    drawn = figure_set.draw(out, full)
+    drawn = figure_set.draw(result, out, full)
     declared = [spec.file for spec in figure_set.specs]
     missing = [name for name in declared if name not in drawn or not (out / name).is_file()]
     extra = sorted(set(drawn) - set(declared))

@@ -240,7 +240,7 @@ def draw_adaptive(out: Path, integrator: str, k: int) -> tuple[tuple[str, str], 
     return (ours, difference), solution
 
 
-def draw_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_pendulum(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of PENDULUM_SET."""
     drawn = {FIXED_STEP_FILES[cell]: draw_fixed_step(out, *cell)[0]
              for cell in FIXED_STEP_FILES if cell[0] == "euler"}
@@ -293,7 +293,7 @@ def draw_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     return drawn
 
 
-def draw_bdf(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_bdf(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of BDF_SET."""
     drawn, rows = {}, []
     for cell in (cell for cell in FIXED_STEP_FILES if cell[0] != "euler"):

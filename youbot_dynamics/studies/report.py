@@ -1,9 +1,10 @@
 """Every study in one report: the seed's figures or verdicts, ours, and the difference.
 
 The page is a loop over the catalogue (studies/catalog.py): each :class:`Section` runs its
-study through the study's own module and returns the text ``youbot-dynamics study NAME``
-prints, then its figure set (studies/figures.py: the seed's figures from our runs, each
-declared with its caption and the seed's figure or verdict) draws into the report folder.
+study through the study's own module (``run(config)``) and returns the text ``youbot-dynamics
+study NAME`` prints with the study's result; then its figure set (studies/figures.py: the
+seed's figures from our runs, each declared with its caption and the seed's figure or
+verdict) draws from that result into the report folder.
 The sections are independent cases of :func:`youbot_dynamics.accuracy.sweeps.map_cases` (a
 local Dask cluster by default, ``scheduler`` for a real one, serial with ``workers=0``);
 the page (``report.md``) is assembled in the order of the catalogue, whatever order they
@@ -57,20 +58,21 @@ def section_by_name(name: str) -> Section:
 
 def run_section(name: str, out_dir: str, full: bool) -> SectionResult:
     """Run one section's study (stdout and stderr kept off the terminal), then draw its
-    figure set. A study or set that raises is reported with its traceback."""
+    figure set from the study's result. A study or set that raises is reported with its
+    traceback (the set then runs the cases it needs itself)."""
     section, out = section_by_name(name), Path(out_dir)
     errors, start = "", time.perf_counter()
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         try:
-            output = section.run(out, full)
+            output, result = section.run(out, full)
         except Exception:  # a bug in one study: reported on its section
-            output, errors = "", traceback.format_exc()
+            output, result, errors = "", None, traceback.format_exc()
     wall_time = time.perf_counter() - start
     figures, figure_error, start = (), None, time.perf_counter()
     try:
         if name in FIGURE_SETS:
             with contextlib.redirect_stdout(io.StringIO()):
-                figures = tuple(draw_set(FIGURE_SETS[name], out, full))
+                figures = tuple(draw_set(FIGURE_SETS[name], out, full, result))
     except Exception:  # a bug in one set: reported on its section
         figure_error = traceback.format_exc()
     return SectionResult(name, section.command_line(full), not errors, output, errors,

@@ -11,9 +11,9 @@ import numpy as np
 
 from youbot_dynamics.model.rotations import SWITCH_ANGLE
 from youbot_dynamics.studies.figures import FigureSet, panels, save, specs
-from youbot_dynamics.studies.rotations import (RUNS, RotationResult, attitude_error,
-                                               axisymmetric_top, rotations_study,
-                                               spin_wobble_sweep)
+from youbot_dynamics.studies.rotations import (RUNS, RotationResult, RotationsConfig,
+                                               RotationsStudy, attitude_error, axisymmetric_top,
+                                               rotations_study, spin_wobble_sweep)
 
 ROTATION_RUNS = ("spin", "tumble", "top")
 
@@ -62,12 +62,16 @@ def plot_rotations(results: list[RotationResult], path: str) -> None:
     plt.close(figure)
 
 
-def draw_rotations(out: Path, full: bool) -> dict[str, tuple[str, str]]:
-    """The figures of ROTATIONS_SET."""
-    results = rotations_study()
+def draw_rotations(result: RotationsStudy | None, out: Path,
+                   full: bool) -> dict[str, tuple[str, str]]:
+    """The figures of ROTATIONS_SET, from ``result`` when it is the whole study at its
+    defaults (every run, rk45 at 1e-8: ``study rotations``, the report's full form), else
+    from a run of it."""
+    study = result if result is not None and result.config == RotationsConfig() else None
+    results = rotations_study() if study is None else study.results
     drawn = {}
     for name in ROTATION_RUNS:
-        mine = [result for result in results if result.run == name]
+        mine = [each for each in results if each.run == name]
         plot_rotations(mine, str(out / f"rotations_{name}.png"))
         drawn[f"rotations_{name}.png"] = (
             "; ".join(f"{r.formulation}: " + (f"failed ({r.failure})" if r.failure else
@@ -76,7 +80,7 @@ def draw_rotations(out: Path, full: bool) -> dict[str, tuple[str, str]]:
                       for r in mine),
             ROTATION_DIFFERENCE[name](mine))
     if full:
-        sweep = spin_wobble_sweep()
+        sweep = spin_wobble_sweep() if study is None else study.sweep
     else:  # the pure spin, and the spin run itself (its wobble) from the study above
         by = {r.formulation: r for r in results if r.run == "spin"}
         sweep = spin_wobble_sweep(wobbles=(0.0,)) + [

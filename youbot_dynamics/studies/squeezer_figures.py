@@ -101,7 +101,7 @@ def squeezer_quantity_plot(path: Path, run, quantity: str) -> None:
                        f"{quantity}")
 
 
-def draw_squeezer(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_squeezer(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of SQUEEZER_SET."""
     runs = {formulation: simulate_squeezer(formulation, integrator,
                                            n_outputs=SQUEEZER_OUTPUTS)

@@ -11,8 +11,7 @@ import numpy as np
 from youbot_dynamics.accuracy.propagation import (FAILURE_FLOOR, FAILURE_RATIO, comparison,
                                                   plot_uncertainty)
 from youbot_dynamics.studies.figures import FigureSet, panels, save, specs
-from youbot_dynamics.studies.uncertain_pendulum import (UncertaintyResult, linear_propagation,
-                                                        monte_carlo)
+from youbot_dynamics.studies.uncertain_pendulum import UncertaintyConfig, UncertaintyResult, run
 
 #: Monte Carlo samples of the short and the full form.
 SAMPLES_SHORT, SAMPLES_FULL = 200, 1000
@@ -26,11 +25,16 @@ def plot_band(result: UncertaintyResult, path: str) -> None:
     plot_uncertainty(result.linear, result.sampled, result.phi, path, PENDULUM_TITLE, QUANTITY)
 
 
-def draw_uncertainty(out: Path, full: bool) -> dict[str, tuple[str, str]]:
-    """The figures of UNCERTAINTY_SET."""
-    samples = SAMPLES_FULL if full else SAMPLES_SHORT
-    linear = linear_propagation()
-    sampled, phi = monte_carlo(samples)
+def draw_uncertainty(result: UncertaintyResult | None, out: Path,
+                     full: bool) -> dict[str, tuple[str, str]]:
+    """The figures of UNCERTAINTY_SET, from ``result`` when it is the study at the
+    report's size (SAMPLES_SHORT, or SAMPLES_FULL when ``full``, seed 0 over T_END), else
+    from a run of that size."""
+    config = UncertaintyConfig(samples=SAMPLES_FULL if full else SAMPLES_SHORT, workers=0)
+    if result is None or (result.config.samples, result.config.seed, result.config.duration) \
+            != (config.samples, config.seed, config.duration):
+        result = run(config)
+    samples, linear, sampled, phi = config.samples, result.linear, result.sampled, result.phi
     figures = comparison(linear, sampled)
     plot_uncertainty(linear, sampled, phi, str(out / "uncertainty.png"), PENDULUM_TITLE,
                      QUANTITY)

@@ -43,7 +43,7 @@ WOODPECKER_FILES = {"woodpecker_z.png": ("sleeve height z (m)", 0),
                     "woodpecker_phiB.png": ("bird angle phiB (rad)", 2)}
 
 
-def draw_woodpecker(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_woodpecker(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of WOODPECKER_SET."""
     woodpecker = Woodpecker()
     solution = woodpecker.simulate(2.0, "dop853", rtol=1e-6, atol=1e-8,
