@@ -13,7 +13,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
 
-from youbot_dynamics.cli.study_commands import stats_table  # noqa: E402
+from youbot_dynamics.studies.stats_table import stats_table  # noqa: E402
 from youbot_dynamics.studies.woodpecker import BEAK, SEED_FIGURES, Woodpecker  # noqa: E402
 
 ADAPTIVE = ("rk45", "dop853", "radau", "bdf", "cvode_bdf", "cvode_adams", "ida")

@@ -105,23 +105,23 @@ def test_energy_criterion_flips_bdf2_verdicts(seed_cells):
 
 @pytest.fixture
 def pendulum_cli(monkeypatch):
-    monkeypatch.setattr(cli, "COMMAND_MODULES", ("youbot_dynamics.cli.pendulum_commands",))
+    monkeypatch.setattr(cli, "COMMAND_MODULES", ("youbot_dynamics.cli.study_commands",))
     return cli.main
 
 
 @pytest.mark.parametrize("k", [10, pytest.param(50, marks=pytest.mark.slow)])
 def test_cvode_order_one_step_counts_as_the_seeds(pendulum_cli, capsys, k):
     """Measured 38 501 and 76 856 steps: the seed's figures exactly (acceptance: 10 %)."""
-    assert pendulum_cli(["pendulum", "--k", str(k), "--integrator", "cvode_bdf",
+    assert pendulum_cli(["study", "pendulum", "--k", str(k), "--integrator", "cvode_bdf",
                          "--max-order", "1", "--jacobian", "difference", "--json"]) == 0
     steps = json.loads(capsys.readouterr().out)["stats"]["steps"]
     assert steps == pytest.approx(SEED_CVODE_ORDER[(k, 1)], rel=0.1)
 
 
 def test_max_order_refused_for_other_integrators(pendulum_cli, capsys):
-    assert pendulum_cli(["pendulum", "--integrator", "rk45", "--max-order", "2"]) == 2
+    assert pendulum_cli(["study", "pendulum", "--integrator", "rk45", "--max-order", "2"]) == 2
     assert "--max-order applies to cvode" in capsys.readouterr().err
-    assert pendulum_cli(["pendulum", "--integrator", "cvode_bdf", "--max-order", "6"]) == 2
+    assert pendulum_cli(["study", "pendulum", "--integrator", "cvode_bdf", "--max-order", "6"]) == 2
     assert "max_order must be 1..5" in capsys.readouterr().err
 
 
@@ -141,7 +141,7 @@ def test_explicit_euler_seed_accurate_cells_are_inaccurate_by_position():
 def test_choppy_traces_plot(tmp_path):
     """At rtol = atol = 0.1 both CVODE methods are visibly off the reference (measured
     0.64 m for BDF, 2.29 m for Adams, within 56 and 45 steps)."""
-    from youbot_dynamics.studies.bdf_study import plot_choppy_traces
+    from youbot_dynamics.studies.pendulum_figures import plot_choppy_traces
     figures = plot_choppy_traces(str(tmp_path / "choppy.png"))
     assert (tmp_path / "choppy.png").stat().st_size > 10_000
     for run in figures.values():

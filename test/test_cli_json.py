@@ -12,7 +12,7 @@ from youbot_dynamics.cli import main
 from youbot_dynamics.cli.ros_commands import _summary_record, _summary_rows
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.mcap_log import McapLogger
-from youbot_dynamics.node.session import SimulationSession
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene
 
 

@@ -64,7 +64,7 @@ def test_simulate_output_is_checked_before_the_run(capsys, tmp_path: Path, case:
     assert not (tmp_path / "absent").exists()
 
 
-@pytest.mark.parametrize("argv", [["woodpecker", "--plot"], ["squeezer", "--plot"]])
+@pytest.mark.parametrize("argv", [["study", "woodpecker", "--plot"], ["study", "squeezer", "--plot"]])
 def test_plot_files_are_checked_before_the_run(capsys, tmp_path: Path, argv: list[str]) -> None:
     _one_line_error(capsys, [*argv, str(tmp_path / "absent" / "plot.png")], "--plot", "does not exist")
 
@@ -119,4 +119,4 @@ def test_replay_of_a_file_that_is_no_bag_is_one_line(capsys, tmp_path: Path, nam
 
 def test_woodpecker_plot_samples_are_bounded_before_the_run(capsys, tmp_path: Path) -> None:
     # Before: int(1e308 * 2000) raised OverflowError (a traceback).
-    _one_line_error(capsys, ["woodpecker", "--t-end", "1e308", "--plot", str(tmp_path / "w.png")], "output samples")
+    _one_line_error(capsys, ["study", "woodpecker", "--duration", "1e308", "--plot", str(tmp_path / "w.png")], "output samples")

@@ -139,12 +139,12 @@ def test_a_step_that_cannot_move_the_clock_is_refused_up_front():
 def test_pendulum_for_1e18_euler_steps_is_refused_in_one_line(capsys):
     # before: a hang; now refused before the first step: near t = 1e9 s a step of 1e-9 s
     # does not move the clock (the spacing of doubles there is 1.2e-7 s)
-    code = main(["pendulum", "--t-end", "1e9", "--integrator", "euler", "--dt", "1e-9"])
+    code = main(["study", "pendulum", "--duration", "1e9", "--integrator", "euler", "--dt", "1e-9"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1
     assert "dt=1e-09 s is below the time resolution at t=1e+09 s (t + dt == t)" in err
     # 1e10 steps that do move the clock are over the default budget of 1e7
-    assert main(["pendulum", "--t-end", "1e4", "--integrator", "euler", "--dt", "1e-6"]) == 2
+    assert main(["study", "pendulum", "--duration", "1e4", "--integrator", "euler", "--dt", "1e-6"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert "euler: 1e+10 steps of dt=1e-06 s over 10000 s exceed the step budget of 10000000 " \

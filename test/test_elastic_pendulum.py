@@ -103,12 +103,12 @@ def test_study_energy_error_falls_with_step_and_tolerance(study_rows):
 
 @pytest.fixture
 def pendulum_cli(monkeypatch):
-    monkeypatch.setattr(cli, "COMMAND_MODULES", ("youbot_dynamics.cli.pendulum_commands",))
+    monkeypatch.setattr(cli, "COMMAND_MODULES", ("youbot_dynamics.cli.study_commands",))
     return cli.main
 
 
 def test_cli_pendulum_json(pendulum_cli, capsys):
-    assert pendulum_cli(["pendulum", "--k", "10", "--state0", "1.2,0,0,0", "--t-end", "20",
+    assert pendulum_cli(["study", "pendulum", "--k", "10", "--state0", "1.2,0,0,0", "--duration", "20",
                          "--integrator", "rk4", "--dt", "0.01", "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     reference, _ = simulate_elastic_pendulum(10.0, SEED_STATE0, 20.0, "dop853", rtol=1e-12,
@@ -119,9 +119,9 @@ def test_cli_pendulum_json(pendulum_cli, capsys):
 
 
 def test_cli_pendulum_text_and_study(pendulum_cli, capsys):
-    assert pendulum_cli(["pendulum", "--integrator", "cvode_adams"]) == 0
+    assert pendulum_cli(["study", "pendulum", "--integrator", "cvode_adams"]) == 0
     assert "energy error" in capsys.readouterr().out
-    assert pendulum_cli(["pendulum-study", "--json"]) == 0
+    assert pendulum_cli(["study", "pendulum-tables", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert {row["table"] for row in rows} == {"euler_stability", "cvode_statistics",
                                               "energy_error"}
@@ -134,12 +134,12 @@ def test_cli_pendulum_text_and_study(pendulum_cli, capsys):
     (["--k", "-1"], "stiffness k must be positive"),
 ])
 def test_cli_pendulum_bad_arguments_exit_2(pendulum_cli, capsys, argv, message):
-    assert pendulum_cli(["pendulum", *argv]) == 2
+    assert pendulum_cli(["study", "pendulum", *argv]) == 2
     error = capsys.readouterr().err
     assert message in error and len(error.strip().splitlines()) == 1
 
 
 def test_cli_pendulum_divergence_exit_1(pendulum_cli, capsys):
-    assert pendulum_cli(["pendulum", "--k", "1e4", "--integrator", "euler", "--dt",
+    assert pendulum_cli(["study", "pendulum", "--k", "1e4", "--integrator", "euler", "--dt",
                          "0.05"]) == 1
     assert "euler diverged at t=" in capsys.readouterr().err

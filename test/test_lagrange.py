@@ -104,7 +104,7 @@ def test_command_line_prints_equations_and_energy_drift(capsys):
     import json
 
     from youbot_dynamics.cli import main
-    assert main(["lagrange", "2d", "--t-end", "2", "--json"]) == 0
+    assert main(["study", "lagrange", "2d", "--duration", "2", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert len(report["equations"]) == 3 and "k*q3" in report["equations"][2]
     assert report["energy_relative_drift"] < 1e-8
@@ -114,14 +114,14 @@ def test_command_line_parameter_override(capsys):
     import json
 
     from youbot_dynamics.cli import main
-    assert main(["lagrange", "2d", "--t-end", "0.5", "--param", "k=80", "--param", "m2=0.4",
+    assert main(["study", "lagrange", "2d", "--duration", "0.5", "--param", "k=80", "--param", "m2=0.4",
                  "--json"]) == 0
     parameters = json.loads(capsys.readouterr().out)["parameters"]
     # the seed appendix's values where not overridden
     assert parameters == {"m1": 1.0, "l": 0.5, "m2": 0.4, "l0": 0.25, "k": 80.0, "g": 9.82,
                           "c": 0.0}
-    assert main(["lagrange", "2d", "--param", "k"]) == 2
-    assert main(["lagrange", "2d", "--param", "spring=3"]) == 2
+    assert main(["study", "lagrange", "2d", "--param", "k"]) == 2
+    assert main(["study", "lagrange", "2d", "--param", "spring=3"]) == 2
 
 
 def test_3d_potential_depends_on_q3_unlike_the_seeds():

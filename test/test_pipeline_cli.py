@@ -7,7 +7,7 @@ from youbot_dynamics.cli import main
 
 
 def test_pendulum_prints_every_stage_and_the_dummy_selection(capsys):
-    assert main(["pipeline", "pendulum", "--integrator", "rk45"]) == 0
+    assert main(["study", "pipeline", "pendulum", "--integrator", "rk45"]) == 0
     out = capsys.readouterr().out
     for heading in ("order lowering", "alias elimination", "matching", "Pantelides",
                     "dummy derivatives", "BLT", "tearing", "generated ODE", "simulation"):
@@ -18,7 +18,7 @@ def test_pendulum_prints_every_stage_and_the_dummy_selection(capsys):
 
 
 def test_modia_pendulum_json_runs_defaults_and_the_seeds_merge(capsys):
-    assert main(["pipeline", "modia-pendulum", "--json"]) == 0
+    assert main(["study", "pipeline", "modia-pendulum", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     runs = report["simulation"]
     assert [run["parameters"]["L"] for run in runs] == [0.8, 0.5]
@@ -30,24 +30,24 @@ def test_modia_pendulum_json_runs_defaults_and_the_seeds_merge(capsys):
 
 
 def test_set_overrides_and_rejects_bad_input(capsys):
-    assert main(["pipeline", "lag", "--set", "tau=1", "--json"]) == 0
+    assert main(["study", "pipeline", "lag", "--set", "tau=1", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["simulation"][0]["parameters"] == {"tau": 1.0}
-    assert main(["pipeline", "lag", "--set", "T=1"]) == 2
+    assert main(["study", "pipeline", "lag", "--set", "T=1"]) == 2
     assert "no parameter or variable T" in capsys.readouterr().err
-    assert main(["pipeline", "lag", "--set", "tau"]) == 2
+    assert main(["study", "pipeline", "lag", "--set", "tau"]) == 2
 
 
 def test_fixed_step_budget_and_the_static_selection(capsys):
-    assert main(["pipeline", "lag", "--integrator", "rk4", "--dt", "1e-9"]) == 2
+    assert main(["study", "pipeline", "lag", "--integrator", "rk4", "--dt", "1e-9"]) == 2
     assert "step budget" in capsys.readouterr().err
     # gravity upwards: the pendulum falls through the horizontal, where y -> 0 makes the
     # start's selection (y' dummy, states x, u) fade: refused with the static selection,
     # chosen again (states y, v) otherwise
-    assert main(["pipeline", "pendulum", "--set", "g=-9.81", "--static-selection"]) == 2
+    assert main(["study", "pipeline", "pendulum", "--set", "g=-9.81", "--static-selection"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "the state selection (x, u) must change" in err
-    assert main(["pipeline", "pendulum", "--set", "g=-9.81", "--json"]) == 0
+    assert main(["study", "pipeline", "pendulum", "--set", "g=-9.81", "--json"]) == 0
     run = json.loads(capsys.readouterr().out)["simulation"][0]
     assert run["state_selections"][0].endswith("states x, u -> y, v")
     assert run["statistics"]["nRestartEvents"] == len(run["state_selections"])

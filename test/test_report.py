@@ -1,6 +1,6 @@
-"""``youbot-dynamics report`` (studies/report.py): the studies' tables, the seeds'
-figures drawn from our runs (studies/figures.py) and one page with a section per study and
-a subsection per figure. CI runs a smoke form (a few quick studies, on a local Dask cluster
+"""``youbot-dynamics report`` (studies/report.py over studies/catalog.py): the studies'
+tables, the seeds' figures drawn from our runs (studies/figures.py) and one page with a
+section per study and a subsection per figure. CI runs a smoke form (a few quick studies, on a local Dask cluster
 of two processes, about 40 s on a loaded machine); the whole short form is marked slow."""
 from __future__ import annotations
 
@@ -11,9 +11,8 @@ import pytest
 from PIL import Image
 
 from youbot_dynamics.cli import main
-from youbot_dynamics.studies.figures import all_specs, figure_sets
-from youbot_dynamics.studies.report import (PAGE, STUDIES, STUDY_NAMES, Study, markdown_rows,
-                                            missing_in_build, run_study, verdict_agreement)
+from youbot_dynamics.studies.catalog import FIGURE_SETS, SECTION_NAMES, SECTIONS, all_specs
+from youbot_dynamics.studies.report import PAGE, markdown_rows, run_section, verdict_agreement
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 SMOKE = ("structure-lowpass", "structure-pendulum", "woodpecker", "uncertainty")
@@ -43,15 +42,14 @@ def assert_report(out: Path, names) -> str:
     sets; every PNG the page shows is valid; every figure subsection has the seed's part,
     ours with its image, and the difference. Returns the page."""
     page = (out / PAGE).read_text(encoding="utf-8")
-    studies = [s for s in STUDIES if s.name in names]
-    assert len(studies) == len(names)
-    declared = [spec.file for study in studies if study.name in figure_sets()
-                for spec in figure_sets()[study.name].specs]
-    for study in studies:
-        assert f"## {study.title}" in page and f'<a id="{study.name}"></a>' in page
-        if missing_in_build(study.arguments(out, False)) is None:
-            for figure in study.figures:
-                assert_png(out / figure)
+    sections = [s for s in SECTIONS if s.name in names]
+    assert len(sections) == len(names)
+    declared = [spec.file for section in sections if section.name in FIGURE_SETS
+                for spec in FIGURE_SETS[section.name].specs]
+    for section in sections:
+        assert f"## {section.title}" in page and f'<a id="{section.name}"></a>' in page
+        for figure in section.files:
+            assert_png(out / figure)
     shown = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", page)
     assert set(declared) <= set(shown), set(declared) - set(shown)
     listed = re.findall(r"^\d+\. \[([^\]]+)\]\(#figure-", page, flags=re.M)
@@ -72,7 +70,7 @@ def test_the_figure_sets_declare_the_seeds_figures():
     specs = all_specs()
     files = [spec.file for spec in specs]
     assert len(files) >= 40 and len(set(files)) == len(files)
-    assert set(figure_sets()) <= set(STUDY_NAMES)
+    assert set(FIGURE_SETS) <= set(SECTION_NAMES)
     assert all(spec.file.endswith(".png") and spec.caption and spec.seed for spec in specs)
 
 
@@ -88,13 +86,7 @@ def test_smoke_report_on_a_local_cluster(tmp_path, capsys):
            "same." in page
     # the studies' own figures reached the page: the seed's 22 beak hits beside ours
     assert "beak hits (seed over 2 s: 22)" in page and "structural index 3" in page
-    assert page.index("Woodpecker") < page.index("Uncertain")  # the order of STUDIES
-
-
-def test_a_study_not_in_the_build_is_listed_not_run(tmp_path):
-    study = Study("other", "Another branch's study", ("no-such-command", "--x"), seed="-")
-    result = run_study(study, str(tmp_path), False)
-    assert result.status is None and "no-such-command" in result.errors
+    assert page.index("Woodpecker") < page.index("Uncertain")  # the order of SECTIONS
 
 
 def test_verdict_agreement_counts_rows_with_both_cells():
@@ -111,7 +103,7 @@ def test_verdict_agreement_counts_rows_with_both_cells():
 @pytest.mark.slow
 def test_short_report_writes_every_figure(tmp_path):
     status = main(["report", "--out", str(tmp_path)])
-    page = assert_report(tmp_path, [s.name for s in STUDIES])
+    page = assert_report(tmp_path, SECTION_NAMES)
     assert status == 0, page
     assert "0 failed" in page
     assert len(figure_subsections(page)) == len(all_specs())
@@ -120,51 +112,58 @@ def test_short_report_writes_every_figure(tmp_path):
 def test_a_figure_set_that_raises_is_reported_failed(tmp_path, monkeypatch):
     from youbot_dynamics.studies import figures
 
-    def broken(out, full):
+    def broken(result, out, full):
         raise RuntimeError("a bug in the figures")
-    sets = dict(figures.figure_sets())
-    sets["structure-lowpass"] = figures.FigureSet("structure-lowpass", (), broken)
-    monkeypatch.setattr("youbot_dynamics.studies.report.figure_sets", lambda: sets)
-    study = next(s for s in STUDIES if s.name == "structure-lowpass")
-    result = run_study(study, str(tmp_path), False)
-    assert result.status == 0 and result.failed
+    monkeypatch.setitem(FIGURE_SETS, "structure-lowpass",
+                        figures.FigureSet("structure-lowpass", (), broken))
+    result = run_section("structure-lowpass", str(tmp_path), False)
+    assert result.ok and result.failed
     assert "RuntimeError: a bug in the figures" in result.figure_error
 
 
 def test_list_figures_names_every_figure_without_running(capsys):
     assert main(["report", "--list-figures"]) == 0
     rows = markdown_rows(capsys.readouterr().out)
-    commands = [file for study in STUDIES for file in study.figures]
+    commands = [file for section in SECTIONS for file in section.files]
     assert [row["file"] for row in rows] == [spec.file for spec in all_specs()] + commands
 
 
 def test_a_figure_set_must_write_what_it_declares(tmp_path):
     from youbot_dynamics.studies.figures import FigureSet, FigureSpec, draw_set
     spec = FigureSpec("a.png", "A", "seed")
-    lazy = FigureSet("lazy", (spec,), lambda out, full: {"a.png": ("ours", "difference")})
+    lazy = FigureSet("lazy", (spec,), lambda result, out, full: {"a.png": ("ours", "difference")})
     with pytest.raises(RuntimeError, match="figure set lazy: did not write a.png"):
         draw_set(lazy, tmp_path)
 
 
 def test_a_study_that_raises_is_reported_failed(tmp_path, monkeypatch):
-    from youbot_dynamics.cli import study_commands
+    from youbot_dynamics.studies import uncertain_pendulum
 
-    def broken(args):
+    def broken(config):
         raise RuntimeError("a bug in the study")
-    monkeypatch.setattr(study_commands, "run_uncertainty", broken)
-    study = next(s for s in STUDIES if s.name == "uncertainty")
-    result = run_study(study, str(tmp_path), False)
-    assert result.status == 1 and "RuntimeError: a bug in the study" in result.errors
+    monkeypatch.setattr(uncertain_pendulum, "run", broken)
+    result = run_section("uncertainty", str(tmp_path), False)
+    assert not result.ok and result.failed and "RuntimeError: a bug in the study" in result.errors
 
 
 @pytest.mark.parametrize("full", [False, True])
-def test_every_study_command_line_parses(tmp_path, full):
-    """Short and full forms: each command line is accepted, or its whole command belongs
-    to a branch not merged here (then the page lists it as missing)."""
-    from youbot_dynamics.cli import COMMANDS
-    for study in STUDIES:
-        argv = study.arguments(tmp_path, full)
-        problem = missing_in_build(argv)
-        assert problem is None or argv[0] not in COMMANDS, (study.name, problem)
-        assert all(str(tmp_path) in a for a in argv if a.endswith(".png")) and not any(
-            "{out}" in a for a in argv)
+def test_every_section_command_line_parses(full):
+    """Short and full forms: the command line each section shows is one the command line
+    accepts (the section runs the study directly; the line is how a user reproduces it)."""
+    from youbot_dynamics.cli import COMMANDS, build_parser
+    for section in SECTIONS:
+        argv = section.command_line(full).split()[1:]
+        assert argv[0] in COMMANDS, section.name
+        build_parser((COMMANDS[argv[0]][0],)).parse_args(argv)
+
+
+def test_report_imports_no_command_line():
+    """The report runs the studies, never the command line (the layering: studies/ is
+    below cli/)."""
+    import subprocess
+    import sys
+    code = ("import sys, youbot_dynamics.studies.report\n"
+            "print(sorted(m for m in sys.modules if m.startswith('youbot_dynamics.cli')))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True, cwd=Path(__file__).resolve().parents[1])
+    assert done.stdout.strip() == "[]"

@@ -124,20 +124,20 @@ def test_cli_rotations_json_and_plot(tmp_path, capsys):
 
     from youbot_dynamics.cli import main
     plot = tmp_path / "rotations.png"
-    assert main(["rotations", "--runs", "top", "--tol", "1e-6", "--plot", str(plot),
+    assert main(["study", "rotations", "--runs", "top", "--tol", "1e-6", "--plot", str(plot),
                  "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert [row["formulation"] for row in report["rows"]] == ["cardan", "cardan_adaptive",
                                                              "quaternion"]
     assert report["spin_wobble_sweep"] == [] and plot.stat().st_size > 10_000
     assert all(row["attitude_error"] < GLOBAL_FACTOR * 1e-6 for row in report["rows"])
-    assert main(["rotations", "--runs", "wobble"]) == 2
+    assert main(["study", "rotations", "--runs", "wobble"]) == 2
 
 
 @pytest.mark.parametrize("argv, stand_in", [
-    (["rotations", "--plot"], "youbot_dynamics.studies.rotations.rotations_study"),
-    (["uncertainty", "--plot"], "youbot_dynamics.studies.uncertain_pendulum.linear_propagation"),
-    (["bdf-study", "--choppy"], "youbot_dynamics.studies.bdf_study.fixed_step_tables"),
+    (["study", "rotations", "--plot"], "youbot_dynamics.studies.rotations.rotations_study"),
+    (["study", "uncertainty", "--plot"], "youbot_dynamics.studies.uncertain_pendulum.linear_propagation"),
+    (["study", "bdf", "--choppy-plot"], "youbot_dynamics.studies.bdf_study.fixed_step_tables"),
 ])
 def test_study_plot_paths_checked_before_the_run(monkeypatch, capsys, tmp_path, argv, stand_in):
     from youbot_dynamics.cli import main

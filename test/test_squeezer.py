@@ -135,18 +135,18 @@ def test_drift_is_largest_without_stabilisation():
 
 
 def test_cli_json_and_errors(capsys, tmp_path):
-    assert main(["squeezer", "--formulation", "index1", "--integrator", "dop853",
+    assert main(["study", "squeezer", "--formulation", "index1", "--integrator", "dop853",
                  "--rtol", "1e-8", "--json", "--plot", str(tmp_path / "drift.png")]) == 0
     report = json.loads(capsys.readouterr().out)
     assert max(report["relative_error_vs_reference"]) < 1e-6
     assert (tmp_path / "drift.png").stat().st_size > 10_000
-    assert main(["squeezer", "--formulation", "index2", "--jacobian", "fd", "--rtol", "1e-4",
+    assert main(["study", "squeezer", "--formulation", "index2", "--jacobian", "fd", "--rtol", "1e-4",
                  "--outputs", "3", "--json"]) == 0
     assert max(json.loads(capsys.readouterr().out)["relative_error_vs_reference"]) < 1e-2
-    assert main(["squeezer", "--formulation", "index3", "--integrator", "rk45"]) == 2
-    assert main(["squeezer", "--formulation", "index1", "--integrator", "radau5"]) == 2
-    assert main(["squeezer", "--formulation", "index1", "--rtol", "-1"]) == 2
-    assert main(["structure", "pendulum", "--json"]) == 0
+    assert main(["study", "squeezer", "--formulation", "index3", "--integrator", "rk45"]) == 2
+    assert main(["study", "squeezer", "--formulation", "index1", "--integrator", "radau5"]) == 2
+    assert main(["study", "squeezer", "--formulation", "index1", "--rtol", "-1"]) == 2
+    assert main(["study", "structure", "pendulum", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["structural_index"] == 3
 
 
@@ -155,7 +155,7 @@ def test_cli_suppression_tables(capsys):
     either way and with radau5 unscaled, index-scaled radau5 9.9e-4 in 47 steps; index 2:
     IDA with w, lambda in its error test spends the step budget, suppressed 1.1e-3 in 321
     steps, radau5 unscaled and scaled both within 1e-4)."""
-    assert main(["squeezer", "--table", "--tolerances", "1e-4", "--outputs", "3",
+    assert main(["study", "squeezer", "--table", "--tolerances", "1e-4", "--outputs", "3",
                  "--json"]) == 0
     tables = json.loads(capsys.readouterr().out)
     index3, index2 = tables["index3"]["rows"][0], tables["index2"]["rows"][0]
@@ -164,4 +164,4 @@ def test_cli_suppression_tables(capsys):
     assert index3["radau5, index-scaled"]["error"] < 2e-2
     assert index2["ida, suppressed"]["error"] < 1e-2
     assert index2["radau5, index-scaled"]["error"] < 1e-3
-    assert main(["squeezer", "--table", "--tolerances", "0"]) == 2
+    assert main(["study", "squeezer", "--table", "--tolerances", "0"]) == 2

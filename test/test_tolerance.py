@@ -68,7 +68,7 @@ def test_pendulum_at_tol_1e_12_ends_within_1e_9_of_an_independent_reference(caps
                        atol=1e-15).y[:, -1]
     assert np.max(np.abs(looser - reference)) < 1e-10
     assert abs(energy(reference) - energy(x0)) < 1e-10
-    assert main(["pendulum", "--k", "1000", "--state0", "1.1,0,0,0", "--t-end", "10",
+    assert main(["study", "pendulum", "--k", "1000", "--state0", "1.1,0,0,0", "--duration", "10",
                  "--tol", "1e-12", "--json"]) == 0
     final = json.loads(capsys.readouterr().out)["final_state"]
     ours = np.array([final[name] for name in ("x", "y", "vx", "vy")])
@@ -122,7 +122,7 @@ def test_scene_tol_key_sets_rtol_and_a_nominal_atol(tmp_path):
 def test_woodpecker_and_lagrange_take_tol(capsys):
     """--tol on the other integrating commands: the woodpecker keeps the seed's 22 beak hits
     at tol 1e-8; lagrange 2d at tol 1e-12 drifts in energy by 3.3e-13 (bound 1e-11)."""
-    assert main(["woodpecker", "--tol", "1e-8", "--json"]) == 0
+    assert main(["study", "woodpecker", "--tol", "1e-8", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["beak_hits"] == 22
-    assert main(["lagrange", "2d", "--tol", "1e-12", "--json"]) == 0
+    assert main(["study", "lagrange", "2d", "--tol", "1e-12", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["energy_relative_drift"] < 1e-11

@@ -71,8 +71,8 @@ def test_linearisation_fails_with_the_seeds_sigmas(linear):
 
 
 def test_cli_uncertainty_json(capsys):
-    assert main(["uncertainty", "--t-end", "1", "--samples", "200", "--json"]) == 0
+    assert main(["study", "uncertainty", "--duration", "1", "--samples", "200", "--json"]) == 0
     figures = json.loads(capsys.readouterr().out)
     assert figures["samples"] == 200 and figures["t_end"] == 1.0
     assert figures["sigma_linear_end"] > 0 and figures["sigma_monte_carlo_end"] > 0
-    assert main(["uncertainty", "--samples", "1"]) == 2
+    assert main(["study", "uncertainty", "--samples", "1"]) == 2

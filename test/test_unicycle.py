@@ -96,12 +96,12 @@ def test_parameters_and_inputs_are_checked():
 
 def test_unicycle_and_mecanum_commands(capsys, monkeypatch):
     monkeypatch.setattr(cli, "COMMAND_MODULES", ("youbot_dynamics.cli.mobile_commands",))
-    assert cli.main(["unicycle", "--tau-left", "-0.5", "--json"]) == 0
+    assert cli.main(["study", "unicycle", "--tau-left", "-0.5", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["case"].startswith("opposite torques")
     assert record["max_error"] < 1e-8
     assert record["final_state"]["x"] == 0.0 and record["final_state"]["y"] == 0.0
-    assert cli.main(["unicycle", "--t-end", "2"]) == 0
+    assert cli.main(["study", "unicycle", "--duration", "2"]) == 0
     text = capsys.readouterr().out
     assert "equal torques: straight line" in text and "max |simulated - closed form|" in text
     assert cli.main(["mecanum", "--twist", "0,0.5,0", "--json"]) == 0

@@ -122,12 +122,12 @@ def test_command_line_reports_the_hits_and_rejects_a_fixed_step_run_without_dt(c
     import json
 
     from youbot_dynamics.cli import main
-    assert main(["woodpecker", "--json"]) == 0
+    assert main(["study", "woodpecker", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["beak_hits"] == SEED_BEAK_HITS
     assert sum(s["kind"] == BEAK for s in report["switches"]) == SEED_BEAK_HITS
     assert report["stats"]["events"] >= len(report["switches"])
-    assert main(["woodpecker", "--integrator", "rk4"]) == 2
+    assert main(["study", "woodpecker", "--integrator", "rk4"]) == 2
     assert "--dt" in capsys.readouterr().err
 
 
@@ -138,5 +138,5 @@ def test_command_line_ida_gives_the_seeds_hits_at_every_tolerance(rtol, capsys):
     import json
 
     from youbot_dynamics.cli import main
-    assert main(["woodpecker", "--integrator", "ida", "--rtol", rtol, "--json"]) == 0
+    assert main(["study", "woodpecker", "--integrator", "ida", "--rtol", rtol, "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["beak_hits"] == SEED_BEAK_HITS

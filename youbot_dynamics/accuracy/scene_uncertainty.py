@@ -12,24 +12,26 @@ The output is a state component by its name (``q[pivot]``, ``v[arm_joint_1]``,
 ``pose[ball.z]``: ``SimulationResult.layout.names``) at the scene's output times. Every
 run (2 k + 1 linear, N Monte Carlo) is an independent case of
 :func:`youbot_dynamics.accuracy.sweeps.map_cases` (serial, a local Dask cluster or the one at
-``scheduler``; ``progress``: a bar on stderr). Mean and sigma come as :class:`~youbot_dynamics.studies.uncertain_pendulum
-.Propagation`; the figures and the plot are that study's (``comparison``,
-``plot_uncertainty``).
+``scheduler``; ``progress``: a bar on stderr). Mean and sigma come as
+:class:`~youbot_dynamics.accuracy.propagation.Propagation`; the figures and the plot are
+accuracy/propagation.py's (``comparison``, ``plot_uncertainty``), shared with the
+uncertain-pendulum study.
 """
 from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
+from youbot_dynamics.accuracy.propagation import Propagation
 from youbot_dynamics.accuracy.sweeps import map_cases
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.scene.reader import SceneError
 from youbot_dynamics.scene.schema import Scene, find_scene, load_scene
 from youbot_dynamics.sim import engine
 from youbot_dynamics.sim.build import compile
-from youbot_dynamics.studies.uncertain_pendulum import Propagation
 
 #: Finite-difference step of the sensitivities, as a fraction of each parameter's sigma:
 #: small enough for the truncation error (O(step^2)) and large enough that the integrator's
@@ -130,3 +132,18 @@ def monte_carlo(path: str | Path, output: str, n: int = 1000, seed: int = 0, dur
                                 desc="Monte Carlo", progress=progress)).T
     return (Propagation("monte_carlo", output_times(path, duration), traces.mean(axis=1),
                         traces.std(axis=1, ddof=1), time.perf_counter() - start), keys, samples, traces)
+
+
+def summary_text(scene: str, output: str, keys: Sequence[str], samples: int, seed: int,
+                 figures: dict) -> str:
+    """The comparison's figures (accuracy.propagation.comparison, in the output's unit and
+    s) as the lines ``scene-uncertainty`` prints."""
+    return "\n".join([
+        f"{scene}: {output} with uncertain {', '.join(keys)}; linear propagation "
+        f"(central differences) against {samples} Monte Carlo samples (seed {seed})",
+        f"at t = {figures['t_end']:g} s: sigma linear {figures['sigma_linear_end']:.4g}, Monte Carlo "
+        f"{figures['sigma_monte_carlo_end']:.4g} (2-sigma bands {figures['band_width_linear_end']:.4g} and "
+        f"{figures['band_width_monte_carlo_end']:.4g} wide); means differ by {figures['mean_difference_end']:.3g}",
+        f"sigma_linear / sigma_MC ranges over [{figures['min_ratio']:.3g}, {figures['max_ratio']:.3g}]; "
+        f"wall time: linear {figures['wall_time_linear']:.3g} s, Monte Carlo "
+        f"{figures['wall_time_monte_carlo']:.3g} s"])

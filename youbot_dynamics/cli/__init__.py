@@ -40,28 +40,14 @@ COMMANDS: dict[str, tuple[str, str]] = {
         ("sim_commands", (("simulate", "simulate a scene"),
                           ("work-precision", "speed versus accuracy on a scene"))),
         ("contact_commands", (("contact-extremes", "measure contact at its extremes"),)),
-        ("pendulum_commands", (("pendulum", "simulate the elastic pendulum"),
-                               ("pendulum-study", "the seed's elastic-pendulum tables"),
-                               ("bdf-study", "fixed-step BDF1-4: the seed's Tables 1-4, stability regions, measured "
-                                             "orders, CVODE order caps"))),
-        ("mechanism_commands", (("squeezer", "Andrew's squeezer: a constrained mechanism in one formulation"),
-                                ("structure", "structural analysis (matching, BLT, Pantelides) of an example"))),
-        ("study_commands", (("woodpecker", "the woodpecker toy: state events, impacts, beak hits and statistics"),
-                            ("lagrange", "equations of motion by sympy (Lagrange), simulated from the seed's "
-                                         "initial state"),
-                            ("rotations", "Cardan angles vs adaptive Cardan vs quaternions on a torque-free rigid body"),
-                            ("uncertainty", "the damped pendulum with uncertain L, m, d: linear propagation against "
-                                            "Monte Carlo"))),
+        ("study_commands", (("study", "run one of the classic studies (study --help lists them)"),)),
         ("ros_commands", (("replay", "publish a recorded bag on its ROS 2 topics"),
                           ("main-job", "simulate a scene with the dynamics node, log MCAP and Rerun"))),
         ("log_commands", (("log", "repair log files"),)),
         ("identify_commands", (("excite", "optimise an excitation trajectory for identification"),
                                ("identify", "identify base parameters from a bag's /joint_states"))),
-        ("mobile_commands", (("unicycle", "the differential drive against its closed forms"),
-                             ("mecanum", "youBot base: wheel speeds of a twist, and its odometry"))),
+        ("mobile_commands", (("mecanum", "youBot base: wheel speeds of a twist, and its odometry"),)),
         ("report_commands", (("report", "run every study; write their PNGs and one Markdown page"),)),
-        ("pipeline_commands", (("pipeline", "equation pipeline on an example model: every stage "
-                                            "printed"),)),
         ("uncertainty_commands", (("scene-uncertainty", "propagate a scene's value ± sigma parameters to an "
                                                         "output: linear band against Monte Carlo"),)),
     ) for name, summary in commands}

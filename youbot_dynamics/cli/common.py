@@ -35,6 +35,7 @@ import numpy as np
 
 from youbot_dynamics import default_urdf
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.io.text_tables import cell, markdown_table  # noqa: F401 (the commands use them)
 from youbot_dynamics.model import lie, limits
 
 if TYPE_CHECKING:  # the robot loader (lxml, Pinocchio) only for commands that load one
@@ -263,29 +264,12 @@ def matrix_text(matrix: np.ndarray, indent: str = "  ") -> str:
 def table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
     """Columns aligned; text cells left, numbers (formatted with :func:`number`) right."""
     rows = [list(row) for row in rows]
-    cells = [[cell if isinstance(cell, str) else number(float(cell)) for cell in row] for row in rows]
+    cells = [[value if isinstance(value, str) else number(float(value)) for value in row] for row in rows]
     widths = [max([len(h), *(len(row[i]) for row in cells)]) for i, h in enumerate(header)]
     lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths)).rstrip()]
     for raw, row in zip(rows, cells):
         lines.append("  ".join(c.ljust(w) if isinstance(r, str) else c.rjust(w)
                                for r, c, w in zip(raw, row, widths)).rstrip())
-    return "\n".join(lines)
-
-
-def cell(value: object, digits: int = 4) -> str:
-    """A figure for a statistics or study table: '-' when not known (None or NaN), integers
-    and text as they are, other numbers to ``digits`` significant digits."""
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "-"
-    if isinstance(value, (str, bool, int, np.integer)):
-        return str(value)
-    return f"{value:.{digits}g}"
-
-
-def markdown_table(header: Sequence[str], rows: Iterable[Sequence[Any]], digits: int = 4) -> str:
-    """A markdown table; cells formatted with :func:`cell`."""
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(cell(value, digits) for value in row) + " |" for row in rows]
     return "\n".join(lines)
 
 

@@ -6,7 +6,8 @@ import argparse
 import json
 
 from youbot_dynamics.accuracy.contact_extremes import TABLES
-from youbot_dynamics.cli.common import add_json, finite_or_none, markdown_table
+from youbot_dynamics.cli.common import add_json, finite_or_none
+from youbot_dynamics.io.text_tables import records_table
 
 #: The commands here that run an integrator, and where their accuracy comes from (see
 #: youbot_dynamics.cli: "--tol" or the reason the command takes none).
@@ -27,12 +28,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     command.set_defaults(run=run_contact_extremes)
 
 
-def markdown(rows: list[dict]) -> str:
-    """A markdown table over the union of the rows' keys (missing: -)."""
-    keys = list(dict.fromkeys(key for row in rows for key in row))
-    return markdown_table(keys, [[row.get(key) for key in keys] for row in rows])
-
-
 def run_contact_extremes(args: argparse.Namespace) -> int:
     """Run the chosen tables and print them."""
     names = args.table or list(TABLES)
@@ -42,5 +37,5 @@ def run_contact_extremes(args: argparse.Namespace) -> int:
                                  for row in rows] for name, rows in tables.items()}))
         return 0
     for name, rows in tables.items():
-        print(f"## {name}\n\n{markdown(rows)}\n")
+        print(f"## {name}\n\n{records_table(rows)}\n")
     return 0

@@ -1,6 +1,7 @@
-"""Sub-command ``pipeline``: the equation pipeline (order lowering, alias elimination,
-matching, Pantelides, dummy derivatives, BLT, tearing, code generation, simulation) on one
-of the seed's example models, each stage printed (or JSON with ``--json``)."""
+"""``study pipeline``: the equation pipeline (order lowering, alias elimination, matching,
+Pantelides, dummy derivatives, BLT, tearing, code generation, simulation) on one of the
+seed's example models, each stage printed (or JSON with ``--json``;
+studies/pipeline_report.py)."""
 from __future__ import annotations
 
 import argparse
@@ -10,26 +11,20 @@ import sys
 
 import numpy as np
 
-from youbot_dynamics.cli.common import CommandError, relative_tolerance
+from youbot_dynamics.cli.common import CommandError, add_json, relative_tolerance
 from youbot_dynamics.cli.sim_commands import add_step_budget_argument, checked_step_budget
 from youbot_dynamics.integrate.integrators import IntegrationError
 from youbot_dynamics.integrate.registry import integrator_names
+from youbot_dynamics.studies import pipeline_report
 from youbot_dynamics.studies.equations import EXAMPLE_MODELS
-from youbot_dynamics.studies.pipeline_report import pipeline_report, report_lines
-from youbot_dynamics.studies.state_selection import simulate_with_reselection
-
-#: The seed's parameter merge for the ModiaLang pendulum (``Pendulum | Map(L = 0.5)``).
-MODIA_MERGE = {"L": 0.5}
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
-    """Add `pipeline`."""
-    parser = subparsers.add_parser(
-        "pipeline", help="equation pipeline on an example model: every stage printed")
+def add_pipeline(parser: argparse.ArgumentParser) -> None:
+    """Options of ``study pipeline``."""
     parser.add_argument("example", choices=tuple(EXAMPLE_MODELS))
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="parameter merge (model | {NAME: VALUE}); repeatable. "
-                        "modia-pendulum runs its defaults and the seed's merge L=0.5 unless "
+                        "modia-pendulum runs its defaults and the source document's merge L=0.5 unless "
                         "--set is given")
     parser.add_argument("--integrator", choices=integrator_names("ode"),
                         default="cvode_bdf", help="default cvode_bdf (Modia's CVODE_BDF)")
@@ -42,8 +37,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="keep the start's state selection (fails where a pivot fades) "
                         "instead of choosing the states again there")
     add_step_budget_argument(parser)
-    parser.add_argument("--json", action="store_true")
-    parser.set_defaults(run=run_pipeline_command)
+    add_json(parser)
+    parser.set_defaults(run=run_pipeline)
 
 
 def parse_merge(items: list[str]) -> dict[str, float]:
@@ -60,31 +55,24 @@ def parse_merge(items: list[str]) -> dict[str, float]:
     return merge
 
 
-def run_pipeline_command(args: argparse.Namespace) -> int:
+def run_pipeline(args: argparse.Namespace) -> int:
     """Run the pipeline on the example and print each stage."""
-    model = EXAMPLE_MODELS[args.example]()
-    merges = [parse_merge(args.set)] if args.set else [{}]
-    if args.example == "modia-pendulum" and not args.set:
-        merges.append(MODIA_MERGE)
-    runs = []
-    for merge in merges:
-        current = model | merge
-        times = np.linspace(current.t0, current.t_end, args.outputs)
-        checked_step_budget(args.integrator, args.dt, times, args.max_steps)
-        try:
-            with np.errstate(all="ignore"):
-                run = simulate_with_reselection(
-                    current, args.integrator, args.tol, args.outputs, dt=args.dt,
-                    max_steps=args.max_steps, max_segments=1 if args.static_selection else 100)
-        except IntegrationError as error:
-            print(f"youbot-dynamics pipeline: {args.example} failed: {error}", file=sys.stderr)
-            return 1
-        label = "model | " + ", ".join(f"{k} = {v:g}" for k, v in merge.items()) \
-            if merge else "model (defaults)"
-        runs.append((label, run, args.tol))
-    report = pipeline_report(runs[0][1].segments[0].result, runs)
-    if args.json:
-        print(json.dumps(report, indent=2, default=str))
-    else:
-        print("\n".join(report_lines(report)))
+    config = pipeline_report.PipelineConfig(
+        example=args.example, merge=tuple(parse_merge(args.set).items()),
+        integrator=args.integrator, tol=args.tol, outputs=args.outputs, dt=args.dt,
+        max_steps=args.max_steps, static_selection=args.static_selection)
+    for _, model in pipeline_report.pipeline_models(config):
+        checked_step_budget(config.integrator, config.dt,
+                            np.linspace(model.t0, model.t_end, config.outputs), config.max_steps)
+    try:
+        report = pipeline_report.run(config)
+    except IntegrationError as error:
+        print(f"youbot-dynamics study pipeline: {args.example} failed: {error}", file=sys.stderr)
+        return 1
+    print(json.dumps(report, indent=2, default=str) if args.json
+          else pipeline_report.text(report))
     return 0
+
+
+#: The studies this module adds under ``study``: name -> function adding its options.
+STUDY_PARSERS = {"pipeline": add_pipeline}

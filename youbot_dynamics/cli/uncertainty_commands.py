@@ -17,8 +17,8 @@ SUMMARY = "propagate a scene's value ± sigma parameters to an output: linear ba
 
 def run_scene_uncertainty(args: argparse.Namespace) -> int:
     """Both propagations, the figures at the end time (or JSON) and optionally the plot."""
-    from youbot_dynamics.accuracy.scene_uncertainty import linear_propagation, monte_carlo
-    from youbot_dynamics.studies.uncertain_pendulum import comparison, plot_uncertainty
+    from youbot_dynamics.accuracy.propagation import comparison, plot_uncertainty
+    from youbot_dynamics.accuracy.scene_uncertainty import linear_propagation, monte_carlo, summary_text
     if args.plot:
         output_file(args.plot, "--plot")
     where = {"workers": args.workers, "scheduler": args.scheduler, "progress": True}
@@ -33,14 +33,7 @@ def run_scene_uncertainty(args: argparse.Namespace) -> int:
                           "sensitivities_end": dict(zip(keys, sensitivities[:, -1].tolist())),
                           "samples": args.samples, "seed": args.seed, "plot": args.plot}, indent=2))
         return 0
-    print(f"{args.scene}: {args.output} with uncertain {', '.join(keys)}; linear propagation "
-          f"(central differences) against {args.samples} Monte Carlo samples (seed {args.seed})")
-    print(f"at t = {figures['t_end']:g} s: sigma linear {figures['sigma_linear_end']:.4g}, Monte Carlo "
-          f"{figures['sigma_monte_carlo_end']:.4g} (2-sigma bands {figures['band_width_linear_end']:.4g} and "
-          f"{figures['band_width_monte_carlo_end']:.4g} wide); means differ by {figures['mean_difference_end']:.3g}")
-    print(f"sigma_linear / sigma_MC ranges over [{figures['min_ratio']:.3g}, {figures['max_ratio']:.3g}]; "
-          f"wall time: linear {figures['wall_time_linear']:.3g} s, Monte Carlo "
-          f"{figures['wall_time_monte_carlo']:.3g} s")
+    print(summary_text(args.scene, args.output, keys, args.samples, args.seed, figures))
     if args.plot:
         print(f"plot written to {args.plot}")
     return 0

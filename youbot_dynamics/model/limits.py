@@ -53,6 +53,7 @@ ANGULAR_SPEED = Bound("angular speed", 1e4, "rad/s", "95 000 rpm")
 DAMPING = Bound("damping", 1e8, "N m s/rad or N s/m", "example robots reach 2e4", non_negative=True)
 FRICTION = Bound("friction", 1e8, "N m or N", "example robots reach 12", non_negative=True)
 RATE = Bound("output rate", 1e6, "Hz", "1 MHz, 1 us between samples")
+DURATION = Bound("duration", 1e4, "s", "2.8 h of simulated time", non_negative=True)
 
 #: Tolerances: rtol (and the accuracy knob ``tol``) at least 100 machine epsilons (2.2e-14),
 #: the floor below which scipy's solvers raise rtol themselves with a warning: there a step's

@@ -218,37 +218,3 @@ def measured_boundary_radius(order: int, angle: float, r_low: float = 1e-3,
         else:
             r_high = middle
     return 0.5 * (r_low + r_high)
-
-
-def plot_stability_regions(path: str, orders=(1, 2, 3, 4),
-                           points: dict[str, complex] | None = None) -> None:
-    """PNG of the root loci (stability boundaries) of the given orders, the unstable side
-    shaded: the whole regions, and a close-up of the imaginary axis near 0 with optional
-    labelled points z = h lambda."""
-    from youbot_dynamics.studies.figures import pyplot, save
-    plt = pyplot()
-
-    figure, axes = plt.subplots(1, 2, figsize=(11, 5.5))
-    theta = np.linspace(0.0, 2.0 * np.pi, 4001)
-    for axis in axes:
-        for order in orders:
-            z = root_locus(order, theta)
-            line, = axis.plot(z.real, z.imag, label=f"BDF{order} "
-                              f"(A({np.degrees(alpha_angle(order)):.2f} deg))")
-            axis.fill(z.real, z.imag, color=line.get_color(), alpha=0.08)
-        axis.axhline(0.0, color="grey", linewidth=0.5)
-        axis.axvline(0.0, color="grey", linewidth=0.5)
-        axis.set_xlabel("Re h lambda")
-        axis.set_ylabel("Im h lambda")
-        axis.grid(True, alpha=0.3)
-    for label, z in (points or {}).items():
-        axes[1].plot(z.real, z.imag, "k.", markersize=6)
-        axes[1].annotate(label, (z.real, z.imag), fontsize=7, xytext=(4, -2),
-                         textcoords="offset points")
-    axes[0].set_aspect("equal")
-    axes[0].legend(fontsize=8, loc="lower right")
-    axes[0].set_title("BDF1-4: unstable inside each closed curve (shaded)")
-    axes[1].set_xlim(-0.8, 0.6)
-    axes[1].set_ylim(-0.1, 2.0)
-    axes[1].set_title("near the imaginary axis: the spring's h i sqrt(k)", fontsize=10)
-    save(figure, path)

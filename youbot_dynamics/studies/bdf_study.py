@@ -11,7 +11,7 @@ Our criterion, stated:
   pendulum's length) of a high-accuracy reference (DOP853 at rtol = atol =
   REFERENCE_TOL) at the outputs every 0.1 s.
 
-Beside it, the energy verdict of ``pendulum-study`` (unstable at max|E - E0| >= 1,
+Beside it, the energy verdict of ``study pendulum-tables`` (unstable at max|E - E0| >= 1,
 accurate below 0.01): the two disagree where a method damps the spring (BDF2 at k = 2000
 loses all 40 units of spring energy, "unstable" by energy, bounded and stable in fact) and
 where a small energy error hides a phase error.
@@ -19,6 +19,7 @@ where a small energy error hides a phase error.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import asdict, dataclass
 from functools import partial
 from typing import Sequence
@@ -26,7 +27,9 @@ from typing import Sequence
 import numpy as np
 
 from youbot_dynamics.integrate.integrators import DivergenceError, Solution
-from youbot_dynamics.studies.bdf import bdf_fixed_step
+from youbot_dynamics.io.text_tables import markdown_table
+from youbot_dynamics.studies.bdf import (alpha_angle, bdf_fixed_step, locus_radius_on_ray,
+                                         measured_boundary_radius)
 from youbot_dynamics.studies.elastic_pendulum import (ACCURATE_ENERGY_ERROR, SEED_STATE0,
                                                       SEED_T_END, STABLE_BOUND, STABLE_ENERGY_ERROR,
                                                       elastic_pendulum_energy,
@@ -102,7 +105,7 @@ def reference_positions(k: float, tol: float = REFERENCE_TOL) -> np.ndarray:
 
 
 def energy_verdict(energy_error: float | None) -> str:
-    """pendulum-study's verdict from max |E - E0| alone (None: diverged)."""
+    """study pendulum-tables' verdict from max |E - E0| alone (None: diverged)."""
     if energy_error is None or energy_error >= STABLE_ENERGY_ERROR:
         return "unstable"
     return "accurate" if energy_error < ACCURATE_ENERGY_ERROR else "stable, inaccurate"
@@ -205,35 +208,85 @@ def stability_points(rows: Sequence[FixedStepRow]) -> dict[str, complex]:
 CHOPPY_TOL, CHOPPY_K = 0.1, 10.0
 
 
-def plot_choppy_traces(path: str,
-                       integrators: Sequence[str] = ("cvode_bdf", "cvode_adams")) -> dict:
-    """PNG of x(t) and y(t) from CVODE (BDF and Adams, or the ``integrators`` given) at
-    rtol = atol = CHOPPY_TOL (k = CHOPPY_K, CVODE's difference-quotient Jacobian) against
-    the DOP853 reference, outputs by CVODE's interpolation every 0.01 s over [0, 20] s.
-    Returns each run's steps and max position error (m)."""
-    from youbot_dynamics.studies.figures import pyplot, save
-    plt = pyplot()
+@dataclass(frozen=True)
+class BdfConfig:
+    """The study's size (``short``: only the cells the seed gives a verdict for, no CVODE
+    order 1 at k = 50) and where the stability bisections run (``workers``: processes of a
+    local Dask cluster, 0 serial; ``scheduler``: a cluster's address; ``progress``: a bar)."""
 
-    reference = reference_solution(CHOPPY_K)
-    figure, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
-    figures = {}
-    for integrator in integrators:
-        solution, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, SEED_T_END,
-                                                integrator, rtol=CHOPPY_TOL, atol=CHOPPY_TOL,
-                                                n_out=DENSE_OUTPUTS, jacobian="difference")
-        error = float(np.max(np.linalg.norm(solution.x[:, :2] - reference.x[:, :2], axis=1)))
-        figures[integrator] = {"steps": solution.stats.steps, "position_error": error}
-        for axis, column in zip(axes, (0, 1)):
-            axis.plot(solution.t, solution.x[:, column], linewidth=0.9,
-                      label=f"{integrator} ({solution.stats.steps} steps)")
-    for axis, column, label in zip(axes, (0, 1), ("x (m)", "y (m)")):
-        axis.plot(reference.t, reference.x[:, column], "k--", linewidth=0.6,
-                  label=f"DOP853 {REFERENCE_TOL:g}")
-        axis.set_ylabel(label)
-        axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=8, loc="upper right")
-    axes[0].set_title(f"Elastic pendulum k = {CHOPPY_K:g}, CVODE at rtol = atol = "
-                      f"{CHOPPY_TOL:g}", fontsize=10)
-    axes[1].set_xlabel("t (s)")
-    save(figure, path)
-    return figures
+    short: bool = False
+    workers: int | None = None
+    scheduler: str | None = None
+    progress: bool = True
+
+
+@dataclass
+class BdfStudy:
+    """Tables 1-4, the stability figures, the measured orders and the CVODE order caps."""
+
+    config: BdfConfig
+    rows: list[FixedStepRow]
+    stability: list[dict]
+    orders: list[dict]
+    cvode: list[dict]
+
+
+def run(config: BdfConfig) -> BdfStudy:
+    """Run the study."""
+    from youbot_dynamics.accuracy.sweeps import map_cases
+    rows = fixed_step_tables(seed_only=config.short)
+    measured = map_cases(measured_boundary_radius, [(order, 0.0, 1e-3, 20.0, 20) for order in
+                                                    (1, 2, 3, 4)], workers=config.workers,
+                         scheduler=config.scheduler, desc="stability boundaries",
+                         progress=config.progress)
+    stability = [{"order": order, "alpha_deg": math.degrees(alpha_angle(order)),
+                  "real_axis_boundary": locus_radius_on_ray(order, 0.0),
+                  "measured_by_solver": radius}
+                 for order, radius in zip((1, 2, 3, 4), measured)]
+    return BdfStudy(config, rows, stability, measured_orders(),
+                    cvode_order_rows((10,) if config.short else (10, 50)))
+
+
+def as_json(study: BdfStudy) -> dict:
+    """The tables' rows, the stability figures, the measured orders and the CVODE rows."""
+    return {"tables": [row.as_dict() for row in study.rows], "stability": study.stability,
+            "measured_orders": study.orders, "cvode_max_order": study.cvode}
+
+
+#: Columns of Tables 1-4 and their titles.
+FIXED_STEP_COLUMNS = ("k", "n_steps", "h_omega", "seed", "verdict", "energy_verdict",
+                      "energy_growth", "energy_error", "position_error", "diverged_at",
+                      "newton_iterations")
+METHOD_TITLES = {"euler": "Table 1: explicit Euler", "bdf2": "Table 2: BDF2",
+                 "bdf3": "Table 3: BDF3", "bdf4": "Table 4: BDF4"}
+
+
+def text(study: BdfStudy) -> str:
+    """The criteria, Tables 1-4, the stability table, the measured orders and the CVODE
+    order caps (Markdown tables)."""
+    lines = [f"Elastic pendulum on [0, {SEED_T_END:g}] from x0 = 1.2 at rest, N fixed steps. "
+             f"Our verdict: unstable if the run diverges or its energy grows by more than "
+             f"{ENERGY_GROWTH:g}; accurate if (x, y) stays within {POSITION_TOLERANCE:g} m of "
+             f"DOP853 at rtol = atol = {REFERENCE_TOL:g} (outputs every 0.1 s). energy_verdict "
+             f"is study pendulum-tables' (unstable at max|E-E0| >= {STABLE_ENERGY_ERROR:g}, "
+             f"accurate below {ACCURATE_ENERGY_ERROR:g}). h_omega = h sqrt(k)."]
+    for method in METHODS:
+        lines += [f"\n{METHOD_TITLES[method]}\n", markdown_table(
+            FIXED_STEP_COLUMNS, ([getattr(row, c) if getattr(row, c) != "" else "-"
+                                  for c in FIXED_STEP_COLUMNS]
+                                 for row in study.rows if row.method == method), digits=3)]
+    lines += ["\nStability: A(alpha) angle and the real-axis boundary h lambda of each BDF, "
+              "from the root locus and measured by bisection on the solver's own growth on "
+              "x' = lambda x\n",
+              markdown_table(tuple(study.stability[0]), ([r[c] for c in r]
+                                                         for r in study.stability), digits=6),
+              "\nMeasured orders (elastic pendulum k = 10 on [0, 2], final-state error "
+              "against DOP853 at 1e-13)\n",
+              markdown_table(("order", "error N=400", "error N=800", "measured_order"),
+                             ([r["order"], *r["errors"], r["measured_order"]]
+                              for r in study.orders), digits=4),
+              "\nCVODE BDF at rtol = atol = 1e-6, order capped (its difference-quotient "
+              "Jacobian, as the seed's runs)\n",
+              markdown_table(tuple(study.cvode[0]), ([r[c] for c in r] for r in study.cvode),
+                             digits=4)]
+    return "\n".join(lines)

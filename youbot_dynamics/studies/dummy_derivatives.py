@@ -99,36 +99,54 @@ def select_dummy_derivatives(result: PantelidesResult, symbols: Mapping[int, sp.
                   and any(j in result.equation_vars[i] for i in equations)]
     levels, dummies = [], []
     while equations:
-        if len(candidates) < len(equations):
-            raise UserInputError(
-                "dummy derivatives: fewer candidates ("
-                + ", ".join(variable_name(result.variables[j]) for j in candidates)
-                + ") than differentiated equations ("
-                + ", ".join(result.equation_names[i] for i in equations) + ")")
-        residuals = [symbolic_equation(result.equations[i], result.variables, symbols)
-                     for i in equations]
-        jacobian = [[sp.diff(r, symbols[j]) for j in candidates] for r in residuals]
-        numeric = [[_magnitude(entry, values) for entry in row] for row in jacobian]
-        preference = [(-result.variables[j][1], j) for j in candidates]
-        chosen, pivots = full_pivot_columns(np.array(numeric), preference)
-        selected = [candidates[c] for c in chosen]
-        levels.append(DummyLevel(
-            [result.equation_names[i] for i in equations],
-            [variable_name(result.variables[j]) for j in candidates],
-            jacobian, numeric,
-            [variable_name(result.variables[j]) for j in selected], pivots))
+        level, selected = dummy_level(result, equations, candidates, symbols, values)
+        levels.append(level)
         dummies += selected
         equations = [lower_equation[i] for i in equations
                      if lower_equation[i] in lower_equation]
         candidates = [lower_variable[j] for j in selected
                       if j in lower_variable and lower_variable[j] in lower_variable]
+    states, unknowns = state_selection(result, dummies)
+    return DummySelection(levels, dummies, states, unknowns)
+
+
+def dummy_level(result: PantelidesResult, equations: list[int], candidates: list[int],
+                symbols: Mapping[int, sp.Symbol], values: Mapping[sp.Symbol, float]
+                ) -> tuple[DummyLevel, list[int]]:
+    """One level of the selection: the Jacobian of the level's differentiated
+    ``equations`` with respect to its ``candidates`` (variable indices), at the start
+    values, and the candidates full pivoting picks (highest derivative first on ties)."""
+    if len(candidates) < len(equations):
+        raise UserInputError(
+            "dummy derivatives: fewer candidates ("
+            + ", ".join(variable_name(result.variables[j]) for j in candidates)
+            + ") than differentiated equations ("
+            + ", ".join(result.equation_names[i] for i in equations) + ")")
+    residuals = [symbolic_equation(result.equations[i], result.variables, symbols)
+                 for i in equations]
+    jacobian = [[sp.diff(r, symbols[j]) for j in candidates] for r in residuals]
+    numeric = [[_magnitude(entry, values) for entry in row] for row in jacobian]
+    preference = [(-result.variables[j][1], j) for j in candidates]
+    chosen, pivots = full_pivot_columns(np.array(numeric), preference)
+    selected = [candidates[c] for c in chosen]
+    return DummyLevel([result.equation_names[i] for i in equations],
+                      [variable_name(result.variables[j]) for j in candidates],
+                      jacobian, numeric,
+                      [variable_name(result.variables[j]) for j in selected], pivots), selected
+
+
+def state_selection(result: PantelidesResult, dummies: list[int]) -> tuple[list[int], list[int]]:
+    """The states (variables whose derivative appears and is no dummy) and the unknowns of
+    the index-1 system (every other variable), as variable indices; UserInputError when
+    the unknowns do not match the equations in number."""
     dummy_set = set(dummies)
-    states = [j for j, k in enumerate(A) if k is not None and k not in dummy_set]
+    states = [j for j, k in enumerate(result.variable_association)
+              if k is not None and k not in dummy_set]
     unknowns = [j for j in range(len(result.variables)) if j not in set(states)]
     if len(unknowns) != len(result.equations):
         raise UserInputError(f"dummy derivatives: {len(result.equations)} equations but "
                              f"{len(unknowns)} unknowns after the state selection")
-    return DummySelection(levels, dummies, states, unknowns)
+    return states, unknowns
 
 
 def _magnitude(entry: sp.Expr, values: Mapping[sp.Symbol, float]) -> float:

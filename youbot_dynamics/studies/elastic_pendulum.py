@@ -20,6 +20,7 @@ import numpy as np
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import DivergenceError, Solution, integrate
 from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS
+from youbot_dynamics.io.text_tables import cell, markdown_table
 
 STATE_NAMES = ("x", "y", "vx", "vy")
 #: The seed's initial state: spring stretched to r = 1.2 along x, at rest.
@@ -220,3 +221,104 @@ def elastic_pendulum_study(energy_k: float = 10.0,
             rows.append(study_row("energy_error", integrator, energy_k, f"{name}={value:g}",
                                   solution, error, ""))
     return rows
+
+
+#: The default integrator of ``study pendulum``, and the one --tol picks when none is
+#: named: its global error on ``--k 1000 --state0 1.1,0,0,0 --duration 10`` measured 8.6e-11
+#: at tol 1e-12 where cvode_bdf's was 1.7e-8 (both local-error controlled; the run spans 50
+#: periods).
+DEFAULT_INTEGRATOR, ACCURATE_INTEGRATOR = "cvode_bdf", "dop853"
+#: Output times of ``study pendulum`` (equally spaced over [0, duration]).
+OUTPUTS = 201
+#: rtol and atol when no tolerance is given.
+DEFAULT_RTOL = DEFAULT_ATOL = 1e-6
+
+
+@dataclass(frozen=True)
+class PendulumConfig:
+    """One run: stiffness k, the initial (x, y, vx, vy), the simulated ``duration`` (s),
+    the integrator, a fixed step ``dt`` (s), rtol and atol (a number or one per
+    component), a step budget, CVODE's order cap and where the Jacobian comes from."""
+
+    k: float = 10.0
+    state0: tuple[float, ...] = SEED_STATE0
+    duration: float = SEED_T_END
+    integrator: str = DEFAULT_INTEGRATOR
+    dt: float | None = None
+    rtol: float = DEFAULT_RTOL
+    atol: object = DEFAULT_ATOL
+    max_steps: int | None = None
+    max_order: int | None = None
+    jacobian: str = "analytic"
+
+
+@dataclass
+class PendulumRun:
+    """The run's solution and its energy error max |E - E0|."""
+
+    config: PendulumConfig
+    solution: Solution
+    energy_error: float
+
+    @property
+    def final_state(self) -> dict[str, float]:
+        """x, y (m), vx, vy (m/s) at the end."""
+        return dict(zip(STATE_NAMES, map(float, self.solution.x[-1])))
+
+
+def run(config: PendulumConfig, progress: Callable[[float], None] | None = None) -> PendulumRun:
+    """Simulate (``progress(t)`` after each step, if given); IntegrationError if the
+    integrator fails."""
+    solution, energy_error = simulate_elastic_pendulum(
+        config.k, config.state0, config.duration, config.integrator, dt=config.dt,
+        rtol=config.rtol, atol=config.atol, n_out=OUTPUTS, max_steps=config.max_steps,
+        progress=progress, max_order=config.max_order, jacobian=config.jacobian)
+    return PendulumRun(config, solution, energy_error)
+
+
+def as_json(result: PendulumRun) -> dict:
+    """k, the end time (s), the final state, the energy error and the statistics."""
+    return {"k": result.config.k, "t_end": float(result.solution.t[-1]),
+            "final_state": result.final_state, "energy_error": result.energy_error,
+            "stats": result.solution.stats.as_dict()}
+
+
+def text(result: PendulumRun) -> str:
+    """The final state, the energy error and the statistics."""
+    config, solution = result.config, result.solution
+    return "\n".join([
+        f"elastic pendulum k={config.k:g}, {config.integrator}, t={solution.t[-1]:g} s",
+        "final state: " + ", ".join(f"{name}={value:.9g}"
+                                    for name, value in result.final_state.items()),
+        f"energy error max|E-E0|: {result.energy_error:.3e}",
+        f"statistics: {solution.stats.summary()}"])
+
+
+#: The tables of ``study pendulum-tables`` (StudyRow.table -> title).
+TABLE_TITLES = {
+    "euler_stability": f"Explicit Euler on [0, {SEED_T_END:g}] from x0 = 1.2 (stable: finite, "
+                       f"|state| <= {STABLE_BOUND:g} and max|E-E0| < {STABLE_ENERGY_ERROR:g}; "
+                       f"accurate: max|E-E0| < {ACCURATE_ENERGY_ERROR:g})",
+    "cvode_statistics": "Statistics at rtol = atol = 1e-6 from x0 = 1.2 on [0, 20] (CVODE "
+                        "and LSODA with their own difference-quotient Jacobians, as the "
+                        "seed's runs; scipy's LSODA beside the seed's LSODAR)",
+    "energy_error": "Energy error max|E-E0| versus step size / tolerance",
+}
+TABLE_COLUMNS = ("integrator", "k", "setting", "verdict", "energy_error", "steps", "rhs_evals",
+                 "jac_evals", "wall_time", "seed")
+TEXT_COLUMNS = ("integrator", "setting", "verdict", "seed")
+
+
+def tables_text(rows: Sequence[StudyRow]) -> str:
+    """The study's tables (Markdown) with each verdict that differs from the seed's noted."""
+    lines = []
+    for table, title in TABLE_TITLES.items():
+        lines += [f"\n{title}\n", markdown_table(TABLE_COLUMNS, (
+            [(getattr(row, c) or "-") if c in TEXT_COLUMNS else getattr(row, c)
+             for c in TABLE_COLUMNS] for row in rows if row.table == table), digits=3)]
+        lines += [f"- k={row.k:g} {row.setting}: the seed says {row.seed!r}, our energy "
+                  f"criterion {row.verdict!r} (max|E-E0| {cell(row.energy_error)}); "
+                  f"study bdf judges position against a reference instead"
+                  for row in rows if row.table == table and row.verdict and row.seed
+                  and row.verdict != row.seed]
+    return "\n".join(lines)

@@ -11,7 +11,12 @@ from pathlib import Path
 
 import numpy as np
 
+from youbot_dynamics.integrate.integrators import integrate
+from youbot_dynamics.studies.equations import (MODIA_MERGE, cartesian_pendulum, first_order_lag,
+                                               lowpass_filter, modia_pendulum)
 from youbot_dynamics.studies.figures import FigureSet, heading, panels, save, specs
+from youbot_dynamics.studies.state_selection import simulate_with_reselection
+from youbot_dynamics.studies.structure import LOWPASS_INCIDENCE, LOWPASS_KNOWN, structure_report
 
 STRUCTURE_TITLES = {"lowpass": "low-pass filter", "pendulum": "Cartesian pendulum",
                     "squeezer": "Andrew's squeezer (index 3)"}
@@ -48,12 +53,13 @@ def incidence_plot(path: Path, matrix: np.ndarray, row_names, column_names, titl
     save(figure, path, title)
 
 
-def draw_structure(example: str, out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_structure(example: str, result: dict | None, out: Path,
+                   full: bool) -> dict[str, tuple[str, str]]:
     """The figures of one structure set: the example's incidence matrix with its
-    matching and its BLT-permuted matrix (and the low-pass filter's bipartite graph)."""
-    from youbot_dynamics.studies.structure import structure_report
+    matching and its BLT-permuted matrix (and the low-pass filter's bipartite graph);
+    ``result``: the example's structure report, if already made."""
     title = STRUCTURE_TITLES[example]
-    report = structure_report(example)
+    report = structure_report(example) if result is None else result
     variables, equations = report["variables"], report["equations"]
     index = {name: j for j, name in enumerate(variables)}
     if "assign" in report:
@@ -128,7 +134,6 @@ def seed_difference(example: str, report: dict, view: str) -> str:
 def lowpass_graph(path: Path, report: dict) -> None:
     """The low-pass filter's bipartite graph: equations left, variables right, the
     matching's edges in red, the known variable grey."""
-    from youbot_dynamics.studies.structure import LOWPASS_INCIDENCE, LOWPASS_KNOWN
     figure, axis = panels(size=(5.0, 4.5))
     axis.grid(False)
     axis.axis("off")
@@ -153,7 +158,6 @@ def lowpass_graph(path: Path, report: dict) -> None:
 
 def run_model(model, tol: float = 1e-10, outputs: int = 401):
     """The pipeline's simulation of an equation model (state selection as the command)."""
-    from youbot_dynamics.studies.state_selection import simulate_with_reselection
     with np.errstate(all="ignore"):
         return simulate_with_reselection(model, "dop853", tol, outputs)
 
@@ -161,7 +165,6 @@ def run_model(model, tol: float = 1e-10, outputs: int = 401):
 def hand_written_pendulum(model, t: np.ndarray) -> np.ndarray:
     """(x, y) of the Cartesian pendulum model from theta'' = -(g / l) sin theta, written
     by hand (theta from hanging straight down), DOP853 at 1e-12."""
-    from youbot_dynamics.integrate.integrators import integrate
     length = float(np.sqrt(model.parameters["L"]))
     gravity = model.parameters["g"]
     theta0 = float(np.arctan2(model.variables["x"], -model.variables["y"]))
@@ -171,9 +174,8 @@ def hand_written_pendulum(model, t: np.ndarray) -> np.ndarray:
     return np.c_[length * np.sin(theta), -length * np.cos(theta)]
 
 
-def draw_lag(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_lag(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figure of the first-order lag."""
-    from youbot_dynamics.studies.equations import first_order_lag
     drawn = {}
     lag = first_order_lag()
     figure, axis = panels(size=(7.0, 3.4))
@@ -195,9 +197,8 @@ def draw_lag(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     return drawn
 
 
-def draw_lowpass(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_lowpass(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figure of the low-pass filter's simulation."""
-    from youbot_dynamics.studies.equations import lowpass_filter
     drawn = {}
     filter_model = lowpass_filter()
     filter_run = run_model(filter_model)
@@ -221,9 +222,8 @@ def draw_lowpass(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     return drawn
 
 
-def draw_cartesian_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_cartesian_pendulum(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The Cartesian pendulum's figures: generated against hand-written."""
-    from youbot_dynamics.studies.equations import cartesian_pendulum
     drawn = {}
     pendulum = cartesian_pendulum()
     run = run_model(pendulum, tol=1e-10, outputs=501)
@@ -260,10 +260,8 @@ def draw_cartesian_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]
     return drawn
 
 
-def draw_modia_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_modia_pendulum(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The ModiaLang damped pendulum's figures, with the seed's L = 0.5 merge."""
-    from youbot_dynamics.cli.pipeline_commands import MODIA_MERGE
-    from youbot_dynamics.studies.equations import modia_pendulum
     drawn = {}
     modia = modia_pendulum()
     runs = {"L = 0.8 (defaults)": run_model(modia, tol=1e-8),

@@ -138,6 +138,8 @@ def modia_pendulum() -> EquationModel:
         t_end=10.0)
 
 
+#: The seed's parameter merge for the ModiaLang pendulum (``Pendulum | Map(L = 0.5)``).
+MODIA_MERGE = {"L": 0.5}
 #: Example name -> its model builder, for the command line.
 EXAMPLE_MODELS: Mapping[str, Callable[[], EquationModel]] = MappingProxyType({
     "lag": first_order_lag, "pendulum": cartesian_pendulum, "lowpass": lowpass_filter,

@@ -1,10 +1,13 @@
-"""The seeds' figures, each drawn from our own runs: the registry the report reads.
+"""What every study's figures share: the declared figure, the figure set, matplotlib set-up.
 
-A *figure set* belongs to one study of the report (studies/report.py): it declares its
+A *figure set* belongs to one study of the report (studies/report.py, whose catalogue lists
+the sets of every study): it declares its
 figures up front (:class:`FigureSpec`: PNG file name, caption, what the seed shows or
-says), and its function ``draw(out_dir, full) -> {file: (ours, difference)}`` runs the
-study's cases, writes every declared PNG into ``out_dir`` and says for each what our run
-measured and how that differs from the seed. ``full`` runs the seed's sizes; the default
+says), and its function ``draw(result, out_dir, full) -> {file: (ours, difference)}``
+draws from the study's ``result`` (what its ``run(config)`` returned in the report; None:
+not run) where that holds what the figures need, runs the cases it lacks, writes every
+declared PNG into ``out_dir`` and says for each what our run measured and how that
+differs from the seed. ``full`` runs the seed's sizes; the default
 (short) form keeps every set to seconds. The declared list is what the report's page and
 its test enumerate, so a set that does not write one of its files is an error here, not a
 missing image on the page.
@@ -14,7 +17,6 @@ one PNG only where the seed drew them together.
 """
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -46,11 +48,11 @@ class Figure:
 @dataclass(frozen=True)
 class FigureSet:
     """The figures of one study: its name, the declared specs in page order and the
-    drawing function ``draw(out_dir, full) -> {file: (ours, difference)}``."""
+    drawing function ``draw(result, out_dir, full) -> {file: (ours, difference)}``."""
 
     name: str
     specs: tuple[FigureSpec, ...]
-    draw: Callable[[Path, bool], dict[str, tuple[str, str]]]
+    draw: Callable[[object, Path, bool], dict[str, tuple[str, str]]]
 
 
 def specs(*rows: tuple[str, str, str]) -> tuple[FigureSpec, ...]:
@@ -90,11 +92,12 @@ def save(figure, path: Path | str, title: str | None = None) -> None:
     pyplot().close(figure)
 
 
-def draw_set(figure_set: FigureSet, out_dir: Path | str, full: bool = False) -> list[Figure]:
+def draw_set(figure_set: FigureSet, out_dir: Path | str, full: bool = False,
+             result: object = None) -> list[Figure]:
     """Draw one set into ``out_dir``; its figures in declared order. RuntimeError naming
     the set and the files if it did not write exactly its declared PNGs."""
     out = Path(out_dir)
-    drawn = figure_set.draw(out, full)
+    drawn = figure_set.draw(result, out, full)
     declared = [spec.file for spec in figure_set.specs]
     missing = [name for name in declared if name not in drawn or not (out / name).is_file()]
     extra = sorted(set(drawn) - set(declared))
@@ -104,22 +107,3 @@ def draw_set(figure_set: FigureSet, out_dir: Path | str, full: bool = False) -> 
                            + ("; " if missing and extra else "")
                            + (f"wrote undeclared {', '.join(extra)}" if extra else ""))
     return [Figure(spec, *drawn[spec.file]) for spec in figure_set.specs]
-
-
-def all_specs() -> list[FigureSpec]:
-    """Every declared figure of every set, in page order."""
-    return [spec for figure_set in figure_sets().values() for spec in figure_set.specs]
-
-
-@functools.cache
-def figure_sets() -> dict[str, FigureSet]:
-    """name -> FigureSet, from the modules that declare them (imported on first call:
-    they import this module)."""
-    from youbot_dynamics.studies import (equation_figures, lagrange_figures, mechanism_figures,
-                                         pendulum_figures, seed000_figures)
-    sets = [pendulum_figures.PENDULUM_SET, pendulum_figures.BDF_SET,
-            mechanism_figures.SQUEEZER_SET, mechanism_figures.WOODPECKER_SET,
-            lagrange_figures.LAGRANGE_2D_SET, lagrange_figures.LAGRANGE_3D_SET,
-            *equation_figures.STRUCTURE_SETS, *equation_figures.PIPELINE_SETS,
-            seed000_figures.ROTATIONS_SET, seed000_figures.UNCERTAINTY_SET]
-    return {figure_set.name: figure_set for figure_set in sets}

@@ -15,7 +15,7 @@ Models (angles in rad, lengths in m, masses in kg; z up, gravity -g z):
 - ``arm``: a planar 2-link arm (uniform links m1, l1 and m2, l2, revolute joints about z,
   q from the x axis, gravity -g y), for the cross-check against Pinocchio's RNEA.
 
-Parameter values (DEFAULTS; any can be overridden, ``lagrange --param NAME=VALUE``):
+Parameter values (DEFAULTS; any can be overridden, ``study lagrange --param NAME=VALUE``):
 
 - ``2d``: the seed appendix's, m1 = 1 kg, m2 = 0.5 kg, k = 50 N/m, l0 = 0.25 m,
   l = 0.5 m, g = 9.82 m/s^2.
@@ -42,6 +42,8 @@ import sympy as sp
 from sympy.physics import mechanics as me
 
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.integrate.integrators import integrate
+from youbot_dynamics.studies.stats_table import stats_table
 
 #: Parameter values used unless given (SI). c is the joint friction coefficient.
 DEFAULTS = {
@@ -222,3 +224,83 @@ def equilibrium(name: str, p: tuple[float, ...]) -> np.ndarray:
         values = dict(zip(DEFAULTS["2d"], p))
         return np.array([0.0, 0.0, values["m2"] * values["g"] / values["k"]])
     return np.zeros(3)
+
+
+#: Relative tolerance of the study's runs; atol = rtol unless given.
+LAGRANGE_RTOL = 1e-12
+#: Output times of a run, equally spaced over [0, duration].
+OUTPUTS = 201
+
+
+@dataclass(frozen=True)
+class LagrangeConfig:
+    """One run from the seed's initial state: the problem ('2d' or '3d'), joint friction
+    c (generalised force -c q_i'), parameter overrides (SI), the simulated ``duration``
+    (s), the integrator and its tolerances (atol None: rtol; a number or one per state
+    component)."""
+
+    problem: str = "2d"
+    friction: float = 0.0
+    overrides: tuple[tuple[str, float], ...] = ()
+    duration: float = 10.0
+    integrator: str = "dop853"
+    rtol: float = LAGRANGE_RTOL
+    atol: object = None
+
+
+@dataclass
+class LagrangeRun:
+    """The run's figures as plain data (equations, parameters, final state, energy in J,
+    statistics)."""
+
+    config: LagrangeConfig
+    summary: dict
+
+
+def initial_state(problem: str) -> np.ndarray:
+    """The seed's initial (q, u) of the problem."""
+    q0, u0 = SEED_INITIAL[problem]
+    return np.r_[q0, u0]
+
+
+def run(config: LagrangeConfig) -> LagrangeRun:
+    """Derive the equations with sympy, simulate them, and measure the energy."""
+    lagrange = model(config.problem)
+    p = lagrange.parameter_values({**dict(config.overrides), "c": config.friction})
+    solution = integrate(lagrange.rhs(p), initial_state(config.problem),
+                         np.linspace(0.0, config.duration, OUTPUTS), config.integrator,
+                         rtol=config.rtol, atol=config.rtol if config.atol is None else config.atol,
+                         state_names=[*map(str, lagrange.q), *map(str, lagrange.u)])
+    energy = lagrange.energy_of(solution.x, p)
+    return LagrangeRun(config, {
+        "problem": config.problem, "friction": config.friction,
+        "parameters": dict(zip(map(str, lagrange.parameters), p)),
+        "equations": lagrange.equations(),
+        "final_state": dict(zip(solution.state_names, solution.x[-1].tolist())),
+        "energy_initial": float(energy[0]), "energy_final": float(energy[-1]),
+        "energy_relative_drift": float(np.abs(energy - energy[0]).max() / abs(energy[0])),
+        "energy_nonincreasing": bool(np.all(np.diff(energy) <= 1e-12)),
+        "stats": solution.stats.as_dict(),
+    })
+
+
+def as_json(result: LagrangeRun) -> dict:
+    """The run's summary."""
+    return result.summary
+
+
+def text(result: LagrangeRun) -> str:
+    """Parameters, the equations (long ones cut at 160 characters), the final state, the
+    energy drift and the statistics."""
+    config, summary = result.config, result.summary
+    lines = [f"Lagrange {config.problem}, friction c = {config.friction:g}, parameters "
+             + ", ".join(f"{k}={v:g}" for k, v in summary["parameters"].items())]
+    lines += [f"  {line if len(line) <= 160 else line[:157] + '...'}"
+              for line in summary["equations"]]
+    lines += [f"final state at t = {config.duration:g} s: "
+              + ", ".join(f"{k}={v:.6g}" for k, v in summary["final_state"].items()),
+              f"energy {summary['energy_initial']:.10g} J -> {summary['energy_final']:.10g} J, "
+              f"max relative drift {summary['energy_relative_drift']:.3g}, "
+              f"non-increasing: {summary['energy_nonincreasing']}",
+              stats_table({config.integrator: summary["stats"]})]
+    return "\n".join(lines)

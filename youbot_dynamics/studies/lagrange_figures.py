@@ -12,7 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
+from youbot_dynamics.integrate.integrators import integrate
 from youbot_dynamics.studies.figures import FigureSet, panels, save, specs
+from youbot_dynamics.studies.lagrange import SEED_INITIAL, equilibrium, model
 
 #: Joint friction coefficient of the friction runs (N m s/rad, Q_i = -c q_i').
 FRICTION = 0.05
@@ -27,8 +29,6 @@ PARTED = (0.01, 0.1)
 
 def simulate(name: str, q0, friction: float, t_end: float, full: bool):
     """(model, parameter values, solution) of one run from q0 at rest."""
-    from youbot_dynamics.integrate.integrators import integrate
-    from youbot_dynamics.studies.lagrange import model
     lagrange = model(name)
     p = lagrange.parameter_values({"c": friction})
     tol = 1e-12 if full else 1e-9
@@ -82,9 +82,8 @@ def conservative_figures(out: Path, name: str, q0, label: str, units: tuple[str,
     return lagrange, p, solution, energy, drift
 
 
-def draw_lagrange_2d(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_lagrange_2d(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of LAGRANGE_2D_SET."""
-    from youbot_dynamics.studies.lagrange import SEED_INITIAL, equilibrium
     q0 = SEED_INITIAL["2d"][0]
     lagrange, p, solution, energy, drift = conservative_figures(out, "2d", q0, "Planar elastic double pendulum",
                                                                 ("rad", "rad", "m"), full)
@@ -116,9 +115,8 @@ def draw_lagrange_2d(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     }
 
 
-def draw_lagrange_3d(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_lagrange_3d(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of LAGRANGE_3D_SET."""
-    from youbot_dynamics.studies.lagrange import SEED_INITIAL
     q0 = SEED_INITIAL["3d"][0]
     lagrange, p, solution, energy, drift = conservative_figures(out, "3d", q0, "3D pendulum", ("rad", "rad", "rad"),
                                                                 full)

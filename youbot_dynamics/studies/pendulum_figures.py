@@ -4,7 +4,7 @@ reference, the CVODE / Dopri45 / LSODA runs of Tables 5-7, the order caps, the r
 "choppy" traces, the BDF stability regions and measured orders.
 
 Every trajectory figure draws x(t) and y(t) (m) of the run over the reference's (DOP853 at
-rtol = atol = 1e-12, dashed). Verdicts are bdf-study's (studies/bdf_study.py): unstable
+rtol = atol = 1e-12, dashed). Verdicts are study bdf's (studies/bdf_study.py): unstable
 when the run diverges or its energy grows by more than 1; accurate when (x, y) stays
 within 1 cm of the reference at the outputs every 0.1 s.
 """
@@ -12,10 +12,21 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from youbot_dynamics.studies.figures import FigureSet, heading, panels, save, specs
+from youbot_dynamics.integrate.integrators import DivergenceError
+from youbot_dynamics.studies.bdf import alpha_angle, amplification, root_locus
+from youbot_dynamics.studies.bdf_study import (CHOPPY_K, CHOPPY_TOL, DENSE_OUTPUTS,
+                                               REFERENCE_TOL, SEED_CVODE_ORDER, SEED_VERDICTS,
+                                               fixed_step_row, fixed_step_states,
+                                               measured_orders, reference_positions,
+                                               reference_solution, stability_points)
+from youbot_dynamics.studies.elastic_pendulum import (SEED_CVODE, SEED_STATE0, SEED_T_END,
+                                                      elastic_pendulum_energy,
+                                                      simulate_elastic_pendulum)
+from youbot_dynamics.studies.figures import FigureSet, heading, panels, pyplot, save, specs
 
 #: Fixed-step cells with a seed verdict: (method, k, N) -> file.
 FIXED_STEP_FILES = {("euler", 1, 1000): "pendulum_euler_k1_n1000.png",
@@ -39,6 +50,72 @@ PRECISION_INTEGRATORS = ("cvode_bdf", "cvode_adams", "rk45", "dop853", "lsoda")
 PRECISION_TOLERANCES = {False: (1e-4, 1e-7), True: (1e-4, 1e-6, 1e-8, 1e-10)}
 
 
+def plot_stability_regions(path: str, orders=(1, 2, 3, 4),
+                           points: dict[str, complex] | None = None) -> None:
+    """PNG of the root loci (stability boundaries) of the given orders, the unstable side
+    shaded: the whole regions, and a close-up of the imaginary axis near 0 with optional
+    labelled points z = h lambda."""
+    plt = pyplot()
+
+    figure, axes = plt.subplots(1, 2, figsize=(11, 5.5))
+    theta = np.linspace(0.0, 2.0 * np.pi, 4001)
+    for axis in axes:
+        for order in orders:
+            z = root_locus(order, theta)
+            line, = axis.plot(z.real, z.imag, label=f"BDF{order} "
+                              f"(A({np.degrees(alpha_angle(order)):.2f} deg))")
+            axis.fill(z.real, z.imag, color=line.get_color(), alpha=0.08)
+        axis.axhline(0.0, color="grey", linewidth=0.5)
+        axis.axvline(0.0, color="grey", linewidth=0.5)
+        axis.set_xlabel("Re h lambda")
+        axis.set_ylabel("Im h lambda")
+        axis.grid(True, alpha=0.3)
+    for label, z in (points or {}).items():
+        axes[1].plot(z.real, z.imag, "k.", markersize=6)
+        axes[1].annotate(label, (z.real, z.imag), fontsize=7, xytext=(4, -2),
+                         textcoords="offset points")
+    axes[0].set_aspect("equal")
+    axes[0].legend(fontsize=8, loc="lower right")
+    axes[0].set_title("BDF1-4: unstable inside each closed curve (shaded)")
+    axes[1].set_xlim(-0.8, 0.6)
+    axes[1].set_ylim(-0.1, 2.0)
+    axes[1].set_title("near the imaginary axis: the spring's h i sqrt(k)", fontsize=10)
+    save(figure, path)
+
+
+def plot_choppy_traces(path: str,
+                       integrators: Sequence[str] = ("cvode_bdf", "cvode_adams")) -> dict:
+    """PNG of x(t) and y(t) from CVODE (BDF and Adams, or the ``integrators`` given) at
+    rtol = atol = CHOPPY_TOL (k = CHOPPY_K, CVODE's difference-quotient Jacobian) against
+    the DOP853 reference, outputs by CVODE's interpolation every 0.01 s over [0, 20] s.
+    Returns each run's steps and max position error (m)."""
+    plt = pyplot()
+
+    reference = reference_solution(CHOPPY_K)
+    figure, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    figures = {}
+    for integrator in integrators:
+        solution, _ = simulate_elastic_pendulum(CHOPPY_K, SEED_STATE0, SEED_T_END,
+                                                integrator, rtol=CHOPPY_TOL, atol=CHOPPY_TOL,
+                                                n_out=DENSE_OUTPUTS, jacobian="difference")
+        error = float(np.max(np.linalg.norm(solution.x[:, :2] - reference.x[:, :2], axis=1)))
+        figures[integrator] = {"steps": solution.stats.steps, "position_error": error}
+        for axis, column in zip(axes, (0, 1)):
+            axis.plot(solution.t, solution.x[:, column], linewidth=0.9,
+                      label=f"{integrator} ({solution.stats.steps} steps)")
+    for axis, column, label in zip(axes, (0, 1), ("x (m)", "y (m)")):
+        axis.plot(reference.t, reference.x[:, column], "k--", linewidth=0.6,
+                  label=f"DOP853 {REFERENCE_TOL:g}")
+        axis.set_ylabel(label)
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize=8, loc="upper right")
+    axes[0].set_title(f"Elastic pendulum k = {CHOPPY_K:g}, CVODE at rtol = atol = "
+                      f"{CHOPPY_TOL:g}", fontsize=10)
+    axes[1].set_xlabel("t (s)")
+    save(figure, path)
+    return figures
+
+
 def method_label(method: str) -> str:
     """'explicit Euler' or 'BDF2'..."""
     return "explicit Euler" if method == "euler" else method.upper()
@@ -46,7 +123,6 @@ def method_label(method: str) -> str:
 
 def fixed_step_spec(method: str, k: int, n: int, file: str):
     """(file, caption, seed) of one fixed-step cell."""
-    from youbot_dynamics.studies.bdf_study import SEED_VERDICTS
     table = {"euler": 1, "bdf2": 2, "bdf3": 3, "bdf4": 4}[method]
     return (file, f"{heading(method_label(method))}, k = {k}, N = {n} steps on [0, 20] s: "
                   "x(t), y(t) against the DOP853 reference",
@@ -55,7 +131,6 @@ def fixed_step_spec(method: str, k: int, n: int, file: str):
 
 def adaptive_spec(integrator: str, k: int, file: str):
     """(file, caption, seed) of one adaptive run at tol 1e-6."""
-    from youbot_dynamics.studies.elastic_pendulum import SEED_CVODE
     seed = SEED_CVODE[(integrator, k)]
     name = {"rk45": "Dormand-Prince 4(5) (Dopri45)", "lsoda": "LSODA (scipy)"}.get(
         integrator, integrator.replace("cvode_", "CVODE ").replace("bdf", "BDF")
@@ -72,9 +147,6 @@ def seed_counts(text: str) -> dict[str, int]:
 def fixed_step_trajectory(method: str, k: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
     """Times and states at every step of a fixed-step run on the seed's problem; a run
     that diverges is run again up to two steps before it diverged (the part to draw)."""
-    from youbot_dynamics.integrate.integrators import DivergenceError
-    from youbot_dynamics.studies.bdf_study import fixed_step_states
-    from youbot_dynamics.studies.elastic_pendulum import SEED_T_END
     h = SEED_T_END / n_steps
     n = n_steps
     for _ in range(4):
@@ -110,7 +182,7 @@ def verdict_text(row) -> str:
         return f"unstable: diverged at t = {row.diverged_at:.3g} s (h sqrt(k) = {row.h_omega:.3g})"
     return (f"{row.verdict}: position error up to {row.position_error:.3g} m against DOP853, "
             f"energy grows by at most {row.energy_growth:.3g} (h sqrt(k) = {row.h_omega:.3g}); "
-            f"pendulum-study's energy verdict: {row.energy_verdict}")
+            f"study pendulum-tables' energy verdict: {row.energy_verdict}")
 
 
 def agreement(seed: str, ours: str) -> str:
@@ -123,8 +195,6 @@ def agreement(seed: str, ours: str) -> str:
 def draw_fixed_step(out: Path, method: str, k: int, n: int) -> tuple[tuple[str, str], object]:
     """One fixed-step cell's figure; (our verdict, the difference from the seed's) and
     the cell's FixedStepRow."""
-    from youbot_dynamics.studies.bdf_study import (fixed_step_row, reference_positions,
-                                                   reference_solution)
     reference = reference_solution(float(k))
     row = fixed_step_row(method, k, n, reference_positions(k))
     t, x = fixed_step_trajectory(method, k, n)
@@ -134,7 +204,7 @@ def draw_fixed_step(out: Path, method: str, k: int, n: int) -> tuple[tuple[str, 
                     row.diverged_at)
     difference = agreement(row.seed, row.verdict)
     if row.energy_verdict != row.verdict:
-        difference += (f" By energy alone (pendulum-study) it would be {row.energy_verdict!r}: "
+        difference += (f" By energy alone (study pendulum-tables) it would be {row.energy_verdict!r}: "
                        "the position criterion is the one stated above the tables.")
     return (verdict_text(row), difference), row
 
@@ -142,9 +212,6 @@ def draw_fixed_step(out: Path, method: str, k: int, n: int) -> tuple[tuple[str, 
 def draw_adaptive(out: Path, integrator: str, k: int) -> tuple[tuple[str, str], object]:
     """One adaptive run at tol 1e-6 (difference-quotient Jacobian, as the seed's), its
     figure, and (ours, difference) against the seed's counts; also the solution."""
-    from youbot_dynamics.studies.bdf_study import DENSE_OUTPUTS, reference_solution
-    from youbot_dynamics.studies.elastic_pendulum import (SEED_CVODE, SEED_STATE0, SEED_T_END,
-                                                          simulate_elastic_pendulum)
     solution, energy_error = simulate_elastic_pendulum(k, SEED_STATE0, SEED_T_END, integrator,
                                                        rtol=1e-6, atol=1e-6, n_out=DENSE_OUTPUTS,
                                                        jacobian="difference")
@@ -173,11 +240,8 @@ def draw_adaptive(out: Path, integrator: str, k: int) -> tuple[tuple[str, str], 
     return (ours, difference), solution
 
 
-def draw_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_pendulum(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of PENDULUM_SET."""
-    from youbot_dynamics.studies.elastic_pendulum import (SEED_STATE0, SEED_T_END,
-                                                          elastic_pendulum_energy,
-                                                          simulate_elastic_pendulum)
     drawn = {FIXED_STEP_FILES[cell]: draw_fixed_step(out, *cell)[0]
              for cell in FIXED_STEP_FILES if cell[0] == "euler"}
     solutions = {}
@@ -229,14 +293,8 @@ def draw_pendulum(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     return drawn
 
 
-def draw_bdf(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_bdf(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of BDF_SET."""
-    from youbot_dynamics.studies.bdf import alpha_angle, amplification, plot_stability_regions
-    from youbot_dynamics.studies.bdf_study import (CHOPPY_K, DENSE_OUTPUTS, SEED_CVODE_ORDER,
-                                                   measured_orders, plot_choppy_traces,
-                                                   reference_solution, stability_points)
-    from youbot_dynamics.studies.elastic_pendulum import (SEED_STATE0, SEED_T_END,
-                                                          simulate_elastic_pendulum)
     drawn, rows = {}, []
     for cell in (cell for cell in FIXED_STEP_FILES if cell[0] != "euler"):
         drawn[FIXED_STEP_FILES[cell]], row = draw_fixed_step(out, *cell)
@@ -304,7 +362,7 @@ def draw_bdf(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     return drawn
 
 
-PENDULUM_SET = FigureSet("pendulum-study", specs(
+PENDULUM_SET = FigureSet("pendulum-tables", specs(
     *(fixed_step_spec(*cell, file) for cell, file in FIXED_STEP_FILES.items()
       if cell[0] == "euler"),
     *(adaptive_spec(*key, file) for key, file in ADAPTIVE_FILES.items()),
@@ -315,7 +373,7 @@ PENDULUM_SET = FigureSet("pendulum-study", specs(
      "Table 6 at tol 1e-6 (steps, f-evals of CVODE BDF / Adams, Dopri45, LSODAR)."),
 ), draw_pendulum)
 
-BDF_SET = FigureSet("bdf-study", specs(
+BDF_SET = FigureSet("bdf", specs(
     *(fixed_step_spec(*cell, file) for cell, file in FIXED_STEP_FILES.items()
       if cell[0] != "euler"),
     ("bdf_stability.png", "Stability regions of BDF1-4 (root loci), and the seed's cells "

@@ -155,8 +155,7 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
     order = [n for n in order if n not in alias_names]
 
     variables, equation_vars = incidence(equations, T, order)
-    highest = [j for j, (name, o) in enumerate(variables) if (name, o + 1) not in variables]
-    matching = maximum_matching(equation_vars, highest)
+    matching = highest_derivative_matching(variables, equation_vars)
     names = [f"f{i + 1}" for i in range(len(equations))]
     reduced = pantelides(equations, T, names, order)
 
@@ -166,32 +165,61 @@ def run_pipeline(model: EquationModel) -> PipelineResult:
     selection = select_dummy_derivatives(reduced, symbols, {**start, **parameters})
 
     residuals = [symbolic_equation(e, reduced.variables, symbols) for e in reduced.equations]
-    unknown_set = set(selection.unknowns)
-    restricted = [{j for j in vs if j in unknown_set} for vs in reduced.equation_vars]
-    assignment = maximum_matching(restricted, selection.unknowns)
-    if len(assignment) != len(residuals):
-        raise UserInputError(f"model {model.name}: the index-1 system has no perfect "
-                             "matching after the state selection")
-    blocks = block_lower_triangular(restricted, assignment)
-    matched = {i: j for j, i in assignment.items()}
+    restricted, blocks, matched = index1_blocks(model, reduced, selection)
 
     result = PipelineResult(
         model, lowered, lowered_names, new_names,
         [(a, str(pretty_expression(v)), where) for a, v, where in aliases], equations,
-        {variable_name(variables[j]): names[i] for j, i in sorted(matching.items())},
-        [names[i] for i in range(len(names)) if i not in matching.values()],
-        [variable_name(v) for v in variables], incidence_rows(equation_vars, len(variables)),
-        reduced, selection,
-        [variable_name(reduced.variables[j]) for j in selection.unknowns],
-        incidence_rows([{selection.unknowns.index(j) for j in vs} for vs in restricted],
-                       len(selection.unknowns)),
-        [[reduced.equation_names[i] for i in block] for block in blocks],
-        [[variable_name(reduced.variables[j]) for j in sorted(matched[i] for i in block)]
-         for block in blocks])
+        *matching_views(variables, equation_vars, matching, names), reduced, selection,
+        *blt_views(reduced, selection, restricted, blocks, matched))
 
     explicit = solve_blocks(model, result, residuals, symbols, matched, start, parameters)
     result.ode = generate_ode(model, reduced, selection, symbols, explicit, aliases)
     return result
+
+
+def highest_derivative_matching(variables: list, equation_vars: list[set[int]]) -> dict[int, int]:
+    """A maximum matching (variable -> equation) of the highest derivatives only: the
+    variables whose next derivative does not appear."""
+    highest = [j for j, (name, o) in enumerate(variables) if (name, o + 1) not in variables]
+    return maximum_matching(equation_vars, highest)
+
+
+def matching_views(variables: list, equation_vars: list[set[int]], matching: dict[int, int],
+                   names: list[str]) -> tuple[dict[str, str], list[str], list[str], list[str]]:
+    """Stage 3 as printed: the matching by name, the unmatched equations, the variables'
+    names and the incidence rows."""
+    return ({variable_name(variables[j]): names[i] for j, i in sorted(matching.items())},
+            [names[i] for i in range(len(names)) if i not in matching.values()],
+            [variable_name(v) for v in variables], incidence_rows(equation_vars, len(variables)))
+
+
+def blt_views(reduced: PantelidesResult, selection: DummySelection, restricted: list[set[int]],
+              blocks: list[list[int]], matched: dict[int, int]
+              ) -> tuple[list[str], list[str], list[list[str]], list[list[str]]]:
+    """Stage 6 as printed: the unknowns' names, the incidence rows in them, each block's
+    equations and the variables it solves for."""
+    return ([variable_name(reduced.variables[j]) for j in selection.unknowns],
+            incidence_rows([{selection.unknowns.index(j) for j in vs} for vs in restricted],
+                           len(selection.unknowns)),
+            [[reduced.equation_names[i] for i in block] for block in blocks],
+            [[variable_name(reduced.variables[j]) for j in sorted(matched[i] for i in block)]
+             for block in blocks])
+
+
+def index1_blocks(model: EquationModel, reduced: PantelidesResult, selection: DummySelection
+                  ) -> tuple[list[set[int]], list[list[int]], dict[int, int]]:
+    """The index-1 system with the states known: each equation's unknowns, its BLT blocks
+    (equation indices) and the matching equation -> unknown; UserInputError when it has
+    no perfect matching."""
+    unknown_set = set(selection.unknowns)
+    restricted = [{j for j in vs if j in unknown_set} for vs in reduced.equation_vars]
+    assignment = maximum_matching(restricted, selection.unknowns)
+    if len(assignment) != len(reduced.equations):
+        raise UserInputError(f"model {model.name}: the index-1 system has no perfect "
+                             "matching after the state selection")
+    return (restricted, block_lower_triangular(restricted, assignment),
+            {i: j for j, i in assignment.items()})
 
 
 def solve_blocks(model: EquationModel, result: PipelineResult, residuals: list[sp.Expr],

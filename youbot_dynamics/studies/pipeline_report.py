@@ -7,15 +7,16 @@ own log is not in benchmarks.md, so its column says so).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 import sympy as sp
 
 from youbot_dynamics.integrate.integrators import IntegratorStats
-from youbot_dynamics.studies.equations import EquationModel
+from youbot_dynamics.studies.equations import EXAMPLE_MODELS, MODIA_MERGE, EquationModel
 from youbot_dynamics.studies.pipeline import PipelineResult, pretty_expression
-from youbot_dynamics.studies.state_selection import ReselectedRun
+from youbot_dynamics.studies.state_selection import ReselectedRun, simulate_with_reselection
 from youbot_dynamics.studies.structure import variable_name
 
 #: What benchmarks.md gives of the seed's statistics log.
@@ -131,14 +132,19 @@ def pipeline_report(result: PipelineResult,
             "observed": {k: str(e) for k, e in result.ode.observed.items()}},
         "simulation": [],
     }
-    for label, run, tol in runs:
-        last = run.segments[-1]
-        ode, solution = last.result.ode, last.solution
-        final = solution.x[-1]
-        observed = ode.observe(float(solution.t[-1]), final)
-        times, _ = run.values(ode.state_names[0])
-        report["simulation"].append({
-            "label": label,
+    report["simulation"] = [simulation_record(*run) for run in runs]
+    return report
+
+
+def simulation_record(label: str, run: ReselectedRun, tol: float) -> dict:
+    """One simulation as plain data: parameters, state selections, the final state and the
+    observed variables at the end (SI), Modia-form statistics."""
+    last = run.segments[-1]
+    ode, solution = last.result.ode, last.solution
+    final = solution.x[-1]
+    observed = ode.observe(float(solution.t[-1]), final)
+    times, _ = run.values(ode.state_names[0])
+    return {"label": label,
             "parameters": dict(last.result.model.parameters),
             "t_end": float(solution.t[-1]),
             "state_selections": run.switches(),
@@ -146,13 +152,20 @@ def pipeline_report(result: PipelineResult,
             "observed_at_end": {k: float(np.real(v)) for k, v in observed.items()},
             "statistics": modia_log(run.stats, times, len(ode.state_names), tol,
                                     len(run.segments) - 1),
-            "seed_statistics": SEED_LOG})
-    return report
+            "seed_statistics": SEED_LOG}
 
 
 def report_lines(report: dict) -> list[str]:
     """The report as the text the command prints, stage by stage."""
-    model = report["model"]
+    lines = model_lines(report["model"])
+    for stage in (lowering_lines, alias_lines, matching_lines, pantelides_lines, dummy_lines,
+                  blt_lines, tearing_lines, code_lines, simulation_lines):
+        lines += stage(report)
+    return lines
+
+
+def model_lines(model: dict) -> list[str]:
+    """The model as ModelingToolkit prints a system."""
     lines = [f"Model {model['name']}:", f"Equations ({len(model['equations'])}):"]
     lines += [f"  {e}" for e in model["equations"]]
     lines.append(f"Unknowns ({len(model['unknowns'])}):")
@@ -160,72 +173,102 @@ def report_lines(report: dict) -> list[str]:
               for k, v in model["unknowns"].items()]
     lines.append(f"Parameters ({len(model['parameters'])}):")
     lines += [f"  {k} [defaults: {k} => {v}]" for k, v in model["parameters"].items()]
+    return lines
 
+
+def lowering_lines(report: dict) -> list[str]:
+    """Stage 1: the new variables of order lowering and the first-order equations."""
     lowering = report["order_lowering"]
-    lines.append("\n== 1. order lowering")
-    lines.append("new variables: " + (", ".join(lowering["new_variables"]) or "none"))
-    lines += [f"  {e}" for e in lowering["equations"]]
+    return ["\n== 1. order lowering",
+            "new variables: " + (", ".join(lowering["new_variables"]) or "none"),
+            *(f"  {e}" for e in lowering["equations"])]
+
+
+def alias_lines(report: dict) -> list[str]:
+    """Stage 2: the aliases eliminated and the equations left."""
     aliases = report["alias_elimination"]
-    lines.append("\n== 2. alias elimination")
-    lines.append("eliminated: " + (", ".join(aliases["aliases"]) or "none"))
-    lines += [f"  {e}" for e in aliases["equations"]]
+    return ["\n== 2. alias elimination",
+            "eliminated: " + (", ".join(aliases["aliases"]) or "none"),
+            *(f"  {e}" for e in aliases["equations"])]
 
+
+def matching_lines(report: dict) -> list[str]:
+    """Stage 3: the incidence matrix and the matching of the highest derivatives."""
     matching = report["matching"]
-    lines.append("\n== 3. matching (Hopcroft-Karp over the highest derivatives)")
-    lines.append("variables: " + ", ".join(f"{j + 1}:{v}" for j, v in
-                                            enumerate(matching["variables"])))
-    lines += [f"  f{i + 1:<3d} {row}" for i, row in enumerate(matching["incidence"])]
-    lines.append("matching: " + ", ".join(f"{v} -> {e}" for v, e in
-                                          matching["highest_derivative_matching"].items()))
-    lines.append("unmatched equations: " + (", ".join(matching["unmatched_equations"])
-                                            or "none"))
+    return ["\n== 3. matching (Hopcroft-Karp over the highest derivatives)",
+            "variables: " + ", ".join(f"{j + 1}:{v}" for j, v in
+                                      enumerate(matching["variables"])),
+            *(f"  f{i + 1:<3d} {row}" for i, row in enumerate(matching["incidence"])),
+            "matching: " + ", ".join(f"{v} -> {e}" for v, e in
+                                     matching["highest_derivative_matching"].items()),
+            "unmatched equations: " + (", ".join(matching["unmatched_equations"]) or "none")]
 
+
+def pantelides_lines(report: dict) -> list[str]:
+    """Stage 4: Pantelides' steps, the differentiated equations and ModiaBase's lists."""
     pant = report["pantelides"]
-    lines.append("\n== 4. Pantelides")
+    lines = ["\n== 4. Pantelides"]
     lines += [f"  {s}" for s in pant["steps"]] or ["  no equation differentiated"]
     lines += [f"  {n}: {e}" for n, e in pant["differentiated_equations"].items()]
-    for key in ("vmap", "eqmap", "assign"):
-        lines.append(f"{key}: " + ", ".join(f"{a} -> {b}" for a, b in pant[key].items()))
+    lines += [f"{key}: " + ", ".join(f"{a} -> {b}" for a, b in pant[key].items())
+              for key in ("vmap", "eqmap", "assign")]
     lines.append(f"{pant['n_equations']} equations in {pant['n_variables']} variables; "
                  f"structural index {pant['structural_index']}")
+    return lines
 
+
+def dummy_lines(report: dict) -> list[str]:
+    """Stage 5: each level's Jacobian and selection, why, the dummies and the states."""
     dummy = report["dummy_derivatives"]
-    lines.append("\n== 5. dummy derivatives (Mattsson-Soederlind)")
+    lines = ["\n== 5. dummy derivatives (Mattsson-Soederlind)"]
     for k, level in enumerate(dummy["levels"], start=1):
         lines.append(f"level {k}: equations {', '.join(level['equations'])}; candidates "
                      f"{', '.join(level['candidates'])}")
-        for name, row in zip(level["equations"], level["jacobian"]):
-            lines.append(f"  d{name}/d(...) = [{', '.join(map(str, row))}]")
+        lines += [f"  d{name}/d(...) = [{', '.join(map(str, row))}]"
+                  for name, row in zip(level["equations"], level["jacobian"])]
         lines.append(f"  selected: {', '.join(level['selected'])}")
     lines += dummy["why"]
     lines.append("dummy derivatives: " + (", ".join(dummy["dummies"]) or "none"))
     lines.append("states: " + ", ".join(dummy["states"]) + "; every other variable is an "
                  "unknown of the index-1 system (chosen at the start values; chosen again "
                  "during the run where a pivot fades)")
+    return lines
 
+
+def blt_lines(report: dict) -> list[str]:
+    """Stage 6: the BLT-permuted incidence of the index-1 system and the sorted equations."""
     blt = report["blt"]
-    lines.append("\n== 6. BLT of the index-1 system (states known)")
-    lines.append("unknowns: " + ", ".join(f"{j + 1}:{v}" for j, v in enumerate(blt["unknowns"])))
-    lines += [f"  {name:<4s} {row}" for name, row in zip(blt["equations"], blt["incidence"])]
-    lines.append("sorted equations ([variables]: equations, in solution order):")
-    lines += [f"  {s}" for s in blt["sorted"]]
+    return ["\n== 6. BLT of the index-1 system (states known)",
+            "unknowns: " + ", ".join(f"{j + 1}:{v}" for j, v in enumerate(blt["unknowns"])),
+            *(f"  {name:<4s} {row}" for name, row in zip(blt["equations"], blt["incidence"])),
+            "sorted equations ([variables]: equations, in solution order):",
+            *(f"  {s}" for s in blt["sorted"])]
 
-    lines.append("\n== 7. tearing")
+
+def tearing_lines(report: dict) -> list[str]:
+    """Stage 7: each algebraic loop's tearing variables, residuals and causal equations."""
+    lines = ["\n== 7. tearing"]
     if not report["tearing"]:
         lines.append("no algebraic loop")
     for torn in report["tearing"]:
         lines.append(f"tearing variables: {', '.join(torn['tearing_variables'])}; residuals: "
                      f"{', '.join(torn['residuals'])}")
         lines += [f"  {c}" for c in torn["causal"]]
+    return lines
 
+
+def code_lines(report: dict) -> list[str]:
+    """Stage 8: the generated ODE and its observed variables."""
     code = report["code"]
-    lines.append("\n== 8. generated ODE x' = f(t, x), x = (" + ", ".join(code["states"]) + ")")
-    lines += [f"  {k} = {v}" for k, v in code["derivatives"].items()]
-    lines.append("observed:")
-    lines += [f"  {k} = {v}" for k, v in code["observed"].items()]
+    return ["\n== 8. generated ODE x' = f(t, x), x = (" + ", ".join(code["states"]) + ")",
+            *(f"  {k} = {v}" for k, v in code["derivatives"].items()),
+            "observed:",
+            *(f"  {k} = {v}" for k, v in code["observed"].items())]
 
-    if report["simulation"]:
-        lines.append("\n== 9. simulation")
+
+def simulation_lines(report: dict) -> list[str]:
+    """Stage 9: each run's parameters, state selections, end values and statistics."""
+    lines = ["\n== 9. simulation"] if report["simulation"] else []
     for run in report["simulation"]:
         lines.append(f"{run['label']}: parameters " + ", ".join(
             f"{k} = {v:g}" for k, v in run["parameters"].items()))
@@ -236,3 +279,51 @@ def report_lines(report: dict) -> list[str]:
         lines += [f"        {k:<15s} = {v}" for k, v in run["statistics"].items()]
         lines.append(f"  seed's log: {run['seed_statistics']}")
     return lines
+
+
+@dataclass(frozen=True)
+class PipelineConfig:
+    """The pipeline on one of EXAMPLE_MODELS: a parameter ``merge`` (model | {name:
+    value}; empty: the defaults, and for modia-pendulum also the seed's merge L = 0.5),
+    the integrator, its accuracy ``tol`` (rtol = tol, atol_i = tol max(|x0_i|, 1e-3)), the
+    output times, a fixed step ``dt`` (s), the step budget of a fixed-step run, and
+    whether to keep the start's state selection (``static_selection``)."""
+
+    example: str = "pendulum"
+    merge: tuple[tuple[str, float], ...] = ()
+    integrator: str = "cvode_bdf"
+    tol: float = 1e-6
+    outputs: int = 201
+    dt: float | None = None
+    max_steps: int | None = None
+    static_selection: bool = False
+
+
+def pipeline_models(config: PipelineConfig) -> list[tuple[str, EquationModel]]:
+    """(label, model) of each simulation: the example with the merge, or its defaults
+    (and the seed's merge for modia-pendulum)."""
+    model = EXAMPLE_MODELS[config.example]()
+    merges = [dict(config.merge)] if config.merge else [{}]
+    if config.example == "modia-pendulum" and not config.merge:
+        merges.append(MODIA_MERGE)
+    return [("model | " + ", ".join(f"{k} = {v:g}" for k, v in merge.items())
+             if merge else "model (defaults)", model | merge) for merge in merges]
+
+
+def run(config: PipelineConfig) -> dict:
+    """Every stage of the pipeline and the simulations, as plain data
+    (:func:`pipeline_report`); IntegrationError if a simulation fails."""
+    runs = []
+    for label, model in pipeline_models(config):
+        with np.errstate(all="ignore"):
+            run = simulate_with_reselection(
+                model, config.integrator, config.tol, config.outputs, dt=config.dt,
+                max_steps=config.max_steps,
+                max_segments=1 if config.static_selection else 100)
+        runs.append((label, run, config.tol))
+    return pipeline_report(runs[0][1].segments[0].result, runs)
+
+
+def text(report: dict) -> str:
+    """The report as the text ``study pipeline`` prints."""
+    return "\n".join(report_lines(report))

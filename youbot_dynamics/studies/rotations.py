@@ -35,6 +35,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.events import Mode, Transition, simulate_hybrid
 from youbot_dynamics.integrate.integrators import (IntegrationError, IntegratorStats,
                                                    StepBudgetError, integrate)
+from youbot_dynamics.io.text_tables import markdown_table
 from youbot_dynamics.model.lie import (exp_so3, log_so3, matrix_from_quaternion,
                                        quaternion_from_matrix)
 from youbot_dynamics.model.rotations import (AXES, SWITCH_ANGLE, adaptive_angles,
@@ -264,45 +265,65 @@ def spin_wobble_sweep(integrator: str = "rk45", tol: float = 1e-8,
     return rows
 
 
-def plot_rotations(results: list[RotationResult], path: str) -> None:
-    """PNG (matplotlib, Agg): per run, the attitude error against the closed form (log
-    scale) of each formulation, and the middle angle of the Cardan formulations."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+@dataclass(frozen=True)
+class RotationsConfig:
+    """The study's settings: the runs (names of RUNS), the integrator and its tolerance
+    (rtol = atol)."""
 
-    runs = list(dict.fromkeys(result.run for result in results))
-    figure, axes = plt.subplots(2, len(runs), figsize=(5 * len(runs), 7), squeeze=False)
-    for column, name in enumerate(runs):
-        top, bottom = axes[0, column], axes[1, column]
-        for result in (r for r in results if r.run == name):
-            run = RUNS[name]
-            inertia = np.array(run.inertia, dtype=float)
-            references, _ = axisymmetric_top(inertia, run.rotation0, np.array(run.w0),
-                                             result.t)
-            error = np.maximum(attitude_error(result.rotations, references), 1e-17)
-            label = (f"{result.formulation} ({result.stats.steps} steps)"
-                     if result.failure is None else f"{result.formulation} (failed)")
-            top.semilogy(result.t, error, label=label, linewidth=0.9)
-            if result.middle_angle is not None:
-                bottom.plot(result.t, result.middle_angle, label=result.formulation,
-                            linewidth=0.9)
-            if result.quaternion_norm is not None:
-                drift = bottom.twinx()
-                drift.plot(result.t, result.quaternion_norm - 1.0, color="tab:green",
-                           label="quaternion |q| - 1 (right)", linewidth=0.9)
-                drift.set_ylabel("|q| - 1")
-                drift.legend(fontsize=7, loc="lower right")
-        for level in (SWITCH_ANGLE, -SWITCH_ANGLE, math.pi / 2, -math.pi / 2):
-            bottom.axhline(level, color="grey", linewidth=0.5,
-                           linestyle=":" if abs(level) == SWITCH_ANGLE else "--")
-        top.set_title(f"{name}: {RUNS[name].purpose}", fontsize=9)
-        top.set_ylabel("attitude error vs closed form (rad)")
-        bottom.set_ylabel("middle Cardan angle a2 (rad)")
-        bottom.set_xlabel("t (s)")
-        for axis in (top, bottom):
-            axis.grid(True, alpha=0.3)
-            axis.legend(fontsize=7, loc="upper left")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    runs: tuple[str, ...] = tuple(RUNS)
+    integrator: str = "rk45"
+    tol: float = 1e-8
+
+
+@dataclass
+class RotationsStudy:
+    """Every formulation on every run, and the spin run's wobble sweep (empty when the
+    spin run is not among the runs)."""
+
+    config: RotationsConfig
+    results: list[RotationResult]
+    sweep: list[dict]
+
+    @property
+    def rows(self) -> list[dict]:
+        """One summary per (run, formulation)."""
+        return [result.summary() for result in self.results]
+
+
+def run(config: RotationsConfig) -> RotationsStudy:
+    """Run the study."""
+    results = rotations_study(config.integrator, config.tol, runs=config.runs)
+    sweep = spin_wobble_sweep(config.integrator, config.tol) if "spin" in config.runs else []
+    return RotationsStudy(config, results, sweep)
+
+
+def as_json(study: RotationsStudy) -> dict:
+    """Integrator, tolerance, the rows and the wobble sweep."""
+    return {"integrator": study.config.integrator, "tol": study.config.tol, "rows": study.rows,
+            "spin_wobble_sweep": study.sweep}
+
+
+#: Columns of the study's table.
+ROTATION_COLUMNS = ("run", "formulation", "steps", "rhs_evals", "switches", "t_reached",
+                    "attitude_error", "rate_error", "norm_drift", "wall_time")
+
+
+def text(study: RotationsStudy) -> str:
+    """The study's table, the runs' purposes and the sweep as text (Markdown tables)."""
+    config, rows, sweep = study.config, study.rows, study.sweep
+    lines = [f"Rotations study, {config.integrator} at rtol = atol = {config.tol:g}; errors are "
+             f"maxima over the outputs against the closed-form axisymmetric top (attitude: "
+             f"|log(R_true^T R)|, rad; rate: |w - w_true|, rad/s). cardan_adaptive switches "
+             f"x-y-z <-> x-z-y at |a2| = {SWITCH_ANGLE} rad; the quaternion is integrated "
+             f"unprojected and renormalised on output (norm_drift = max ||q| - 1|).\n"]
+    lines += [f"{name}: {RUNS[name].purpose}" for name in dict.fromkeys(row["run"] for row in rows)]
+    lines += ["", markdown_table(ROTATION_COLUMNS, ([row[c] for c in ROTATION_COLUMNS]
+                                                    for row in rows), digits=3)]
+    if sweep:
+        lines += [f"\nspin with less and less wobble (w0 = ({RUNS['spin'].w0[0]:g}, wobble, 0) "
+                  f"rad/s): fixed Cardan against the quaternion\n",
+                  markdown_table(tuple(sweep[0]), ([row[c] for c in sweep[0]] for row in sweep),
+                                 digits=3)]
+    lines += [f"{row['run']} / {row['formulation']} failed: {row['failure']}"
+              for row in rows if row["failure"]]
+    return "\n".join(lines)

@@ -314,22 +314,142 @@ def reference_error(q: np.ndarray) -> np.ndarray:
     return np.abs(np.asarray(q) - Q_REFERENCE) / np.abs(Q_REFERENCE)
 
 
-def plot_drift(runs: list[ConstrainedRun], path: str) -> None:
-    """PNG of max_i |g_i(q)| and max_i |(G v)_i| over time for each run (log scale);
-    matplotlib with the Agg backend."""
-    from youbot_dynamics.studies.figures import pyplot, save
-    plt = pyplot()
+#: Shown with every index-3 run on IDA (see dynamics/constraints.py, "Error test").
+INDEX3_CAVEAT = ("IDA runs index 3 with v, w and lambda under a loose absolute tolerance "
+                 "(in its error test, or out of it by IDASetSuppressAlg, they make it fail "
+                 "at t = 0: see study squeezer --table): the velocity along the motion is not "
+                 "error-controlled and q's error is 1e2 to 1e4 times rtol; prefer "
+                 "--integrator radau5 (the default: Hairer's index-scaled error test)")
+#: Table numbers of the seed for each formulation's suppression grid.
+SEED_TABLES = {"index3": 8, "index2": 9}
 
-    figure, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
-    floor = 1e-18  # exact zeros (t = 0, projected states) drawn at the floor
-    for run in runs:
-        label = f"{run.formulation} ({run.stats.integrator})"
-        top.semilogy(run.t, np.abs(run.position_residual).max(axis=1) + floor, label=label)
-        bottom.semilogy(run.t, np.abs(run.velocity_residual).max(axis=1) + floor,
-                        label=label)
-    top.set_ylabel("max |g(q)| (m)")
-    bottom.set_ylabel("max |G v| (m/s)")
-    bottom.set_xlabel("t (s)")
-    top.set_title("Andrew's squeezer: constraint drift")
-    top.legend()
-    save(figure, path)
+
+@dataclass(frozen=True)
+class SqueezerConfig:
+    """One run: the formulation, the integrator (None: :func:`default_integrator`), rtol
+    and atol (None: rtol * 1e-3), the simulated ``duration`` (s), the output times, a fixed
+    step ``dt`` (s) and, for DAE forms, the exact Jacobian or IDA's finite differences."""
+
+    formulation: str = "index1-projection"
+    integrator: str | None = None
+    rtol: float = 1e-6
+    atol: float | None = None
+    duration: float = T_REFERENCE
+    outputs: int = 500
+    dt: float | None = None
+    exact_jacobian: bool = True
+
+
+@dataclass
+class SqueezerResult:
+    """The run (ConstrainedRun: q in rad, v in rad/s, multipliers, residuals, statistics)."""
+
+    config: SqueezerConfig
+    run: ConstrainedRun
+
+
+def run(config: SqueezerConfig) -> SqueezerResult:
+    """Simulate the squeezer (IntegrationError or NotImplementedError if it fails)."""
+    return SqueezerResult(config, simulate_squeezer(
+        config.formulation, config.integrator, exact_jacobian=config.exact_jacobian,
+        rtol=config.rtol, atol=config.atol, t_end=config.duration,
+        n_outputs=config.outputs, dt=config.dt))
+
+
+def index3_on_ida(result: SqueezerResult) -> bool:
+    """The run is index 3 on IDA (whose caveat is shown)."""
+    return result.run.formulation == "index3" and result.run.stats.integrator == "ida"
+
+
+def as_json(result: SqueezerResult) -> dict:
+    """The run's figures, the caveat of index 3 on IDA, and q's relative error against
+    the reference when the run ends at T_REFERENCE."""
+    report = result.run.as_dict()
+    if index3_on_ida(result):
+        report["caveat"] = INDEX3_CAVEAT
+    if abs(result.config.duration - T_REFERENCE) < 1e-15:
+        report["relative_error_vs_reference"] = reference_error(result.run.q[-1]).tolist()
+    return report
+
+
+def format_vector(values) -> str:
+    """Numbers side by side, 10 significant digits, signs aligned."""
+    return " ".join(f"{value: .10g}" for value in values)
+
+
+def text(result: SqueezerResult) -> str:
+    """End state (q, v, and q's error against the reference), multipliers, residuals,
+    statistics."""
+    run, report = result.run, as_json(result)
+    compared = "relative_error_vs_reference" in report
+    lines = [f"Andrew's squeezer, {run.formulation} with {run.stats.integrator}, "
+             f"rtol {result.config.rtol:g}, t = {report['t_end']:g} s",
+             f"{'':10s} {'q (rad)':>18s} {'v (rad/s)':>18s}"
+             + (f" {'rel. error q':>14s}" if compared else "")]
+    for i, name in enumerate(POSITION_NAMES):
+        line = f"{name:10s} {run.q[-1, i]:18.12g} {run.v[-1, i]:18.10g}"
+        if compared:
+            line += f" {report['relative_error_vs_reference'][i]:14.3e}"
+        lines.append(line)
+    lines += [f"lambda     {format_vector(run.multipliers[-1])}",
+              f"g(q)       {format_vector(run.position_residual[-1])}",
+              f"G v        {format_vector(run.velocity_residual[-1])}",
+              run.stats.summary()]
+    if index3_on_ida(result):
+        lines.append(f"note: {INDEX3_CAVEAT}")
+    if run.projection:
+        lines.append(f"projections {run.projection['projections']}, Gauss-Newton iterations "
+                     f"{run.projection['gauss_newton_iterations']}")
+    return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class SuppressionConfig:
+    """The suppression grids: rtol = atol values and output times."""
+
+    tolerances: tuple[float, ...] = SUPPRESSION_TOLERANCES
+    outputs: int = 500
+
+
+@dataclass
+class SuppressionTables:
+    """formulation (index3, index2) -> tolerance -> column -> GridCell."""
+
+    config: SuppressionConfig
+    tables: dict[str, dict[float, dict[str, GridCell]]]
+
+
+def run_suppression(config: SuppressionConfig) -> SuppressionTables:
+    """The grids of index 3 and index 2 (the seed's Tables 8 and 9)."""
+    if not all(tol > 0 for tol in config.tolerances):
+        raise UserInputError(f"--tolerances must be positive, got {list(config.tolerances)}")
+    if config.outputs < 2:
+        raise UserInputError(f"--outputs must be at least 2, got {config.outputs!r}")
+    return SuppressionTables(config, {
+        formulation: suppression_table(formulation, config.tolerances, config.outputs)
+        for formulation in SEED_TABLES})
+
+
+def suppression_json(result: SuppressionTables) -> dict:
+    """Per formulation: the seed's table number and figures, and the grid's rows."""
+    return {formulation: {
+        "seed_table": SEED_TABLES[formulation], "seed": SEED_SUPPRESSION[formulation],
+        "rows": [{"tol": tol, **{column: vars(cell) for column, cell in row.items()}}
+                 for tol, row in table.items()]}
+        for formulation, table in result.tables.items()}
+
+
+def suppression_text(result: SuppressionTables) -> str:
+    """Per tolerance and column, q's largest relative error at t = 0.03 s and the steps,
+    or why the run failed; the seed's figures under each table."""
+    width = max(len(column) for column in SUPPRESSION_COLUMNS)
+    lines = []
+    for formulation, table in result.tables.items():
+        lines.append(f"Seed Table {SEED_TABLES[formulation]}: Andrew's squeezer, {formulation}, "
+                     f"rtol = atol = tol, {result.config.outputs} outputs; q's largest relative "
+                     f"error at t = {T_REFERENCE:g} s against the test set, or why the run failed")
+        for tol, row in table.items():
+            lines.append(f"  tol {tol:g}")
+            lines += [f"    {column:{width}s}  {cell.verdict()}" for column, cell in row.items()]
+        lines.append(f"  {SEED_SUPPRESSION[formulation]} (its grid is not in benchmarks.md)")
+    return "\n".join(lines)

@@ -337,29 +337,43 @@ def structure_report(example: str) -> dict:
     systems, Pantelides' reduction steps, vmap, eqmap, final assignment and structural
     index."""
     if example == "lowpass":
-        equation_vars = [{j - 1 for j in vs} for vs in LOWPASS_INCIDENCE]
-        n_variables = max(max(vs) for vs in LOWPASS_INCIDENCE)
-        unknowns = [j for j in range(n_variables) if j + 1 not in LOWPASS_KNOWN]
-        matching = maximum_matching(equation_vars, unknowns)
-        blocks = block_lower_triangular(equation_vars, matching)
-        names = [f"f{i + 1}" for i in range(len(equation_vars))]
-        return {
-            "example": example,
-            "variables": [str(j + 1) for j in range(n_variables)],
-            "known": list(LOWPASS_KNOWN),
-            "equations": [f"f{i + 1}" for i in range(len(equation_vars))],
-            "incidence": incidence_rows(equation_vars, n_variables),
-            "assign": [matching[j] + 1 if j in matching else 0 for j in range(n_variables)],
-            "perfect_matching": len(matching) == len(equation_vars),
-            "blocks": [[i + 1 for i in block] for block in blocks],
-            "blt": blt_view(equation_vars, matching, blocks, names,
-                            [str(j + 1) for j in range(n_variables)]),
-            "steps": ["perfect matching: no equation needs differentiating (index 0 or 1)"]
-            if len(matching) == len(equation_vars) else ["no perfect matching"],
-        }
+        return lowpass_report()
     if example not in STRUCTURE_EXAMPLES:
         raise UserInputError(f"unknown structure example {example!r}; valid: "
                              + ", ".join(STRUCTURE_EXAMPLES))
+    return pantelides_report(example)
+
+
+def lowpass_report() -> dict:
+    """The low-pass filter's incidence (seed 000 item 4): the matching as the seed's
+    ``assign`` list (variable -> equation, 0 = known) and the BLT blocks."""
+    example = "lowpass"
+    equation_vars = [{j - 1 for j in vs} for vs in LOWPASS_INCIDENCE]
+    n_variables = max(max(vs) for vs in LOWPASS_INCIDENCE)
+    unknowns = [j for j in range(n_variables) if j + 1 not in LOWPASS_KNOWN]
+    matching = maximum_matching(equation_vars, unknowns)
+    blocks = block_lower_triangular(equation_vars, matching)
+    names = [f"f{i + 1}" for i in range(len(equation_vars))]
+    return {
+        "example": example,
+        "variables": [str(j + 1) for j in range(n_variables)],
+        "known": list(LOWPASS_KNOWN),
+        "equations": [f"f{i + 1}" for i in range(len(equation_vars))],
+        "incidence": incidence_rows(equation_vars, n_variables),
+        "assign": [matching[j] + 1 if j in matching else 0 for j in range(n_variables)],
+        "perfect_matching": len(matching) == len(equation_vars),
+        "blocks": [[i + 1 for i in block] for block in blocks],
+        "blt": blt_view(equation_vars, matching, blocks, names,
+                        [str(j + 1) for j in range(n_variables)]),
+        "steps": ["perfect matching: no equation needs differentiating (index 0 or 1)"]
+        if len(matching) == len(equation_vars) else ["no perfect matching"],
+    }
+
+
+def pantelides_report(example: str) -> dict:
+    """The Cartesian pendulum's or the squeezer's equations: the matching of the highest
+    derivatives, Pantelides' steps, vmap, eqmap, the final assignment, the BLT blocks of
+    the reduced system and the structural index."""
     t = sp.Symbol("t")
     if example == "pendulum":
         equations, names = cartesian_pendulum_equations(t)
@@ -373,13 +387,6 @@ def structure_report(example: str) -> dict:
                if (name, order + 1) not in variables]
     initial = maximum_matching(equation_vars, highest)
     result = pantelides(equations, t, names, functions)
-    active = result.active_equations
-    solved = {j: active.index(i) for j, i in result.assignment.items()
-              if result.variable_association[j] is None}
-    solved_vars = [{j for j in result.equation_vars[i] if j in solved} for i in active]
-    blocks = block_lower_triangular(solved_vars, solved)
-    unknowns = sorted(solved)
-    column = {j: k for k, j in enumerate(unknowns)}
     return {
         "example": example,
         "variables": [variable_name(v) for v in variables],
@@ -396,13 +403,68 @@ def structure_report(example: str) -> dict:
         "differentiations": result.differentiations,
         "n_equations": len(result.equations),
         "n_variables": len(result.variables),
-        "blocks": [[result.equation_names[active[i]] for i in block] for block in blocks],
-        "blt": blt_view([{column[j] for j in vs} for vs in solved_vars],
-                        {column[j]: i for j, i in solved.items()}, blocks,
-                        [result.equation_names[i] for i in active],
-                        [variable_name(result.variables[j]) for j in unknowns]),
+        **reduced_blocks(result),
         "structural_index": result.structural_index,
     }
+
+
+def reduced_blocks(result: PantelidesResult) -> dict:
+    """The BLT blocks of Pantelides' reduced system (its active equations in the variables
+    they solve for, by equation name) and their permuted incidence matrix."""
+    active = result.active_equations
+    solved = {j: active.index(i) for j, i in result.assignment.items()
+              if result.variable_association[j] is None}
+    solved_vars = [{j for j in result.equation_vars[i] if j in solved} for i in active]
+    blocks = block_lower_triangular(solved_vars, solved)
+    unknowns = sorted(solved)
+    column = {j: k for k, j in enumerate(unknowns)}
+    return {"blocks": [[result.equation_names[active[i]] for i in block] for block in blocks],
+            "blt": blt_view([{column[j] for j in vs} for vs in solved_vars],
+                            {column[j]: i for j, i in solved.items()}, blocks,
+                            [result.equation_names[i] for i in active],
+                            [variable_name(result.variables[j]) for j in unknowns])}
+
+
+def structure_text(report: dict) -> str:
+    """A structure report (:func:`structure_report`) as the lines ``study structure``
+    prints: variables, incidence matrix, matching, reduction steps, maps, BLT blocks."""
+    lines = [f"Structural analysis: {report['example']} (equations and variables numbered "
+             f"from 1)",
+             "variables: " + ", ".join(f"{j + 1}:{name}" for j, name in
+                                       enumerate(report["variables"]))]
+    if "known" in report:
+        lines.append(f"known: {report['known']}")
+    lines.append("incidence matrix (rows equations, columns variables):")
+    lines += [f"  {name:>4s} {row}" for name, row in zip(report["equations"], report["incidence"])]
+    lines += matching_lines(report)
+    lines.append("reduction steps:")
+    lines += [f"  {step}" for step in report["steps"]]
+    if "vmap" in report:
+        lines += pantelides_lines(report)
+    lines.append("blocks (BLT order): " + "  ".join(
+        "[" + ", ".join(str(e) for e in block) + "]" for block in report["blocks"]))
+    return "\n".join(lines)
+
+
+def matching_lines(report: dict) -> list[str]:
+    """The matching: the seed's assign list, or the highest derivatives' matching and the
+    equations it leaves unmatched."""
+    if "assign" in report:
+        return [f"matching (variable -> equation, 0 = known): assign = {report['assign']}"]
+    return ["matching of the highest derivatives: " + ", ".join(
+                f"{v} -> {e}" for v, e in report["initial_matching"].items()),
+            f"unmatched equations: {', '.join(report['unmatched_equations']) or 'none'}"]
+
+
+def pantelides_lines(report: dict) -> list[str]:
+    """vmap, eqmap, the assignment, the differentiations and the structural index."""
+    lines = [f"{key}: " + ", ".join(f"{a} -> {b}" for a, b in report[key].items())
+             for key in ("vmap", "eqmap", "assignment")]
+    lines.append("differentiated: " + ", ".join(f"{name} x{count}" for name, count in
+                                                report["differentiations"].items()))
+    lines.append(f"{report['n_equations']} equations in {report['n_variables']} variables; "
+                 f"structural index {report['structural_index']}")
+    return lines
 
 
 def variable_symbol(variable: Variable) -> sp.Symbol:

@@ -13,8 +13,8 @@ Two propagations of the same fixed-step RK4 map (h = STEP):
   again (a negative damping, 2.5 sigma away, would feed the swing until it turns over and
   spins, which no physical pendulum does), integrated side by side as arrays.
 
-Where the two standard deviations part (FAILURE_RATIO, FAILURE_FLOOR), linearisation has
-failed. Measured (N = 1000, seed 0): they agree to the first swing's end and part at
+Where the two standard deviations part (accuracy/propagation.py's FAILURE_RATIO and
+FAILURE_FLOOR), linearisation has failed. Measured (N = 1000, seed 0): they agree to the first swing's end and part at
 t = 0.85 s; then the samples dephase (the period depends on L) and the linear sigma
 oscillates with the nominal swing, up to 2.0x the Monte Carlo's near t = 5 s, down to
 0.35x at t = 10 s (0.049 rad against 0.142 rad). Relative to each other they differ from
@@ -28,6 +28,8 @@ from typing import Callable
 
 import numpy as np
 
+from youbot_dynamics.accuracy.propagation import (FAILURE_FLOOR, FAILURE_RATIO, Propagation,
+                                                  comparison)
 from youbot_dynamics.errors import UserInputError
 
 GRAVITY = 9.81
@@ -37,10 +39,6 @@ PHI0, W0 = 1.57, 0.0
 T_END = 10.0
 #: RK4 step (s) and output interval (s).
 STEP, OUTPUT_EVERY = 0.01, 0.05
-#: Linearisation counts as failed where |sigma_linear - sigma_MonteCarlo| exceeds both
-#: FAILURE_RATIO sigma_MonteCarlo (its own sampling error is about 1/sqrt(2 N), 2.2 % at
-#: N = 1000) and FAILURE_FLOOR (rad; tiny early spreads differ relatively but not visibly).
-FAILURE_RATIO, FAILURE_FLOOR = 0.2, 0.02
 
 
 def pendulum_rhs(phi, w, length, mass, damping, sin: Callable):
@@ -66,17 +64,6 @@ def rk4(phi, w, parameters, sin: Callable, t_end: float, step: float, every: int
         if n % every == 0:
             out.append((phi, w))
     return out
-
-
-@dataclass
-class Propagation:
-    """Mean and standard deviation of phi (rad) at the times t (s)."""
-
-    method: str
-    t: np.ndarray
-    mean: np.ndarray
-    sigma: np.ndarray
-    wall_time: float
 
 
 def output_times(t_end: float) -> tuple[np.ndarray, int]:
@@ -159,51 +146,61 @@ def monte_carlo(n: int = 1000, t_end: float = T_END, seed: int = 0,
                         time.perf_counter() - start), phi)
 
 
-def comparison(linear: Propagation, sampled: Propagation) -> dict:
-    """Figures of the study: both sigmas and 2-sigma band widths at the end, the range of
-    sigma_linear / sigma_MonteCarlo, and the first time (s) where they part by more than
-    FAILURE_RATIO and FAILURE_FLOOR (None if never)."""
-    ratio = np.divide(linear.sigma, sampled.sigma, out=np.ones_like(linear.sigma),
-                      where=sampled.sigma > 0)
-    gap = np.abs(linear.sigma - sampled.sigma)
-    failed = np.flatnonzero((gap > FAILURE_RATIO * sampled.sigma) & (gap > FAILURE_FLOOR))
-    return {"t_end": float(linear.t[-1]),
-            "sigma_linear_end": float(linear.sigma[-1]),
-            "sigma_monte_carlo_end": float(sampled.sigma[-1]),
-            "band_width_linear_end": float(2.0 * linear.sigma[-1]),
-            "band_width_monte_carlo_end": float(2.0 * sampled.sigma[-1]),
-            "mean_difference_end": float(linear.mean[-1] - sampled.mean[-1]),
-            "min_ratio": float(np.min(ratio)), "max_ratio": float(np.max(ratio)),
-            "linearisation_fails_at": float(linear.t[failed[0]]) if failed.size else None,
-            "wall_time_linear": linear.wall_time,
-            "wall_time_monte_carlo": sampled.wall_time}
+@dataclass(frozen=True)
+class UncertaintyConfig:
+    """The study's settings: Monte Carlo ``samples`` and their random ``seed``, the
+    simulated ``duration`` (s), where the samples run (``workers``: processes of a local
+    Dask cluster, 0 serial; ``scheduler``: a cluster's address)."""
+
+    samples: int = 1000
+    seed: int = 0
+    duration: float = T_END
+    workers: int | None = None
+    scheduler: str | None = None
 
 
-PENDULUM_TITLE = "Damped pendulum, L = 0.8 +- 0.2, m = 1 +- 0.2, d = 0.5 +- 0.2"
+@dataclass
+class UncertaintyResult:
+    """Both propagations of phi (rad), the Monte Carlo's traces ((outputs, samples)) and
+    the comparison's figures (accuracy.propagation.comparison)."""
+
+    config: UncertaintyConfig
+    linear: Propagation
+    sampled: Propagation
+    phi: np.ndarray
+    figures: dict
 
 
-def plot_uncertainty(linear: Propagation, sampled: Propagation, phi_samples: np.ndarray,
-                     path: str, title: str = PENDULUM_TITLE, quantity: str = "phi (rad)") -> None:
-    """PNG: the quantity (default the pendulum's phi) with the +-sigma bands of both
-    propagations and 30 sample traces; below, the two sigmas over time."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def run(config: UncertaintyConfig) -> UncertaintyResult:
+    """Linear propagation against the Monte Carlo over [0, duration]."""
+    if config.samples < 2:
+        raise UserInputError(f"--samples must be at least 2, got {config.samples}")
+    linear = linear_propagation(config.duration)
+    sampled, phi = monte_carlo(config.samples, config.duration, config.seed,
+                               workers=config.workers, scheduler=config.scheduler)
+    return UncertaintyResult(config, linear, sampled, phi, comparison(linear, sampled))
 
-    figure, (top, bottom) = plt.subplots(2, 1, figsize=(9, 8), sharex=True)
-    top.plot(sampled.t, phi_samples[:, :30], color="grey", linewidth=0.3, alpha=0.6)
-    for result, color in ((linear, "tab:blue"), (sampled, "tab:orange")):
-        top.plot(result.t, result.mean, color=color, label=f"{result.method} mean")
-        top.fill_between(result.t, result.mean - result.sigma, result.mean + result.sigma,
-                         color=color, alpha=0.25, label=f"{result.method} +-1 sigma")
-        bottom.plot(result.t, result.sigma, color=color, label=result.method)
-    top.set_ylabel(quantity)
-    top.set_title(f"{title}; {phi_samples.shape[1]} samples", fontsize=10)
-    bottom.set_ylabel(f"sigma of {quantity}")
-    bottom.set_xlabel("t (s)")
-    for axis in (top, bottom):
-        axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=8)
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+
+def as_json(result: UncertaintyResult) -> dict:
+    """The comparison's figures with the samples and their seed."""
+    return {**result.figures, "samples": result.config.samples, "seed": result.config.seed}
+
+
+def text(result: UncertaintyResult) -> str:
+    """The study's figures as lines of text."""
+    figures, config = result.figures, result.config
+    fails = figures["linearisation_fails_at"]
+    return "\n".join([
+        f"Damped pendulum, L = 0.8 +- 0.2 m, m = 1 +- 0.2 kg, d = 0.5 +- 0.2 N m s/rad, "
+        f"phi0 = 1.57 rad; RK4 h = 0.01 s; linear propagation (uncertainties) against "
+        f"{config.samples} Monte Carlo samples (seed {config.seed})",
+        f"at t = {figures['t_end']:g} s: sigma(phi) linear {figures['sigma_linear_end']:.4g} "
+        f"rad, Monte Carlo {figures['sigma_monte_carlo_end']:.4g} rad (2-sigma bands "
+        f"{figures['band_width_linear_end']:.4g} and {figures['band_width_monte_carlo_end']:.4g}"
+        f" rad wide); means differ by {figures['mean_difference_end']:.3g} rad",
+        f"sigma_linear / sigma_MC ranges over [{figures['min_ratio']:.3g}, "
+        f"{figures['max_ratio']:.3g}]; linearisation fails (beyond +-{FAILURE_RATIO:.0%} "
+        f"and {FAILURE_FLOOR:g} rad) "
+        + ("nowhere" if fails is None else f"first at t = {fails:g} s"),
+        f"wall time: linear {figures['wall_time_linear']:.3g} s, Monte Carlo "
+        f"{figures['wall_time_monte_carlo']:.3g} s"])

@@ -42,7 +42,7 @@ STATE_NAMES = ("x", "y", "theta", "v", "omega")
 
 Torques = Callable[[float], tuple[float, float]]
 #: Longest simulated time (s, 2.8 h): dop853 takes about 800 steps per 1e4 s at rtol 1e-10.
-MAX_DURATION = 1e4
+MAX_DURATION = limits.DURATION.maximum
 #: Shortest time constant m / b or I_z / beta (s): below it the model is stiff beyond use.
 MIN_TIME_CONSTANT = 1e-6
 _BOUNDS = {"mass": limits.MASS, "yaw_inertia": limits.INERTIA, "wheel_radius": limits.LENGTH,
@@ -155,3 +155,95 @@ def simulate_unicycle(model: Unicycle, tau_right: float, tau_left: float, t_end:
     return integrate(lambda t, x: unicycle_rhs(t, x, model, lambda _: (tau_right, tau_left)), state,
                      np.linspace(0.0, t_end, n_out), integrator, rtol=rtol, atol=atol, dt=dt,
                      state_names=STATE_NAMES)
+
+
+#: dop853 at rtol 1e-10, atol 1e-12 meets the closed forms to about 1e-10 on the defaults.
+DEFAULT_INTEGRATOR, DEFAULT_RTOL, DEFAULT_ATOL = "dop853", 1e-10, 1e-12
+#: Output times of a run, equally spaced over [0, duration].
+OUTPUTS = 101
+
+
+@dataclass(frozen=True)
+class UnicycleConfig:
+    """One run from rest: the model, the wheel torques (N m), the simulated ``duration``
+    (s), the integrator, its tolerances (a number or one per state component) and a fixed
+    step ``dt`` (s)."""
+
+    model: Unicycle = Unicycle()
+    tau_right: float = 0.5
+    tau_left: float = 0.5
+    duration: float = 10.0
+    integrator: str = DEFAULT_INTEGRATOR
+    rtol: float = DEFAULT_RTOL
+    atol: object = DEFAULT_ATOL
+    dt: float | None = None
+
+
+@dataclass
+class UnicycleRun:
+    """The run, the closed form it is compared with at the outputs (x, y, theta, v, omega
+    where they exist; theta, v, omega only for general torques), and the largest gap."""
+
+    config: UnicycleConfig
+    solution: Solution
+    case: str
+    compared: slice
+    reference: np.ndarray
+    max_error: float
+
+    @property
+    def final_state(self) -> dict[str, float]:
+        """The simulated state at the end (m, rad, m/s, rad/s)."""
+        return dict(zip(STATE_NAMES, map(float, self.solution.x[-1])))
+
+    @property
+    def closed_form(self) -> dict[str, float]:
+        """The closed form's compared components at the end."""
+        return dict(zip(STATE_NAMES[self.compared], map(float, self.reference[-1, self.compared])))
+
+
+def run(config: UnicycleConfig) -> UnicycleRun:
+    """Simulate from rest and compare with the closed form where one exists (IntegrationError
+    if the integrator fails)."""
+    model, tau_right, tau_left = config.model, config.tau_right, config.tau_left
+    state0 = np.zeros(5)
+    solution = simulate_unicycle(model, tau_right, tau_left, config.duration, config.integrator,
+                                 rtol=config.rtol, atol=config.atol, dt=config.dt, n_out=OUTPUTS)
+    straight, spin = tau_right == tau_left, tau_right == -tau_left
+    if straight or spin:
+        compared = slice(0, 5)
+        reference = np.array([unicycle_closed_form(model, tau_right, tau_left, state0, t)
+                              for t in solution.t])
+    else:  # x, y have no closed form: compare theta, v, omega
+        compared = slice(2, 5)
+        reference = np.array([[0.0, 0.0, *heading_and_speeds(model, tau_right, tau_left, state0, t)[0]]
+                              for t in solution.t])
+    error = float(np.abs(solution.x[:, compared] - reference[:, compared]).max())
+    case = "equal torques: straight line" if straight else "opposite torques: spin in place" if spin else \
+        "general torques: closed forms of theta, v, omega only"
+    return UnicycleRun(config, solution, case, compared, reference, error)
+
+
+def as_json(result: UnicycleRun) -> dict:
+    """Parameters, torques, the case, the final state beside the closed form, the largest
+    gap and the statistics."""
+    config = result.config
+    return {"parameters": asdict(config.model), "tau_right": config.tau_right,
+            "tau_left": config.tau_left, "case": result.case, "t_end": float(result.solution.t[-1]),
+            "final_state": result.final_state, "closed_form": result.closed_form,
+            "max_error": result.max_error, "stats": result.solution.stats.as_dict()}
+
+
+def text(result: UnicycleRun) -> str:
+    """The case, the parameters, the final state beside the closed form, the largest gap and
+    the statistics."""
+    config, solution, closed = result.config, result.solution, result.closed_form
+    return "\n".join([
+        f"unicycle, {result.case}; tau_r = {config.tau_right:g}, tau_l = {config.tau_left:g} N m; "
+        f"{config.integrator}, t = {solution.t[-1]:g} s",
+        "parameters: " + ", ".join(f"{k} = {v:g}" for k, v in asdict(config.model).items()),
+        "final state:  " + ", ".join(f"{k}={v:.12g}" for k, v in result.final_state.items()),
+        "closed form:  " + ", ".join(f"{k}={v:.12g}" for k, v in closed.items()),
+        f"max |simulated - closed form| over {len(solution.t)} outputs ({', '.join(closed)}): "
+        f"{result.max_error:.3e}",
+        f"statistics: {solution.stats.summary()}"])

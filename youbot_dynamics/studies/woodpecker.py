@@ -37,6 +37,7 @@ from functools import cached_property
 import numpy as np
 
 from youbot_dynamics.integrate.events import HybridSolution, Mode, Transition, simulate_hybrid
+from youbot_dynamics.studies.stats_table import stats_table
 
 STATE_NAMES = ("z", "phiS", "phiB", "dz", "dphiS", "dphiB")
 MODES = ("I", "II", "III")
@@ -205,25 +206,67 @@ class Woodpecker:
                                atol=atol, state_names=STATE_NAMES, **options)
 
 
-def plot_woodpecker(woodpecker: Woodpecker, solution: HybridSolution, path: str) -> None:
-    """Save a PNG (matplotlib, Agg) of z, phiS, phiB, lambda1, lambda2 and the mode index
-    (I = 1, II = 2, III = 3) over time."""
-    from youbot_dynamics.studies.figures import pyplot, save
-    plt = pyplot()
+@dataclass(frozen=True)
+class WoodpeckerConfig:
+    """One run of the toy from the seed's state: ``duration`` (s), the integrator, its
+    tolerances, a fixed step ``dt`` (s) for fixed-step integrators, and ``n_out`` output
+    samples (0: only the switches, start and end)."""
 
-    lambdas = np.array([woodpecker.constraint_forces(mode, x)
-                        for mode, x in zip(solution.mode, solution.x)])
-    index = [MODES.index(mode) + 1 for mode in solution.mode]
-    rows = [("z (m)", solution.x[:, 0]), ("phiS (rad)", solution.x[:, 1]),
-            ("phiB (rad)", solution.x[:, 2]), ("lambda1 (N)", lambdas[:, 0]),
-            ("lambda2 (N)", lambdas[:, 1]), ("mode", index)]
-    figure, axes = plt.subplots(len(rows), 1, sharex=True, figsize=(8, 9.5))
-    for axis, (label, values) in zip(axes, rows):
-        axis.plot(solution.t, values, linewidth=0.8)
-        axis.set_ylabel(label)
-        axis.grid(True, alpha=0.3)
-    axes[-1].set_yticks([1, 2, 3], MODES)
-    axes[-1].set_xlabel("t (s)")
-    axes[0].set_title(f"Woodpecker toy: {solution.count(BEAK)} beak hits, "
-                      f"{solution.stats.integrator}")
-    save(figure, path)
+    duration: float = 2.0
+    integrator: str = "dop853"
+    rtol: float = 1e-6
+    atol: float = 1e-8
+    dt: float | None = None
+    n_out: int = 0
+
+
+@dataclass
+class WoodpeckerRun:
+    """The run's solution (modes, states, switches, statistics) and its toy."""
+
+    config: WoodpeckerConfig
+    woodpecker: Woodpecker
+    solution: HybridSolution
+
+
+def run(config: WoodpeckerConfig) -> WoodpeckerRun:
+    """Simulate the toy."""
+    woodpecker = Woodpecker()
+    options = {} if config.dt is None else {"dt": config.dt}
+    solution = woodpecker.simulate(config.duration, config.integrator, rtol=config.rtol,
+                                   atol=config.atol, n_out=config.n_out, **options)
+    return WoodpeckerRun(config, woodpecker, solution)
+
+
+def as_json(result: WoodpeckerRun) -> dict:
+    """Beak hits, the switches (time in s, kind, modes), the final state and mode, the
+    statistics."""
+    solution = result.solution
+    return {
+        "beak_hits": solution.count(BEAK),
+        "switches": [{"time": s.time, "kind": s.kind, "from": s.mode_before,
+                      "to": s.mode_after} for s in solution.switches],
+        "final_state": dict(zip(solution.state_names, solution.x[-1].tolist())),
+        "final_mode": solution.mode[-1],
+        "stats": solution.stats.as_dict(),
+    }
+
+
+def seed_json() -> dict:
+    """The seed's beak hits and statistics."""
+    return {"beak_hits": SEED_BEAK_HITS, **SEED_FIGURES}
+
+
+def text(result: WoodpeckerRun) -> str:
+    """Beak hits beside the seed's, the switches, the final state and the statistics
+    table beside the seed's rows."""
+    config, summary = result.config, as_json(result)
+    lines = [f"woodpecker toy over [0, {config.duration:g}] s with {config.integrator} "
+             f"(rtol {config.rtol:g}): {summary['beak_hits']} beak hits "
+             f"(seed over 2 s: {SEED_BEAK_HITS})"]
+    lines += [f"  t = {switch['time']:.6f} s  {switch['kind']:<12} "
+              f"{switch['from']} -> {switch['to']}" for switch in summary["switches"]]
+    lines.append(f"final mode {summary['final_mode']}, state "
+                 + ", ".join(f"{k}={v:.6g}" for k, v in summary["final_state"].items()))
+    lines.append(stats_table({f"{config.integrator} (ours)": summary["stats"], **SEED_FIGURES}))
+    return "\n".join(lines)

@@ -1,7 +1,6 @@
-"""Figures of the seed's two mechanisms (seed 001, Lund course): Andrew's squeezer in its
-index-1, index-2 and index-3 forms (positions, velocities, multipliers, constraint drift;
-benchmarks.md section 1) and the woodpecker toy (z, phiS, phiB, the multipliers and the
-mode sequence; section 2).
+"""Figures of Andrew's squeezer (seed 001, Lund course; benchmarks.md section 1;
+studies/squeezer.py) in its index-1, index-2 and index-3 forms: positions (rad),
+velocities (rad/s), multipliers and the constraint drift over time.
 
 The squeezer runs from the test set's consistent start with the seed's 500 outputs on
 [0, 0.03] s: index 1 with RK45 (the seed's DOPRI5), index 2 with IDA, index 3 with Radau
@@ -15,7 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from youbot_dynamics.studies.figures import FigureSet, panels, save, specs
+from youbot_dynamics.integrate.constrained import ConstrainedRun
+from youbot_dynamics.studies.figures import FigureSet, panels, pyplot, save, specs
+from youbot_dynamics.studies.squeezer import (POSITION_NAMES, SEED_FIGURES, SqueezerResult,
+                                              reference_error, simulate_squeezer)
 
 #: Outputs of the squeezer runs (the seed's).
 SQUEEZER_OUTPUTS = 500
@@ -25,20 +27,54 @@ SQUEEZER_RUNS = {"index1": ("rk45", "DOPRI5 index 1"),
                  "index3": ("radau5", "Assimulo IDA index 3")}
 
 
+def plot_drift(runs: list[ConstrainedRun], path: str) -> None:
+    """PNG of max_i |g_i(q)| and max_i |(G v)_i| over time for each run (log scale);
+    matplotlib with the Agg backend."""
+    plt = pyplot()
+
+    figure, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    floor = 1e-18  # exact zeros (t = 0, projected states) drawn at the floor
+    for run in runs:
+        label = f"{run.formulation} ({run.stats.integrator})"
+        top.semilogy(run.t, np.abs(run.position_residual).max(axis=1) + floor, label=label)
+        bottom.semilogy(run.t, np.abs(run.velocity_residual).max(axis=1) + floor,
+                        label=label)
+    top.set_ylabel("max |g(q)| (m)")
+    bottom.set_ylabel("max |G v| (m/s)")
+    bottom.set_xlabel("t (s)")
+    top.set_title("Andrew's squeezer: constraint drift")
+    top.legend()
+    save(figure, path)
+
+
+#: The ODE formulations compared by ``study squeezer --plot``.
+ODE_FORMULATIONS = ("index1", "index1-baumgarte", "index1-projection")
+
+
+def plot_ode_drift(result: SqueezerResult, path: str) -> None:
+    """The drift of the three ODE formulations run with the settings of ``result`` (its
+    ODE integrator; rk45 when it ran on IDA)."""
+    config = result.config
+    ode = result.run.stats.integrator if result.run.stats.integrator != "ida" else "rk45"
+    plot_drift([simulate_squeezer(name, ode, rtol=config.rtol, t_end=config.duration,
+                                  n_outputs=config.outputs, dt=config.dt, atol=config.atol)
+                for name in ODE_FORMULATIONS], path)
+
+
 def seed_run_text(seed_run: str) -> str:
     """'DOPRI5 index 1: 85 steps, 704 f-evals' from squeezer.SEED_FIGURES."""
-    from youbot_dynamics.studies.squeezer import SEED_FIGURES
     figures = SEED_FIGURES[seed_run]
     return f"{seed_run}: {figures['steps']} steps, {figures['rhs_evals']} f-evals"
 
 
 def counts_difference(seed_run: str, stats) -> str:
     """Our steps and f-evals against the seed run's, in percent."""
-    from youbot_dynamics.studies.squeezer import SEED_FIGURES
     figures = SEED_FIGURES[seed_run]
     return (f"Seed {seed_run}: {figures['steps']} steps, {figures['rhs_evals']} f-evals; ours "
             f"({stats.integrator}) {stats.steps} ({stats.steps / figures['steps'] - 1:+.0%}) "
             f"and {stats.rhs_evals} ({stats.rhs_evals / figures['rhs_evals'] - 1:+.0%})")
+
+
 QUANTITIES = {"positions": "q mod 2 pi (rad)", "velocities": "v (rad/s)",
               "lambdas": "lambda (N or N m)"}
 
@@ -50,7 +86,6 @@ def wrapped(angles: np.ndarray) -> np.ndarray:
 
 def squeezer_quantity_plot(path: Path, run, quantity: str) -> None:
     """One quantity of one run over time, a line per component."""
-    from youbot_dynamics.studies.squeezer import POSITION_NAMES
     values = {"positions": wrapped(run.q), "velocities": run.v,
               "lambdas": run.multipliers}[quantity]
     names = POSITION_NAMES if quantity != "lambdas" else [f"lambda{j + 1}" for j in range(6)]
@@ -66,9 +101,8 @@ def squeezer_quantity_plot(path: Path, run, quantity: str) -> None:
                        f"{quantity}")
 
 
-def draw_squeezer(out: Path, full: bool) -> dict[str, tuple[str, str]]:
+def draw_squeezer(result: object, out: Path, full: bool) -> dict[str, tuple[str, str]]:
     """The figures of SQUEEZER_SET."""
-    from youbot_dynamics.studies.squeezer import plot_drift, reference_error, simulate_squeezer
     runs = {formulation: simulate_squeezer(formulation, integrator,
                                            n_outputs=SQUEEZER_OUTPUTS)
             for formulation, (integrator, _) in SQUEEZER_RUNS.items()}
@@ -113,86 +147,6 @@ def draw_squeezer(out: Path, full: bool) -> dict[str, tuple[str, str]]:
     return drawn
 
 
-#: The woodpecker's quantities drawn one per figure: file -> (label, column or key).
-WOODPECKER_FILES = {"woodpecker_z.png": ("sleeve height z (m)", 0),
-                    "woodpecker_phiS.png": ("sleeve angle phiS (rad)", 1),
-                    "woodpecker_phiB.png": ("bird angle phiB (rad)", 2)}
-
-
-def draw_woodpecker(out: Path, full: bool) -> dict[str, tuple[str, str]]:
-    """The figures of WOODPECKER_SET."""
-    from youbot_dynamics.studies.woodpecker import (BEAK, MODES, SEED_BEAK_HITS, SEED_FIGURES,
-                                                    SEED_INITIAL_MODE, SEED_INITIAL_STATE,
-                                                    Woodpecker)
-    woodpecker = Woodpecker()
-    solution = woodpecker.simulate(2.0, "dop853", rtol=1e-6, atol=1e-8,
-                                   n_out=8000 if full else 4000)
-    hits = solution.count(BEAK)
-    beak_times = [s.time for s in solution.switches if s.kind == BEAK]
-    counts = f"{hits} beak hits, {solution.stats.events} mode switches"
-    seed_counts = (f"the seed's {SEED_BEAK_HITS} beak hits; its state events "
-                   + ", ".join(f"{name} {figures['events']}"
-                               for name, figures in SEED_FIGURES.items()))
-    drawn = {}
-    for file, (label, column) in WOODPECKER_FILES.items():
-        figure, axis = panels(size=(7.5, 3.2))
-        axis.plot(solution.t, solution.x[:, column], linewidth=0.8)
-        if column == 2:
-            axis.axhline(woodpecker.beak_angle(), color="red", linewidth=0.6,
-                         label="beak touches the bar")
-            axis.legend(fontsize=7)
-        if column == 1:
-            for sign in (1, -1):
-                axis.axhline(sign * woodpecker.stop_angle(), color="grey", linewidth=0.6)
-        axis.set_xlabel("t (s)")
-        axis.set_ylabel(label)
-        save(figure, out / file, f"Woodpecker toy: {label.split(' (')[0]}")
-        values = solution.x[:, column]
-        drawn[file] = (f"range [{values.min():.4g}, {values.max():.4g}]; {counts}",
-                       f"Against {seed_counts}. The seed's curves are not in "
-                       "benchmarks.md: compare the shape (a falling sleeve, a rocking bird).")
-    figure, axis = panels(size=(7.5, 2.8))
-    index = [MODES.index(mode) + 1 for mode in solution.mode]
-    axis.step(solution.t, index, where="post", linewidth=0.8)
-    for t in beak_times:
-        axis.axvline(t, color="red", linewidth=0.4, alpha=0.6)
-    axis.set_yticks([1, 2, 3], MODES)
-    axis.set_xlabel("t (s)")
-    axis.set_ylabel("mode (red: beak hits)")
-    save(figure, out / "woodpecker_modes.png", "Woodpecker toy: mode sequence")
-    sequence = "".join({"I": "1", "II": "2", "III": "3"}[m] for m in
-                       [solution.mode[0]] + [s.mode_after for s in solution.switches][:12])
-    drawn["woodpecker_modes.png"] = (
-        f"{counts}; the first modes {sequence}... (1 = I free, 2 = II, 3 = III)",
-        f"Seed: {SEED_BEAK_HITS} beak hits over 2 s, ours {hits}. Its state events count "
-        "differently (IDA restarts, Dymola's crossings), so the switch counts are not "
-        "one to one.")
-    lambdas = np.array([woodpecker.constraint_forces(mode, x)
-                        for mode, x in zip(solution.mode, solution.x)])
-    figure, axis = panels(size=(7.5, 3.2))
-    axis.plot(solution.t, lambdas[:, 0], linewidth=0.8, label="lambda1 (corner normal)")
-    axis.plot(solution.t, lambdas[:, 1], linewidth=0.8, label="lambda2 (sticking)")
-    axis.set_xlabel("t (s)")
-    axis.set_ylabel("N")
-    axis.legend(fontsize=7)
-    save(figure, out / "woodpecker_lambdas.png", "Woodpecker toy: constraint multipliers")
-    start = woodpecker.constraint_forces(SEED_INITIAL_MODE, np.array(SEED_INITIAL_STATE))
-    drawn["woodpecker_lambdas.png"] = (
-        f"at the start ({SEED_INITIAL_MODE}): lambda = ({start[0]:.5g}, {start[1]:.5g}) N",
-        "The seed lists lambda0 = (-0.628993, 0.047088) N, which its own state and "
-        "parameters do not give: ours follow from the state (lambda is no state here).")
-    figure, axis = panels(size=(5.5, 4.5))
-    axis.plot(solution.x[:, 2], solution.x[:, 5], linewidth=0.5)
-    axis.set_xlabel("phiB (rad)")
-    axis.set_ylabel("phiB' (rad/s)")
-    save(figure, out / "woodpecker_phase.png", "Woodpecker toy: the bird's phase portrait")
-    drawn["woodpecker_phase.png"] = (
-        f"phiB' from {solution.x[:, 5].min():.3g} to {solution.x[:, 5].max():.3g} rad/s; "
-        "the beak hits are the vertical jumps at the right edge",
-        "Not in the seed: the limit cycle of the rocking bird, drawn from the same run.")
-    return drawn
-
-
 SQUEEZER_SET = FigureSet("squeezer", specs(
     *((f"squeezer_{formulation}_{quantity}.png",
        f"Andrew's squeezer, {formulation} ({integrator}): {quantity} over [0, 30] ms",
@@ -204,18 +158,3 @@ SQUEEZER_SET = FigureSet("squeezer", specs(
     ("squeezer_drift_by_index.png", "Constraint drift of the index-1, index-2 and index-3 "
      "runs", "The seed's remark: index 1 drifts, index 2 and 3 do not (as much)."),
 ), draw_squeezer)
-
-WOODPECKER_SET = FigureSet("woodpecker", specs(
-    ("woodpecker_z.png", "Woodpecker toy: sleeve height z(t) over 2 s",
-     "The seed's z plot (22 beak hits over 2 s)."),
-    ("woodpecker_phiS.png", "Woodpecker toy: sleeve angle phiS(t), the stops in grey",
-     "The seed's phiS plot."),
-    ("woodpecker_phiB.png", "Woodpecker toy: bird angle phiB(t), the beak contact in red",
-     "The seed's phiB plot."),
-    ("woodpecker_modes.png", "Woodpecker toy: the mode sequence I / II / III with the beak "
-     "hits", "The seed's mode sequence."),
-    ("woodpecker_lambdas.png", "Woodpecker toy: lambda1 and lambda2 over time",
-     "The seed's initial lambda (-0.628993, 0.047088) N."),
-    ("woodpecker_phase.png", "Woodpecker toy: phase portrait phiB' against phiB",
-     "No seed figure."),
-), draw_woodpecker)
