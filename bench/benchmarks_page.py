@@ -2,7 +2,7 @@
 and the table of figure, ours, peer, unit, ratio, goal, met. Written by ``make bench``
 (bench/summary.py) after every measuring run; ``python bench/summary.py --page-only``
 rewrites the page from the saved results without measuring. Imports nothing numerical, so
-test/test_docs.py can check that the committed page is the committed results' page.
+test/package/test_docs.py can check that the committed page is the committed results' page.
 """
 from __future__ import annotations
 

@@ -3,9 +3,9 @@
 - ``ROS_PYTHON_CHECK_FIELDS=1``: every rclpy message built in a test process (and in the
   node processes the tests start, which inherit the environment) checks its field types,
   as a strict subscriber would; a wrong type raises instead of publishing garbage.
-- Hypothesis profiles for the fuzz tests (test/test_fuzz_*.py): ``ci`` (default; bounded,
+- Hypothesis profiles for the fuzz tests (test/*/test_fuzz_*.py): ``ci`` (default; bounded,
   derandomised, no example database written) and ``thorough`` (many more random
-  examples): ``HYPOTHESIS_PROFILE=thorough pytest test/test_fuzz_*.py``.
+  examples): ``HYPOTHESIS_PROFILE=thorough pytest test/*/test_fuzz_*.py``.
 """
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ results in the cases' order, whatever order they finish in. Where they run:
   most one per case), one thread each, started for the call and closed after it.
 
 Each case runs the same code on the same inputs wherever it runs, so the results equal the
-serial run's bit for bit (test/test_sweeps.py checks it on a scheduler with two workers).
+serial run's bit for bit (test/accuracy/test_sweeps.py checks it on a scheduler with two workers).
 Wall times measured inside a case are the exception: they are figures of the run, not of
 the case. A case that raises is re-raised as :class:`CaseError` naming the case.
 """

@@ -276,7 +276,7 @@ class ContactSet:
             # velocities before the later blocks moved (Pinocchio 4.1, pgs-solver.hxx): after
             # the first sweep of a two-sided grasp every block looks solved while the first
             # pad's contact still approaches at 30 mm/s, and the sphere slid 2.8 mm in 0.75 s
-            # (test/test_grasp.py). So PGS stops on its fixed-point test alone, at rounding
+            # (test/sim/test_grasp.py). So PGS stops on its fixed-point test alone, at rounding
             # level: it creeps where contacts are redundant, and at 1e-10 a box landing on a
             # 0.25 rad incline (4 corners) stopped after 50 sweeps with 0.9 mm/s of slip left.
             self.options.absolute_feasibility_tol = 0.0
