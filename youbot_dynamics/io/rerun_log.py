@@ -52,6 +52,7 @@ from rerun.urdf import UrdfJoint, UrdfTree
 from youbot_dynamics.dynamics.collision import Geometry, Shape
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.closing import ClosesOnExit
+from youbot_dynamics.io.log_file import FileSink, LogWriteFailed, open_exclusive
 from youbot_dynamics.io.messages import finite_array, finite_floats, stamps_ns
 from youbot_dynamics.model.lie import quaternion_from_matrix
 from youbot_dynamics.io.drawn_shapes import drawn_shape
@@ -186,7 +187,10 @@ class RerunLogger(ClosesOnExit):
         self._pending_t: list[int] = []
         self._pending_names: tuple[str, ...] = ()
         self._ee_path: list[np.ndarray] = []
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._lock: FileSink | None = FileSink(open_exclusive(self.path, "Rerun recording", truncate=False))
+        self.failure: LogWriteFailed | None = None
+        """Always None: Rerun 0.41 writes the file from its own thread and reports a failed
+        write only on stderr (after which its flush, disconnect and exit block)."""
         self._rec: rr.RecordingStream | None = rr.RecordingStream(
             application_id, recording_id=recording_id, send_properties=False
         )
@@ -331,6 +335,8 @@ class RerunLogger(ClosesOnExit):
             rec.log(EE_PATH, rr.LineStrips3D([np.concatenate(self._ee_path)]), static=True)
         rec.flush()
         rec.disconnect()
+        lock, self._lock = self._lock, None
+        lock.close()
 
     def _recording(self) -> rr.RecordingStream:
         if self._rec is None:
