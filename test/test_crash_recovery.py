@@ -33,7 +33,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import read_bag
 from youbot_dynamics.io.mcap_log import McapLogger
-from youbot_dynamics.io.mcap_recover import default_recovered_path, recover_mcap
+from youbot_dynamics.io.mcap_recover import NothingRecovered, default_recovered_path, recover_mcap
 from youbot_dynamics.io.messages import TYPESTORE
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.io.rrd_recover import recover_rrd
@@ -110,7 +110,8 @@ def test_recovering_a_complete_file_keeps_everything(complete: Path, tmp_path: P
 def test_every_cut_keeps_exactly_the_chunks_before_it(complete: Path, tmp_path: Path) -> None:
     """Cuts at 40 random offsets, plus just before, at and after the end of every chunk
     record: the recovered file holds the messages of the chunks that end at or before the
-    cut, bit for bit, in an indexed file that AnyReader and mcap's reader accept."""
+    cut, bit for bit, in an indexed file that AnyReader and mcap's reader accept; a cut
+    before the end of the first chunk recovers nothing, which is an error."""
     with complete.open("rb") as stream:
         summary = make_reader(stream).get_summary()
     ends = [c.chunk_start_offset + c.chunk_length for c in summary.chunk_indexes]
@@ -125,6 +126,10 @@ def test_every_cut_keeps_exactly_the_chunks_before_it(complete: Path, tmp_path: 
         kept_chunks = [c for c, end in zip(summary.chunk_indexes, ends) if end <= cut]
         expected = [m for m in everything if any(c.message_start_time <= m[1] <= c.message_end_time
                                                  for c in kept_chunks)]
+        if not expected:                     # cut before the end of the first chunk
+            with pytest.raises(NothingRecovered, match="no message recovered"):
+                recover_mcap(broken, fixed)
+            continue
         result = recover_mcap(broken, fixed)
         assert not result.complete and result.chunks == len(kept_chunks), cut
         assert result.messages == len(expected) and raw_messages(fixed) == expected, cut
