@@ -36,7 +36,8 @@ def recovery_losses(result: Recovery) -> str:
     parts = [f"damaged chunk skipped {damage}" for damage in result.damaged]
     if result.stopped is not None:
         parts.append(f"reading stopped {result.stopped}")
-    parts.append(f"{result.dropped_bytes} bytes of unreadable or incomplete tail dropped")
+    if result.dropped_bytes or not parts:
+        parts.append(f"{result.dropped_bytes} bytes of unreadable or incomplete tail dropped")
     if result.orphans:
         parts.append(f"{result.orphans} messages dropped with their channel")
     return ("it was damaged: " if result.had_footer else "it had no summary; ") + "; ".join(parts)
