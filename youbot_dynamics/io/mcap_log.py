@@ -23,6 +23,23 @@ every ``diagnostics_period``). Closing a chunk took 1.4 to 6 ms (500 Hz /joint_s
 /tf, fsync included). The truncated file lacks its summary and footer;
 :func:`youbot_dynamics.io.mcap_recover.recover_mcap` (``youbot-dynamics log recover``)
 rebuilds it.
+
+Exclusive paths: the file is opened under an advisory lock
+(:func:`~youbot_dynamics.io.log_file.open_exclusive`) before it is emptied; a second
+writer on the same path is refused with ``LogPathInUse`` (one line naming the holder's
+pid) and the first writer's log stays whole. The lock goes with the file's descriptor, so
+with its process, ``kill -9`` included.
+
+Write errors: the file is written unbuffered (:class:`~youbot_dynamics.io.log_file.FileSink`),
+so a write that fails (ENOSPC, EIO, EROFS, EDQUOT; EFBIG past a file-size limit) is seen at
+once with the bytes really written. Logging then stops: the file is cut after its last
+complete chunk and finished there (summary and footer of the chunks kept; the last chunks
+are given up if the summary needs their room), or, if even that fails, left cut after its
+complete chunks for ``log recover``. ``McapLogger.failure`` then holds a
+:class:`~youbot_dynamics.io.log_file.LogWriteFailed` (errno name and text, path, messages
+and bytes in the file, messages lost, whether it is finalised), ``closed`` is True, later
+``add_topic`` / ``write`` / ``write_all`` calls do nothing and ``close`` does not raise: the
+caller's loop goes on.
 """
 
 from __future__ import annotations
@@ -96,11 +113,19 @@ class McapLogger(ClosesOnExit):
     nanoseconds. ``close`` finalises the file (summary, statistics, footer) and may be
     called more than once; the ROS node calls it on shutdown and from its SIGINT, SIGTERM
     and SIGHUP handling. Chunks close on a time bound (see the module docstring).
+
+    A write error never reaches the caller: logging stops and ``failure`` tells why and
+    what the file holds (None while all is well)::
+
+        if log.failure is not None:          # e.g. in a /diagnostics callback
+            status = ERROR, str(log.failure), log.failure.key_values()
     """
 
     def __init__(self, path: str | Path, *, chunk_span_ns: int = DEFAULT_CHUNK_SPAN_NS,
                  chunk_wall_s: float = DEFAULT_CHUNK_WALL_S):
-        """Create (or overwrite) ``path``; the parent folder is created if missing.
+        """Create (or overwrite) ``path`` under its lock; the parent folder is created if
+        missing. ``LogPathInUse`` if another writer holds ``path``, ``LogPathError`` if it
+        cannot be written (both one-line ``UserInputError``).
 
         ``chunk_span_ns`` (log time, ns) and ``chunk_wall_s`` (wall s) bound how long a
         chunk stays open, so how much a crash can lose.

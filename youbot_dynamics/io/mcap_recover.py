@@ -180,7 +180,7 @@ class _Scan:
                 try:
                     record = breakup_chunk(record, validate_crc=True)
                 except _DAMAGED as error:
-                    self.damaged.append(Damage(start, f"damaged chunk ({_reason(error)})"))
+                    self.damaged.append(Damage(start, _reason(error)))
                     continue
             yield record
 

@@ -41,7 +41,11 @@ class ChunkedWriter:
     """Writes one MCAP file to ``stream``: ``start``, ``register_schema``,
     ``register_channel``, ``add_messages`` (the messages of one log time), ``flush`` (close
     the open chunk and flush the stream) and ``finish`` (summary and footer), as mcap's
-    ``Writer`` does."""
+    ``Writer`` does.
+
+    For a stream that failed mid-file: ``chunk_end(k)`` is where the data of the first
+    ``k`` written chunks ends and ``tail_of(k)`` the bytes that finish a file cut there
+    (summary of those chunks, footer, magic); ``chunk_messages(k)`` counts their messages."""
 
     def __init__(self, stream: IO[bytes], chunk_size: int = CHUNK_SIZE) -> None:
         self._stream, self.chunk_size = stream, chunk_size

@@ -140,7 +140,8 @@ class RerunLogger(ClosesOnExit):
     is buffered, writes the end-effector path and disconnects so the file gets its footer.
     Joint names must be moving URDF joints (``UserInputError`` otherwise); values must be
     finite and times integer nanoseconds (``MessageFieldError``, a ValueError naming the
-    field, otherwise).
+    field, otherwise). The path is held under an advisory lock while the recording is
+    open (a second writer gets ``LogPathInUse``, see ``io.log_file``).
     """
 
     def __init__(
