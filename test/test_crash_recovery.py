@@ -311,6 +311,24 @@ def joint_state_stamps(path: Path) -> list[int]:
             for m in read_bag(path) if m.topic == "/joint_states"]
 
 
+def recovered_joint_state_stamps(killed: Path) -> list[int]:
+    """The /joint_states stamps (ns) ``recover_mcap`` keeps of a killed node's MCAP, checked
+    to run from t = 0 without a gap, with the rebuilt statistics right; none if it kept
+    nothing (killed before its first chunk closed: an error of its own)."""
+    try:
+        result = recover_mcap(killed)
+    except NothingRecovered:
+        return []
+    assert not result.complete
+    stamps = joint_state_stamps(result.target)
+    assert stamps == [SAMPLE_NS * i for i in range(len(stamps))]   # from t = 0, no gap
+    with result.target.open("rb") as stream:
+        reader = make_reader(stream)
+        assert reader.get_summary().statistics.message_count == result.messages == \
+            sum(1 for _ in reader.iter_messages())
+    return stamps
+
+
 def kill_and_recover(tmp_path: Path, kills: int, seed: int) -> list[tuple[float, float, float]]:
     """Kill ``kills`` node processes with SIGKILL at random simulated times in [0.1, 2.5] s;
     check each recovered MCAP; return (target, MCAP loss, Rerun loss) in s per kill: the
@@ -330,14 +348,7 @@ def kill_and_recover(tmp_path: Path, kills: int, seed: int) -> list[tuple[float,
             assert status == -signal.SIGKILL and run.sent.is_set(), run.log.read_text()
             with pytest.raises(UserInputError, match="cannot be read"):    # the killed file itself
                 joint_state_stamps(run.mcap)
-            result = recover_mcap(run.mcap)
-            assert not result.complete
-            stamps = joint_state_stamps(result.target)
-            assert stamps == [SAMPLE_NS * i for i in range(len(stamps))]   # from t = 0, no gap
-            with result.target.open("rb") as stream:
-                reader = make_reader(stream)
-                assert reader.get_summary().statistics.message_count == result.messages == \
-                    sum(1 for _ in reader.iter_messages())
+            stamps = recovered_joint_state_stamps(run.mcap)
             kept_ns = stamps[-1] if stamps else -SAMPLE_NS        # nothing kept: lost from t = 0 on
             mcap_loss = run.seen_ns - kept_ns
             try:

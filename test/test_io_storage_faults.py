@@ -23,6 +23,7 @@ from pathlib import Path
 
 import pytest
 from mcap.reader import make_reader
+from rerun.chunk import RrdReader
 
 from youbot_dynamics import default_urdf
 from youbot_dynamics.cli import main as cli_main
@@ -33,7 +34,7 @@ from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.mcap_recover import NothingRecovered, recover_mcap
 from youbot_dynamics.io.rerun_log import RerunLogger
 
-from test_crash_recovery import DT_NS, SPAN_NS, anyreader_count, raw_messages, write_run
+from test_crash_recovery import DT_NS, SPAN_NS, anyreader_count, raw_messages, rerun_sample_times_ns, write_run
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -123,6 +124,44 @@ def test_an_io_error_on_close_stops_without_raising(tmp_path: Path, monkeypatch:
     assert log.failure.key_values()["log.error"] == "EIO"
     log.write("/clock", messages.clock(0), 0)            # a no-op, not an error
     assert recover_mcap(path, tmp_path / "fixed.mcap").messages == log.failure.messages > 0
+
+
+RERUN_WRITER = textwrap.dedent("""
+    import json, resource, signal, sys
+    from youbot_dynamics import default_urdf
+    from youbot_dynamics.io.rerun_log import RerunLogger
+    path, limit = sys.argv[1], int(sys.argv[2])
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+    joints = [f"arm_joint_{j}" for j in range(1, 6)]
+    log = RerunLogger(path, default_urdf(), recording_name="full")
+    failed_at = None
+    for k in range(30000):
+        q = [1e-4 * k] * 5
+        log.log_sample(k * 2_000_000, joints, q, q, q, 1.0, [0.0, 0.0, 1e-4 * k])
+        if log.failure is not None and failed_at is None:
+            failed_at = k
+    log.close()
+    print(json.dumps({"failed_at": failed_at, "closed": log.closed, "text": str(log.failure),
+                      **{k: str(v) for k, v in vars(log.failure).items()}}))
+""")
+
+
+def test_a_rerun_recording_stops_before_its_file_size_limit_with_its_footer(tmp_path: Path) -> None:
+    """Rerun's own writer cannot report a failed write (and then blocks the process's exit):
+    the logger stops before the limit, the recording finished with its footer; the process
+    exits at once."""
+    path, limit = tmp_path / "full.rrd", 4_000_000
+    run = subprocess.run([sys.executable, "-c", RERUN_WRITER, str(path), str(limit)], cwd=REPO,
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert run.returncode == 0 and "Failed to write" not in run.stderr, run.stderr
+    report = json.loads(run.stdout)
+    assert report["failed_at"] is not None and report["closed"] and report["errno"] == "EFBIG"
+    assert "file-size limit" in report["reason"] and report["finalised"] == "True"
+    assert path.stat().st_size == int(report["bytes"]) <= limit
+    assert len(RrdReader(str(path)).store()) > 0                       # the footer is there
+    times = rerun_sample_times_ns(path)
+    assert times == [2_000_000 * k for k in range(len(times))] and len(times) == int(report["messages"]) > 0
 
 
 HOLDER = textwrap.dedent("""

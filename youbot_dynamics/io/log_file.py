@@ -12,6 +12,8 @@
   reaches the kernel whole or raises ``OSError``, and ``offset`` is always the bytes the
   file really holds, so after a failed write (ENOSPC, EIO, EROFS, EDQUOT, EFBIG) the writer
   knows where its last complete record ends.
+- :func:`room_left` is what a log file may still grow by (free space, file-size limit), for
+  a writer that cannot see its own write errors (Rerun's) and must stop before them.
 - :class:`LogWriteFailed` is what a logger reports once a write failed and logging stopped:
   the errno's name and text, the path, what the file holds, what was lost, and whether
   the file was finalised (readable as it is) or needs ``youbot-dynamics log recover``.
@@ -21,6 +23,7 @@ from __future__ import annotations
 import errno
 import fcntl
 import os
+import resource
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -98,6 +101,18 @@ def open_exclusive(path: Path, kind: str, *, truncate: bool = True) -> int:
     return fd
 
 
+def room_left(path: Path) -> tuple[int, str]:
+    """Bytes ``path`` may still grow by, and the errno a write past them gets: the free
+    space of its file system for an unprivileged writer (``ENOSPC``) or, if smaller, what
+    this process's file-size limit (RLIMIT_FSIZE) leaves (``EFBIG``)."""
+    status = os.statvfs(path)
+    room, error = status.f_bavail * status.f_frsize, "ENOSPC"
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    if limit != resource.RLIM_INFINITY and limit - path.stat().st_size < room:
+        room, error = max(0, limit - path.stat().st_size), "EFBIG"
+    return room, error
+
+
 class FileSink:
     """Unbuffered, complete writes to an open descriptor (owned: ``close`` closes it and so
     releases its lock; a sink dropped unclosed closes it when collected).
@@ -154,11 +169,12 @@ class LogWriteFailed:
     """A log whose write failed: logging stopped there, later log calls do nothing.
 
     ``reason`` is the errno's name and text (``ENOSPC (No space left on device)``);
-    ``messages`` and ``bytes`` what the file holds as left (messages readable, file size);
+    ``messages`` and ``bytes`` what the file holds as left (messages readable, file size;
+    for a Rerun recording, samples);
     ``lost`` the messages logged but not in the file (the chunk being written, and any
     chunk given up to make room for the summary); ``finalised`` whether the summary and
     footer were written, so readers take the file as it is (otherwise ``log recover``
-    rebuilds it from its complete chunks).
+    rebuilds it from its complete chunks); ``unit`` what ``messages`` counts.
     """
 
     path: Path
@@ -169,12 +185,13 @@ class LogWriteFailed:
     bytes: int
     lost: int
     finalised: bool
+    unit: str = "messages"
 
     def __str__(self) -> str:
-        state = ("the file is finalised (summary and footer written)" if self.finalised else
-                 f"the file has no summary: `youbot-dynamics log recover {self.path}` rebuilds it")
-        return (f"{self.kind} {self.path}: write failed with {self.reason}; logging stopped with "
-                f"{self.messages} messages ({self.bytes} bytes) in the file, {self.lost} lost; {state}")
+        state = ("the file is finalised (readable as it is)" if self.finalised else
+                 f"the file is not finalised: `youbot-dynamics log recover {self.path}` rebuilds it")
+        return (f"{self.kind} {self.path}: logging stopped on {self.reason} with {self.messages} {self.unit} "
+                f"({self.bytes} bytes) in the file, {self.lost} lost; {state}")
 
     def key_values(self) -> dict[str, str]:
         """The failure as /diagnostics key-value pairs (``log.*``)."""
