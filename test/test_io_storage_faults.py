@@ -92,6 +92,33 @@ def test_a_file_size_limit_stops_the_log_cleanly_and_the_file_reads_as_it_is(tmp
     assert recover_mcap(path, tmp_path / "again.mcap").complete
 
 
+def test_a_file_cut_after_any_chunk_and_finished_there_reads_whole(tmp_path: Path) -> None:
+    """What a failed writer falls back on when the summary needs the room of its last chunks:
+    the data cut after chunk k plus ``tail_of(k)`` is a complete file of exactly the first k
+    chunks' messages, statistics right, for every k."""
+    complete = tmp_path / "run.mcap"
+    log = McapLogger(complete, chunk_span_ns=SPAN_NS, chunk_wall_s=float("inf"))
+    log.add_topic("/clock", "rosgraph_msgs/msg/Clock")
+    log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
+    for k in range(400):
+        t = k * DT_NS
+        log.write_all([("/clock", messages.clock(t)), ("/joint_states", messages.joint_state(t, ["a"], [k], [0]))], t)
+    writer, data = log._writer, complete.read_bytes()       # the file as written so far: complete chunks only
+    assert writer.chunk_count == 7
+    for k in range(writer.chunk_count + 1):
+        cut = tmp_path / f"cut{k}.mcap"
+        cut.write_bytes(data[:writer.chunk_end(k)] + writer.tail_of(k))
+        kept = raw_messages(cut)
+        assert len(kept) == writer.chunk_messages(k) == 2 * 50 * k
+        assert [m[1] for m in kept if m[0] == "/clock"] == [j * DT_NS for j in range(50 * k)]
+        with cut.open("rb") as stream:
+            statistics = make_reader(stream).get_summary().statistics
+        assert statistics.message_count == len(kept) == anyreader_count(cut) and statistics.chunk_count == k
+        if k:
+            assert recover_mcap(cut, tmp_path / "again.mcap").complete
+    log.close()
+
+
 def test_a_limit_too_small_for_the_summary_leaves_the_file_as_it_was(tmp_path: Path) -> None:
     """Room for the header only: the first chunk fails, the summary does not fit either; the
     file is left cut after its header and says so (there is nothing to recover)."""
