@@ -52,6 +52,7 @@ from rerun.urdf import UrdfJoint, UrdfTree
 from youbot_dynamics.dynamics.collision import Geometry, Shape
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.closing import ClosesOnExit
+from youbot_dynamics.io.log_file import FileSink, LogWriteFailed, open_exclusive, room_left
 from youbot_dynamics.io.messages import finite_array, finite_floats, stamps_ns
 from youbot_dynamics.model.lie import quaternion_from_matrix
 from youbot_dynamics.io.drawn_shapes import drawn_shape
@@ -67,6 +68,9 @@ GEOMETRY = "/geometry"
 WORLD_FRAME = "/world_frame"
 DEFAULT_BATCH_SIZE = 250
 """Samples ``log_sample`` buffers before sending them in one batch."""
+RESERVE_BYTES = 1 << 20
+"""Bytes a recording leaves free at least on its file system (and under the file-size
+limit), beyond its footer and what is in flight; see ``RerunLogger``."""
 DEFAULT_FLUSH_SPAN = 1.0
 """Simulated seconds of samples ``log_sample`` / ``log_body_poses`` buffer at most: a batch
 is sent (and Rerun's pipeline flushed towards the file) once it spans this long, so a crash
@@ -139,7 +143,18 @@ class RerunLogger(ClosesOnExit):
     is buffered, writes the end-effector path and disconnects so the file gets its footer.
     Joint names must be moving URDF joints (``UserInputError`` otherwise); values must be
     finite and times integer nanoseconds (``MessageFieldError``, a ValueError naming the
-    field, otherwise).
+    field, otherwise). The path is held under an advisory lock while the recording is
+    open (a second writer gets ``LogPathInUse``, see ``io.log_file``).
+
+    Room: Rerun 0.41 writes the file from its own thread and reports a failed write only on
+    stderr, after which its flush, disconnect and the interpreter's exit block forever. So
+    the logger stops before that can happen: before each batch it asks
+    :func:`~youbot_dynamics.io.log_file.room_left` (free space, file-size limit), and if
+    less is left than ``reserve_bytes`` + four times the most the file grew between two
+    batches + an eighth of its size (the footer's manifest: ~7 % measured), it drops the
+    batch, finishes the file (footer written) and sets ``failure``
+    (:class:`~youbot_dynamics.io.log_file.LogWriteFailed`; ``messages`` counts samples);
+    ``closed`` is then True and later log calls do nothing.
     """
 
     def __init__(
@@ -154,6 +169,7 @@ class RerunLogger(ClosesOnExit):
         world_frame: str | None = None,
         batch_size: int = DEFAULT_BATCH_SIZE,
         flush_span: float = DEFAULT_FLUSH_SPAN,
+        reserve_bytes: int = RESERVE_BYTES,
     ) -> None:
         """Start the recording at ``path``, log the robot from ``urdf_path``, the shapes of
         the free bodies and the static geometry.
@@ -161,6 +177,7 @@ class RerunLogger(ClosesOnExit):
         ``world_frame`` is the frame free-body poses, end-effector positions and world
         geometry are given in (default: the URDF root link; ``world`` without a robot).
         Free bodies need names distinct from the URDF's links and the world frame.
+        ``reserve_bytes``: room kept free (see the class docstring).
         """
         self.path = Path(path)
         self.urdf_path = None if urdf_path is None else Path(urdf_path)
@@ -186,7 +203,13 @@ class RerunLogger(ClosesOnExit):
         self._pending_t: list[int] = []
         self._pending_names: tuple[str, ...] = ()
         self._ee_path: list[np.ndarray] = []
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._lock: FileSink | None = FileSink(open_exclusive(self.path, "Rerun recording", truncate=False))
+        self.failure: LogWriteFailed | None = None
+        """Set when logging stopped for want of room (see the class docstring)."""
+        self.reserve_bytes = int(reserve_bytes)
+        self._growth = 0          # most bytes the file grew by between two batches
+        self._size: int | None = None    # the file's size at the last batch (None before the first)
+        self._sent = 0            # samples sent (joint samples and body samples)
         self._rec: rr.RecordingStream | None = rr.RecordingStream(
             application_id, recording_id=recording_id, send_properties=False
         )
@@ -243,6 +266,8 @@ class RerunLogger(ClosesOnExit):
         ``flush_span`` s (one Rerun call per entity per batch instead of one per sample);
         ``close`` sends the rest.
         """
+        if self.failure is not None:
+            return
         self._recording()
         names = tuple(joint_names)
         if names != self._pending_names:
@@ -266,6 +291,8 @@ class RerunLogger(ClosesOnExit):
         every body named at construction to (translation (m), quaternion (x, y, z, w)) in
         the world frame. Checked at once, sent in batches of ``batch_size`` like
         ``log_sample``."""
+        if self.failure is not None:
+            return
         self._recording()
         if set(poses) != set(self.bodies):
             raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies "
@@ -277,6 +304,8 @@ class RerunLogger(ClosesOnExit):
     def log_body_rows(self, stamp_ns: int, rows: np.ndarray) -> None:
         """``log_body_poses`` of the free bodies as rows (one per body, in ``bodies``
         order) of translation (m) and quaternion (x, y, z, w): one check of the array."""
+        if self.failure is not None:
+            return
         self._recording()
         rows = np.asarray(rows, dtype=np.float64)
         if rows.shape != (len(self.bodies), 7) or not np.isfinite(rows).all():    # log_body_poses names it
@@ -303,6 +332,8 @@ class RerunLogger(ClosesOnExit):
     ) -> None:
         """Log N samples at once: ``stamps`` (N,) in integer ns; ``q``, ``v``, ``tau`` (N, n)
         ordered as ``joint_names``; ``energy`` (N,) in J; ``ee_position`` (N, 3) in m."""
+        if self.failure is not None:
+            return
         self._recording()
         names = tuple(joint_names)
         self._resolve(names)
@@ -317,12 +348,15 @@ class RerunLogger(ClosesOnExit):
             ee=finite_array(ee_position, "Rerun ee_position", count * 3).reshape(count, 3),
         )
         self._flush()
+        if self._out_of_room():
+            return
+        self._sent += count
         self._send(names, samples)
 
     def close(self) -> None:
         """Send pending samples, log the end-effector path and finalise the file; later
         calls do nothing."""
-        if self._rec is None:
+        if self._rec is None or self._out_of_room():
             return
         self._flush()
         self._flush_bodies()
@@ -331,6 +365,8 @@ class RerunLogger(ClosesOnExit):
             rec.log(EE_PATH, rr.LineStrips3D([np.concatenate(self._ee_path)]), static=True)
         rec.flush()
         rec.disconnect()
+        lock, self._lock = self._lock, None
+        lock.close()
 
     def _recording(self) -> rr.RecordingStream:
         if self._rec is None:
@@ -347,9 +383,41 @@ class RerunLogger(ClosesOnExit):
             )
         return [self._joints[name] for name in names]
 
+    def _out_of_room(self) -> bool:
+        """Stop the recording (footer written, ``failure`` set, buffers dropped) if the file
+        has too little room left for the next batch and its footer; True if stopped."""
+        if self._rec is None:
+            return True
+        try:
+            size = self.path.stat().st_size
+            room, error = room_left(self.path)
+        except OSError:            # the file gone or its file system unreadable: Rerun writes on regardless
+            return False
+        self._growth, self._size = max(self._growth, size - (size if self._size is None else self._size)), size
+        needed = self.reserve_bytes + 4 * self._growth + size // 8
+        if room >= needed:
+            return False
+        lost = len(self._pending) + len(self._body_rows)
+        self._pending, self._pending_t, self._body_rows = [], [], []
+        rec, self._rec = self._rec, None
+        rec.flush()
+        rec.disconnect()
+        lock, self._lock = self._lock, None
+        lock.close()
+        text = "file-size limit" if error == "EFBIG" else "no space left on its file system"
+        self.failure = LogWriteFailed(
+            path=self.path, kind="Rerun recording", errno=error,
+            reason=f"{error} ({text}: {room} bytes left, {needed} kept for the next batch and the footer)",
+            messages=self._sent, bytes=self.path.stat().st_size, lost=lost, finalised=True,  # with its footer
+            unit="samples")
+        return True
+
     def _flush(self) -> None:
         """Send the samples buffered by ``log_sample``."""
+        if self._pending and self._out_of_room():
+            return
         if self._pending:
+            self._sent += len(self._pending)
             rows, times, self._pending, self._pending_t = np.vstack(self._pending), self._pending_t, [], []
             n = len(self._pending_names)
             self._send(self._pending_names, Samples(np.array(times, dtype=np.int64), rows[:, :n], rows[:, n:2 * n],
@@ -359,8 +427,9 @@ class RerunLogger(ClosesOnExit):
     def _flush_bodies(self) -> None:
         """Send the free-body poses buffered by ``log_body_poses``: one Transform3D column
         per body."""
-        if not self._body_rows:
+        if not self._body_rows or self._out_of_room():
             return
+        self._sent += len(self._body_rows)
         rows, self._body_rows = self._body_rows, []
         index = [rr.TimeColumn(TIMELINE, duration=durations([t for t, _ in rows]))]
         poses = np.array([pose for _, pose in rows])    # (samples, bodies, 7)
