@@ -193,8 +193,9 @@ class LogWriteFailed:
         return (f"{self.kind} {self.path}: logging stopped on {self.reason} with {self.messages} {self.unit} "
                 f"({self.bytes} bytes) in the file, {self.lost} lost; {state}")
 
-    def key_values(self) -> dict[str, str]:
-        """The failure as /diagnostics key-value pairs (``log.*``)."""
-        return {"log.path": str(self.path), "log.error": self.errno, "log.reason": self.reason,
-                "log.messages": str(self.messages), "log.bytes": str(self.bytes), "log.lost": str(self.lost),
-                "log.finalised": str(self.finalised).lower()}
+    def key_values(self, prefix: str = "log") -> dict[str, str]:
+        """The failure as /diagnostics key-value pairs (``<prefix>.path``, ``.error``, ...)."""
+        values = {"path": str(self.path), "error": self.errno, "reason": self.reason,
+                  "messages": str(self.messages), "bytes": str(self.bytes), "lost": str(self.lost),
+                  "finalised": str(self.finalised).lower()}
+        return {f"{prefix}.{key}": value for key, value in values.items()}

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from youbot_dynamics.io.log_file import LogWriteFailed
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
@@ -52,6 +53,13 @@ class Recorder:
     def paths(self) -> list[Path]:
         """The log files being written."""
         return [log.path for log in (self.mcap, self.rerun) if log is not None]
+
+    @property
+    def failures(self) -> dict[str, LogWriteFailed]:
+        """The logs whose writes failed (``mcap``, ``rerun``: the failure); each stopped
+        logging there, the other goes on."""
+        return {name: log.failure for name, log in (("mcap", self.mcap), ("rerun", self.rerun))
+                if log is not None and log.failure is not None}
 
     def write(self, outputs: Outputs, stamp_ns: int) -> None:
         """Log messages at ``stamp_ns`` (log and publish time)."""

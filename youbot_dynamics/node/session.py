@@ -99,10 +99,15 @@ class Session(ClosesOnExit):
         """/diagnostics with one status of this session (also logged); with a robot, its
         values name the /ee_pose link (``ee_link``) and the /ee_poses links in order
         (``ee_links``, comma-separated). The watchdog's values are added; an OK status turns
-        WARN when a callback overran its budget since the last report."""
+        WARN when a callback overran its budget since the last report; any status turns ERROR
+        when a log's write failed (a full disk, a file-size limit: the reason and what the file
+        holds in ``log.mcap.*`` / ``log.rerun.*``), while the node goes on publishing."""
         if level == "OK" and self.watchdog.fresh:
             level, text = "WARN", f"a callback overran its {self.watchdog.budget:g} s budget"
         values = {**values, **self.watchdog.values()}
+        for name, failure in self.recorder.failures.items():
+            text = str(failure) if level != "ERROR" else f"{text}; {failure}"
+            level, values = "ERROR", {**values, **failure.key_values(f"log.{name}")}
         if self.frames.has_robot:
             values = {"ee_link": self.frames.links.ee_link, "ee_links": ",".join(self.frames.links.ee_links),
                       **values}
