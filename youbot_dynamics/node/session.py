@@ -57,6 +57,9 @@ class Session(ClosesOnExit):
     stamp_ns: int
     failure: str | None = None
     """Why the session stopped publishing (None while it runs)."""
+    namesakes: int = 0
+    """Other nodes on the graph with this node's full name (the ROS side counts them):
+    topics, services and parameter sets reach whichever answers."""
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
                  mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float,
@@ -99,12 +102,16 @@ class Session(ClosesOnExit):
         """/diagnostics with one status of this session (also logged); with a robot, its
         values name the /ee_pose link (``ee_link``) and the /ee_poses links in order
         (``ee_links``, comma-separated). The watchdog's values are added; an OK status turns
-        WARN when a callback overran its budget since the last report; any status turns ERROR
+        WARN when a callback overran its budget since the last report or when other nodes of
+        the same full name are on the graph (``graph.namesakes``); any status turns ERROR
         when a log's write failed (a full disk, a file-size limit: the reason and what the file
         holds in ``log.mcap.*`` / ``log.rerun.*``), while the node goes on publishing."""
+        if level == "OK" and self.namesakes:
+            level, text = "WARN", (f"{self.namesakes} other node(s) named {self.node_name} on the graph: "
+                                   "services and parameter sets reach whichever answers")
         if level == "OK" and self.watchdog.fresh:
             level, text = "WARN", f"a callback overran its {self.watchdog.budget:g} s budget"
-        values = {**values, **self.watchdog.values()}
+        values = {**values, **self.watchdog.values(), "graph.namesakes": self.namesakes}
         for name, failure in self.recorder.failures.items():
             text = str(failure) if level != "ERROR" else f"{text}; {failure}"
             level, values = "ERROR", {**values, **failure.key_values(f"log.{name}")}

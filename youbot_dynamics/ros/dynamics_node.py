@@ -214,7 +214,18 @@ class DynamicsNode(Node):
 
     def _on_diagnostics(self) -> None:
         if not self.finished:
+            self._count_namesakes()
             self._publish(self.session.diagnostics(self._real_time_factor()))
+
+    def _count_namesakes(self) -> None:
+        """Count the other nodes with this node's full name (two launches of one name in one
+        domain); warn in the log when their number changes (the status says it each time)."""
+        me = (self.get_name(), self.get_namespace())
+        namesakes = sum(node == me for node in self.get_node_names_and_namespaces()) - 1
+        if namesakes > 0 and namesakes != self.session.namesakes:
+            self.get_logger().warning(f"{namesakes} other node(s) named {self.get_fully_qualified_name()} "
+                                      "on the graph: give each its own name or namespace")
+        self.session.namesakes = max(namesakes, 0)
 
     # ---- the node boundary ---------------------------------------------------------------
     def _subscribe(self, topic: Topic, callback: Callable, **options) -> None:
