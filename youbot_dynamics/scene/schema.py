@@ -73,7 +73,7 @@ from youbot_dynamics.integrate.registry import (AUTO, REGISTRY, STEPPERS, integr
                                                 is_fixed_step)
 from youbot_dynamics.model import limits
 from youbot_dynamics.model.compose import EMPTY_ROBOT, robot_with_gravity
-from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
+from youbot_dynamics.model.robot import Robot, URDFDocument, keep_joints, read_urdf, robot_from_urdf
 from youbot_dynamics.scene.base import BaseSpec, read_base
 from youbot_dynamics.scene.contacts import (ContactPairSpec, FreeBodySpec, read_composition,
                                             read_contacts, read_free_bodies, read_geometries)
@@ -156,7 +156,9 @@ class Scene:
     ``robot`` is the Robot the scene simulates, loaded once: only the moving joints, the
     others locked at their values, with the scene's gravity. ``urdf`` is the full robot's
     URDF text (the file's, the composed one, or the empty robot's: /robot_description);
-    ``urdf_path`` the file it was read from (None for ``robot: none`` and composed robots).
+    ``urdf_path`` the file it was read from (None for ``robot: none`` and composed robots);
+    ``urdf_document`` that URDF as read and checked once, from which the compiler builds the
+    robot with another root joint (a moving base's planar root) without reading it again.
     ``friction`` maps a moving joint to its spec (law and parameters) for the joints the
     scene lists; the others follow ``friction_default``. ``free_bodies``, ``geometries``
     (free bodies' shapes first, then world and link geometry) and ``contacts`` are empty in
@@ -185,6 +187,7 @@ class Scene:
     contacts: tuple[ContactPairSpec, ...] = ()
     base: BaseSpec = BaseSpec()
     uncertain: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
+    urdf_document: URDFDocument | None = dataclasses.field(default=None, compare=False, repr=False)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = DICT_SOURCE, base_dir: Path | None = None,
@@ -291,7 +294,7 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     the order their mistakes are reported."""
     reader = SceneReader(source, values)
     data = reader.mapping(data, "(top level)", TOP_KEYS)
-    full, urdf, urdf_path = _full_robot(reader, data, base_dir)
+    full, document, urdf, urdf_path = _full_robot(reader, data, base_dir)
     robot, locked, gravity = _reduced_robot(reader, data, full)
     q0, v0 = _initial_state(reader, robot, data.get("initial", {}))
     friction_default, joint_friction = _friction(reader, robot, data.get("friction", {}))
@@ -302,7 +305,8 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     default_name = Path(source).stem if Path(source).suffix in (".yaml", ".yml") else "scene"
     scene = Scene(
         name=str(data.get("name", default_name)), description=str(data.get("description", "")),
-        source=source, robot=robot, urdf=urdf, urdf_path=urdf_path, moving=robot.joint_names,
+        source=source, robot=robot, urdf=urdf, urdf_path=urdf_path, urdf_document=document,
+        moving=robot.joint_names,
         locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0), gravity=_frozen(gravity),
         friction_default=friction_default, friction=MappingProxyType(joint_friction), controller=controller,
         integrator=integrator, duration=duration, outputs=outputs,
@@ -318,19 +322,21 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
 
 
 def _full_robot(reader: SceneReader, data: Mapping[str, Any], base_dir: Path | None
-                ) -> tuple[Robot, str, Path | None]:
-    """(the full robot of ``robot:``, loaded with a fixed root; its URDF text as the file
-    holds it, for /robot_description; the file, None for a composed robot or none)."""
+                ) -> tuple[Robot, URDFDocument, str, Path | None]:
+    """(the full robot of ``robot:``, loaded with a fixed root; its URDF as read once; its
+    text as the file holds it, for /robot_description; the file, None for a composed robot
+    or none)."""
     urdf_source = _robot_source(reader, data.get("robot"), base_dir)
     try:
-        full = load_robot(urdf_source)
+        document = read_urdf(urdf_source)
+        full = robot_from_urdf(document)
     except UserInputError as error:
         raise SceneError(reader.source, "robot", str(error), data.get("robot")) from None
     # the text as the file holds it, for /robot_description (a byte that is no UTF-8 is
-    # replaced there, never in the model, which load_robot read by the file's encoding)
+    # replaced there, never in the model, which read_urdf read by the file's encoding)
     if isinstance(urdf_source, str):
-        return full, urdf_source, None
-    return full, urdf_source.read_text(encoding="utf-8", errors="replace"), urdf_source
+        return full, document, urdf_source, None
+    return full, document, urdf_source.read_text(encoding="utf-8", errors="replace"), urdf_source
 
 
 def _reduced_robot(reader: SceneReader, data: Mapping[str, Any], full: Robot

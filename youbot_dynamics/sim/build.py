@@ -84,12 +84,12 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
 
 # ---- the plant and the base --------------------------------------------------------------------
 def build_plant(scene: Scene) -> tuple[Robot, list[int | None]]:
-    """The plant: the scene's robot (under a moving base reloaded with a planar root, the
-    scene's gravity) with one free-flyer joint per free body appended; and the frame id of
-    each of the scene's geometries (None: world)."""
+    """The plant: the scene's robot (under a moving base rebuilt with a planar root from the
+    URDF the scene read, with the scene's gravity) with one free-flyer joint per free body
+    appended; and the frame id of each of the scene's geometries (None: world)."""
     robot = scene.robot
     if scene.base.mode != "fixed":
-        robot = robot_with_gravity(planar_robot(scene.urdf_path or scene.urdf, scene.moving, scene.locked),
+        robot = robot_with_gravity(planar_robot(scene.urdf_document, scene.moving, scene.locked),
                                    scene.gravity)
     bodies = [spec.body for spec in scene.free_bodies]
     if not bodies:
