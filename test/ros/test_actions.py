@@ -18,7 +18,7 @@ import rclpy  # noqa: E402
 from action_msgs.msg import GoalStatus  # noqa: E402
 from builtin_interfaces.msg import Duration  # noqa: E402
 from control_msgs.action import FollowJointTrajectory, GripperCommand  # noqa: E402
-from control_msgs.msg import JointTolerance  # noqa: E402
+from control_msgs.msg import GripperCommand as GripperCommandMsg, JointTolerance  # noqa: E402
 from rclpy.action import ActionClient  # noqa: E402
 from rclpy.context import Context  # noqa: E402
 from rclpy.node import Node  # noqa: E402
@@ -158,3 +158,66 @@ def test_cancel_and_preemption(tmp_path) -> None:
         assert response.result.error_code == Result.INVALID_GOAL
         response = result_of(second)
         assert response.status == GoalStatus.STATUS_SUCCEEDED, response.result.error_string
+
+
+def settled_after(node: DynamicsNode, publisher, message, seconds: float = 2.0) -> np.ndarray:
+    """Publish ``message`` until the node has accepted it, then the arm's q once ``seconds``
+    of simulated time have passed."""
+    def accepted() -> bool:
+        if node.session.counters.accepted == 0:
+            publisher.publish(message)
+            return False
+        return True
+
+    wait_until(lambda: publisher.get_subscription_count() > 0, what="the node's subscription")
+    wait_until(accepted, what="the command to be accepted")
+    start = node.session.t
+    wait_until(lambda: node.session.t > start + seconds, what="simulated time")
+    return node.session.snapshot.q.copy()
+
+
+def test_forward_position_commands_move_the_arm_like_a_joint_trajectory(tmp_path) -> None:
+    """arm_controller/commands (position) holding TARGET leaves the arm where a
+    /joint_trajectory to TARGET does; a command of the wrong length or with a NaN is refused
+    and counted."""
+    scene = frictionless_arm(tmp_path)
+    finals = {}
+    for offset, (topic, kind, message) in enumerate((
+            ("joint_trajectory", JointTrajectory, JointTrajectory(joint_names=ARM, points=[
+                JointTrajectoryPoint(positions=TARGET.tolist(), time_from_start=Duration())])),
+            ("arm_controller/commands", Float64MultiArray, Float64MultiArray(data=TARGET.tolist())))):
+        with ros_context(22 + offset) as (context, _):
+            node = make_node(context, scene=scene, publish_rate=100.0, time_scale=0.0)
+            sender = Collector(context, {})
+            publisher = sender.create_publisher(kind, topic, RELIABLE_DEEP)
+            with spinning(context, node, sender, single_threaded=True):
+                finals[topic] = settled_after(node, publisher, message)
+                if kind is Float64MultiArray:
+                    publisher.publish(Float64MultiArray(data=TARGET[:4].tolist()))
+                    publisher.publish(Float64MultiArray(data=[float("nan"), *TARGET[1:]]))
+                    counters = node.session.counters
+                    wait_until(lambda: counters.rejected["length_mismatch"] == 1 and counters.rejected["non_finite"] == 1,
+                               what="the two bad commands counted")
+                    assert np.all(np.isfinite(node.session.snapshot.q))
+    np.testing.assert_allclose(finals["arm_controller/commands"], finals["joint_trajectory"], atol=1e-6)
+    np.testing.assert_allclose(finals["arm_controller/commands"], TARGET, atol=1e-6)
+
+
+def test_gripper_closes_on_the_sphere(tmp_path) -> None:
+    """grasp: the pads (gripper_joints) squeeze the sphere at the scene's 1.5 N; a goal 3 mm
+    into the sphere with max_effort 1 N stalls on it (contact, the pads still) with each pad's
+    force capped at 1 N, and aborts, as gripper_action_controller does without
+    allow_stalling; the sphere stays held (it sinks less than 0.1 mm)."""
+    with node_and_client(24, scene="grasp", publish_rate=100.0, time_scale=1.0, gripper_joints="pad_l_joint,pad_r_joint",
+                         stall_timeout=0.3) as (node, client):
+        wait_until(lambda: node.session.t > 0.2, what="the grasp to settle")
+        assert np.allclose(node.session.snapshot.tau, 1.5)          # the scene's servo force, above the cap
+        handle = client._accepted(client.gripper, GripperCommand.Goal(
+            command=GripperCommandMsg(position=0.003, max_effort=1.0)))
+        response = result_of(handle)
+        result = response.result
+        assert response.status == GoalStatus.STATUS_ABORTED
+        assert result.stalled and not result.reached_goal
+        assert 0.9 <= result.effort <= 1.0 + 1e-12
+        assert np.all(np.abs(node.session.snapshot.tau) <= 1.0 + 1e-12)
+        assert abs(node.session.snapshot.bodies["sphere"][2, 3]) < 1e-4
