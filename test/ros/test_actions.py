@@ -64,10 +64,11 @@ def client_context(domain: int):
 class MoveItLike(Node):
     """An action client as MoveIt's controller manager uses them; keeps every feedback."""
 
-    def __init__(self, context: Context) -> None:
-        super().__init__("moveit_like", context=context)
+    def __init__(self, context: Context, namespace: str = "/") -> None:
+        super().__init__("moveit_like", context=context, namespace=namespace)
         self.arm = ActionClient(self, FollowJointTrajectory, "arm_controller/follow_joint_trajectory")
         self.gripper = ActionClient(self, GripperCommand, "gripper_controller/gripper_command")
+        self.commands = self.create_publisher(Float64MultiArray, "arm_controller/commands", RELIABLE_DEEP)
         self.feedback: list = []
 
     def send(self, names, points, path=(), goal=(), goal_time=0.0):
@@ -97,10 +98,13 @@ def result_of(handle):
 
 
 @contextmanager
-def node_and_client(offset: int, **parameters):
+def node_and_client(offset: int, namespace: str = "/", **parameters):
+    """A dynamics node (in ``namespace``) and a MoveIt-like client in the same namespace, each in
+    its own context, spun in its own thread."""
     with ros_context(offset) as (context, domain), client_context(domain) as other:
-        node = make_node(context, **parameters)
-        client = MoveItLike(other)
+        node = DynamicsNode(context=context, namespace=namespace,
+                            parameter_overrides=[Parameter(k, value=v) for k, v in parameters.items()])
+        client = MoveItLike(other, namespace)
         with spinning(context, node, single_threaded=True), spinning(other, client):
             yield node, client
 
@@ -139,7 +143,8 @@ def test_follow_joint_trajectory_results(tmp_path) -> None:
 
 def test_cancel_and_preemption(tmp_path) -> None:
     """A goal cancelled mid-way ends CANCELED with the arm held short of its target; a goal
-    preempted by a second one ends CANCELED (INVALID_GOAL, as JTC) and the second succeeds."""
+    preempted by a second one ends CANCELED (INVALID_GOAL, as JTC) and the second succeeds; a
+    goal whose joints an arm_controller/commands message takes over ends CANCELED too."""
     with node_and_client(21, scene=frictionless_arm(tmp_path), publish_rate=100.0, time_scale=1.0) as (node, client):
         slow = client.send(ARM, [(20.0, TARGET)])
         wait_until(lambda: len(client.feedback) > 20, what="feedback")
@@ -158,6 +163,12 @@ def test_cancel_and_preemption(tmp_path) -> None:
         assert response.result.error_code == Result.INVALID_GOAL
         response = result_of(second)
         assert response.status == GoalStatus.STATUS_SUCCEEDED, response.result.error_string
+
+        third = client.send(ARM, [(20.0, CANDLE)])
+        wait_until(lambda: client.commands.get_subscription_count() > 0, what="the node's commands subscription")
+        client.commands.publish(Float64MultiArray(data=TARGET.tolist()))
+        response = result_of(third)
+        assert response.status == GoalStatus.STATUS_CANCELED and "arm_controller/commands" in response.result.error_string
 
 
 def settled_after(node: DynamicsNode, publisher, message, seconds: float = 2.0) -> np.ndarray:
@@ -207,8 +218,9 @@ def test_gripper_closes_on_the_sphere(tmp_path) -> None:
     """grasp: the pads (gripper_joints) squeeze the sphere at the scene's 1.5 N; a goal 3 mm
     into the sphere with max_effort 1 N stalls on it (contact, the pads still) with each pad's
     force capped at 1 N, and aborts, as gripper_action_controller does without
-    allow_stalling; the sphere stays held (it sinks less than 0.1 mm)."""
-    with node_and_client(24, scene="grasp", publish_rate=100.0, time_scale=1.0, gripper_joints="pad_l_joint,pad_r_joint",
+    allow_stalling; the sphere stays held (it sinks less than 0.1 mm). The node and the client
+    run in /youbot1: the action's name is relative."""
+    with node_and_client(24, "/youbot1", scene="grasp", publish_rate=100.0, time_scale=1.0, gripper_joints="pad_l_joint,pad_r_joint",
                          stall_timeout=0.3) as (node, client):
         wait_until(lambda: node.session.t > 0.2, what="the grasp to settle")
         assert np.allclose(node.session.snapshot.tau, 1.5)          # the scene's servo force, above the cap

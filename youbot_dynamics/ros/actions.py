@@ -8,8 +8,10 @@ results.
 Every goal is accepted; one that cannot run ends at once ABORTED with its result code and
 error string (rclpy's rejection carries no result, and a MoveIt client reads the code). A
 newer goal preempts the running one of its controller: the older ends CANCELED with
-``INVALID_GOAL`` "Current goal cancelled due to new incoming action." (JTC's words). A cancel
-request holds the joints where they are and ends the goal CANCELED (``SUCCESSFUL``).
+``INVALID_GOAL`` "Current goal cancelled due to new incoming action." (JTC's words); so does
+a running goal when a ``<controller>/commands`` message takes its joints over or ``~/reset``
+restarts the scene (with that reason). A cancel request holds the joints where they are and
+ends the goal CANCELED (``SUCCESSFUL``).
 Feedback goes out once per published sample, from the node's step timer
 (:meth:`Controllers.on_sample`).
 """
@@ -33,8 +35,8 @@ from youbot_dynamics.node.interface import ACTIONS, TOPICS
 from youbot_dynamics.node.trajectory_goal import INVALID_GOAL, SUCCESSFUL, GoalRejected, Outcome, TrajectoryGoal
 from youbot_dynamics.ros.conversions import rclpy_class
 
-PREEMPTED = Outcome("canceled", INVALID_GOAL, "Current goal cancelled due to new incoming action.")
-"""How a preempted FollowJointTrajectory goal ends (joint_trajectory_controller's result)."""
+PREEMPTED = "Current goal cancelled due to new incoming action."
+"""The error string of a preempted FollowJointTrajectory goal (joint_trajectory_controller's)."""
 
 
 @dataclass
@@ -76,20 +78,29 @@ class Controllers:
         for topic in TOPICS:
             group = topic.when
             if topic.direction == "sub" and group in self.joints and self.joints[group]:
-                subscribe(topic, lambda msg, group=group: forward_command(
-                    session, group, self.joints[group], msg.data, params["commands_interface"]))
+                subscribe(topic, lambda msg, group=group: self._forward(group, msg.data))
 
     @property
     def offered(self) -> list[str]:
         """The action names served."""
         return [action.name for action in ACTIONS if self.joints[action.when]]
 
+    def _forward(self, group: str, data) -> None:
+        """A ``<group>/commands`` message: applied, then the group's running goal ends."""
+        forward_command(self.session, group, self.joints[group], data, self.params["commands_interface"])
+        self.interrupt(group, f"Current goal cancelled by a command on {group}/commands.")
+
+    def interrupt(self, group: str | None, why: str) -> None:
+        """End the running goal of ``group`` (None: every group) CANCELED, saying ``why``."""
+        for name, running in self.running.items():
+            if running is not None and group in (None, name):
+                self._end(name, running, Outcome("canceled", INVALID_GOAL, why) if name == "arm_controller"
+                          else "canceled")
+
     # ---- goals -----------------------------------------------------------------------
     def _begin(self, group: str, handle, goal) -> Future:
         """Make ``goal`` its controller's running goal (preempting the older one)."""
-        previous = self.running[group]
-        if previous is not None:
-            self._end(group, previous, PREEMPTED if group == "arm_controller" else "canceled")
+        self.interrupt(group, PREEMPTED)
         running = _Running(handle, goal, Future())
         self.running[group] = running
         return running.done

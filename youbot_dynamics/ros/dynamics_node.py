@@ -322,6 +322,7 @@ class DynamicsNode(Node):
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()
+        self.controllers.interrupt(None, "Current goal cancelled: the scene was reset (~/reset).")
         self._restart_pacing()
         self._publish(self.session.diagnostics(self._real_time_factor()))     # the reset, as an event
         response.success, response.message = True, (f"reset {self.session.scene.name}: its t = 0 is node time "
