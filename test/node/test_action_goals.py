@@ -8,6 +8,7 @@ import pytest
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.controller_groups import GroupedTrajectory, Hold, Ramp, group_joints
 from youbot_dynamics.node.forward_commands import forward_command
+from youbot_dynamics.node.gripper_goal import GripperGoal, finger_pairs
 from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.node.trajectory_goal import (GOAL_TOLERANCE_VIOLATED, INVALID_GOAL, INVALID_JOINTS,
                                                   OLD_HEADER_TIMESTAMP, SUCCESSFUL, GoalRejected, TrajectoryGoal,
@@ -104,6 +105,12 @@ def test_group_joints_by_pattern_or_parameter(scene) -> None:
     assert group_joints(robot, "arm_controller", "arm_joint_2, arm_joint_1") == ("arm_joint_2", "arm_joint_1")
     with pytest.raises(Exception, match="gripper_finger_joint_l"):
         group_joints(robot, "gripper_controller", "gripper_finger_joint_l")
+    gripping = load_scene("gripping")          # two youBots: the first one's joints
+    fingers = group_joints(gripping.robot, "gripper_controller", "")
+    assert fingers == ("yb1_gripper_finger_joint_l", "yb1_gripper_finger_joint_r")
+    assert group_joints(gripping.robot, "arm_controller", "") == tuple(f"yb1_{name}" for name in ARM)
+    assert finger_pairs(gripping, ["yb1_gripper_finger_link_l", "yb1_gripper_finger_link_r"]) == {
+        "yb1_pad_l/sphere", "yb1_pad_r/sphere"}
 
 
 def test_forward_commands_are_checked_and_counted(scene) -> None:
@@ -122,3 +129,26 @@ def test_forward_commands_are_checked_and_counted(scene) -> None:
     assert session.counters.accepted == 1
     assert q_d[0] == pytest.approx(q[0] + 0.1 * (session.scene_time - t0)) and v_d[0] == 0.1
     np.testing.assert_allclose(q_d[1:], q[1:])
+
+
+def test_gripper_goal_caps_the_force_and_stalls_on_the_sphere() -> None:
+    """grasp: the scene's servo presses each pad with kp * 1 mm = 1.5 N; a goal 3 mm into
+    the sphere with max_effort 1 N leaves each pad at exactly 1 N (the cap, not the URDF's
+    10 N), blocked by the sphere: stalled after stall_timeout (0.3 s) of contact at rest, not
+    reached; without allow_stalling it aborts. The sphere is held: 2 mu F = 0.6 N > m g = 0.449 N."""
+    session = SimulationSession(load_scene("grasp"), 100.0)
+    for _ in range(21):
+        session.step()
+    np.testing.assert_allclose(session.snapshot.tau, 1500.0 * 0.001, rtol=1e-5)
+    joints = group_joints(session.robot, "gripper_controller", "pad_l_joint,pad_r_joint")
+    goal = GripperGoal.start(session, "gripper_controller", joints, 0.003, 1.0, 0.0005, 0.3, False)
+    t0 = session.t
+    for _ in range(200):
+        session.step()
+        state, status = goal.update()
+        if status:
+            break
+    assert status == "aborted" and state.stalled and not state.reached_goal
+    assert session.t - t0 >= 0.3 and state.effort == 1.0
+    np.testing.assert_array_equal(np.abs(session.snapshot.tau), 1.0)
+    assert abs(session.snapshot.bodies["sphere"][2, 3]) < 1e-4

@@ -50,6 +50,10 @@ def make_node(context, **parameters) -> DynamicsNode:
     return DynamicsNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in parameters.items()])
 
 
+def duration(seconds: float) -> Duration:
+    return Duration(sec=int(seconds), nanosec=round(seconds % 1 * 1e9))
+
+
 @contextmanager
 def client_context(domain: int):
     """A second rclpy context in the node's domain: the client's own middleware participant."""
@@ -75,11 +79,10 @@ class MoveItLike(Node):
         """Send a goal and wait for its acceptance; returns the goal handle."""
         request = FollowJointTrajectory.Goal()
         request.trajectory = JointTrajectory(joint_names=list(names), points=[
-            JointTrajectoryPoint(positions=list(map(float, q)), time_from_start=Duration(sec=int(t), nanosec=round(t % 1 * 1e9)))
-            for t, q in points])
+            JointTrajectoryPoint(positions=list(map(float, q)), time_from_start=duration(t)) for t, q in points])
         request.path_tolerance = [JointTolerance(name=n, position=p) for n, p in path]
         request.goal_tolerance = [JointTolerance(name=n, position=p) for n, p in goal]
-        request.goal_time_tolerance = Duration(sec=int(goal_time), nanosec=round(goal_time % 1 * 1e9))
+        request.goal_time_tolerance = duration(goal_time)
         return self._accepted(self.arm, request)
 
     def _accepted(self, client, request):
@@ -168,7 +171,8 @@ def test_cancel_and_preemption(tmp_path) -> None:
         wait_until(lambda: client.commands.get_subscription_count() > 0, what="the node's commands subscription")
         client.commands.publish(Float64MultiArray(data=TARGET.tolist()))
         response = result_of(third)
-        assert response.status == GoalStatus.STATUS_CANCELED and "arm_controller/commands" in response.result.error_string
+        assert response.status == GoalStatus.STATUS_CANCELED
+        assert "arm_controller/commands" in response.result.error_string
 
 
 def settled_after(node: DynamicsNode, publisher, message, seconds: float = 2.0) -> np.ndarray:
@@ -207,7 +211,8 @@ def test_forward_position_commands_move_the_arm_like_a_joint_trajectory(tmp_path
                     publisher.publish(Float64MultiArray(data=TARGET[:4].tolist()))
                     publisher.publish(Float64MultiArray(data=[float("nan"), *TARGET[1:]]))
                     counters = node.session.counters
-                    wait_until(lambda: counters.rejected["length_mismatch"] == 1 and counters.rejected["non_finite"] == 1,
+                    rejected = counters.rejected
+                    wait_until(lambda: (rejected["length_mismatch"], rejected["non_finite"]) == (1, 1),
                                what="the two bad commands counted")
                     assert np.all(np.isfinite(node.session.snapshot.q))
     np.testing.assert_allclose(finals["arm_controller/commands"], finals["joint_trajectory"], atol=1e-6)
@@ -220,8 +225,8 @@ def test_gripper_closes_on_the_sphere(tmp_path) -> None:
     force capped at 1 N, and aborts, as gripper_action_controller does without
     allow_stalling; the sphere stays held (it sinks less than 0.1 mm). The node and the client
     run in /youbot1: the action's name is relative."""
-    with node_and_client(24, "/youbot1", scene="grasp", publish_rate=100.0, time_scale=1.0, gripper_joints="pad_l_joint,pad_r_joint",
-                         stall_timeout=0.3) as (node, client):
+    with node_and_client(24, "/youbot1", scene="grasp", publish_rate=100.0, time_scale=1.0,
+                         gripper_joints="pad_l_joint,pad_r_joint", stall_timeout=0.3) as (node, client):
         wait_until(lambda: node.session.t > 0.2, what="the grasp to settle")
         assert np.allclose(node.session.snapshot.tau, 1.5)          # the scene's servo force, above the cap
         handle = client._accepted(client.gripper, GripperCommand.Goal(

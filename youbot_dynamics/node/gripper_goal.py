@@ -24,7 +24,7 @@ import numpy as np
 
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.node.commands import InputRejected, joint_trajectory
-from youbot_dynamics.node.controller_groups import command_group
+from youbot_dynamics.node.controller_groups import Hold, command_group
 
 STALL_VELOCITY = 0.001
 """Finger speed (m/s, rad/s) below which a blocked finger counts as stalled
@@ -53,10 +53,11 @@ class GripperGoal:
     published sample :meth:`update` gives the state and, once decided, the status
     (``succeeded`` or ``aborted``)."""
 
-    def __init__(self, session, joints: Sequence[str], target: float, tolerance: float, stall_timeout_ns: int,
-                 allow_stalling: bool) -> None:
+    def __init__(self, session, group: str, joints: Sequence[str], target: float, tolerance: float,
+                 stall_timeout_ns: int, allow_stalling: bool) -> None:
         robot = session.robot
-        self.session, self.index = session, np.array([robot.joint_index(name) for name in joints])
+        self.session, self.group = session, group
+        self.index = np.array([robot.joint_index(name) for name in joints])
         self.target, self.tolerance = float(target), float(tolerance)
         self.stall_timeout_ns, self.allow_stalling = stall_timeout_ns, allow_stalling
         links = [joint.child for joint in robot.tree if joint.name in joints]
@@ -69,7 +70,7 @@ class GripperGoal:
         """Check the goal (raises :class:`InputRejected`) and move the fingers to
         ``position`` with their force capped at ``max_effort``."""
         robot = session.robot
-        self = cls(session, joints, position, tolerance, round(stall_timeout * NS_PER_S), allow_stalling)
+        self = cls(session, group, joints, position, tolerance, round(stall_timeout * NS_PER_S), allow_stalling)
         if not (np.isfinite(position) and np.isfinite(max_effort)):
             raise InputRejected("non_finite", f"gripper goal position {position}, max_effort {max_effort}")
         q_now = session.snapshot.q
@@ -101,3 +102,7 @@ class GripperGoal:
         if stalled:
             return state, "succeeded" if self.allow_stalling else "aborted"
         return state, None
+
+    def hold(self) -> None:
+        """Hold the fingers where they are (after a cancel), the force cap unchanged."""
+        command_group(self.session.simulator, self.group, self.index, Hold(self.session.snapshot.q))

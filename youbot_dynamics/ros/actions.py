@@ -80,11 +80,6 @@ class Controllers:
             if topic.direction == "sub" and group in self.joints and self.joints[group]:
                 subscribe(topic, lambda msg, group=group: self._forward(group, msg.data))
 
-    @property
-    def offered(self) -> list[str]:
-        """The action names served."""
-        return [action.name for action in ACTIONS if self.joints[action.when]]
-
     def _forward(self, group: str, data) -> None:
         """A ``<group>/commands`` message: applied, then the group's running goal ends."""
         forward_command(self.session, group, self.joints[group], data, self.params["commands_interface"])
@@ -157,6 +152,7 @@ class Controllers:
         if gripper is not None:
             state, status = gripper.goal.update()
             if gripper.handle.is_cancel_requested:
+                gripper.goal.hold()
                 self._end("gripper_controller", gripper, ("canceled", state))
                 return
             gripper.handle.publish_feedback(_gripper_message(
@@ -174,7 +170,8 @@ class Controllers:
         feedback = action.Feedback(joint_names=list(arm.goal.joints))
         feedback.header.stamp.sec, feedback.header.stamp.nanosec = divmod(self.session.stamp_ns, NS_PER_S)
         point = rclpy_class("trajectory_msgs/msg/JointTrajectoryPoint")
-        feedback.desired, feedback.actual, feedback.error = (_point(point, values) for values in (desired, actual, error))
+        feedback.desired, feedback.actual, feedback.error = (_point(point, values)
+                                                             for values in (desired, actual, error))
         arm.handle.publish_feedback(feedback)
         if outcome is not None:
             self._end("arm_controller", arm, outcome)
