@@ -13,7 +13,7 @@ a running goal when a ``<controller>/commands`` message takes its joints over or
 restarts the scene (with that reason). A cancel request holds the joints where they are and
 ends the goal CANCELED (``SUCCESSFUL``).
 Feedback goes out once per published sample, from the node's step timer
-(:meth:`Controllers.on_sample`).
+(:meth:`Controllers.on_sample`), with the node's topic QoS (reliable, keep last 1000).
 """
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ from youbot_dynamics.node.gripper_goal import GripperGoal, GripperState
 from youbot_dynamics.node.interface import ACTIONS, TOPICS
 from youbot_dynamics.node.trajectory_goal import INVALID_GOAL, SUCCESSFUL, GoalRejected, Outcome, TrajectoryGoal
 from youbot_dynamics.ros.conversions import rclpy_class
+from youbot_dynamics.ros.qos import RELIABLE_DEEP
 
 PREEMPTED = "Current goal cancelled due to new incoming action."
 """The error string of a preempted FollowJointTrajectory goal (joint_trajectory_controller's)."""
@@ -74,7 +75,7 @@ class Controllers:
                 self.servers.append(ActionServer(
                     node, rclpy_class(action.type), action.name, execute_callback=executes[action.when],
                     goal_callback=lambda request: GoalResponse.ACCEPT,
-                    cancel_callback=lambda handle: CancelResponse.ACCEPT))
+                    cancel_callback=lambda handle: CancelResponse.ACCEPT, feedback_pub_qos_profile=RELIABLE_DEEP))
         for topic in TOPICS:
             group = topic.when
             if topic.direction == "sub" and group in self.joints and self.joints[group]:
