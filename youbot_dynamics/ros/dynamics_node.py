@@ -198,10 +198,11 @@ class DynamicsNode(Node):
         subscribed = self._subscribed()
         for _ in range(due):
             self._publish(session.step(), subscribed)
-            self.controllers.on_sample()
             if session.failure:
                 self.get_logger().error(session.failure)
+                self.controllers.interrupt(None, f"Current goal cancelled: the simulation {session.failure}.")
                 return
+            self.controllers.on_sample()
             if p["duration"] and session.t >= p["duration"] - 1e-12:
                 self._finish()
                 return
