@@ -9,10 +9,10 @@ Every goal is accepted; one that cannot run ends at once ABORTED with its result
 error string (rclpy's rejection carries no result, and a MoveIt client reads the code). A
 newer goal preempts the running one of its controller: the older ends CANCELED with
 ``INVALID_GOAL`` "Current goal cancelled due to new incoming action." (JTC's words); so does
-a running goal when a ``<controller>/commands`` message takes its joints over, the simulation
-fails (diverges) or ``~/reset``
-restarts the scene (with that reason). A cancel request holds the joints where they are and
-ends the goal CANCELED (``SUCCESSFUL``).
+a running goal when a ``<controller>/commands`` message takes its joints over, the
+simulation fails (diverges) or ``~/reset`` restarts the scene (with that reason). A cancel
+request holds the joints where they are and ends the goal CANCELED (``SUCCESSFUL``).
+
 Feedback goes out once per published sample, from the node's step timer
 (:meth:`Controllers.on_sample`), with the node's topic QoS (reliable, keep last 1000).
 """
