@@ -20,6 +20,7 @@ import sys
 from dataclasses import dataclass
 
 from youbot_dynamics.node.commands import TIMEOUT_ACTIONS
+from youbot_dynamics.node.forward_commands import INTERFACES as COMMAND_INTERFACES
 from youbot_dynamics.node.topics import GLOBAL_TOPICS
 
 Outputs = list[tuple[str, object]]
@@ -42,7 +43,9 @@ FEATURES = {"robot": "the scene has a robot",
             "several_robots": "the robot is composed of several robots",
             "moving_base": "the scene has a moving base",
             "free_bodies": "the scene has free bodies",
-            "static_geometry": "the scene has static or link geometry"}
+            "static_geometry": "the scene has static or link geometry",
+            "arm_controller": "the scene moves arm joints (arm_joints)",
+            "gripper_controller": "the scene moves gripper joints (gripper_joints)"}
 """Scene features a topic may need (``Topic.when``)."""
 
 
@@ -109,6 +112,12 @@ TOPICS: tuple[Topic, ...] = (
     Topic("/joint_states", "sub", "sensor_msgs/msg/JointState", "joint_states_qos", INVERSE, None,
           "measured joint positions and velocities by name (unstamped samples take the receive time)",
           max_bytes=64 * 1024),
+    Topic("/arm_controller/commands", "sub", "std_msgs/msg/Float64MultiArray", "reliable", SIMULATE,
+          "arm_controller", "forward_command_controller's commands: one value per arm joint in arm_joints' "
+          "order (youBot: arm_joint_1 .. 5), meaning commands_interface", max_bytes=64 * 1024),
+    Topic("/gripper_controller/commands", "sub", "std_msgs/msg/Float64MultiArray", "reliable", SIMULATE,
+          "gripper_controller", "as arm_controller/commands, one value per gripper joint in gripper_joints' order "
+          "(youBot: gripper_finger_joint_l, _r)", max_bytes=64 * 1024),
 )
 """Every topic. Subscriptions' ``max_bytes``: 64 KiB holds a JointState of MAX_NAMES (256)
 joints four times over; 1 MiB a trajectory of MAX_TRAJECTORY_POINTS (1000) points of 16
@@ -153,9 +162,37 @@ SERVICES: tuple[Service, ...] = (
     Service("~/pause", "std_srvs/srv/SetBool", SIMULATE, "pause (true) or resume (false) simulated time"),
 )
 
+
+
+@dataclass(frozen=True)
+class Action:
+    """One action server of the node: ``name`` (relative), ``type`` (pkg/action/Type), the
+    ``modes`` it is in, the scene feature it needs and what it does."""
+
+    name: str
+    type: str
+    modes: tuple[str, ...]
+    when: str
+    does: str
+
+
+ACTIONS: tuple[Action, ...] = (
+    Action("arm_controller/follow_joint_trajectory", "control_msgs/action/FollowJointTrajectory", SIMULATE,
+           "arm_controller", "joint_trajectory_controller's action: the arm joints in any order, path and goal "
+           "tolerances, goal_time_tolerance, feedback per sample, cancel, preemption (the older goal is "
+           "cancelled); a goal that cannot run ends ABORTED with its result code (INVALID_JOINTS, INVALID_GOAL, "
+           "OLD_HEADER_TIMESTAMP)"),
+    Action("gripper_controller/gripper_command", "control_msgs/action/GripperCommand", SIMULATE,
+           "gripper_controller", "gripper_action_controller's action: every gripper joint to position (m), force "
+           "capped at max_effort (N); stalled when a finger touches and stops for stall_timeout"),
+)
+"""Every action server (:mod:`youbot_dynamics.ros.actions`; the goal logic:
+:mod:`~youbot_dynamics.node.trajectory_goal`, :mod:`~youbot_dynamics.node.gripper_goal`)."""
+
 AUTO_PREFIX = "auto"
 """``frame_prefix`` value that derives the prefix from the node's namespace."""
-CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS, "joint_states_qos": SUBSCRIPTION_QOS}
+CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS, "joint_states_qos": SUBSCRIPTION_QOS,
+           "commands_interface": COMMAND_INTERFACES}
 """The allowed values of the string parameters that have a fixed set."""
 
 
@@ -209,6 +246,22 @@ PARAMETERS: dict[str, Spec] = {
     "wait_timeout": Spec(10.0, "wall-clock seconds to wait for those subscribers; then start anyway, "
                          "with a warning", (0.0, 3600.0)),
     "diagnostics_period": Spec(1.0, "wall-clock seconds between /diagnostics messages", (0.01, 60.0)),
+    "arm_joints": Spec("", "joints of arm_controller, comma-separated, in the order of its commands ('' : the "
+                       "first youBot's moving arm_joint_1 .. 5)"),
+    "gripper_joints": Spec("", "joints of gripper_controller, comma-separated ('' : the first youBot's moving "
+                           "gripper_finger_joint_l, _r)"),
+    "commands_interface": Spec("position", "what <controller>/commands carries: position (rad, m) | velocity "
+                               "(rad/s, m/s) | effort (N m, N; as /joint_commands)"),
+    "goal_time_tolerance": Spec(0.0, "follow_joint_trajectory: seconds after the trajectory's end to reach the "
+                                "goal tolerances, for goals that give 0; 0: wait indefinitely (JTC's goal_time)",
+                                (0.0, 3600.0)),
+    "stopped_velocity_tolerance": Spec(0.01, "follow_joint_trajectory: default goal velocity tolerance (rad/s, "
+                                       "m/s)", (0.0, 100.0)),
+    "gripper_goal_tolerance": Spec(0.0005, "gripper_command: position error (m, rad) within which the goal is "
+                                   "reached", (1.0e-9, 1.0)),
+    "stall_timeout": Spec(1.0, "gripper_command: seconds (simulated) a touching finger must stay still to be "
+                          "stalled", (0.0, 60.0)),
+    "allow_stalling": Spec(False, "gripper_command: a stalled goal succeeds (true) or aborts (false)"),
 }
 """Every parameter of the node. Numeric ones carry their range (rclpy refuses a value
 outside it); string choices are :data:`CHOICES` (:func:`check_choice`). Read-only ones fix
@@ -269,6 +322,9 @@ def markdown() -> str:
              "## Services", "", *_table(("service", "type", "modes", "does"),
                                         [(f"`{s.name}`", f"`{s.type}`", ", ".join(s.modes), s.does)
                                          for s in SERVICES]), "",
+             "## Actions", "", *_table(("action", "type", "modes", "does"),
+                                       [(f"`{a.name}`", f"`{a.type}`", ", ".join(a.modes) + f" ({FEATURES[a.when]})",
+                                         a.does) for a in ACTIONS]), "",
              "## Parameters", "", *_table(("parameter", "type", "default", "range", "description"),
                                           [_parameter_row(name, spec) for name, spec in PARAMETERS.items()]), ""]
     return "\n".join(lines)

@@ -75,6 +75,7 @@ from youbot_dynamics.node.configure import session_from_parameters
 from youbot_dynamics.node.interface import SERVICES, Outputs, Topic, check_choice, topics_of
 from youbot_dynamics.node.pacing import Pacing, RealTimeFactor
 from youbot_dynamics.node.topics import graph_name
+from youbot_dynamics.ros.actions import Controllers
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr
 from youbot_dynamics.ros.parameters import declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
@@ -106,6 +107,7 @@ class DynamicsNode(Node):
             self._wait_deadline = time.monotonic() + p["wait_timeout"]
             self._waiting = p["wait_for_subscribers"] > 0
             self.pacing = Pacing(self.session.k)
+            self.controllers = Controllers(self, self.session, p, self._subscribe)   # actions, <controller>/commands
             self.create_timer(1.0 / p["publish_rate"], self._guarded("step timer", self._on_tick), clock=steady)
         else:
             self._inbox: list[tuple] = []
@@ -198,7 +200,9 @@ class DynamicsNode(Node):
             self._publish(session.step(), subscribed)
             if session.failure:
                 self.get_logger().error(session.failure)
+                self.controllers.interrupt(None, f"Current goal cancelled: the simulation {session.failure}.")
                 return
+            self.controllers.on_sample()
             if p["duration"] and session.t >= p["duration"] - 1e-12:
                 self._finish()
                 return
@@ -330,6 +334,7 @@ class DynamicsNode(Node):
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()
+        self.controllers.interrupt(None, "Current goal cancelled: the scene was reset (~/reset).")
         self._restart_pacing()
         self._publish(self.session.diagnostics(self._real_time_factor()))     # the reset, as an event
         response.success, response.message = True, (f"reset {self.session.scene.name}: its t = 0 is node time "

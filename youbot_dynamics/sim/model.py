@@ -277,7 +277,7 @@ class SimModel:
             return None
         nv, end, model, table, joints = fast
         points, timing = compiled
-        law = np.array([controller.kp, controller.kd, controller.limit], dtype=float)
+        law = np.array([controller.kp, controller.kd, reference.limit(controller.limit)], dtype=float)
         law.setflags(write=False)
         work = np.zeros((8, nv))
         command, left, q, v = work[3], work[4], work[6], work[7]
