@@ -19,7 +19,7 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass
 
-from youbot_dynamics.node.commands import TIMEOUT_ACTIONS
+from youbot_dynamics.io.qos import Qos
 from youbot_dynamics.node.topics import GLOBAL_TOPICS
 
 Outputs = list[tuple[str, object]]
@@ -30,11 +30,13 @@ MODES = ("simulate", "inverse")
 BOTH = MODES
 SIMULATE, INVERSE = ("simulate",), ("inverse",)
 
-QOS = {"reliable": "reliable, volatile, keep last 1000",
-       "latched": "reliable, transient local, depth 1 (late subscribers get the last message)",
-       "best_effort": "best effort, volatile, keep last 1000",
-       "keep_all": "reliable, volatile, keep all"}
-"""QoS profiles by name (their rclpy form: :mod:`youbot_dynamics.ros.qos`)."""
+QOS = {"reliable": Qos("reliable", "volatile", "keep_last", 1000),
+       "latched": Qos("reliable", "transient_local", "keep_last", 1),
+       "best_effort": Qos("best_effort", "volatile", "keep_last", 1000),
+       "keep_all": Qos("reliable", "volatile", "keep_all", 0)}
+"""QoS profiles by name: the one source of what the node's publishers and subscriptions use
+(their rclpy form: :mod:`youbot_dynamics.ros.qos`) and of what its MCAP records as each
+channel's offered profile. Latched: late subscribers get the last message."""
 SUBSCRIPTION_QOS = ("best_effort", "reliable", "keep_all")
 """The choices of the ``joint_states_qos`` parameter (names of :data:`QOS`)."""
 
@@ -118,8 +120,8 @@ TOPIC_TYPES = {topic.name: topic.type for topic in TOPICS if topic.direction == 
 """Every topic the node publishes and logs, with its type (tf2_msgs has no PyPI wheel:
 ``make`` builds it from interfaces/; without it the node publishes neither /tf nor /tf_static
 but still logs them)."""
-LATCHED_TOPICS = frozenset(topic.name for topic in TOPICS if topic.qos == "latched")
-"""Topics sent once and latched (transient local, depth 1), in the MCAP too."""
+TOPIC_QOS = {topic.name: QOS[topic.qos] for topic in TOPICS if topic.direction == "pub"}
+"""The profile every published topic is offered with, live and in the MCAP."""
 
 
 def topics_of(mode: str, direction: str, features: frozenset[str], latched: bool = False) -> tuple[Topic, ...]:
@@ -153,6 +155,10 @@ SERVICES: tuple[Service, ...] = (
     Service("~/pause", "std_srvs/srv/SetBool", SIMULATE, "pause (true) or resume (false) simulated time"),
 )
 
+TIMEOUT_ACTIONS = ("hold", "zero_torque")
+"""What the simulator applies once the last effort command is older than the timeout:
+``hold`` hands control back to the scene's controller (its set point or trajectory; zero
+torque in a scene without a controller), ``zero_torque`` applies zero torque."""
 AUTO_PREFIX = "auto"
 """``frame_prefix`` value that derives the prefix from the node's namespace."""
 CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS, "joint_states_qos": SUBSCRIPTION_QOS}
@@ -264,7 +270,8 @@ def markdown() -> str:
              "node time: simulated time in simulate mode, the sender's stamps in inverse mode.", "",
              "## Topics", "", *_table(("topic", "dir", "type", "QoS", "modes", "carries"),
                                       [_topic_row(topic) for topic in TOPICS]), "",
-             "QoS: " + "; ".join(f"{name}: {text}" for name, text in QOS.items())
+             "QoS: " + "; ".join(f"{name}: {qos.describe()}" for name, qos in QOS.items())
+             + " (latched: late subscribers get the last message)"
              + "; `joint_states_qos`: the profile that parameter names.", "",
              "## Services", "", *_table(("service", "type", "modes", "does"),
                                         [(f"`{s.name}`", f"`{s.type}`", ", ".join(s.modes), s.does)
