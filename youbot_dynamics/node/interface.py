@@ -17,6 +17,7 @@ order in which a session lists its topics (and the MCAP its channels).
 from __future__ import annotations
 
 import sys
+import textwrap
 from dataclasses import dataclass
 
 from youbot_dynamics.io.qos import Qos
@@ -155,6 +156,17 @@ SERVICES: tuple[Service, ...] = (
     Service("~/pause", "std_srvs/srv/SetBool", SIMULATE, "pause (true) or resume (false) simulated time"),
 )
 
+
+def offered(mode: str, features: frozenset[str]) -> dict[str, tuple[str, ...]]:
+    """What a node in ``mode`` with the scene ``features`` offers, by kind, in table order (as
+    its ready line lists it): the topics it publishes (latched ones last) and subscribes,
+    and its services."""
+    return {"publishes": tuple(topic.name for latched in (False, True)
+                               for topic in topics_of(mode, "pub", features, latched=latched)),
+            "subscribes": tuple(topic.name for topic in topics_of(mode, "sub", features)),
+            "services": tuple(service.name for service in SERVICES if mode in service.modes)}
+
+
 TIMEOUT_ACTIONS = ("hold", "zero_torque")
 """What the simulator applies once the last effort command is older than the timeout:
 ``hold`` hands control back to the scene's controller (its set point or trajectory; zero
@@ -230,6 +242,28 @@ def check_choice(name: str, value: object) -> str | None:
     return None
 
 
+# ---- dynamics_node --help -------------------------------------------------------------
+def _range_of(name: str, spec: Spec) -> str:
+    """A parameter's allowed values in words: its choices or its (min .. max) range."""
+    if name in CHOICES:
+        return " | ".join(CHOICES[name])
+    return "" if spec.limits is None else f"{spec.limits[0]:g} .. {spec.limits[1]:g}"
+
+
+def parameter_help(width: int = 100) -> str:
+    """The parameter table as ``dynamics_node --help`` prints it: per parameter a line of
+    name, type, default and range (or choices), then its description, wrapped to ``width``."""
+    rows = [(name, type(spec.default).__name__, repr(spec.default), _range_of(name, spec),
+             spec.description + ("" if spec.read_only else " (settable at run time)"))
+            for name, spec in PARAMETERS.items()]
+    widths = [max(len(row[column]) for row in rows) for column in range(3)]
+    lines = ["  " + "  ".join(("name", "type", "default")[c].ljust(widths[c]) for c in range(3)) + "  range"]
+    for *columns, limits, description in rows:
+        lines.append(("  " + "  ".join(c.ljust(w) for c, w in zip(columns, widths)) + "  " + limits).rstrip())
+        lines += textwrap.wrap(description, width, initial_indent=" " * 6, subsequent_indent=" " * 6)
+    return "\n".join(lines)
+
+
 # ---- docs/node.md ----------------------------------------------------------------------
 def _cell(text: object) -> str:
     """``text`` as a Markdown table cell (pipes escaped)."""
@@ -250,11 +284,9 @@ def _topic_row(topic: Topic) -> tuple[object, ...]:
 
 
 def _parameter_row(name: str, spec: Spec) -> tuple[object, ...]:
-    limits = "" if spec.limits is None else f"{spec.limits[0]:g} .. {spec.limits[1]:g}"
-    choices = " | ".join(CHOICES.get(name, ()))
     default = f'`"{spec.default}"`' if isinstance(spec.default, str) else f"`{spec.default!r}`"
     writable = "" if spec.read_only else " (settable at run time)"
-    return f"`{name}`", type(spec.default).__name__, default, choices or limits, spec.description + writable
+    return f"`{name}`", type(spec.default).__name__, default, _range_of(name, spec), spec.description + writable
 
 
 def markdown() -> str:
