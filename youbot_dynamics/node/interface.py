@@ -296,7 +296,8 @@ def markdown() -> str:
              "`dynamics_node` runs in one of two modes (parameter `mode`): **simulate** integrates a scene and "
              "publishes its motion; **inverse** computes joint torques from measured `/joint_states`. Run it with "
              "`ros2 run youbot_dynamics dynamics_node --ros-args --params-file config/dynamics_node.yaml` or "
-             "`python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing`.", "",
+             "`python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing`; `dynamics_node --help` "
+             "prints the parameters below, `dynamics_node --managed` runs it as a lifecycle node (ros.md).", "",
              "Topics are relative names: `--ros-args -r __ns:=/youbot1` moves them under `/youbot1`, except "
              "`/tf`, `/tf_static` and `/diagnostics`, which stay global. Frames carry `frame_prefix`. Stamps are "
              "node time: simulated time in simulate mode, the sender's stamps in inverse mode.", "",
