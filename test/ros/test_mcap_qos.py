@@ -54,9 +54,9 @@ def live_and_recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tup
                 Parameter("scene", value=scene), Parameter("mode", value=mode), Parameter("mcap_path", value=str(mcap))])
             try:
                 for topic, publisher in node.publishers_.items():
-                    name = graph_name(topic)
-                    resolved = node.resolve_topic_name(name)
-                    wait_until(lambda: node.get_publishers_info_by_topic(resolved), what=f"{resolved} on the graph")
+                    resolved = node.resolve_topic_name(graph_name(topic))
+                    wait_until(lambda name=resolved: node.get_publishers_info_by_topic(name),
+                               what=f"{resolved} on the graph")
                     (info,) = node.get_publishers_info_by_topic(resolved)
                     live = {"reliability": named(ReliabilityPolicy, info.qos_profile.reliability),
                             "durability": named(DurabilityPolicy, info.qos_profile.durability),

@@ -56,8 +56,8 @@ from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.io.log_file import (FileSink, LogPathError, LogWriteFailed, describe_os_error, errno_name,
                                          open_exclusive)
 from youbot_dynamics.io.mcap_writer import ChunkedWriter
-from youbot_dynamics.io.qos import DEFAULT, Qos
 from youbot_dynamics.io.messages import TYPESTORE
+from youbot_dynamics.io.qos import DEFAULT, Qos
 
 DEFAULT_CHUNK_SPAN_NS = 1_000_000_000
 """Log time (ns) one chunk may span at most: what a crash loses at most."""

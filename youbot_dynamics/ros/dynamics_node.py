@@ -42,8 +42,17 @@ leaving, the node waits (up to :data:`~youbot_dynamics.ros.process.ACK_TIMEOUT`)
 subscribers have acknowledged every message.
 
 Run: ``ros2 run youbot_dynamics dynamics_node --ros-args --params-file config/dynamics_node.yaml``
-or ``python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing``.
-SIGINT and SIGTERM finalise the logs before the process ends.
+or ``python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing``;
+``--help`` prints the parameters (:mod:`youbot_dynamics.node.usage`, before rclpy is imported
+when run as the ``dynamics_node`` executable). SIGINT and SIGTERM finalise the logs before the
+process ends.
+
+Start-up: configure (the session: scene loaded and compiled, logs opened; publishers,
+subscriptions, services, timers), then activate (latched messages, then samples) and a
+``ready:`` log line of what the node offers (:func:`~youbot_dynamics.node.interface.offered`).
+A run whose ``duration`` exceeds 10 s logs every 10 % of simulated time
+(:mod:`youbot_dynamics.node.progress`); /diagnostics carries ``progress``. ``--managed``
+makes these steps lifecycle transitions (:class:`ManagedDynamicsNode`).
 """
 from __future__ import annotations
 
@@ -188,7 +197,7 @@ class DynamicsNode(Node):
     # ---- output ------------------------------------------------------------------------
     def _create_publishers(self) -> None:
         """A publisher per session topic (latched ones transient local; type and QoS from the
-        interface table), then the latched messages. A topic whose message package is not
+        interface table; the latched messages go out on activation). A topic whose message package is not
         installed (tf2_msgs without ``make``'s build) is left out, with one warning; it is
         still logged."""
         self._unpublished: set[str] = set()
