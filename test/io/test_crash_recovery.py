@@ -33,6 +33,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import read_bag
 from youbot_dynamics.io.mcap_log import McapLogger
+from youbot_dynamics.node.interface import QOS
 from youbot_dynamics.io.mcap_recover import NothingRecovered, default_recovered_path, recover_mcap
 from youbot_dynamics.io.messages import TYPESTORE
 from youbot_dynamics.io.rerun_log import RerunLogger
@@ -49,7 +50,7 @@ def write_run(path: Path, samples: int = 600) -> None:
     with McapLogger(path, chunk_span_ns=SPAN_NS, chunk_wall_s=float("inf")) as log:
         log.add_topic("/clock", "rosgraph_msgs/msg/Clock")
         log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
-        log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", latched=True)
+        log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", qos=QOS["latched"])
         log.write("/tf_static", messages.tf_message(
             [messages.transform_stamped(0, "base_footprint", "base_link", [0, 0, 0.084], [0, 0, 0, 1])]), 0)
         for k in range(samples):

@@ -125,6 +125,8 @@ def test_follow_joint_trajectory_results(tmp_path) -> None:
         assert response.result.error_code == Result.SUCCESSFUL, response.result.error_string
         final = node.session.snapshot.q
         assert np.all(np.abs(final - TARGET) <= 0.002)
+        # the result (a service reply) may overtake the last feedback (a topic): wait for them
+        wait_until(lambda: len(client.feedback) >= 150, what="a feedback per sample of the 1.5 s goal")
         stamps = np.array([f.header.stamp.sec * 10**9 + f.header.stamp.nanosec for f in client.feedback])
         assert client.feedback[0].joint_names == ARM and len(stamps) >= 150
         assert np.all(np.diff(stamps) == 10_000_000)     # one per sample at 100 Hz, none missing

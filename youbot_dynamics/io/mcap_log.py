@@ -57,6 +57,7 @@ from youbot_dynamics.io.log_file import (FileSink, LogPathError, LogWriteFailed,
                                          open_exclusive)
 from youbot_dynamics.io.mcap_writer import ChunkedWriter
 from youbot_dynamics.io.messages import TYPESTORE
+from youbot_dynamics.io.qos import DEFAULT, Qos
 
 DEFAULT_CHUNK_SPAN_NS = 1_000_000_000
 """Log time (ns) one chunk may span at most: what a crash loses at most."""
@@ -66,24 +67,18 @@ DEFAULT_CHUNK_WALL_S = 1.0
 _FINISH_ATTEMPTS = 3
 """Tries at finishing a file after a write error (each giving up the chunks that left no room)."""
 
-DEFAULT_DEPTH = 10
-"""History depth offered for ordinary topics (rclpy's default publisher depth)."""
-
 _INFINITE_DURATION = {"sec": 9223372036, "nsec": 854775807}
 """RMW_DURATION_INFINITE as rosbag2 (Jazzy) writes an unset deadline, lifespan, lease."""
 
 
-def offered_qos_yaml(*, latched: bool) -> str:
-    """The ``offered_qos_profiles`` YAML of a topic, as rosbag2 (Jazzy) writes it.
-
-    Reliable, keep-last; ``latched`` topics (/tf_static) are transient-local with depth 1
-    as tf2's static broadcaster offers them, the others volatile with depth 10.
-    """
+def offered_qos_yaml(qos: Qos) -> str:
+    """The ``offered_qos_profiles`` YAML of a topic offered with ``qos``, as rosbag2 (Jazzy)
+    writes it (one profile; deadline, lifespan and lease infinite, liveliness automatic)."""
     profile = {
-        "history": "keep_last",
-        "depth": 1 if latched else DEFAULT_DEPTH,
-        "reliability": "reliable",
-        "durability": "transient_local" if latched else "volatile",
+        "history": qos.history,
+        "depth": qos.depth,
+        "reliability": qos.reliability,
+        "durability": qos.durability,
         "deadline": dict(_INFINITE_DURATION),
         "lifespan": dict(_INFINITE_DURATION),
         "liveliness": "automatic",
@@ -106,7 +101,8 @@ class McapLogger(ClosesOnExit):
 
         with McapLogger("out/run.mcap") as log:
             log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
-            log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", latched=True)
+            log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage",
+                          qos=Qos("reliable", "transient_local", "keep_last", 1))
             log.write("/joint_states", messages.joint_state(...), log_time_ns=t_ns)
 
     Messages are rosbags typestore instances (see ``io.messages``); times are integer
@@ -159,10 +155,9 @@ class McapLogger(ClosesOnExit):
         """Message type of each added topic."""
         return {topic: msgtype for topic, (_, msgtype) in self._channels.items()}
 
-    def add_topic(self, topic: str, msgtype: str, *, latched: bool = False) -> None:
-        """Declare ``topic`` carrying ``msgtype`` (``pkg/msg/Type``).
-
-        ``latched`` offers transient-local durability (for /tf_static). Adding a topic
+    def add_topic(self, topic: str, msgtype: str, *, qos: Qos = DEFAULT) -> None:
+        """Declare ``topic`` carrying ``msgtype`` (``pkg/msg/Type``), recorded as offered
+        with ``qos`` (the publisher's profile: transient local for /tf_static). Adding a topic
         twice with the same type does nothing; with another type it is an error. After a
         write error (``failure`` set) it does nothing.
         """
@@ -183,7 +178,7 @@ class McapLogger(ClosesOnExit):
                 name=msgtype, encoding="ros2msg", data=ros2msg_schema(msgtype)
             )
         metadata = {
-            "offered_qos_profiles": offered_qos_yaml(latched=latched),
+            "offered_qos_profiles": offered_qos_yaml(qos),
             "topic_type_hash": TYPESTORE.hash_rihs01(msgtype),
         }
         channel = self._writer.register_channel(

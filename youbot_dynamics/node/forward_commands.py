@@ -26,8 +26,6 @@ import numpy as np
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.controller_groups import Hold, Ramp, command_group
 
-INTERFACES = ("position", "velocity", "effort")
-"""The choices of the ``commands_interface`` parameter."""
 
 
 def forward_command(session, group: str, joints: Sequence[str], data: Sequence[float], interface: str) -> None:

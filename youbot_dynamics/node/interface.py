@@ -17,10 +17,10 @@ order in which a session lists its topics (and the MCAP its channels).
 from __future__ import annotations
 
 import sys
+import textwrap
 from dataclasses import dataclass
 
-from youbot_dynamics.node.commands import TIMEOUT_ACTIONS
-from youbot_dynamics.node.forward_commands import INTERFACES as COMMAND_INTERFACES
+from youbot_dynamics.io.qos import Qos
 from youbot_dynamics.node.topics import GLOBAL_TOPICS
 
 Outputs = list[tuple[str, object]]
@@ -31,11 +31,13 @@ MODES = ("simulate", "inverse")
 BOTH = MODES
 SIMULATE, INVERSE = ("simulate",), ("inverse",)
 
-QOS = {"reliable": "reliable, volatile, keep last 1000",
-       "latched": "reliable, transient local, depth 1 (late subscribers get the last message)",
-       "best_effort": "best effort, volatile, keep last 1000",
-       "keep_all": "reliable, volatile, keep all"}
-"""QoS profiles by name (their rclpy form: :mod:`youbot_dynamics.ros.qos`)."""
+QOS = {"reliable": Qos("reliable", "volatile", "keep_last", 1000),
+       "latched": Qos("reliable", "transient_local", "keep_last", 1),
+       "best_effort": Qos("best_effort", "volatile", "keep_last", 1000),
+       "keep_all": Qos("reliable", "volatile", "keep_all", 0)}
+"""QoS profiles by name: the one source of what the node's publishers and subscriptions use
+(their rclpy form: :mod:`youbot_dynamics.ros.qos`) and of what its MCAP records as each
+channel's offered profile. Latched: late subscribers get the last message."""
 SUBSCRIPTION_QOS = ("best_effort", "reliable", "keep_all")
 """The choices of the ``joint_states_qos`` parameter (names of :data:`QOS`)."""
 
@@ -127,8 +129,8 @@ TOPIC_TYPES = {topic.name: topic.type for topic in TOPICS if topic.direction == 
 """Every topic the node publishes and logs, with its type (tf2_msgs has no PyPI wheel:
 ``make`` builds it from interfaces/; without it the node publishes neither /tf nor /tf_static
 but still logs them)."""
-LATCHED_TOPICS = frozenset(topic.name for topic in TOPICS if topic.qos == "latched")
-"""Topics sent once and latched (transient local, depth 1), in the MCAP too."""
+TOPIC_QOS = {topic.name: QOS[topic.qos] for topic in TOPICS if topic.direction == "pub"}
+"""The profile every published topic is offered with, live and in the MCAP."""
 
 
 def topics_of(mode: str, direction: str, features: frozenset[str], latched: bool = False) -> tuple[Topic, ...]:
@@ -189,6 +191,26 @@ ACTIONS: tuple[Action, ...] = (
 """Every action server (:mod:`youbot_dynamics.ros.actions`; the goal logic:
 :mod:`~youbot_dynamics.node.trajectory_goal`, :mod:`~youbot_dynamics.node.gripper_goal`)."""
 
+
+def offered(mode: str, features: frozenset[str]) -> dict[str, tuple[str, ...]]:
+    """What a node in ``mode`` with the scene ``features`` offers, by kind, in table order (as
+    its ready line lists it): the topics it publishes (latched ones last) and subscribes,
+    its services and its action servers."""
+    return {"publishes": tuple(topic.name for latched in (False, True)
+                               for topic in topics_of(mode, "pub", features, latched=latched)),
+            "subscribes": tuple(topic.name for topic in topics_of(mode, "sub", features)),
+            "services": tuple(service.name for service in SERVICES if mode in service.modes),
+            "actions": tuple(action.name for action in ACTIONS
+                             if mode in action.modes and action.when in features)}
+
+
+TIMEOUT_ACTIONS = ("hold", "zero_torque")
+"""What the simulator applies once the last effort command is older than the timeout:
+``hold`` hands control back to the scene's controller (its set point or trajectory; zero
+torque in a scene without a controller), ``zero_torque`` applies zero torque."""
+COMMAND_INTERFACES = ("position", "velocity", "effort")
+"""What ``<controller>/commands`` carries (the ``commands_interface`` parameter), as
+forward_command_controller's interfaces (:mod:`~youbot_dynamics.node.forward_commands`)."""
 AUTO_PREFIX = "auto"
 """``frame_prefix`` value that derives the prefix from the node's namespace."""
 CHOICES = {"mode": MODES, "on_timeout": TIMEOUT_ACTIONS, "joint_states_qos": SUBSCRIPTION_QOS,
@@ -277,6 +299,28 @@ def check_choice(name: str, value: object) -> str | None:
     return None
 
 
+# ---- dynamics_node --help -------------------------------------------------------------
+def _range_of(name: str, spec: Spec) -> str:
+    """A parameter's allowed values in words: its choices or its (min .. max) range."""
+    if name in CHOICES:
+        return " | ".join(CHOICES[name])
+    return "" if spec.limits is None else f"{spec.limits[0]:g} .. {spec.limits[1]:g}"
+
+
+def parameter_help(width: int = 100) -> str:
+    """The parameter table as ``dynamics_node --help`` prints it: per parameter a line of
+    name, type, default and range (or choices), then its description, wrapped to ``width``."""
+    rows = [(name, type(spec.default).__name__, repr(spec.default), _range_of(name, spec),
+             spec.description + ("" if spec.read_only else " (settable at run time)"))
+            for name, spec in PARAMETERS.items()]
+    widths = [max(len(row[column]) for row in rows) for column in range(3)]
+    lines = ["  " + "  ".join(("name", "type", "default")[c].ljust(widths[c]) for c in range(3)) + "  range"]
+    for *columns, limits, description in rows:
+        lines.append(("  " + "  ".join(c.ljust(w) for c, w in zip(columns, widths)) + "  " + limits).rstrip())
+        lines += textwrap.wrap(description, width, initial_indent=" " * 6, subsequent_indent=" " * 6)
+    return "\n".join(lines)
+
+
 # ---- docs/node.md ----------------------------------------------------------------------
 def _cell(text: object) -> str:
     """``text`` as a Markdown table cell (pipes escaped)."""
@@ -297,11 +341,9 @@ def _topic_row(topic: Topic) -> tuple[object, ...]:
 
 
 def _parameter_row(name: str, spec: Spec) -> tuple[object, ...]:
-    limits = "" if spec.limits is None else f"{spec.limits[0]:g} .. {spec.limits[1]:g}"
-    choices = " | ".join(CHOICES.get(name, ()))
     default = f'`"{spec.default}"`' if isinstance(spec.default, str) else f"`{spec.default!r}`"
     writable = "" if spec.read_only else " (settable at run time)"
-    return f"`{name}`", type(spec.default).__name__, default, choices or limits, spec.description + writable
+    return f"`{name}`", type(spec.default).__name__, default, _range_of(name, spec), spec.description + writable
 
 
 def markdown() -> str:
@@ -311,13 +353,15 @@ def markdown() -> str:
              "`dynamics_node` runs in one of two modes (parameter `mode`): **simulate** integrates a scene and "
              "publishes its motion; **inverse** computes joint torques from measured `/joint_states`. Run it with "
              "`ros2 run youbot_dynamics dynamics_node --ros-args --params-file config/dynamics_node.yaml` or "
-             "`python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing`.", "",
+             "`python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing`; `dynamics_node --help` "
+             "prints the parameters below, `dynamics_node --managed` runs it as a lifecycle node (ros.md).", "",
              "Topics are relative names: `--ros-args -r __ns:=/youbot1` moves them under `/youbot1`, except "
              "`/tf`, `/tf_static` and `/diagnostics`, which stay global. Frames carry `frame_prefix`. Stamps are "
              "node time: simulated time in simulate mode, the sender's stamps in inverse mode.", "",
              "## Topics", "", *_table(("topic", "dir", "type", "QoS", "modes", "carries"),
                                       [_topic_row(topic) for topic in TOPICS]), "",
-             "QoS: " + "; ".join(f"{name}: {text}" for name, text in QOS.items())
+             "QoS: " + "; ".join(f"{name}: {qos.describe()}" for name, qos in QOS.items())
+             + " (latched: late subscribers get the last message)"
              + "; `joint_states_qos`: the profile that parameter names.", "",
              "## Services", "", *_table(("service", "type", "modes", "does"),
                                         [(f"`{s.name}`", f"`{s.type}`", ", ".join(s.modes), s.does)

@@ -14,7 +14,7 @@ from youbot_dynamics.io.log_file import LogWriteFailed
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.interface import LATCHED_TOPICS, TOPIC_TYPES, Outputs
+from youbot_dynamics.node.interface import TOPIC_QOS, TOPIC_TYPES, Outputs
 from youbot_dynamics.scene.schema import Scene
 
 
@@ -33,8 +33,9 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
 
 
 class Recorder:
-    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (those in
-    :data:`LATCHED_TOPICS` offered latched), and a Rerun recording (``rrd_path``) of the
+    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (each recorded as
+    offered with its profile in the interface table, :data:`TOPIC_QOS`, as the node's
+    publishers offer it), and a Rerun recording (``rrd_path``) of the
     robot, the scene's static geometry and (simulate mode) its free bodies; either may be
     None. ``close`` finalises both and may be called more than once."""
 
@@ -43,7 +44,7 @@ class Recorder:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
             for topic in topics:
-                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic in LATCHED_TOPICS)
+                self.mcap.add_topic(topic, TOPIC_TYPES[topic], qos=TOPIC_QOS[topic])
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
             geometries=[g for g in scene.geometries if mode == "simulate" or g.owner != "body"],
