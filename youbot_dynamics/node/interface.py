@@ -42,7 +42,8 @@ FEATURES = {"robot": "the scene has a robot",
             "several_robots": "the robot is composed of several robots",
             "moving_base": "the scene has a moving base",
             "free_bodies": "the scene has free bodies",
-            "static_geometry": "the scene has static or link geometry"}
+            "static_geometry": "the scene has static or link geometry",
+            "wrist_sensor": "the scene has a wrist force/torque sensor (scene key wrist_sensor, default the palm)"}
 """Scene features a topic may need (``Topic.when``)."""
 
 
@@ -84,6 +85,12 @@ TOPICS: tuple[Topic, ...] = (
           "the free bodies' poses in the root frame, in the scene's order (names: free_bodies in /diagnostics)"),
     Topic("/free_bodies_markers", "pub", "visualization_msgs/msg/MarkerArray", "reliable", SIMULATE, "free_bodies",
           "each free body's shape at its pose (namespace: the body's name)"),
+    Topic("/wrist_wrench", "pub", "geometry_msgs/msg/WrenchStamped", "reliable", SIMULATE, "wrist_sensor",
+          "force (N) and torque (N m) the arm exerts on the hand across the wrist_sensor link's joint, about that "
+          "link's origin in its frame (at rest: the weight of the hand and its load, pointing up)"),
+    Topic("/imu", "pub", "sensor_msgs/msg/Imu", "reliable", SIMULATE, "moving_base",
+          "base_link's angular velocity (rad/s) and proper acceleration (m/s^2; +9.81 up at rest) in base_link, its "
+          "orientation in the world; covariances 0 (noise-free simulation)"),
     Topic("/tf", "pub", "tf2_msgs/msg/TFMessage", "reliable", BOTH, None,
           "every moving link in its parent, odom -> base_footprint (moving base), root frame -> each free body"),
     Topic("/odom", "pub", "nav_msgs/msg/Odometry", "reliable", INVERSE, "moving_base",

@@ -51,7 +51,8 @@ class Session(ClosesOnExit):
     the /diagnostics status. ``features`` are the scene's (keys of
     :data:`~youbot_dynamics.node.interface.FEATURES`), ``topics`` those published per sample,
     in order. Subclasses say their ``mode`` and keep ``stamp_ns``, the stamp (ns) of their
-    latest output; ``moving_base`` says whether the scene's base moves."""
+    latest output; ``moving_base`` says whether the scene's base moves; ``sensors`` adds the
+    sensor features the scene has (``wrist_sensor``)."""
 
     mode: str
     stamp_ns: int
@@ -60,7 +61,8 @@ class Session(ClosesOnExit):
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
                  mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float,
-                 frame_prefix: str, node_name: str, moving_base: bool = False, moving_root: bool = False) -> None:
+                 frame_prefix: str, node_name: str, moving_base: bool = False, moving_root: bool = False,
+                 sensors: frozenset[str] = frozenset()) -> None:
         self.scene, self.robot, self.node_name = scene, robot, node_name
         self.counters = InputCounters()
         self.watchdog = Watchdog(callback_budget)
@@ -70,7 +72,7 @@ class Session(ClosesOnExit):
             ("robot", self.frames.has_robot),
             ("several_robots", self.frames.has_robot and len(self.frames.links.ee_links) > 1),
             ("moving_base", moving_base), ("free_bodies", bool(self.frames.body_shapes)),
-            ("static_geometry", bool(self.frames.static_geometry))) if present)
+            ("static_geometry", bool(self.frames.static_geometry))) if present) | sensors
         self.topics = published(self.mode, self.features)
         latched = {"/tf_static": self.frames.tf_static, "/scene_markers": self.frames.scene_markers,
                    "/robot_description": lambda: messages.string(scene.urdf)}
