@@ -13,7 +13,7 @@ import numpy as np
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.interface import LATCHED_TOPICS, TOPIC_TYPES, Outputs
+from youbot_dynamics.node.interface import LATCHED_TOPICS, Outputs, topic_type
 from youbot_dynamics.scene.schema import Scene
 
 
@@ -42,7 +42,7 @@ class Recorder:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
             for topic in topics:
-                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic in LATCHED_TOPICS)
+                self.mcap.add_topic(topic, topic_type(topic), latched=topic in LATCHED_TOPICS)
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
             geometries=[g for g in scene.geometries if mode == "simulate" or g.owner != "body"],

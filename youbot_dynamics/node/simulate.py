@@ -81,10 +81,13 @@ class SimulationSession(Session):
             self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix)
             frame_id = frame_id or self.moving_base.odometry.odom_frame
         moving = self.moving_base is not None
-        sensors = frozenset({"wrist_sensor"} if self.simulator.model.sensors.wrist is not None else ())
+        sensors = frozenset(feature for feature, present in (
+            ("wrist_sensor", self.simulator.model.sensors.wrist is not None),
+            ("contact_pairs", bool(scene.contacts))) if present)
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget,
-                         frame_prefix, node_name, moving_base=moving, moving_root=moving, sensors=sensors)
-        self._sensors = SensorMessages(self.simulator.model.sensors, self.frames.prefix, self.topics)
+                         frame_prefix, node_name, moving_base=moving, moving_root=moving, sensors=sensors,
+                         pairs=[(pair.geometry1, pair.geometry2) for pair in scene.contacts])
+        self._sensors = SensorMessages(self.simulator.model, self.frames.prefix, self.frames.root_frame, self.topics)
         if self.moving_base is not None:
             self.moving_base.counters = self.counters
         self.step_ns = max(1, round(NS_PER_S / publish_rate))

@@ -72,7 +72,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.configure import session_from_parameters
-from youbot_dynamics.node.interface import SERVICES, Outputs, Topic, check_choice, topics_of
+from youbot_dynamics.node.interface import SERVICES, Outputs, Topic, check_choice, instances, topics_of
 from youbot_dynamics.node.pacing import Pacing, RealTimeFactor
 from youbot_dynamics.node.topics import graph_name
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr
@@ -134,7 +134,8 @@ class DynamicsNode(Node):
             except ImportError:
                 self._unpublished.add(topic.name)
                 continue
-            self.publishers_[topic.name] = self.create_publisher(cls, graph_name(topic.name), PROFILES[topic.qos])
+            for name in instances(topic, self.session.topics):  # the per-pair topics: one each
+                self.publishers_[name] = self.create_publisher(cls, graph_name(name), PROFILES[topic.qos])
         if self._unpublished:
             self.get_logger().warning(f"not publishing {', '.join(sorted(self._unpublished))}: their message "
                                       "package is not installed (tf2_msgs: `make` builds it from interfaces/, "
