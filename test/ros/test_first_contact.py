@@ -87,7 +87,7 @@ def test_a_long_run_says_ready_reports_progress_and_says_done(tmp_path: Path) ->
     log = result.stdout + result.stderr
     assert result.returncode == 0, log
     (ready,) = [line.split("ready: ", 1)[1] for line in log.splitlines() if "ready: " in line]
-    features = frozenset({"robot", "arm_controller"})   # arm_ptp moves its arm, not its fingers
+    features = frozenset({"robot", "arm_controller", "wrist_sensor"})   # arm_ptp: its arm moves, not its fingers
     expected = {kind: [name if name in ("/tf", "/tf_static", "/diagnostics") else
                        "/yb/dynamics_node/" + name[2:] if name.startswith("~/") else "/yb/" + name.lstrip("/")
                        for name in names]

@@ -16,8 +16,10 @@ order in which a session lists its topics (and the MCAP its channels).
 """
 from __future__ import annotations
 
+import re
 import sys
 import textwrap
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from youbot_dynamics.io.qos import Qos
@@ -47,7 +49,9 @@ FEATURES = {"robot": "the scene has a robot",
             "free_bodies": "the scene has free bodies",
             "static_geometry": "the scene has static or link geometry",
             "arm_controller": "the scene moves arm joints (arm_joints)",
-            "gripper_controller": "the scene moves gripper joints (gripper_joints)"}
+            "gripper_controller": "the scene moves gripper joints (gripper_joints)",
+            "wrist_sensor": "the scene has a wrist force/torque sensor (scene key wrist_sensor, default the palm)",
+            "contact_pairs": "the scene declares contact pairs"}
 """Scene features a topic may need (``Topic.when``)."""
 
 
@@ -89,6 +93,16 @@ TOPICS: tuple[Topic, ...] = (
           "the free bodies' poses in the root frame, in the scene's order (names: free_bodies in /diagnostics)"),
     Topic("/free_bodies_markers", "pub", "visualization_msgs/msg/MarkerArray", "reliable", SIMULATE, "free_bodies",
           "each free body's shape at its pose (namespace: the body's name)"),
+    Topic("/wrist_wrench", "pub", "geometry_msgs/msg/WrenchStamped", "reliable", SIMULATE, "wrist_sensor",
+          "force (N) and torque (N m) the arm exerts on the hand across the wrist_sensor link's joint, about that "
+          "link's origin in its frame (at rest: the weight of the hand and its load, pointing up)"),
+    Topic("/imu", "pub", "sensor_msgs/msg/Imu", "reliable", SIMULATE, "moving_base",
+          "base_link's angular velocity (rad/s) and proper acceleration (m/s^2; +9.81 up at rest) in base_link, its "
+          "orientation in the world; covariances 0 (noise-free simulation)"),
+    Topic("/contacts/<pair>", "pub", "geometry_msgs/msg/WrenchStamped", "reliable", SIMULATE, "contact_pairs",
+          "one topic per contact pair, /contacts/<first>/<second> (geometry names): the contact force (N) and torque "
+          "(N m) on the second geometry about its frame's origin (its link or free body; the root frame for world "
+          "geometry), in that frame; zero while apart"),
     Topic("/tf", "pub", "tf2_msgs/msg/TFMessage", "reliable", BOTH, None,
           "every moving link in its parent, odom -> base_footprint (moving base), root frame -> each free body"),
     Topic("/odom", "pub", "nav_msgs/msg/Odometry", "reliable", INVERSE, "moving_base",
@@ -125,12 +139,47 @@ TOPICS: tuple[Topic, ...] = (
 joints four times over; 1 MiB a trajectory of MAX_TRAJECTORY_POINTS (1000) points of 16
 joints with positions, velocities, accelerations and efforts (0.5 MB)."""
 
+PAIR_TOPIC = "/contacts/<pair>"
+"""The table's name of the per-pair topics (:func:`pair_topic` names each)."""
 TOPIC_TYPES = {topic.name: topic.type for topic in TOPICS if topic.direction == "pub"}
 """Every topic the node publishes and logs, with its type (tf2_msgs has no PyPI wheel:
 ``make`` builds it from interfaces/; without it the node publishes neither /tf nor /tf_static
 but still logs them)."""
 TOPIC_QOS = {topic.name: QOS[topic.qos] for topic in TOPICS if topic.direction == "pub"}
 """The profile every published topic is offered with, live and in the MCAP."""
+
+
+def pair_topic(first: str, second: str) -> str:
+    """The topic of the contact pair of geometries ``first`` and ``second``:
+    /contacts/<first>/<second>, each name made a valid ROS name token (a character other
+    than a letter, digit or underscore becomes _, a leading digit gets a _ before it)."""
+    def token(name: str) -> str:
+        name = re.sub(r"[^A-Za-z0-9_]", "_", name)
+        return "_" + name if not name or name[0].isdigit() else name
+    return f"/contacts/{token(first)}/{token(second)}"
+
+
+def table_topic(name: str) -> str:
+    """The table's name of a published topic (a per-pair topic's: :data:`PAIR_TOPIC`)."""
+    return PAIR_TOPIC if name.startswith("/contacts/") else name
+
+
+def topic_type(name: str) -> str:
+    """The message type of a published topic (a per-pair topic's: :data:`PAIR_TOPIC`'s)."""
+    return TOPIC_TYPES[table_topic(name)]
+
+
+def topic_qos(name: str) -> Qos:
+    """The profile a published topic is offered with, live and in the MCAP."""
+    return TOPIC_QOS[table_topic(name)]
+
+
+def instances(topic: Topic, names: Sequence[str]) -> tuple[str, ...]:
+    """The topics ``topic`` stands for among a session's ``names``: the per-pair topics for
+    :data:`PAIR_TOPIC`, the topic itself otherwise."""
+    if topic.name != PAIR_TOPIC:
+        return (topic.name,)
+    return tuple(name for name in names if name.startswith("/contacts/"))
 
 
 def topics_of(mode: str, direction: str, features: frozenset[str], latched: bool = False) -> tuple[Topic, ...]:
@@ -142,9 +191,11 @@ def topics_of(mode: str, direction: str, features: frozenset[str], latched: bool
                  and (direction == "sub" or (topic.qos == "latched") == latched))
 
 
-def published(mode: str, features: frozenset[str]) -> tuple[str, ...]:
-    """Names of the topics published per sample (not latched), in table order."""
-    return tuple(topic.name for topic in topics_of(mode, "pub", features))
+def published(mode: str, features: frozenset[str], pairs: Sequence[tuple[str, str]] = ()) -> tuple[str, ...]:
+    """Names of the topics published per sample (not latched), in table order; the contact
+    ``pairs`` ((first, second) geometry names) stand for :data:`PAIR_TOPIC`, in their order."""
+    return tuple(name for topic in topics_of(mode, "pub", features)
+                 for name in ([pair_topic(*pair) for pair in pairs] if topic.name == PAIR_TOPIC else [topic.name]))
 
 
 @dataclass(frozen=True)
@@ -192,12 +243,14 @@ ACTIONS: tuple[Action, ...] = (
 :mod:`~youbot_dynamics.node.trajectory_goal`, :mod:`~youbot_dynamics.node.gripper_goal`)."""
 
 
-def offered(mode: str, features: frozenset[str]) -> dict[str, tuple[str, ...]]:
+def offered(mode: str, features: frozenset[str], published: Sequence[str] = ()) -> dict[str, tuple[str, ...]]:
     """What a node in ``mode`` with the scene ``features`` offers, by kind, in table order (as
-    its ready line lists it): the topics it publishes (latched ones last) and subscribes,
-    its services and its action servers."""
-    return {"publishes": tuple(topic.name for latched in (False, True)
-                               for topic in topics_of(mode, "pub", features, latched=latched)),
+    its ready line lists it): the topics it publishes (latched ones last; the per-pair topics
+    among ``published``, the session's topic names) and subscribes, its services and its
+    action servers."""
+    return {"publishes": tuple(name for latched in (False, True)
+                               for topic in topics_of(mode, "pub", features, latched=latched)
+                               for name in instances(topic, published)),
             "subscribes": tuple(topic.name for topic in topics_of(mode, "sub", features)),
             "services": tuple(service.name for service in SERVICES if mode in service.modes),
             "actions": tuple(action.name for action in ACTIONS

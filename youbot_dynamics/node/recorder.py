@@ -14,7 +14,7 @@ from youbot_dynamics.io.log_file import LogWriteFailed
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.interface import TOPIC_QOS, TOPIC_TYPES, Outputs
+from youbot_dynamics.node.interface import Outputs, topic_qos, topic_type
 from youbot_dynamics.scene.schema import Scene
 
 
@@ -44,7 +44,7 @@ class Recorder:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
             for topic in topics:
-                self.mcap.add_topic(topic, TOPIC_TYPES[topic], qos=TOPIC_QOS[topic])
+                self.mcap.add_topic(topic, topic_type(topic), qos=topic_qos(topic))
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
             geometries=[g for g in scene.geometries if mode == "simulate" or g.owner != "body"],

@@ -28,7 +28,7 @@ has no joints and no end effector, and an empty or identity message would read a
 """
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from youbot_dynamics.io import messages
@@ -51,7 +51,9 @@ class Session(ClosesOnExit):
     the /diagnostics status. ``features`` are the scene's (keys of
     :data:`~youbot_dynamics.node.interface.FEATURES`), ``topics`` those published per sample,
     in order. Subclasses say their ``mode`` and keep ``stamp_ns``, the stamp (ns) of their
-    latest output; ``moving_base`` says whether the scene's base moves."""
+    latest output; ``moving_base`` says whether the scene's base moves; ``sensors`` adds the
+    sensor features the scene has (``wrist_sensor``, ``contact_pairs``), ``pairs`` the contact
+    pairs' (first, second) geometry names, one topic each."""
 
     mode: str
     stamp_ns: int
@@ -63,7 +65,8 @@ class Session(ClosesOnExit):
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
                  mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float,
-                 frame_prefix: str, node_name: str, moving_base: bool = False, moving_root: bool = False) -> None:
+                 frame_prefix: str, node_name: str, moving_base: bool = False, moving_root: bool = False,
+                 sensors: frozenset[str] = frozenset(), pairs: Sequence[tuple[str, str]] = ()) -> None:
         self.scene, self.robot, self.node_name = scene, robot, node_name
         self.counters = InputCounters()
         self.watchdog = Watchdog(callback_budget)
@@ -73,8 +76,8 @@ class Session(ClosesOnExit):
             ("robot", self.frames.has_robot),
             ("several_robots", self.frames.has_robot and len(self.frames.links.ee_links) > 1),
             ("moving_base", moving_base), ("free_bodies", bool(self.frames.body_shapes)),
-            ("static_geometry", bool(self.frames.static_geometry))) if present)
-        self.topics = published(self.mode, self.features)
+            ("static_geometry", bool(self.frames.static_geometry))) if present) | sensors
+        self.topics = published(self.mode, self.features, pairs)
         latched = {"/tf_static": self.frames.tf_static, "/scene_markers": self.frames.scene_markers,
                    "/robot_description": lambda: messages.string(scene.urdf)}
         self.latched: Outputs = [(topic.name, latched[topic.name]())

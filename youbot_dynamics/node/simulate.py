@@ -12,7 +12,8 @@ is recorded as an event: /diagnostics (also logged) carries ``resets`` and
 Free bodies are published on /free_bodies (their names, in that order, are the
 ``free_bodies`` value of /diagnostics) and drawn in the Rerun recording as their shapes. A
 moving base (:mod:`youbot_dynamics.node.mobile_base`) adds /cmd_vel, /odom and
-/base_pose_ground_truth.
+/base_pose_ground_truth; the sensors (:mod:`youbot_dynamics.node.sensors`) /wrist_wrench and
+/imu.
 """
 from __future__ import annotations
 
@@ -33,6 +34,7 @@ from youbot_dynamics.node.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands,
 from youbot_dynamics.node.frames import SampleFrames
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.mobile_base import MobileBase
+from youbot_dynamics.node.sensors import SensorMessages
 from youbot_dynamics.node.session import Session
 from youbot_dynamics.scene.schema import Scene
 from youbot_dynamics.sim.simulator import Simulator, Snapshot
@@ -79,8 +81,13 @@ class SimulationSession(Session):
             self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix)
             frame_id = frame_id or self.moving_base.odometry.odom_frame
         moving = self.moving_base is not None
+        sensors = frozenset(feature for feature, present in (
+            ("wrist_sensor", self.simulator.model.sensors.wrist is not None),
+            ("contact_pairs", bool(scene.contacts))) if present)
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget,
-                         frame_prefix, node_name, moving_base=moving, moving_root=moving)
+                         frame_prefix, node_name, moving_base=moving, moving_root=moving, sensors=sensors,
+                         pairs=[(pair.geometry1, pair.geometry2) for pair in scene.contacts])
+        self._sensors = SensorMessages(self.simulator.model, self.frames.prefix, self.frames.root_frame, self.topics)
         if self.moving_base is not None:
             self.moving_base.counters = self.counters
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
@@ -123,7 +130,7 @@ class SimulationSession(Session):
         if self.moving_base is not None:
             self.moving_base.reset()
         self.k, self.failure, self.wall_time, self._pending, self._prebuilt = 0, None, 0.0, [], []
-        self.snapshot = self.simulator.snapshot()
+        self.snapshot = self.simulator.snapshot(self._sensors.wanted)
         self.energy0, self.energy_error = self.snapshot.energy, 0.0
         self._started = False
 
@@ -178,7 +185,8 @@ class SimulationSession(Session):
                 state.reference = dataclasses.replace(state.reference, base_twist=self.moving_base.twist(self.t))
             start = time.perf_counter()
             try:
-                self._pending = self.simulator.advance_through(times, self.commands.torque(self.t))[::-1]
+                self._pending = self.simulator.advance_through(times, self.commands.torque(self.t),
+                                                               self._sensors.wanted)[::-1]
             except DivergenceError as error:
                 self.failure = f"diverged after t = {self.t:.6f} s: {error}"
                 return []
@@ -247,6 +255,7 @@ class SimulationSession(Session):
         if bodies is not None and "/free_bodies_markers" in wanted:
             columns.append(("/free_bodies_markers",
                             self.frames.free_body_markers(stamps, [s.bodies for s in snapshots])))
+        columns += self._sensors.columns(stamps, snapshots, wanted)
         return columns
 
     def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None = None) -> Outputs:

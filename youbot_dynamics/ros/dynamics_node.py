@@ -84,7 +84,8 @@ from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.configure import session_from_parameters
 from youbot_dynamics.node import usage
-from youbot_dynamics.node.interface import SERVICES, Outputs, Topic, check_choice, offered, topics_of
+from youbot_dynamics.node.interface import (SERVICES, Outputs, Topic, check_choice, instances, offered,
+                                            topics_of)
 from youbot_dynamics.node.inverse_session import InverseSession
 from youbot_dynamics.node.pacing import Pacing, RealTimeFactor
 from youbot_dynamics.node.progress import Progress
@@ -172,7 +173,8 @@ class DynamicsNode(Node):
         parts = []
         controllers = set() if self.controllers is None else {
             group for group, joints in self.controllers.joints.items() if joints}   # their actions and commands
-        for kind, names in offered(self.session.mode, self.session.features | controllers).items():
+        for kind, names in offered(self.session.mode, self.session.features | controllers,
+                                   self.session.topics).items():
             resolve = self.resolve_service_name if kind == "services" else self.resolve_topic_name
             resolved = [resolve(graph_name(name)) for name in names if name not in self._unpublished]
             parts.append(f"{kind} {', '.join(resolved) or 'none'}")
@@ -215,7 +217,8 @@ class DynamicsNode(Node):
             except ImportError:
                 self._unpublished.add(topic.name)
                 continue
-            self.publishers_[topic.name] = self.create_publisher(cls, graph_name(topic.name), PROFILES[topic.qos])
+            for name in instances(topic, self.session.topics):  # the per-pair topics: one each
+                self.publishers_[name] = self.create_publisher(cls, graph_name(name), PROFILES[topic.qos])
         if self._unpublished:
             self.get_logger().warning(f"not publishing {', '.join(sorted(self._unpublished))}: their message "
                                       "package is not installed (tf2_msgs: `make` builds it from interfaces/, "

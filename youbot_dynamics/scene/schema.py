@@ -38,6 +38,8 @@ Keys (units SI, angles rad; joint values are mappings by joint name)::
       energy_tolerance: J           # conservative scenes: allowed energy growth
     duration: s
     outputs: {rate: Hz, record: [q, v, z, base, base_v, tau, energy, ee_position]}
+    wrist_sensor: link | none       # the force/torque sensor at this link's joint to its parent
+                                    # (default: the first *gripper_palm_link, if any)
     robot: none | {compose: [...]}  # no robot, or several composed into one (model/compose.py)
     base: {mode: fixed | kinematic | dynamic, ...}   # the moving base (scene/base.py)
     free_bodies: [...]              # rigid objects (see scene/contacts.py for these four)
@@ -84,7 +86,7 @@ RECORDABLE = ("q", "v", "z", "base", "base_v", "tau", "energy", "ee_position")
 FRICTION_DEFAULTS = ("urdf", "none")
 CONTACT_SECTIONS = ("free_bodies", "world", "geometry", "contacts")
 TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "gravity", "friction",
-            "controller", "integrator", "duration", "outputs", "base", *CONTACT_SECTIONS)
+            "controller", "integrator", "duration", "outputs", "base", "wrist_sensor", *CONTACT_SECTIONS)
 #: The source of a scene given as a mapping without a label.
 DICT_SOURCE = "<dict>"
 
@@ -186,6 +188,8 @@ class Scene:
     geometries: tuple = ()
     contacts: tuple[ContactPairSpec, ...] = ()
     base: BaseSpec = BaseSpec()
+    wrist_sensor: str | None = None
+    """The link whose joint to its parent holds the wrist force/torque sensor (None: none)."""
     uncertain: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
     urdf_document: URDFDocument | None = dataclasses.field(default=None, compare=False, repr=False)
 
@@ -310,7 +314,7 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
         locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0), gravity=_frozen(gravity),
         friction_default=friction_default, friction=MappingProxyType(joint_friction), controller=controller,
         integrator=integrator, duration=duration, outputs=outputs,
-        base=read_base(reader, data.get("base"), robot))
+        base=read_base(reader, data.get("base"), robot), wrist_sensor=_wrist_sensor(reader, data, robot))
     try:
         scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
     except UserInputError as error:
@@ -319,6 +323,23 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     reader.unused_values()
     return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts,
                                uncertain=MappingProxyType(dict(reader.uncertain)))
+
+
+WRIST_SENSOR_DEFAULT = "gripper_palm_link"
+"""The link of the default wrist sensor (the youBot's palm; the first robot's when composed)."""
+
+
+def _wrist_sensor(reader: SceneReader, data: Mapping[str, Any], robot: Robot) -> str | None:
+    """The ``wrist_sensor`` key: a link of the robot, or ``none``; absent: the first link
+    named (or prefixed) ``gripper_palm_link``, if the robot has one."""
+    value = data.get("wrist_sensor")
+    if value is None:
+        return next((link for link in robot.link_names if link.endswith(WRIST_SENSOR_DEFAULT)), None)
+    if value == "none":
+        return None
+    if not isinstance(value, str) or value not in robot.link_names:
+        raise SceneError(reader.source, "wrist_sensor", f"{value!r} is no link of the robot (a link name or none)")
+    return value
 
 
 def _full_robot(reader: SceneReader, data: Mapping[str, Any], base_dir: Path | None

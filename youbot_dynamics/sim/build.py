@@ -39,6 +39,7 @@ from youbot_dynamics.sim.controllers import Control, ControllerCallback, Referen
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
 from youbot_dynamics.sim.mobile_base import POSE_LABELS, TWIST_LABELS, BaseModel, planar_robot
 from youbot_dynamics.sim.model import BLOCKS, SimModel
+from youbot_dynamics.sim.sensors import SensorModel
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
@@ -79,7 +80,8 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
         passive=passive, ee_frame=plant.frame_id(robot.end_effectors[0]),
         velocity_index=velocity_index(layout, scene, base), base=base,
         slices=MappingProxyType({symbol: layout.slice(symbol) for symbol in BLOCKS}),
-        coordinates=tuple(spec.rotation_coordinates for spec in scene.free_bodies))
+        coordinates=tuple(spec.rotation_coordinates for spec in scene.free_bodies),
+        sensors=SensorModel(plant, scene.wrist_sensor, contact, base is not None, scene.urdf))
 
 
 # ---- the plant and the base --------------------------------------------------------------------
