@@ -76,8 +76,8 @@ class SimulationSession(Session):
                  frame_prefix: str = "", node_name: str = "dynamics_node") -> None:
         self.simulator = Simulator(scene, scene.pinned_integrator())
         if self.simulator.model.base is not None:
-            self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix)
-            frame_id = frame_id or self.moving_base.odometry.odom_frame
+            self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix,
+                                          self.simulator.robot.root_link)
         moving = self.moving_base is not None
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget,
                          frame_prefix, node_name, moving_base=moving, moving_root=moving)
@@ -209,19 +209,22 @@ class SimulationSession(Session):
         """The messages of the topics in ``wanted`` of N samples at ``stamps`` (ns), built
         together, with each sample's kinematics (one pass per sample feeds /tf, /ee_pose and
         the Rerun sample; none when nothing takes them) and its free bodies' rows. A moving
-        base's outputs advance its odometry: one sample at a time. Raises MessageFieldError."""
+        base's outputs advance its odometry: one sample at a time; its rows (odom ->
+        base_footprint, odom -> world) place /ee_pose(s) and go on /tf. Raises
+        MessageFieldError."""
         bodies = self.frames.body_poses([snapshot.bodies for snapshot in snapshots]) if self.frames.body_shapes \
             else None
         samples = [self.frames.links.at(snapshot.q) for snapshot in snapshots] \
             if self.frames.has_robot and self.kinematics_wanted else None
+        odometry, base = [], None
+        if self.moving_base is not None:     # always: it advances the odometry
+            odometry, rows = self.moving_base.outputs(stamps[0], self.scene_time, snapshots[0])
+            base = rows[np.newaxis]
         per_sample: list[Outputs] = [[] for _ in snapshots]
-        for topic, built in self._motion_messages(stamps, snapshots, samples, bodies):
+        for topic, built in self._motion_messages(stamps, snapshots, samples, bodies, base):
             for outputs, message in zip(per_sample, built):
                 outputs.append((topic, message))
-        base = None
-        if self.moving_base is not None:     # always: it advances the odometry
-            odometry, base = self.moving_base.outputs(stamps[0], self.scene_time, snapshots[0])
-            per_sample[0] += [(topic, message) for topic, message in odometry if topic in self.wanted]
+        per_sample[0] += [(topic, message) for topic, message in odometry if topic in self.wanted]
         if "/tf" in self.wanted:
             for outputs, message in zip(per_sample, self.frames.tf(stamps, samples, bodies, base)):
                 outputs.append(("/tf", message))
@@ -229,11 +232,11 @@ class SimulationSession(Session):
                 for k, outputs in enumerate(per_sample)]
 
     def _motion_messages(self, stamps: Sequence[int], snapshots: Sequence[Snapshot],
-                         samples: Sequence[SampleFrames] | None, bodies: np.ndarray | None
-                         ) -> list[tuple[str, list[object]]]:
+                         samples: Sequence[SampleFrames] | None, bodies: np.ndarray | None,
+                         base: np.ndarray | None) -> list[tuple[str, list[object]]]:
         """(topic, its N messages) of the wanted topics before the base's and /tf: /clock,
-        /joint_states, /ee_pose(s) (from the kinematics ``samples``), /free_bodies and
-        /free_bodies_markers (from the body rows ``bodies``)."""
+        /joint_states, /ee_pose(s) (from the kinematics ``samples`` and a moving base's rows
+        ``base``), /free_bodies and /free_bodies_markers (from the body rows ``bodies``)."""
         wanted = self.wanted
         columns: list[tuple[str, list[object]]] = []
         if "/clock" in wanted:
@@ -241,7 +244,7 @@ class SimulationSession(Session):
         if "/joint_states" in wanted:
             columns.append(("/joint_states", self._joint_states_of(stamps, snapshots)))
         if samples is not None:
-            columns += self.frames.ee_messages(stamps, samples, wanted)
+            columns += self.frames.ee_messages(stamps, samples, wanted, base)
         if bodies is not None and "/free_bodies" in wanted:
             columns.append(("/free_bodies", self.frames.free_bodies(stamps, bodies)))
         if bodies is not None and "/free_bodies_markers" in wanted:
