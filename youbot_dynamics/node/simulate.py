@@ -30,7 +30,7 @@ from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.node.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                            follow, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.node.frames import SampleFrames
+from youbot_dynamics.node.frames import SampleFrames, composed_rows
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.mobile_base import MobileBase
 from youbot_dynamics.node.session import Session
@@ -205,7 +205,7 @@ class SimulationSession(Session):
         return [(self.wanted, *sample) for sample in reversed(built)]
 
     def _sample_messages(self, snapshots: Sequence[Snapshot], stamps: Sequence[int]
-                         ) -> list[tuple[Outputs, SampleFrames | None, np.ndarray | None]]:
+                         ) -> list[tuple[Outputs, SampleFrames | None, np.ndarray | None, np.ndarray | None]]:
         """The messages of the topics in ``wanted`` of N samples at ``stamps`` (ns), built
         together, with each sample's kinematics (one pass per sample feeds /tf, /ee_pose and
         the Rerun sample; none when nothing takes them) and its free bodies' rows. A moving
@@ -228,8 +228,8 @@ class SimulationSession(Session):
         if "/tf" in self.wanted:
             for outputs, message in zip(per_sample, self.frames.tf(stamps, samples, bodies, base)):
                 outputs.append(("/tf", message))
-        return [(outputs, None if samples is None else samples[k], None if bodies is None else bodies[k])
-                for k, outputs in enumerate(per_sample)]
+        return [(outputs, None if samples is None else samples[k], None if bodies is None else bodies[k],
+                 None if base is None else base[k]) for k, outputs in enumerate(per_sample)]
 
     def _motion_messages(self, stamps: Sequence[int], snapshots: Sequence[Snapshot],
                          samples: Sequence[SampleFrames] | None, bodies: np.ndarray | None,
@@ -253,22 +253,26 @@ class SimulationSession(Session):
         return columns
 
     def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None = None) -> Outputs:
-        """The sample's messages (``prebuilt``: (wanted, messages, kinematics, body rows) of
-        :meth:`_block`, or built now), logged."""
+        """The sample's messages (``prebuilt``: (wanted, messages, kinematics, body rows, base
+        rows) of :meth:`_block`, or built now), logged (the Rerun recording's end effector in
+        the root frame: a moving base's odometry pose times the kinematics)."""
         stamp = self.stamp_ns
         self.snapshot = snapshot
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
         try:
-            outputs, sample, bodies = prebuilt[1:] if prebuilt is not None else \
+            outputs, sample, bodies, base = prebuilt[1:] if prebuilt is not None else \
                 self._sample_messages([snapshot], [stamp])[0]
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
+        if base is not None:
+            self.recorder.base(stamp, base)
         if sample is not None:
+            ee = sample.ee[sample.ee_index] if base is None else composed_rows(base[0], sample.ee[[sample.ee_index]])[0]
             self.recorder.sample(stamp, snapshot.joint_names, snapshot.q, snapshot.v, snapshot.tau, snapshot.energy,
-                                 sample.ee[sample.ee_index, :3])
+                                 ee[:3])
         if bodies is not None:
             self.recorder.bodies(stamp, bodies)
         return outputs
