@@ -173,3 +173,29 @@ def test_a_root_frame_inside_the_tree_is_refused(scene_name: str, frame_id: str)
     with pytest.raises(Exception, match="frame_id|rename") as caught:
         SimulationSession(load_scene(scene_name), 50.0, frame_id=frame_id)
     assert frame_id in str(caught.value)
+
+
+def test_rerun_recording_holds_the_same_tree(tmp_path) -> None:
+    """mobile_pick's .rrd: odom -> base_footprint and odom -> world per sample equal to /tf
+    (float32), the end effector in odom equal to /ee_pose, the sphere under world and the
+    table in world: the recording carries the tree's numbers, not the base-relative ones."""
+    from test_viewers import rerun_rows
+    scene, rate = load_scene("mobile_pick"), 50.0
+    with SimulationSession(scene, rate, rrd_path=tmp_path / "run.rrd") as session:
+        samples = [dict(session.step()) for _ in range(101)]
+    temporal, static = rerun_rows(tmp_path / "run.rrd")
+    last = samples[-1]
+    edges = {(t.header.frame_id, t.child_frame_id): t.transform for t in last["/tf"].transforms}
+    for child in ("base_footprint", "world"):
+        row = max(temporal[f"/base_frames/{child}"], key=lambda r: r["sim_time"])
+        assert (row["Transform3D:parent_frame"], row["Transform3D:child_frame"]) == (["odom"], [child])
+        moved = edges[("odom", child)].translation
+        assert np.array_equal(row["Transform3D:translation"][0], np.float32([moved.x, moved.y, moved.z]))
+    ee = max(temporal["/ee/position"], key=lambda r: r["sim_time"])
+    palm = last["/ee_pose"].pose.position
+    assert np.array_equal(ee["Points3D:positions"][0], np.float32([palm.x, palm.y, palm.z]))
+    assert palm.x > -1.0          # the palm over the table in odom, 1 m from where the base started
+    sphere = max(temporal["/free_bodies/sphere"], key=lambda r: r["sim_time"])
+    assert sphere["Transform3D:parent_frame"] == ["world"]
+    assert static["/geometry/table"][0]["CoordinateFrame:frame"] == ["world"]
+    assert static["/ee/position"][0]["CoordinateFrame:frame"] == ["odom"]
