@@ -218,13 +218,19 @@ class RerunLogger(ClosesOnExit):
                 self._rec.log(geometry_entity(geometry.name), rr.CoordinateFrame(frame),
                               shape_archetype(geometry.name, geometry.shape, geometry.placement), static=True)
         if root_link is not None:
-            self._rec.log_file_from_path(self.urdf_path, static=True)
-            if static_frames is None:
-                static_frames = [(self.world_frame, root_link)] if self.world_frame != root_link else []
-            for parent, child in static_frames[:1]:
-                self._rec.log(WORLD_FRAME, rr.Transform3D(parent_frame=parent, child_frame=child), static=True)
-            self._rec.log(EE_POSITION, rr.CoordinateFrame(self.root_frame), static=True)
-            self._rec.log(EE_PATH, rr.CoordinateFrame(self.root_frame), static=True)
+            self._log_robot(root_link, static_frames)
+
+    def _log_robot(self, root_link: str, static_frames: Sequence[tuple[str, str]] | None) -> None:
+        """The URDF (static), the identity transform that joins the root frame to it (the
+        first of ``static_frames``; default: world frame -> root link if they differ) and
+        the end effector's frame."""
+        self._rec.log_file_from_path(self.urdf_path, static=True)
+        if static_frames is None:
+            static_frames = [(self.world_frame, root_link)] if self.world_frame != root_link else []
+        for parent, child in static_frames[:1]:
+            self._rec.log(WORLD_FRAME, rr.Transform3D(parent_frame=parent, child_frame=child), static=True)
+        self._rec.log(EE_POSITION, rr.CoordinateFrame(self.root_frame), static=True)
+        self._rec.log(EE_PATH, rr.CoordinateFrame(self.root_frame), static=True)
 
     @staticmethod
     def _urdf_tree(urdf_path: Path) -> UrdfTree:
