@@ -204,7 +204,7 @@ def test_rerun_recording_holds_the_same_tree(tmp_path) -> None:
 def test_mobile_picks_robot_description_has_one_root_for_robot_state_publisher() -> None:
     """The composed URDF of a moving-base scene is rooted at base_footprint (no world link
     welded to it), so robot_state_publisher's tree of it joins odom -> base_footprint."""
-    import xml.etree.ElementTree as ElementTree
+    from xml.etree import ElementTree
     root = ElementTree.fromstring(load_scene("mobile_pick").urdf)
     links = {link.get("name") for link in root.iter("link")}
     children = {joint.find("child").get("link") for joint in root.iter("joint")}
