@@ -80,7 +80,7 @@ class FrameMessages:
     def __init__(self, robot: Robot, root_frame: str, ee_link: str | None,
                  geometries: Sequence[Geometry] = (), prefix: str = "", moving_root: bool = False) -> None:
         self.links = LinkFrames(robot, ee_link or None)
-        self.prefix, self.moving_root = prefix, moving_root
+        self.prefix = prefix
         self.has_robot = bool(robot.tree)
         self.body_shapes = {g.name: (g.shape, g.placement) for g in geometries if g.owner == "body"}
         self.tree = frame_tree(robot.root_link, prefix, root_frame, moving_root,
