@@ -88,9 +88,10 @@ TOPICS: tuple[Topic, ...] = (
     Topic("/odom", "pub", "nav_msgs/msg/Odometry", "reliable", SIMULATE, "moving_base",
           "wheel odometry of the simulated wheel speeds: base_footprint in odom"),
     Topic("/base_pose_ground_truth", "pub", "nav_msgs/msg/Odometry", "reliable", SIMULATE, "moving_base",
-          "the simulated pose and twist of base_footprint in odom (zero covariance)"),
+          "the simulated pose and twist of base_footprint in world (zero covariance)"),
     Topic("/free_bodies", "pub", "geometry_msgs/msg/PoseArray", "reliable", SIMULATE, "free_bodies",
-          "the free bodies' poses in the root frame, in the scene's order (names: free_bodies in /diagnostics)"),
+          "the free bodies' poses in the world frame (the root frame with a fixed base), in the scene's order "
+          "(names: free_bodies in /diagnostics)"),
     Topic("/free_bodies_markers", "pub", "visualization_msgs/msg/MarkerArray", "reliable", SIMULATE, "free_bodies",
           "each free body's shape at its pose (namespace: the body's name)"),
     Topic("/wrist_wrench", "pub", "geometry_msgs/msg/WrenchStamped", "reliable", SIMULATE, "wrist_sensor",
@@ -104,18 +105,19 @@ TOPICS: tuple[Topic, ...] = (
           "(N m) on the second geometry about its frame's origin (its link or free body; the root frame for world "
           "geometry), in that frame; zero while apart"),
     Topic("/tf", "pub", "tf2_msgs/msg/TFMessage", "reliable", BOTH, None,
-          "every moving link in its parent, odom -> base_footprint (moving base), root frame -> each free body"),
+          "every moving link in its parent, odom -> base_footprint and odom -> world (moving base), world frame -> "
+          "each free body (one tree: docs/ros.md, The frame tree)"),
     Topic("/odom", "pub", "nav_msgs/msg/Odometry", "reliable", INVERSE, "moving_base",
           "wheel odometry of the received /joint_states' wheel speeds"),
     Topic("/diagnostics", "pub", "diagnostic_msgs/msg/DiagnosticArray", "reliable", BOTH, None,
           "one status: real-time factor, integrator statistics, energy, input counters, callback overruns, "
           "contact events (simulate); torques published, input counters, estimator restarts (inverse)"),
     Topic("/tf_static", "pub", "tf2_msgs/msg/TFMessage", "latched", BOTH, None,
-          "every fixed link in its parent, and root frame -> URDF root link if they differ"),
+          "every fixed link in its parent, and root frame -> URDF root link (or -> odom) if they differ"),
     Topic("/robot_description", "pub", "std_msgs/msg/String", "latched", BOTH, "robot",
           "the URDF of what is simulated (the composed URDF for a composed scene)"),
     Topic("/scene_markers", "pub", "visualization_msgs/msg/MarkerArray", "latched", BOTH, "static_geometry",
-          "static world geometry (root frame) and geometry on links (link frame, frame-locked)"),
+          "static world geometry (world frame) and geometry on links (link frame, frame-locked)"),
     Topic("/joint_commands", "sub", "sensor_msgs/msg/JointState", "reliable", SIMULATE, None,
           "effort commands (N m, N) by joint name, held for command_timeout; beyond the effort limit: clamped",
           max_bytes=64 * 1024),
@@ -294,8 +296,8 @@ PARAMETERS: dict[str, Spec] = {
                      (0.0, 1.0e6)),
     "solve_horizon": Spec(0.02, "simulated time (s) per integrator run (samples handed out one by one; "
                           "commands take effect at the next run)", (0.0, 1.0)),
-    "frame_id": Spec("", "frame of /ee_pose and /free_bodies, root of /tf, used as given ('' : the URDF root link, "
-                     "world without a robot, with frame_prefix)"),
+    "frame_id": Spec("", "root of /tf and frame of /ee_pose, used as given ('' : odom with a moving base, else the "
+                     "URDF root link, world without a robot, with frame_prefix)"),
     "frame_prefix": Spec(AUTO_PREFIX, "prefix of every frame the node names (URDF links, free bodies, the default "
                          "root frame), as robot_state_publisher's frame_prefix; auto: the node's namespace without "
                          "its leading slash, plus / (youbot1/ in /youbot1, none in the root namespace)"),

@@ -36,6 +36,7 @@ from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.node.commands import InputCounters
 from youbot_dynamics.node.frame_messages import FrameMessages
+from youbot_dynamics.node.frames import frame_tree
 from youbot_dynamics.node.interface import Outputs, published, topics_of
 from youbot_dynamics.node.recorder import Recorder
 from youbot_dynamics.node.watchdog import Watchdog
@@ -84,7 +85,7 @@ class Session(ClosesOnExit):
                                  for topic in topics_of(self.mode, "pub", self.features, latched=True)]
         """Messages to publish once, latched (transient local), when the node starts."""
         self.recorder = Recorder(self.mode, scene, robot, (*self.topics, *(t for t, _ in self.latched)),
-                                 mcap_path, rrd_path, frame_id or robot.root_link)
+                                 mcap_path, rrd_path, frame_tree(robot.root_link, "", frame_id, moving_root))
         self.recorder.write(self.latched, 0)
         self.consumed_by(None)
 

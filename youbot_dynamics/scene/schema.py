@@ -347,7 +347,7 @@ def _full_robot(reader: SceneReader, data: Mapping[str, Any], base_dir: Path | N
     """(the full robot of ``robot:``, loaded with a fixed root; its URDF as read once; its
     text as the file holds it, for /robot_description; the file, None for a composed robot
     or none)."""
-    urdf_source = _robot_source(reader, data.get("robot"), base_dir)
+    urdf_source = _robot_source(reader, data.get("robot"), base_dir, data.get("base"))
     try:
         document = read_urdf(urdf_source)
         full = robot_from_urdf(document)
@@ -450,10 +450,17 @@ def _contact_sections(reader: SceneReader, data: Mapping[str, Any], robot: Robot
     return bodies, geometries, contacts
 
 
-def _robot_source(reader: SceneReader, value: Any, base_dir: Path | None) -> str | Path:
-    """The full robot: its URDF file, or the URDF text of a composed robot or of none."""
+def _moving_base(value: Any) -> bool:
+    """Whether a scene's raw ``base:`` section asks for a moving base (validated later by
+    :func:`~youbot_dynamics.scene.base.read_base`)."""
+    return isinstance(value, Mapping) and value.get("mode", "fixed") in ("kinematic", "dynamic")
+
+
+def _robot_source(reader: SceneReader, value: Any, base_dir: Path | None, base: Any = None) -> str | Path:
+    """The full robot: its URDF file, or the URDF text of a composed robot (not welded to a
+    world link under a moving ``base``) or of none."""
     if isinstance(value, Mapping):
-        return read_composition(reader, value, base_dir)
+        return read_composition(reader, value, base_dir, welded=not _moving_base(base))
     if value == "none":
         return EMPTY_ROBOT
     return Path(default_urdf()) if value is None else reader.file(value, "robot", base_dir)
