@@ -1,19 +1,27 @@
-"""The node's interface table (node/interface.py): docs/node.md is what it generates, and
-the names it uses for QoS profiles are those ros/qos.py defines."""
+"""The node's interface table (node/interface.py): docs/node.md and the README's table are
+what it generates, and the names it uses for QoS profiles are those ros/qos.py defines."""
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
 
-from youbot_dynamics.node.interface import CHOICES, PARAMETERS, QOS, SUBSCRIPTION_QOS, TOPICS, markdown
+from youbot_dynamics.node.interface import (CHOICES, PARAMETERS, QOS, SUBSCRIPTION_QOS, TOPICS, markdown,
+                                            stack_table)
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "node.md"
+README = Path(__file__).resolve().parents[2] / "README.md"
 
 
 def test_docs_node_md_is_what_the_table_generates() -> None:
     assert DOCS.read_text(encoding="utf-8") == markdown(), \
         "docs/node.md is stale: python -m youbot_dynamics.node.interface > docs/node.md"
+
+
+def test_the_readme_holds_the_generated_stack_table() -> None:
+    text = README.read_text(encoding="utf-8")
+    section = text[text.index("## Use it from your ROS stack"):]
+    assert stack_table() in section, f"README's table is stale; it should read:\n{stack_table()}"
 
 
 def test_every_topic_names_a_known_qos_and_subscriptions_a_size_bound() -> None:

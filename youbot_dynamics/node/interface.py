@@ -401,6 +401,30 @@ def _parameter_row(name: str, spec: Spec) -> tuple[object, ...]:
     return f"`{name}`", type(spec.default).__name__, default, _range_of(name, spec), spec.description + writable
 
 
+STACK = ("/joint_states", "/ee_pose", "/tf", "/tf_static", "/robot_description", "/clock", "/diagnostics",
+         "/odom", "/imu", "/wrist_wrench", "/joint_commands", "/joint_trajectory", "/cmd_vel",
+         "/arm_controller/commands", "arm_controller/follow_joint_trajectory", "gripper_controller/gripper_command",
+         "~/reset", "scene", "mode", "publish_rate", "time_scale", "duration", "mcap_path", "rrd_path")
+"""What another ROS stack meets first: the rows of the README's table (:func:`stack_table`)."""
+
+
+def stack_table() -> str:
+    """The README's table of :data:`STACK`: each name (relative, as remapping sees it), its
+    type, and what it is in each mode (pub, sub, action, service or parameter); the
+    descriptions are in docs/node.md (:func:`markdown`)."""
+    types: dict[str, str] = {}
+    kinds: dict[tuple[str, str], str] = {}
+    for name, kind, type_, modes in (*((t.name, t.direction, t.type, t.modes) for t in TOPICS),
+                                     *((a.name, "action", a.type, a.modes) for a in ACTIONS),
+                                     *((s.name, "service", s.type, s.modes) for s in SERVICES),
+                                     *((n, "parameter", type(s.default).__name__, BOTH) for n, s in PARAMETERS.items())):
+        types[name] = re.sub(r"/(msg|srv|action)/", "/", type_)
+        kinds.update({(name, mode): kind for mode in modes})
+    rows = [(f"`{name if name in GLOBAL_TOPICS else name.lstrip('/')}`", f"`{types[name]}`",
+             *(kinds.get((name, mode), "") for mode in MODES)) for name in STACK]
+    return "\n".join(_table(("name", "type", *MODES), rows))
+
+
 def markdown() -> str:
     """docs/node.md: the tables above as Markdown."""
     lines = ["# The dynamics node", "",
