@@ -16,7 +16,7 @@ from tqdm import tqdm
 from youbot_dynamics.accuracy.work_precision import resolve_integrator, work_precision, write_back
 from youbot_dynamics.cli.common import (CommandError, add_duration, add_json, add_out_folder,
                                         add_sweep_arguments, add_tolerance_arguments, finite_or_none,
-                                        output_file, output_folder)
+                                        output_file, output_folder, positive_int)
 from youbot_dynamics.integrate.integrators import (IntegrationError, StepBudgetError,
                                                    checked_fixed_step, fixed_step_count)
 from youbot_dynamics.integrate.registry import INTEGRATORS, REGISTRY, STEPPERS, integrator_names
@@ -33,7 +33,7 @@ ACCURACY = {"simulate": "--tol",
 
 def add_step_budget_argument(parser: argparse.ArgumentParser) -> None:
     """--max-steps: the budget of a fixed-step run."""
-    parser.add_argument("--max-steps", type=int, default=MAX_STEPS, metavar="N",
+    parser.add_argument("--max-steps", type=positive_int, default=MAX_STEPS, metavar="N",
                         help=f"refuse a fixed-step run of more than N steps (default {MAX_STEPS:g})")
 
 
