@@ -301,3 +301,11 @@ def test_cli_write_urdf_fits_consistent_links_to_the_node_bag(node_round_trip, t
     # measured 5e-13 (12 significant digits in the file); bound 1e-9
     np.testing.assert_allclose(base.of(theta)[written], fit.base_values[written], atol=1e-9)
     assert min(pseudo_inertia_eigenvalues(layout_for(reloaded), theta).values()) > 0
+    # with --json the same URDF is written, and the document says so
+    # (before: the command returned after printing the JSON and wrote nothing)
+    in_json = tmp_path / "identified_json.urdf"
+    assert main(["identify", str(noisy), "--states", "measured", "--json", "--write-urdf", str(in_json)]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert in_json.read_text() == text
+    assert document["written_urdf"]["output"] == str(in_json) and document["written_urdf"]["warnings"] == []
+    assert document["written_urdf"]["moved_std_max"] == pytest.approx(np.abs(fit.moved_std).max(), rel=1e-9)
