@@ -1,8 +1,9 @@
 """Sub-commands of parameter identification (see :mod:`youbot_dynamics.identification`).
 
 - ``excite [-o excite.yaml]``: an excitation trajectory (Fourier series, Swevers) optimised
-  for cond(Y_base) within the URDF's limits; written as /joint_trajectory fields (YAML)
-  with its Fourier coefficients. Prints the condition number before and after, and that
+  for cond(Y_base) within the URDF's limits (positions, speeds and the nominal robot's
+  efforts); written as /joint_trajectory fields (YAML) with its Fourier coefficients, one
+  period in as many points as the node takes in one message. Prints the condition number before and after, and that
   of random Fourier trajectories of the same length.
 - ``identify BAG``: base parameters from /joint_states of a bag (MCAP file or rosbag2
   folder): OLS and WLS estimates, standard deviations, relative deviations (flagged above
@@ -29,13 +30,14 @@ from youbot_dynamics.identification.base_parameters import base_parameters
 from youbot_dynamics.identification.consistency import (PRIOR_WEIGHT, consistent_fit, pseudo_inertia_eigenvalues,
                                                         standard_from_base)
 from youbot_dynamics.identification.estimation import FLAG_PERCENT
-from youbot_dynamics.identification.excitation import (ExcitationLimits, condition_number, optimise_excitation,
-                                                       random_fourier)
+from youbot_dynamics.identification.excitation import (DEFAULT_RATE, ExcitationLimits, condition_number,
+                                                       message_rate, optimise_excitation, random_fourier)
 from youbot_dynamics.identification.identify import ARM_JOINTS, identify_bag, layout_for
 from youbot_dynamics.identification.measurements import STATES
 from youbot_dynamics.identification.regressor import FRICTION_TERMS
 from youbot_dynamics.identification.urdf_output import body_links, identified_urdf
 from youbot_dynamics.model.robot import load_robot
+from youbot_dynamics.node.commands import MAX_TRAJECTORY_POINTS
 
 #: No command here runs an integrator (see youbot_dynamics.cli).
 ACCURACY: dict[str, str] = {}
@@ -69,7 +71,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     excite.add_argument("--iterations", type=int, default=60, help="SLSQP iterations (default 60)")
     excite.add_argument("--acceleration", type=positive, default=ExcitationLimits.acceleration,
                         help="acceleration limit, rad/s^2 (the URDF has none)")
-    add_rate(excite, 100.0, "sample rate of the written points", parse=positive)
+    add_rate(excite, None, f"sample rate of the written points (default {DEFAULT_RATE:g} Hz, or less so that a "
+             f"period fits one /joint_trajectory: at most {MAX_TRAJECTORY_POINTS} points)", parse=positive)
     excite.add_argument("--seed", type=int, default=0, help="seed of the random starting series")
     excite.set_defaults(run=run_excite)
 
@@ -100,6 +103,10 @@ def run_excite(args: argparse.Namespace) -> int:
     """Optimise, write the trajectory, print the condition numbers."""
     if args.harmonics < 1 or args.iterations < 0:
         raise CommandError("--harmonics must be >= 1 and --iterations >= 0")
+    rate = message_rate(args.period) if args.rate is None else args.rate
+    if round(args.period * rate) + 1 > MAX_TRAJECTORY_POINTS:
+        raise CommandError(f"--rate {rate:g} Hz over the {args.period:g} s period gives {round(args.period * rate) + 1} "
+                           f"points; the node takes at most {MAX_TRAJECTORY_POINTS} per /joint_trajectory")
     layout = _layout(args)
     base = base_parameters(layout)
     limits = ExcitationLimits(acceleration=args.acceleration)
@@ -108,7 +115,7 @@ def run_excite(args: argparse.Namespace) -> int:
     randoms = [condition_number(layout, base, random_fourier(layout, args.period, args.harmonics, limits,
                                                              np.random.default_rng(args.seed + s)))
                for s in range(1, 6)]
-    result.trajectory.write(args.output, rate=args.rate)
+    result.trajectory.write(args.output, rate=rate)
     record = {"output": args.output, "base_parameters": base.count, "condition_initial": result.initial_condition,
               "condition_optimised": result.condition, "condition_random_median": float(np.median(randoms)),
               "iterations": result.iterations, "message": result.message}
@@ -118,7 +125,7 @@ def run_excite(args: argparse.Namespace) -> int:
     print(f"excite: {base.count} base parameters; cond(Y_base) {result.initial_condition:.4g} (random start) -> "
           f"{result.condition:.4g} after {result.iterations} SLSQP iterations ({result.message}); "
           f"random Fourier trajectories of the same length: median {np.median(randoms):.4g}")
-    print(f"wrote {args.output} ({args.period:g} s period, {args.harmonics} harmonics, points at {args.rate:g} Hz)")
+    print(f"wrote {args.output} ({args.period:g} s period, {args.harmonics} harmonics, points at {rate:g} Hz)")
     return 0
 
 
