@@ -83,9 +83,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                   "tolerances against a tight reference; write CSV, markdown "
                                   "and PNG; with --target-error recommend the setting of least "
                                   "counted work (rhs evaluations + Jacobians x state dimension) "
-                                  "that meets it; with --write-back pin it into the scene file.")
+                                  "that meets it; with --write-back pin it into the scene file. "
+                                  "The error is the final joint-space one (rad), or without robot "
+                                  "joints the free bodies' final positions (m); errors below the "
+                                  "reference's own accuracy print as '< estimate (ref)'. Scenes with "
+                                  "constraint-based contact are refused (only the constraint steppers "
+                                  "integrate them).")
     study.add_argument("--scene", required=True, metavar="NAME_OR_PATH")
-    study.add_argument("--target-error", type=float, help="final joint-space error to meet, rad "
+    study.add_argument("--target-error", type=float, help="final error to meet, rad (m without robot joints) "
                        "(default with --write-back: the scene's integrator.target_error)")
     study.add_argument("--write-back", action="store_true",
                        help="pin the recommended method and tolerance (or dt) into the scene file's integrator "
