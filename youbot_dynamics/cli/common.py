@@ -61,12 +61,11 @@ def add_duration(parser: argparse.ArgumentParser, default: float | None = None, 
                         help=f"simulated time, s (default {shown})")
 
 
-def add_rate(parser: argparse.ArgumentParser, default: float | None, meaning: str, *,
+def add_rate(parser: argparse.ArgumentParser, default: float, meaning: str, *,
              parse: Callable[[str], float] = float) -> None:
-    """--rate HZ: a rate in Hz (``meaning`` says of what, and its default when ``default``
-    is None: the command derives it); the only use of the name."""
+    """--rate HZ: a rate in Hz (``meaning`` says of what); the only use of the name."""
     parser.add_argument("--rate", type=parse, default=default, metavar="HZ",
-                        help=f"{meaning}, Hz" + ("" if default is None else f" (default {default:g})"))
+                        help=f"{meaning}, Hz (default {default:g})")
 
 
 def time_scale(text: str) -> float:

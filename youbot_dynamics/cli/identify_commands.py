@@ -71,8 +71,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     excite.add_argument("--iterations", type=int, default=60, help="SLSQP iterations (default 60)")
     excite.add_argument("--acceleration", type=positive, default=ExcitationLimits.acceleration,
                         help="acceleration limit, rad/s^2 (the URDF has none)")
-    add_rate(excite, None, f"sample rate of the written points (default {DEFAULT_RATE:g} Hz, or less so that a "
-             f"period fits one /joint_trajectory: at most {MAX_TRAJECTORY_POINTS} points)", parse=positive)
+    add_rate(excite, DEFAULT_RATE, f"sample rate of the written points, lowered where a period would not fit one "
+             f"/joint_trajectory (at most {MAX_TRAJECTORY_POINTS} points, the node's bound)", parse=positive)
     excite.add_argument("--seed", type=int, default=0, help="seed of the random starting series")
     excite.set_defaults(run=run_excite)
 
@@ -103,10 +103,7 @@ def run_excite(args: argparse.Namespace) -> int:
     """Optimise, write the trajectory, print the condition numbers."""
     if args.harmonics < 1 or args.iterations < 0:
         raise CommandError("--harmonics must be >= 1 and --iterations >= 0")
-    rate = message_rate(args.period) if args.rate is None else args.rate
-    if round(args.period * rate) + 1 > MAX_TRAJECTORY_POINTS:
-        raise CommandError(f"--rate {rate:g} Hz over the {args.period:g} s period gives {round(args.period * rate) + 1} "
-                           f"points; the node takes at most {MAX_TRAJECTORY_POINTS} per /joint_trajectory")
+    rate = message_rate(args.period, args.rate)
     layout = _layout(args)
     base = base_parameters(layout)
     limits = ExcitationLimits(acceleration=args.acceleration)
@@ -116,7 +113,7 @@ def run_excite(args: argparse.Namespace) -> int:
                                                              np.random.default_rng(args.seed + s)))
                for s in range(1, 6)]
     result.trajectory.write(args.output, rate=rate)
-    record = {"output": args.output, "base_parameters": base.count, "condition_initial": result.initial_condition,
+    record = {"output": args.output, "rate": rate, "base_parameters": base.count, "condition_initial": result.initial_condition,
               "condition_optimised": result.condition, "condition_random_median": float(np.median(randoms)),
               "iterations": result.iterations, "message": result.message}
     if args.json:
