@@ -208,8 +208,10 @@ def optimise_excitation(layout: RegressorLayout, base: BaseParameters, *, period
                         harmonics: int = 5, limits: ExcitationLimits = ExcitationLimits(), grid: int = 60,
                         iterations: int = 60, seed: int = 0) -> ExcitationResult:
     """Minimise cond(Y_base) over the Fourier coefficients (SLSQP, finite-difference
-    gradients) from a random feasible series; constraints on ``grid`` points per period, the
-    efforts checked again on ``DENSE_GRID`` (:func:`within_efforts`)."""
+    gradients) from a random feasible series; constraints on ``grid`` points per period. The
+    result is the feasible iterate of least condition number (the last one shrunk about its
+    q0 until feasible among them), its efforts checked again on ``DENSE_GRID``
+    (:func:`within_efforts`)."""
     lower, upper, vmax, amax = _bounds(layout, limits)
     tau_max = limits.effort_fraction * _effort_limits(layout)
     limited = np.isfinite(tau_max)
@@ -247,11 +249,24 @@ def optimise_excitation(layout: RegressorLayout, base: BaseParameters, *, period
         return np.concatenate([a.sum(axis=1), w * (b @ harmonic)])
 
     x0 = np.concatenate([initial.q0, initial.a.ravel(), initial.b.ravel()])
+    kept = {"x": x0, "objective": objective(x0)}          # the random start is feasible
+
+    def keep(x: np.ndarray) -> bool:
+        """Remember the feasible iterate of least condition number (SLSQP's callback);
+        whether ``x`` is feasible."""
+        feasible = bool(np.all(inequalities(x) >= -1e-6) and np.all(np.abs(at_rest(x)) <= 1e-9))
+        if feasible and objective(x) < kept["objective"]:
+            kept.update(x=x.copy(), objective=objective(x))
+        return feasible
+
     result = scipy.optimize.minimize(objective, x0, method="SLSQP",
                                      constraints=[{"type": "ineq", "fun": inequalities},
                                                   {"type": "eq", "fun": at_rest}],
-                                     options={"maxiter": iterations})
-    best = within_efforts(layout, unpack(result.x) if np.all(inequalities(result.x) >= -1e-6) else initial)
+                                     options={"maxiter": iterations}, callback=keep)
+    for k in range(60):      # the last iterate, shrunk about its q0 until it is feasible
+        if keep(np.concatenate([result.x[:n], 0.95 ** k * result.x[n:]])):
+            break
+    best = within_efforts(layout, unpack(kept["x"]))
     return ExcitationResult(best, initial, condition_number(layout, base, best),
                             condition_number(layout, base, initial), int(result.nit), str(result.message))
 
