@@ -52,7 +52,7 @@ setup(
     entry_points={
         "console_scripts": [
             "youbot-dynamics = youbot_dynamics.cli:main",
-            "dynamics_node = youbot_dynamics.ros.dynamics_node:main",
+            "dynamics_node = youbot_dynamics.ros.dynamics_main:main",
             "replay_node = youbot_dynamics.ros.replay_node:main",
         ],
     },

@@ -95,7 +95,6 @@ def dask_cluster():
 
 
 def test_scheduler_with_two_workers_equals_serial(dask_cluster, serial_boundaries):
-    from distributed import Client
     results = map_cases(measured_boundary_radius, BOUNDARY_CASES, scheduler=dask_cluster,
                         progress=False)
     assert results == serial_boundaries

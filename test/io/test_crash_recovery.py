@@ -33,7 +33,8 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import read_bag
 from youbot_dynamics.io.mcap_log import McapLogger
-from youbot_dynamics.io.mcap_recover import default_recovered_path, recover_mcap
+from youbot_dynamics.node.interface import QOS
+from youbot_dynamics.io.mcap_recover import NothingRecovered, default_recovered_path, recover_mcap
 from youbot_dynamics.io.messages import TYPESTORE
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.io.rrd_recover import recover_rrd
@@ -49,7 +50,7 @@ def write_run(path: Path, samples: int = 600) -> None:
     with McapLogger(path, chunk_span_ns=SPAN_NS, chunk_wall_s=float("inf")) as log:
         log.add_topic("/clock", "rosgraph_msgs/msg/Clock")
         log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
-        log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", latched=True)
+        log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", qos=QOS["latched"])
         log.write("/tf_static", messages.tf_message(
             [messages.transform_stamped(0, "base_footprint", "base_link", [0, 0, 0.084], [0, 0, 0, 1])]), 0)
         for k in range(samples):
@@ -110,7 +111,8 @@ def test_recovering_a_complete_file_keeps_everything(complete: Path, tmp_path: P
 def test_every_cut_keeps_exactly_the_chunks_before_it(complete: Path, tmp_path: Path) -> None:
     """Cuts at 40 random offsets, plus just before, at and after the end of every chunk
     record: the recovered file holds the messages of the chunks that end at or before the
-    cut, bit for bit, in an indexed file that AnyReader and mcap's reader accept."""
+    cut, bit for bit, in an indexed file that AnyReader and mcap's reader accept; a cut
+    before the end of the first chunk recovers nothing, which is an error."""
     with complete.open("rb") as stream:
         summary = make_reader(stream).get_summary()
     ends = [c.chunk_start_offset + c.chunk_length for c in summary.chunk_indexes]
@@ -125,6 +127,10 @@ def test_every_cut_keeps_exactly_the_chunks_before_it(complete: Path, tmp_path: 
         kept_chunks = [c for c, end in zip(summary.chunk_indexes, ends) if end <= cut]
         expected = [m for m in everything if any(c.message_start_time <= m[1] <= c.message_end_time
                                                  for c in kept_chunks)]
+        if not expected:                     # cut before the end of the first chunk
+            with pytest.raises(NothingRecovered, match="no message recovered"):
+                recover_mcap(broken, fixed)
+            continue
         result = recover_mcap(broken, fixed)
         assert not result.complete and result.chunks == len(kept_chunks), cut
         assert result.messages == len(expected) and raw_messages(fixed) == expected, cut
@@ -306,6 +312,24 @@ def joint_state_stamps(path: Path) -> list[int]:
             for m in read_bag(path) if m.topic == "/joint_states"]
 
 
+def recovered_joint_state_stamps(killed: Path) -> list[int]:
+    """The /joint_states stamps (ns) ``recover_mcap`` keeps of a killed node's MCAP, checked
+    to run from t = 0 without a gap, with the rebuilt statistics right; none if it kept
+    nothing (killed before its first chunk closed: an error of its own)."""
+    try:
+        result = recover_mcap(killed)
+    except NothingRecovered:
+        return []
+    assert not result.complete
+    stamps = joint_state_stamps(result.target)
+    assert stamps == [SAMPLE_NS * i for i in range(len(stamps))]   # from t = 0, no gap
+    with result.target.open("rb") as stream:
+        reader = make_reader(stream)
+        assert reader.get_summary().statistics.message_count == result.messages == \
+            sum(1 for _ in reader.iter_messages())
+    return stamps
+
+
 def kill_and_recover(tmp_path: Path, kills: int, seed: int) -> list[tuple[float, float, float]]:
     """Kill ``kills`` node processes with SIGKILL at random simulated times in [0.1, 2.5] s;
     check each recovered MCAP; return (target, MCAP loss, Rerun loss) in s per kill: the
@@ -325,14 +349,7 @@ def kill_and_recover(tmp_path: Path, kills: int, seed: int) -> list[tuple[float,
             assert status == -signal.SIGKILL and run.sent.is_set(), run.log.read_text()
             with pytest.raises(UserInputError, match="cannot be read"):    # the killed file itself
                 joint_state_stamps(run.mcap)
-            result = recover_mcap(run.mcap)
-            assert not result.complete
-            stamps = joint_state_stamps(result.target)
-            assert stamps == [SAMPLE_NS * i for i in range(len(stamps))]   # from t = 0, no gap
-            with result.target.open("rb") as stream:
-                reader = make_reader(stream)
-                assert reader.get_summary().statistics.message_count == result.messages == \
-                    sum(1 for _ in reader.iter_messages())
+            stamps = recovered_joint_state_stamps(run.mcap)
             kept_ns = stamps[-1] if stamps else -SAMPLE_NS        # nothing kept: lost from t = 0 on
             mcap_loss = run.seen_ns - kept_ns
             try:

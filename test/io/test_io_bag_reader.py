@@ -14,6 +14,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import BagMessage, BagTopic, bag_topics, paced, read_bag
 from youbot_dynamics.io.mcap_log import McapLogger
+from youbot_dynamics.node.interface import QOS
 
 JOINTS = ["arm_joint_1", "arm_joint_2"]
 
@@ -86,7 +87,7 @@ def test_reads_a_single_mcap_file_from_mcap_logger(tmp_path: Path) -> None:
     path = tmp_path / "run.mcap"
     with McapLogger(path) as log:
         log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
-        log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", latched=True)
+        log.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", qos=QOS["latched"])
         log.write("/tf_static", messages.tf_message([]), 0)
         for k in range(3):
             log.write("/joint_states", messages.joint_state(k, JOINTS, [k / 3, 1.0]), 10 + k)

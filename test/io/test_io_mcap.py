@@ -26,6 +26,8 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.mcap_writer import ChunkedWriter
+from youbot_dynamics.io.qos import DEFAULT
+from youbot_dynamics.node.interface import QOS
 
 JOINTS = ["arm_joint_1", "arm_joint_2", "arm_joint_3"]
 LINKS = [("base_link", "arm_link_1"), ("arm_link_1", "arm_link_2"), ("arm_link_2", "arm_link_3")]
@@ -70,7 +72,7 @@ def sample(k: int) -> dict:
 def write_log(path: Path) -> None:
     with McapLogger(path) as log:
         for topic, msgtype in TOPICS.items():
-            log.add_topic(topic, msgtype, latched=topic == "/tf_static")
+            log.add_topic(topic, msgtype, qos=QOS["latched"] if topic == "/tf_static" else DEFAULT)
         log.write(
             "/tf_static",
             messages.tf_message(

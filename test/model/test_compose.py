@@ -78,3 +78,19 @@ def test_gravity_on_a_copy_leaves_the_loaded_model_alone():
     assert moon.model.gravity.linear.tolist() == [0.0, 0.0, -1.62]
     assert robot.model.gravity.linear.tolist() == [0.0, 0.0, -9.81]
     assert robot_with_gravity(robot, [0.0, 0.0, -9.81]) is robot
+
+
+def test_a_robot_on_a_moving_base_is_not_welded_to_a_world_link():
+    """Unwelded (a moving base): the robot's own root link is the root, no ``world`` link and
+    no world joint, the same model as the file's; two robots or a pose are refused."""
+    robot = load_robot(composed_urdf([Placement(URDF)], welded=False))
+    single = load_robot(URDF)
+    assert robot.root_link == single.root_link == "base_footprint"
+    assert "world" not in robot.link_names and not any(j.name.endswith("world_joint") for j in robot.tree)
+    assert robot.link_names == single.link_names and robot.nv == single.nv
+    with pytest.raises(CompositionError, match="one robot") as two:
+        composed_urdf([Placement(URDF, "a_"), Placement(URDF, "b_")], welded=False)
+    assert two.value.index == 1
+    with pytest.raises(CompositionError, match="base.initial.pose") as placed:
+        composed_urdf([Placement(URDF, pose=pose([1.0, 0.0, 0.0], 0.0))], welded=False)
+    assert placed.value.part == "pose"

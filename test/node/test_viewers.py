@@ -91,7 +91,11 @@ def test_ee_pose_is_youbot_1s_palm_and_ee_poses_both_palms(gripping) -> None:
     """In the MCAP, every /ee_pose is youBot 1's palm and /ee_poses both palms, in the world
     frame, at the q of /joint_states of the same stamp; the palm moves (not the identity)."""
     assert gripping["topics"] == ("/clock", "/joint_states", "/ee_pose", "/ee_poses", "/free_bodies",
-                                  "/free_bodies_markers", "/tf", "/diagnostics")
+                                  "/free_bodies_markers", "/wrist_wrench",
+                                  *(f"/contacts/{pair}/sphere" for pair in ("table", "yb1_plate", "yb2_plate",
+                                                                             "yb1_pad_l", "yb1_pad_r", "yb2_pad_l",
+                                                                             "yb2_pad_r")),
+                                  "/tf", "/diagnostics")
     logged = gripping["mcap"]
     assert len(logged["/ee_pose"]) == len(logged["/ee_poses"]) == len(logged["/joint_states"]) == N
     for state, ee, both in zip(logged["/joint_states"], logged["/ee_pose"], logged["/ee_poses"]):

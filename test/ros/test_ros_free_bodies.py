@@ -122,7 +122,7 @@ def test_free_bodies_topic_carries_the_same_poses(ball_drop_run) -> None:
                             ball_drop_run["mcap"]["/tf"])
     tf_topics = {"/tf", "/tf_static"} if importlib.util.find_spec("tf2_msgs") else set()   # built by `make`
     assert ball_drop_run["published"] == {"/clock", "/free_bodies", "/free_bodies_markers", "/scene_markers",
-                                          "/diagnostics", *tf_topics}  # no robot
+                                          "/contacts/floor/ball", "/diagnostics", *tf_topics}  # no robot
     assert not {"/joint_states", "/ee_pose"} & set(ball_drop_run["mcap"])
     assert len(received) == len(logged) == N
     for got, kept, transform in zip(received, logged, tf):

@@ -313,8 +313,8 @@ def test_signal_finalises_the_logs(tmp_path: Path, signum: int, offset: int) -> 
     assert process.returncode == 0, process.stderr.read()
     assert [stamp_ns(m) for m in received] == [10_000_000 * k for k in range(len(received))]
     topics = {t.topic: t for t in bag_topics(mcap)}
-    assert set(topics) == {"/clock", "/joint_states", "/ee_pose", "/diagnostics", "/tf", "/tf_static",
-                           "/robot_description"}
+    assert set(topics) == {"/clock", "/joint_states", "/ee_pose", "/wrist_wrench", "/diagnostics", "/tf",
+                           "/tf_static", "/robot_description"}
     assert topics["/tf_static"].latched and topics["/tf_static"].message_count == 1
     logged = [m.message for m in read_bag(mcap) if m.topic == "/joint_states"]
     assert len(logged) >= len(received) >= 20

@@ -7,13 +7,15 @@ import copy
 import dataclasses
 from pathlib import Path
 
+import cloudpickle
 import numpy as np
 import pytest
 import yaml
 
+import youbot_dynamics.model.robot as robot_module
 import youbot_dynamics.scene.schema as scene_module
 from youbot_dynamics import default_urdf
-from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.model.robot import Robot, URDFDocument
 from youbot_dynamics.scene.schema import Scene, SceneError, load_scene, scene_dir
 from youbot_dynamics.sim.simulator import Simulator
 from youbot_dynamics.sim.state import StateLayout
@@ -28,6 +30,8 @@ def assert_same(a, b, where: str = "scene") -> None:
     if isinstance(a, Robot):
         assert (a.name, a.source, a.joint_names, dict(a.locked)) == (b.name, b.source, b.joint_names, dict(b.locked))
         assert a.model == b.model, where
+    elif isinstance(a, URDFDocument):
+        assert_same((a.label, a.tree, a.root_link, a.forgiven), (b.label, b.tree, b.root_link, b.forgiven), where)
     elif dataclasses.is_dataclass(a):
         assert type(a) is type(b), where
         for field in dataclasses.fields(a):
@@ -81,15 +85,31 @@ def test_relative_files_are_found_in_base_dir_then_the_package_share(tmp_path):
     assert Scene.from_dict(packaged_urdf).urdf_path == urdf.resolve()
 
 
-def test_the_robot_is_parsed_once_per_scene(monkeypatch):
+@pytest.mark.parametrize("name", ["arm_friction", "base_square"])
+def test_the_robot_is_parsed_once_per_scene(monkeypatch, name):
+    """Once per scene, a moving base's planar plant included: the compiler rebuilds the
+    robot with its planar root from the URDF the scene read, never from the file again."""
     calls = []
-    real = scene_module.load_robot
-    monkeypatch.setattr(scene_module, "load_robot", lambda *a, **k: calls.append(a) or real(*a, **k))
-    scene = load_scene("arm_friction")
-    assert len(calls) == 1 and isinstance(scene.robot, Robot) and scene.robot.nv == 5
+    real = robot_module.read_urdf
+    counting = lambda *a, **k: calls.append(a) or real(*a, **k)  # noqa: E731
+    monkeypatch.setattr(scene_module, "read_urdf", counting)
+    monkeypatch.setattr(robot_module, "read_urdf", counting)
+    scene = load_scene(name)
+    assert len(calls) == 1 and isinstance(scene.robot, Robot)
     simulator = Simulator(scene)
-    assert simulator.robot is scene.robot and len(calls) == 1
+    assert simulator.robot is scene.robot
+    plant = simulator.model.plant                 # a moving base: the planar root's (cos, sin)
+    assert plant.nq - plant.nv == (0 if scene.base.mode == "fixed" else 1)
+    assert len(calls) == 1
     assert scene.with_duration(0.1).robot is scene.robot and len(calls) == 1
+
+
+def test_a_scene_with_its_urdf_pickles():
+    """A scene goes to a sweep's worker as Dask sends it (cloudpickle): its URDF is read
+    again there."""
+    scene = load_scene("base_square")
+    again = cloudpickle.loads(cloudpickle.dumps(scene))
+    assert_same(again, scene)
 
 
 def test_composed_robot_keeps_its_urdf_text_and_no_file():

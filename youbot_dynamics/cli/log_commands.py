@@ -4,6 +4,8 @@
   whose writer was killed (SIGKILL, power cut): every complete chunk and message kept, the
   summary and statistics rebuilt (see :mod:`youbot_dynamics.io.mcap_recover`). The output
   defaults to ``BROKEN.recovered.mcap`` beside the input; the input is never changed.
+  Damaged chunks are named by byte offset; a file from which no message is recovered is an
+  error (one line, exit 2, nothing written).
 - ``log recover BROKEN.rrd [-o FIXED.rrd]``: the same for a Rerun recording, through
   Rerun's own command line (see :mod:`youbot_dynamics.io.rrd_recover`).
 
@@ -15,7 +17,7 @@ import argparse
 from pathlib import Path
 
 from youbot_dynamics.cli.common import CommandError, add_json, output_file, print_json
-from youbot_dynamics.io.mcap_recover import recover_mcap
+from youbot_dynamics.io.mcap_recover import Recovery, recover_mcap
 from youbot_dynamics.io.rrd_recover import recover_rrd
 
 #: No command here runs an integrator (see youbot_dynamics.cli).
@@ -32,6 +34,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                          help="where to write the recovered file (default BROKEN.recovered.mcap or .rrd)")
     add_json(recover)
     recover.set_defaults(run=run_recover)
+
+
+def recovery_losses(result: Recovery) -> str:
+    """What an incomplete MCAP lost: damaged chunks by byte offset, where reading stopped,
+    the bytes dropped, messages without their channel."""
+    parts = [f"damaged chunk skipped {damage}" for damage in result.damaged]
+    if result.stopped is not None:
+        parts.append(f"reading stopped {result.stopped}")
+    if result.dropped_bytes or not parts:
+        parts.append(f"{result.dropped_bytes} bytes of unreadable or incomplete tail dropped")
+    if result.orphans:
+        parts.append(f"{result.orphans} messages dropped with their channel")
+    return ("it was damaged: " if result.had_footer else "it had no summary; ") + "; ".join(parts)
 
 
 def run_recover(args: argparse.Namespace) -> int:
@@ -56,8 +71,7 @@ def run_recover(args: argparse.Namespace) -> int:
         return 0
     span = ("no messages" if result.first_log_time_ns is None else
             f"log time {result.first_log_time_ns * 1e-9:.3f} .. {result.last_log_time_ns * 1e-9:.3f} s")
-    state = ("it was complete" if result.complete else
-             f"it had no summary; {result.dropped_bytes} bytes of incomplete tail dropped")
+    state = "it was complete" if result.complete else recovery_losses(result)
     print(f"log recover: {result.messages} messages in {result.chunks} complete chunks "
           f"({len(result.topics)} topics: {', '.join(result.topics) or 'none'}; {span}) "
           f"from {result.source}; {state}; wrote {result.target}")

@@ -212,6 +212,15 @@ class ContactModel:
         sum of J^T f over the overlapping points. ``poses`` are those at q, and ``data``'s
         frames are placed at q."""
         generalised = np.zeros(self.model.nv)
+        for _, _, relative, force in self.compliant_point_forces(data, q, v, poses, compliant, approach_speeds):
+            generalised += relative.T @ force
+        return generalised
+
+    def compliant_point_forces(self, data: pin.Data, q: np.ndarray, v: np.ndarray, poses: Sequence[np.ndarray],
+                               compliant: Sequence[int], approach_speeds: np.ndarray):
+        """Per overlapping point of the compliant pairs (arguments as :meth:`compliant_force`):
+        (pair index, point (world, m: midway between the surfaces), relative Jacobian (3 x nv),
+        force on the pair's second geometry (world, N))."""
         close = set(self.broad.close_pairs(self.centres(self.placements(data))))
         jacobians_ready = False
         for j, k in enumerate(compliant):
@@ -227,13 +236,13 @@ class ContactModel:
             law: HuntCrossley = self.pairs[k].law
             chi = hysteresis_factor(law.restitution, approach_speeds[j], law.damping_model)
             for c in points:
-                relative = self.relative_jacobian(data, k, 0.5 * (c.point1 + c.point2))
+                point = 0.5 * (c.point1 + c.point2)
+                relative = self.relative_jacobian(data, k, point)
                 u = relative @ v
                 un = float(u @ c.normal)
                 fn = hunt_crossley_force(c.depth, -un, law.stiffness, law.exponent, chi) / len(points)
-                force = fn * c.normal + regularised_coulomb(u - un * c.normal, fn, law.friction, law.velocity_scale)
-                generalised += relative.T @ force
-        return generalised
+                yield k, point, relative, fn * c.normal + regularised_coulomb(u - un * c.normal, fn, law.friction,
+                                                                            law.velocity_scale)
 
     def elastic_energy(self, poses: Sequence[np.ndarray], compliant: Sequence[int]) -> float:
         """Energy (J) in the springs of the compliant pairs: per contact point 1/N of the

@@ -64,11 +64,17 @@ class StepperSettings:
 @dataclass
 class StepReport:
     """What one step found: per pair the summed normal impulse (N s), the deepest overlap
-    (m) and the solver's iterations."""
+    (m) and the solver's iterations; per contact point its pair's name (``names``), the point
+    (``points``: normal from the pair's first geometry to its second) and its impulse on the
+    second geometry (``impulses``, N s, rows 3i, 3i + 1 tangential, 3i + 2 normal in the
+    contact frame :func:`contact_rotation` of the normal)."""
 
     normal_impulse: dict[str, float] = field(default_factory=dict)
     penetration: float = 0.0
     iterations: int = 0
+    names: list[str] = field(default_factory=list)
+    points: list = field(default_factory=list)
+    impulses: np.ndarray | None = None
 
 
 @njit(types.void(READ_VECTOR, types.Array(types.float64, 2, "A")), cache=True)
@@ -341,6 +347,7 @@ class ConstraintStepper:
         gaps, i, joints = [], 0, self.joint_placements(data)
         for k, points in touching:
             rotation1, translation1, rotation2, translation2 = joints[k]
+            report.points += points
             for c in points:
                 placed1, at1, placed2, at2 = active.placements[i]
                 _contact_placements(c.normal, c.point1, c.point2, rotation1, translation1, rotation2, translation2,
@@ -355,6 +362,7 @@ class ConstraintStepper:
                             -settings.restitution_threshold, settings.baumgarte, active.mass_jt, active.delassus,
                             active.drift)
         impulses, report.iterations = active.solve(active.delassus, active.drift)
+        report.names, report.impulses = active.names, impulses
         v_next = np.empty_like(v_free)
         _velocity_after(v_free, active.mass_jt, impulses, v_next)
         for name, impulse in zip(active.names, impulses[2::3].tolist()):

@@ -41,7 +41,11 @@ class ChunkedWriter:
     """Writes one MCAP file to ``stream``: ``start``, ``register_schema``,
     ``register_channel``, ``add_messages`` (the messages of one log time), ``flush`` (close
     the open chunk and flush the stream) and ``finish`` (summary and footer), as mcap's
-    ``Writer`` does."""
+    ``Writer`` does.
+
+    For a stream that failed mid-file: ``chunk_end(k)`` is where the data of the first
+    ``k`` written chunks ends and ``tail_of(k)`` the bytes that finish a file cut there
+    (summary of those chunks, footer, magic); ``chunk_messages(k)`` counts their messages."""
 
     def __init__(self, stream: IO[bytes], chunk_size: int = CHUNK_SIZE) -> None:
         self._stream, self.chunk_size = stream, chunk_size
@@ -53,12 +57,16 @@ class ChunkedWriter:
         self._chunk_indexes: list[ChunkIndex] = []
         self._counts: dict[int, int] = {}             # messages per channel, in order of the first one
         self._times: list[int] = []                   # [earliest, latest] log time of every message
+        self._chunk_counts: list[dict[int, int]] = []  # per written chunk: its messages per channel
+        self._chunk_ends: list[int] = []               # per written chunk: offset after its message indexes
+        self._data_start = 0                           # offset after the header record
         self.chunk_count = 0
 
     def start(self, profile: str, library: str) -> None:
         """The magic and the header record."""
         self._stream.write(MAGIC)
         self._write_record(Header(profile=profile, library=library))
+        self._data_start = self._stream.tell()
 
     def register_schema(self, name: str, encoding: str, data: bytes) -> int:
         """A schema (into the open chunk and the summary); returns its id (1, 2, ...)."""
@@ -109,16 +117,51 @@ class ChunkedWriter:
         statistics, chunk indexes, empty attachment and metadata index groups, summary
         offsets), the footer and the closing magic. Does not close the stream."""
         self._close_chunk()
-        self._write_record(DataEnd(data_section_crc=0))
-        summary_start = self._stream.tell()
+        self._stream.write(self._tail(self._stream.tell(), self._chunk_indexes, self._counts, self._times))
+
+    @property
+    def messages(self) -> int:
+        """Messages added so far (written or in the open chunk)."""
+        return sum(self._counts.values())
+
+    def chunk_end(self, chunks: int) -> int:
+        """Offset after the first ``chunks`` written chunks and their message indexes (after
+        the header for 0): where a file keeping only them ends its data section."""
+        return self._chunk_ends[chunks - 1] if chunks else self._data_start
+
+    def chunk_messages(self, chunks: int) -> int:
+        """Messages in the first ``chunks`` written chunks."""
+        return sum(sum(counts.values()) for counts in self._chunk_counts[:chunks])
+
+    def tail_of(self, chunks: int) -> bytes:
+        """The bytes that finish a file cut at ``chunk_end(chunks)``: data end, summary
+        (every schema and channel; statistics and chunk indexes of those chunks only),
+        footer and magic, as ``finish`` writes them. For a writer whose stream failed: the
+        file, cut there, becomes complete without the chunks after it."""
+        indexes = self._chunk_indexes[:chunks]
+        counts: dict[int, int] = {}          # in order of each channel's first message, as add_messages counts
+        for chunk_counts in self._chunk_counts[:chunks]:
+            for channel, count in chunk_counts.items():
+                counts[channel] = counts.get(channel, 0) + count
+        times = [min(i.message_start_time for i in indexes), max(i.message_end_time for i in indexes)] \
+            if indexes else []
+        return self._tail(self.chunk_end(chunks), indexes, counts, times)
+
+    def _tail(self, data_end: int, chunk_indexes: list[ChunkIndex], counts: dict[int, int],
+              times: list[int]) -> bytes:
+        """Data end, summary, footer and magic for a data section ending at ``data_end``
+        with ``chunk_indexes``, ``counts`` messages per channel and ``times`` [earliest,
+        latest] log time."""
+        data_end_record = _record_bytes(DataEnd(data_section_crc=0))
+        summary_start = data_end + len(data_end_record)
         summary = RecordBuilder()
         statistics = Statistics(
-            message_count=sum(self._counts.values()), schema_count=len(self._schemas),
-            channel_count=len(self._channels), attachment_count=0, metadata_count=0, chunk_count=self.chunk_count,
-            message_start_time=self._times[0] if self._times else 0,
-            message_end_time=self._times[1] if self._times else 0, channel_message_counts=self._counts)
+            message_count=sum(counts.values()), schema_count=len(self._schemas),
+            channel_count=len(self._channels), attachment_count=0, metadata_count=0, chunk_count=len(chunk_indexes),
+            message_start_time=times[0] if times else 0,
+            message_end_time=times[1] if times else 0, channel_message_counts=counts)
         groups = ((Opcode.SCHEMA, self._schemas), (Opcode.CHANNEL, self._channels), (Opcode.STATISTICS, [statistics]),
-                  (Opcode.CHUNK_INDEX, self._chunk_indexes), (Opcode.ATTACHMENT_INDEX, []),
+                  (Opcode.CHUNK_INDEX, chunk_indexes), (Opcode.ATTACHMENT_INDEX, []),
                   (Opcode.METADATA_INDEX, []))
         offsets = []
         for opcode, records in groups:
@@ -133,10 +176,9 @@ class ChunkedWriter:
         data = summary.end()
         crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4, summary_start, summary_offset_start),
                          zlib.crc32(data))
-        self._stream.write(data)
-        self._write_record(Footer(summary_start=summary_start, summary_offset_start=summary_offset_start,
-                                  summary_crc=crc))
-        self._stream.write(MAGIC)
+        footer = _record_bytes(Footer(summary_start=summary_start, summary_offset_start=summary_offset_start,
+                                      summary_crc=crc))
+        return data_end_record + data + footer + MAGIC
 
     def _chunk_record(self, record: Schema | Channel) -> None:
         """A schema or channel record into the open chunk (closed past ``chunk_size``)."""
@@ -147,9 +189,7 @@ class ChunkedWriter:
             self._close_chunk()
 
     def _write_record(self, record: object) -> None:
-        builder = RecordBuilder()
-        record.write(builder)
-        self._stream.write(builder.end())
+        self._stream.write(_record_bytes(record))
 
     def _close_chunk(self) -> None:
         """Write the open chunk (zstd) and its message indexes, and index it; nothing if it
@@ -175,4 +215,13 @@ class ChunkedWriter:
             chunk_length=index_start - chunk_start, message_index_offsets=offsets, message_index_length=len(records),
             compression="zstd", compressed_size=len(compressed), uncompressed_size=len(data)))
         self.chunk_count += 1
+        self._chunk_counts.append({channel: len(entries) // 2 for channel, entries in self._chunk_index.items()})
+        self._chunk_ends.append(self._stream.tell())
         self._chunk, self._chunk_times, self._chunk_index = bytearray(), [], {}
+
+
+def _record_bytes(record: object) -> bytes:
+    """The bytes of one mcap record (opcode, length, fields)."""
+    builder = RecordBuilder()
+    record.write(builder)
+    return builder.end()

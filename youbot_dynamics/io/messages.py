@@ -55,6 +55,9 @@ Odometry = _T["nav_msgs/msg/Odometry"]
 Twist = _T["geometry_msgs/msg/Twist"]
 TwistWithCovariance = _T["geometry_msgs/msg/TwistWithCovariance"]
 PoseWithCovariance = _T["geometry_msgs/msg/PoseWithCovariance"]
+Wrench = _T["geometry_msgs/msg/Wrench"]
+WrenchStamped = _T["geometry_msgs/msg/WrenchStamped"]
+Imu = _T["sensor_msgs/msg/Imu"]
 
 UNIT_QUATERNION_TOLERANCE = 1e-6
 """Largest accepted | |q| - 1 | for a quaternion in a message."""
@@ -226,6 +229,30 @@ def odometry(stamp_ns: int, frame_id: str, child_frame_id: str, position_xyz: Se
                                                           angular=Vector3(x=wx, y=wy, z=wz)),
                                               covariance=finite_array(twist_covariance, "Odometry.twist.covariance",
                                                                       36)))
+
+
+def wrench_stamped(stamp_ns: int, frame_id: str, force: Sequence[float], torque: Sequence[float]) -> WrenchStamped:
+    """geometry_msgs/WrenchStamped: force (N) and torque (N m) about ``frame_id``'s origin, in
+    that frame."""
+    fx, fy, fz = finite_floats(force, "WrenchStamped.wrench.force", 3)
+    tx, ty, tz = finite_floats(torque, "WrenchStamped.wrench.torque", 3)
+    return WrenchStamped(header=header(stamp_ns, frame_id),
+                         wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz), torque=Vector3(x=tx, y=ty, z=tz)))
+
+
+def imu(stamp_ns: int, frame_id: str, quaternion_xyzw: Sequence[float], angular_velocity: Sequence[float],
+        linear_acceleration: Sequence[float], covariances: Sequence[Sequence[float]]) -> Imu:
+    """sensor_msgs/Imu in ``frame_id``: orientation (unit quaternion), angular velocity
+    (rad/s), linear acceleration (m/s^2) and their row-major 3x3 ``covariances`` (in that
+    order; REP 145: -1 in element 0 for a quantity not provided)."""
+    wx, wy, wz = finite_floats(angular_velocity, "Imu.angular_velocity", 3)
+    ax, ay, az = finite_floats(linear_acceleration, "Imu.linear_acceleration", 3)
+    orientation, angular, linear = (finite_array(c, f"Imu.{name}_covariance", 9) for c, name in
+                                    zip(covariances, ("orientation", "angular_velocity", "linear_acceleration")))
+    return Imu(header=header(stamp_ns, frame_id), orientation=unit_quaternion(quaternion_xyzw, "Imu.orientation"),
+               orientation_covariance=orientation, angular_velocity=Vector3(x=wx, y=wy, z=wz),
+               angular_velocity_covariance=angular, linear_acceleration=Vector3(x=ax, y=ay, z=az),
+               linear_acceleration_covariance=linear)
 
 
 def tf_message(transforms: Iterable[TransformStamped]) -> TFMessage:

@@ -9,7 +9,7 @@ Layout of the recording (Rerun 0.41):
   ``rerun.urdf.UrdfJoint``), which is how Rerun >= 0.28 animates a loaded URDF; joints not
   named in a sample keep their last (initially zero) position;
 - ``/ee/position``: the end-effector position per sample (``Points3D``, one point, metres,
-  in the URDF root link's frame) and, on close, ``/ee/path``: the whole path as one static
+  in the root frame) and, on close, ``/ee/path``: the whole path as one static
   ``LineStrips3D``;
 - ``/joints/q``, ``/joints/v``, ``/joints/tau``: ``Scalars`` with one series per joint
   (rad or m, rad/s or m/s, N m or N), series named by a static ``SeriesLines``;
@@ -24,13 +24,16 @@ Layout of the recording (Rerun 0.41):
   geometry on robot links (in the link's frame, which the URDF loader names after the
   link), static solids placed as the scene places them; a halfspace is drawn as a thin
   square plate on its boundary plane (``io.drawn_shapes.drawn_shape``);
-- ``/world_frame``: if the world frame is not the URDF root link (a ``frame_id`` such as
-  ``odom``), a static identity transform world frame -> root link joins the two trees.
+- ``/world_frame``: the static identity transform that joins the root frame to the tree
+  (by default: world frame -> root link if they differ, a ``frame_id`` such as ``map``);
+- ``/base_frames/<child>``: a moving base's per-sample transforms (``moving_frames``:
+  odom -> base_footprint, odom -> world), as the node's /tf has them.
 
-The world frame is the frame free-body poses, end-effector positions and world geometry are
-given in (the robot's root frame; ``world`` without a robot). Every frame is a named frame
-whose chain of parents ends at the world frame, so a 3D view rooted anywhere in the tree
-finds a transform path to every entity.
+The world frame is the frame free-body poses and world geometry are given in (the robot's
+root frame; ``world`` without a robot, or under a moving base); the root frame the one of
+the end-effector positions (default: the world frame). Every frame is a named frame whose
+chain of parents ends at the root frame, so a 3D view rooted anywhere in the tree finds a
+transform path to every entity.
 
 Every sample sits on the ``sim_time`` timeline, a duration logged as integer nanoseconds
 (the stamps of the MCAP messages: never float seconds, which Rerun truncates to whole
@@ -52,6 +55,7 @@ from rerun.urdf import UrdfJoint, UrdfTree
 from youbot_dynamics.dynamics.collision import Geometry, Shape
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.closing import ClosesOnExit
+from youbot_dynamics.io.log_file import FileSink, LogWriteFailed, open_exclusive, room_left
 from youbot_dynamics.io.messages import finite_array, finite_floats, stamps_ns
 from youbot_dynamics.model.lie import quaternion_from_matrix
 from youbot_dynamics.io.drawn_shapes import drawn_shape
@@ -65,8 +69,12 @@ ENERGY = "/energy"
 FREE_BODIES = "/free_bodies"
 GEOMETRY = "/geometry"
 WORLD_FRAME = "/world_frame"
+BASE_FRAMES = "/base_frames"
 DEFAULT_BATCH_SIZE = 250
 """Samples ``log_sample`` buffers before sending them in one batch."""
+RESERVE_BYTES = 1 << 20
+"""Bytes a recording leaves free at least on its file system (and under the file-size
+limit), beyond its footer and what is in flight; see ``RerunLogger``."""
 DEFAULT_FLUSH_SPAN = 1.0
 """Simulated seconds of samples ``log_sample`` / ``log_body_poses`` buffer at most: a batch
 is sent (and Rerun's pipeline flushed towards the file) once it spans this long, so a crash
@@ -139,7 +147,18 @@ class RerunLogger(ClosesOnExit):
     is buffered, writes the end-effector path and disconnects so the file gets its footer.
     Joint names must be moving URDF joints (``UserInputError`` otherwise); values must be
     finite and times integer nanoseconds (``MessageFieldError``, a ValueError naming the
-    field, otherwise).
+    field, otherwise). The path is held under an advisory lock while the recording is
+    open (a second writer gets ``LogPathInUse``, see ``io.log_file``).
+
+    Room: Rerun 0.41 writes the file from its own thread and reports a failed write only on
+    stderr, after which its flush, disconnect and the interpreter's exit block forever. So
+    the logger stops before that can happen: before each batch it asks
+    :func:`~youbot_dynamics.io.log_file.room_left` (free space, file-size limit), and if
+    less is left than ``reserve_bytes`` + four times the most the file grew between two
+    batches + an eighth of its size (the footer's manifest: ~7 % measured), it drops the
+    batch, finishes the file (footer written) and sets ``failure``
+    (:class:`~youbot_dynamics.io.log_file.LogWriteFailed`; ``messages`` counts samples);
+    ``closed`` is then True and later log calls do nothing.
     """
 
     def __init__(
@@ -152,15 +171,24 @@ class RerunLogger(ClosesOnExit):
         application_id: str = "youbot_dynamics",
         recording_id: str | None = None,
         world_frame: str | None = None,
+        root_frame: str | None = None,
+        static_frames: Sequence[tuple[str, str]] | None = None,
+        moving_frames: Sequence[tuple[str, str]] = (),
         batch_size: int = DEFAULT_BATCH_SIZE,
         flush_span: float = DEFAULT_FLUSH_SPAN,
+        reserve_bytes: int = RESERVE_BYTES,
     ) -> None:
         """Start the recording at ``path``, log the robot from ``urdf_path``, the shapes of
         the free bodies and the static geometry.
 
-        ``world_frame`` is the frame free-body poses, end-effector positions and world
-        geometry are given in (default: the URDF root link; ``world`` without a robot).
-        Free bodies need names distinct from the URDF's links and the world frame.
+        ``world_frame`` is the frame free-body poses and world geometry are given in
+        (default: the URDF root link; ``world`` without a robot), ``root_frame`` the one of
+        the end-effector positions (default: the world frame); ``static_frames`` the one
+        identity transform (parent, child) at most that joins the root to the robot
+        (default: world frame -> root link if they differ), ``moving_frames`` the edges
+        (parent, child) ``log_frame_rows`` moves each sample. Free bodies need names
+        distinct from the URDF's links and the world frame.
+        ``reserve_bytes``: room kept free (see the class docstring).
         """
         self.path = Path(path)
         self.urdf_path = None if urdf_path is None else Path(urdf_path)
@@ -172,6 +200,10 @@ class RerunLogger(ClosesOnExit):
         self.bodies = tuple(g.name for g in bodies)
         root_link = None if self.urdf_path is None else tree.root_link().name
         self.world_frame = world_frame or root_link or "world"
+        self.root_frame = root_frame or self.world_frame
+        self.moving_frames = tuple(moving_frames)
+        self._frame_rows: list[tuple[int, np.ndarray]] = []
+        """Buffered samples of ``log_frame_rows``: stamp (ns) and rows (edges, 7)."""
         links = set() if self.urdf_path is None else {root_link, *(joint.child_link for joint in tree.joints())}
         clash = sorted(set(self.bodies) & (links | {self.world_frame}))
         if clash:
@@ -186,7 +218,13 @@ class RerunLogger(ClosesOnExit):
         self._pending_t: list[int] = []
         self._pending_names: tuple[str, ...] = ()
         self._ee_path: list[np.ndarray] = []
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._lock: FileSink | None = FileSink(open_exclusive(self.path, "Rerun recording", truncate=False))
+        self.failure: LogWriteFailed | None = None
+        """Set when logging stopped for want of room (see the class docstring)."""
+        self.reserve_bytes = int(reserve_bytes)
+        self._growth = 0          # most bytes the file grew by between two batches
+        self._size: int | None = None    # the file's size at the last batch (None before the first)
+        self._sent = 0            # samples sent (joint, body and moving-frame samples)
         self._rec: rr.RecordingStream | None = rr.RecordingStream(
             application_id, recording_id=recording_id, send_properties=False
         )
@@ -203,12 +241,19 @@ class RerunLogger(ClosesOnExit):
                 self._rec.log(geometry_entity(geometry.name), rr.CoordinateFrame(frame),
                               shape_archetype(geometry.name, geometry.shape, geometry.placement), static=True)
         if root_link is not None:
-            self._rec.log_file_from_path(self.urdf_path, static=True)
-            if self.world_frame != root_link:
-                self._rec.log(WORLD_FRAME, rr.Transform3D(parent_frame=self.world_frame, child_frame=root_link),
-                              static=True)
-            self._rec.log(EE_POSITION, rr.CoordinateFrame(self.world_frame), static=True)
-            self._rec.log(EE_PATH, rr.CoordinateFrame(self.world_frame), static=True)
+            self._log_robot(root_link, static_frames)
+
+    def _log_robot(self, root_link: str, static_frames: Sequence[tuple[str, str]] | None) -> None:
+        """The URDF (static), the identity transform that joins the root frame to it (the
+        first of ``static_frames``; default: world frame -> root link if they differ) and
+        the end effector's frame."""
+        self._rec.log_file_from_path(self.urdf_path, static=True)
+        if static_frames is None:
+            static_frames = [(self.world_frame, root_link)] if self.world_frame != root_link else []
+        for parent, child in static_frames[:1]:
+            self._rec.log(WORLD_FRAME, rr.Transform3D(parent_frame=parent, child_frame=child), static=True)
+        self._rec.log(EE_POSITION, rr.CoordinateFrame(self.root_frame), static=True)
+        self._rec.log(EE_PATH, rr.CoordinateFrame(self.root_frame), static=True)
 
     @staticmethod
     def _urdf_tree(urdf_path: Path) -> UrdfTree:
@@ -237,12 +282,14 @@ class RerunLogger(ClosesOnExit):
     ) -> None:
         """Log one sample at simulated time ``stamp_ns`` (integer ns): joint positions ``q``,
         velocities ``v``, efforts ``tau`` (ordered as ``joint_names``), total energy (J) and
-        the end-effector position (m, in ``world_frame``); the joint transforms follow ``q``.
+        the end-effector position (m, in ``root_frame``); the joint transforms follow ``q``.
 
         Samples are checked at once and sent in batches of ``batch_size`` or spanning
         ``flush_span`` s (one Rerun call per entity per batch instead of one per sample);
         ``close`` sends the rest.
         """
+        if self.failure is not None:
+            return
         self._recording()
         names = tuple(joint_names)
         if names != self._pending_names:
@@ -266,6 +313,8 @@ class RerunLogger(ClosesOnExit):
         every body named at construction to (translation (m), quaternion (x, y, z, w)) in
         the world frame. Checked at once, sent in batches of ``batch_size`` like
         ``log_sample``."""
+        if self.failure is not None:
+            return
         self._recording()
         if set(poses) != set(self.bodies):
             raise UserInputError(f"Rerun log: poses for {sorted(poses)}, expected the free bodies "
@@ -277,12 +326,25 @@ class RerunLogger(ClosesOnExit):
     def log_body_rows(self, stamp_ns: int, rows: np.ndarray) -> None:
         """``log_body_poses`` of the free bodies as rows (one per body, in ``bodies``
         order) of translation (m) and quaternion (x, y, z, w): one check of the array."""
+        if self.failure is not None:
+            return
         self._recording()
         rows = np.asarray(rows, dtype=np.float64)
         if rows.shape != (len(self.bodies), 7) or not np.isfinite(rows).all():    # log_body_poses names it
             self.log_body_poses(stamp_ns, {name: (row[:3], row[3:]) for name, row in zip(self.bodies, rows)})
             return
         self._buffer_bodies(_stamp(stamp_ns), rows)
+
+    def log_frame_rows(self, stamp_ns: int, rows: np.ndarray) -> None:
+        """The poses of ``moving_frames`` at simulated time ``stamp_ns`` (integer ns): rows
+        (edges, 7) of translation (m) and quaternion (x, y, z, w), child in parent; sent in
+        batches like ``log_sample``."""
+        self._recording()
+        rows = finite_array(rows, "Rerun moving frames", len(self.moving_frames) * 7).reshape(-1, 7)
+        t = _stamp(stamp_ns)
+        self._frame_rows.append((t, rows))
+        if len(self._frame_rows) >= self.batch_size or t - self._frame_rows[0][0] >= self.flush_span_ns:
+            self._flush_frames()
 
     def _buffer_bodies(self, t: int, rows: np.ndarray) -> None:
         """Buffer checked body rows at ``t`` (ns); send the batch when it is full or spans
@@ -303,6 +365,8 @@ class RerunLogger(ClosesOnExit):
     ) -> None:
         """Log N samples at once: ``stamps`` (N,) in integer ns; ``q``, ``v``, ``tau`` (N, n)
         ordered as ``joint_names``; ``energy`` (N,) in J; ``ee_position`` (N, 3) in m."""
+        if self.failure is not None:
+            return
         self._recording()
         names = tuple(joint_names)
         self._resolve(names)
@@ -317,20 +381,26 @@ class RerunLogger(ClosesOnExit):
             ee=finite_array(ee_position, "Rerun ee_position", count * 3).reshape(count, 3),
         )
         self._flush()
+        if self._out_of_room():
+            return
+        self._sent += count
         self._send(names, samples)
 
     def close(self) -> None:
         """Send pending samples, log the end-effector path and finalise the file; later
         calls do nothing."""
-        if self._rec is None:
+        if self._rec is None or self._out_of_room():
             return
         self._flush()
         self._flush_bodies()
+        self._flush_frames()
         rec, self._rec = self._rec, None
         if self._ee_path:
             rec.log(EE_PATH, rr.LineStrips3D([np.concatenate(self._ee_path)]), static=True)
         rec.flush()
         rec.disconnect()
+        lock, self._lock = self._lock, None
+        lock.close()
 
     def _recording(self) -> rr.RecordingStream:
         if self._rec is None:
@@ -347,9 +417,41 @@ class RerunLogger(ClosesOnExit):
             )
         return [self._joints[name] for name in names]
 
+    def _out_of_room(self) -> bool:
+        """Stop the recording (footer written, ``failure`` set, buffers dropped) if the file
+        has too little room left for the next batch and its footer; True if stopped."""
+        if self._rec is None:
+            return True
+        try:
+            size = self.path.stat().st_size
+            room, error = room_left(self.path)
+        except OSError:            # the file gone or its file system unreadable: Rerun writes on regardless
+            return False
+        self._growth, self._size = max(self._growth, size - (size if self._size is None else self._size)), size
+        needed = self.reserve_bytes + 4 * self._growth + size // 8
+        if room >= needed:
+            return False
+        lost = len(self._pending) + len(self._body_rows)
+        self._pending, self._pending_t, self._body_rows = [], [], []
+        rec, self._rec = self._rec, None
+        rec.flush()
+        rec.disconnect()
+        lock, self._lock = self._lock, None
+        lock.close()
+        text = "file-size limit" if error == "EFBIG" else "no space left on its file system"
+        self.failure = LogWriteFailed(
+            path=self.path, kind="Rerun recording", errno=error,
+            reason=f"{error} ({text}: {room} bytes left, {needed} kept for the next batch and the footer)",
+            messages=self._sent, bytes=self.path.stat().st_size, lost=lost, finalised=True,  # with its footer
+            unit="samples")
+        return True
+
     def _flush(self) -> None:
         """Send the samples buffered by ``log_sample``."""
+        if self._pending and self._out_of_room():
+            return
         if self._pending:
+            self._sent += len(self._pending)
             rows, times, self._pending, self._pending_t = np.vstack(self._pending), self._pending_t, [], []
             n = len(self._pending_names)
             self._send(self._pending_names, Samples(np.array(times, dtype=np.int64), rows[:, :n], rows[:, n:2 * n],
@@ -359,15 +461,26 @@ class RerunLogger(ClosesOnExit):
     def _flush_bodies(self) -> None:
         """Send the free-body poses buffered by ``log_body_poses``: one Transform3D column
         per body."""
-        if not self._body_rows:
-            return
         rows, self._body_rows = self._body_rows, []
+        self._send_transforms(rows, [(body_entity(name), self.world_frame, name) for name in self.bodies])
+
+    def _flush_frames(self) -> None:
+        """Send the moving frames' poses buffered by ``log_frame_rows``."""
+        rows, self._frame_rows = self._frame_rows, []
+        self._send_transforms(rows, [(f"{BASE_FRAMES}/{child}", parent, child) for parent, child in self.moving_frames])
+
+    def _send_transforms(self, rows: list[tuple[int, np.ndarray]], edges: Sequence[tuple[str, str, str]]) -> None:
+        """Send buffered samples (stamp ns, rows (edges, 7)) as one Transform3D column per
+        edge (entity, parent frame, child frame)."""
+        if not rows or self._out_of_room():
+            return
+        self._sent += len(rows)
         index = [rr.TimeColumn(TIMELINE, duration=durations([t for t, _ in rows]))]
-        poses = np.array([pose for _, pose in rows])    # (samples, bodies, 7)
-        for k, name in enumerate(self.bodies):
+        poses = np.array([pose for _, pose in rows])    # (samples, edges, 7)
+        for k, (entity, parent, child) in enumerate(edges):
             columns = rr.Transform3D.columns(translation=poses[:, k, :3], quaternion=poses[:, k, 3:],
-                                             parent_frame=[self.world_frame] * len(rows), child_frame=[name] * len(rows))
-            self._recording().send_columns(body_entity(name), indexes=index, columns=columns)
+                                             parent_frame=[parent] * len(rows), child_frame=[child] * len(rows))
+            self._recording().send_columns(entity, indexes=index, columns=columns)
         self._recording().flush(timeout_sec=0.0)
 
     def _send(self, names: tuple[str, ...], samples: Samples) -> None:

@@ -2,6 +2,12 @@
 joint name prefixed, each robot's root link welded to a common ``world`` link at its pose,
 link inertials corrected), the empty robot, and another gravity on a model copy.
 
+A robot on a moving base is not welded: its root link (base_footprint) is the composed
+robot's root, which the base's planar joint moves and odometry places under ``odom``; a
+``world`` link welded to it would be a second parent of base_footprint on /tf (and in
+robot_state_publisher's tree of /robot_description). So such a composition holds one robot
+at the identity pose (the base's initial pose places it).
+
 Plain data in, URDF text or a :class:`~youbot_dynamics.model.robot.Robot` out; the scene
 validator (scene/contacts.py) reads the scene's ``robot: {compose: [...]}`` into
 :class:`Placement` values and turns a :class:`CompositionError` into an error naming the
@@ -56,11 +62,16 @@ class CompositionError(UserInputError):
         super().__init__(f"placement {index}: {part}: {problem}")
 
 
-def composed_urdf(placements: Sequence[Placement]) -> str:
+def composed_urdf(placements: Sequence[Placement], welded: bool = True) -> str:
     """One URDF (text) from several: every link and joint name prefixed, each robot's root
-    link fixed to a common ``world`` link at its pose by a joint ``<prefix>world_joint``."""
+    link fixed to a common ``world`` link at its pose by a joint ``<prefix>world_joint``;
+    ``welded`` False (a moving base): one robot at the identity pose, its own root link the
+    root (no ``world`` link), else a CompositionError."""
+    if not welded:
+        _check_unwelded(placements)
     world = etree.Element("robot", name="composed")
-    etree.SubElement(world, "link", name="world")
+    if welded:
+        etree.SubElement(world, "link", name="world")
     for index, placement in enumerate(placements):
         text, label = _read(placement, index)
         try:
@@ -79,6 +90,8 @@ def composed_urdf(placements: Sequence[Placement]) -> str:
                     if link is not None:
                         link.set("link", prefix + link.get("link"))
                 world.append(element)
+        if not welded:
+            continue
         joint = etree.SubElement(world, "joint", name=f"{prefix}world_joint", type="fixed")
         etree.SubElement(joint, "parent", link="world")
         etree.SubElement(joint, "child", link=prefix + base)
@@ -87,6 +100,15 @@ def composed_urdf(placements: Sequence[Placement]) -> str:
         etree.SubElement(joint, "origin", xyz=" ".join(repr(float(x)) for x in pose[:3, 3]),
                          rpy=" ".join(repr(float(x)) for x in rpy))
     return etree.tostring(world, encoding="unicode")
+
+
+def _check_unwelded(placements: Sequence[Placement]) -> None:
+    """A composition a moving base carries: one robot, at the identity pose."""
+    if len(placements) != 1:
+        raise CompositionError(1, "urdf", "a moving base carries one robot: compose one URDF (or fix the base)")
+    if not np.array_equal(np.asarray(placements[0].pose, dtype=float), np.eye(4)):
+        raise CompositionError(0, "pose", "a moving base's robot is placed by base.initial.pose: give no pose "
+                               "(or the identity)")
 
 
 def _read(placement: Placement, index: int) -> tuple[str | bytes, str]:

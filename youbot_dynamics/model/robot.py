@@ -41,12 +41,15 @@ offending link named); ``strict=True`` makes warnings errors. A malformed file i
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin
+from lxml import etree
 
 from youbot_dynamics.errors import SingularMassMatrixError, URDFError, UserInputError
 from youbot_dynamics.model.fidelity import WARNING, fidelity_notes, inertial_warnings, mass_matrix_defect
@@ -322,56 +325,101 @@ class Robot:
 # ---------------------------------------------------------------------------------------
 # Loading
 # ---------------------------------------------------------------------------------------
-def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False) -> Robot:
-    """Build a Robot from a URDF file path or a URDF XML string (any encoding declaration).
+@dataclass(frozen=True, eq=False)
+class URDFDocument:
+    """A URDF read and checked once, from which a Robot is built for any root joint
+    (:func:`robot_from_urdf`): ``label`` (the file or "<string>"), the parsed ``element``
+    (lxml; read-only from here on), the ``forgiven`` notes of what urdfdom forgives, the
+    kinematic ``tree`` and ``root_link``, the ``mimic`` relations and their warnings.
+    ``source`` is what it was read from (a path or the XML text): a pickled document (a
+    scene sent to a sweep's worker) is read again from it."""
 
-    ``root`` joins the URDF's root link to the world: ``fixed`` (welded), ``floating``
-    (Pinocchio free-flyer) or ``planar`` (x, y, yaw on the floor); see the module docstring
-    for the q and v layouts. An unknown root is a UserInputError.
+    source: str | Path
+    label: str
+    element: etree._Element
+    forgiven: tuple[str, ...]
+    tree: tuple[TreeJoint, ...]
+    root_link: str
+    relations: Mapping[str, Mimic]
+    mimic_warnings: tuple[str, ...]
+
+    def __reduce__(self) -> tuple:
+        return read_urdf, (self.source,)
+
+
+@contextmanager
+def _reading(label: str) -> Iterator[None]:
+    """The parsers' own failures on a malformed attribute or element as one URDFError."""
+    try:
+        yield
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as error:
+        if isinstance(error, UserInputError):
+            raise
+        raise URDFError(f"{label}: cannot read the URDF: {type(error).__name__}: {' '.join(str(error).split())} "
+                        "(a malformed attribute or element the checks above do not cover)") from None
+
+
+def read_urdf(source: str | Path) -> URDFDocument:
+    """Read and check a URDF file path or XML string (any encoding declaration) once.
 
     Raises :class:`URDFError` naming the file, the line, the element and the reason for a
     missing file, malformed XML, a ``<robot>`` without a name, a duplicate link or joint name,
     an attribute that is not the numbers urdfdom expects, a missing ``<mass value>``,
     ``<inertia>`` moment or ``<limit>`` effort / velocity, an unknown joint type, a missing
     parent or child link, a zero axis on a moving joint, a ``<mimic>`` of no moving joint or a
-    kinematic loop. Physically invalid inertias are warnings in the fidelity report
-    (``Robot.warnings``), errors with ``strict=True``; so is a singular joint-space mass
-    matrix. What urdfdom forgives is forgiven and noted in the fidelity report
+    kinematic loop. What urdfdom forgives is forgiven and noted
     (:mod:`youbot_dynamics.model.lenient_urdf`: an XML declaration after blank lines or of
     version 0.0, undeclared namespace prefixes, a point-mass <inertial>, reversed limits; a
-    malformed <visual>); a URDF joint named ROOT_JOINT_NAME makes a floating or planar root
-    joint take the next free name (:func:`~youbot_dynamics.model.pinocchio_model.root_joint_name`).
-    """
-    if root not in ROOTS:
-        raise UserInputError(f"root '{root}' is unknown: expected one of {', '.join(ROOTS)}")
+    malformed <visual>)."""
     text, label = read_source(source)
     element, forgiven = parse_urdf(text, label)
-    try:
+    with _reading(label):
         forgiven += add_point_mass_inertias(element)
         forgiven += check_urdf(element, label)
         forgiven += reversed_limit_notes(element)
-        root_joint = ROOT_JOINT_NAME if root == "fixed" else root_joint_name(element)
         tree, root_link = kinematic_tree(element)
         relations, mimic_warnings = mimic_relations(element, label)
-        model, mimic, mimic_notes = pinocchio_model(element, relations, root, root_joint)
+    return URDFDocument(source, label, element, tuple(forgiven), tree, root_link, relations,
+                        tuple(mimic_warnings))
+
+
+def robot_from_urdf(document: URDFDocument, root: str = "fixed", *, strict: bool = False) -> Robot:
+    """The Robot of a read URDF with the root joint ``root``: ``fixed`` (welded),
+    ``floating`` (Pinocchio free-flyer) or ``planar`` (x, y, yaw on the floor); see the
+    module docstring for the q and v layouts. An unknown root is a UserInputError.
+
+    Physically invalid inertias are warnings in the fidelity report (``Robot.warnings``),
+    errors with ``strict=True``; so is a singular joint-space mass matrix. A URDF joint named
+    ROOT_JOINT_NAME makes a floating or planar root joint take the next free name
+    (:func:`~youbot_dynamics.model.pinocchio_model.root_joint_name`)."""
+    if root not in ROOTS:
+        raise UserInputError(f"root '{root}' is unknown: expected one of {', '.join(ROOTS)}")
+    element, label = document.element, document.label
+    with _reading(label):
+        root_joint = ROOT_JOINT_NAME if root == "fixed" else root_joint_name(element)
+        model, mimic, mimic_notes = pinocchio_model(element, document.relations, root, root_joint)
         first = 1 if root == "fixed" else 2  # Pinocchio joint 0 is the universe, 1 the root joint
         by_name = {joint.get("name"): joint for joint in element.findall("joint")}
         joints = tuple(moving_joint(by_name[model.names[i]]) for i in range(first, model.njoints)
                        if model.names[i] not in mimic)
-        robot = Robot(name=element.get("name"), source=label, model=model, joints=joints, tree=tree,
-                      root_link=root_link,
-                      fidelity=(_root_note(root, root_link, root_joint), *forgiven, *mimic_warnings, *inertial_warnings(element),
+        robot = Robot(name=element.get("name"), source=label, model=model, joints=joints, tree=document.tree,
+                      root_link=document.root_link,
+                      fidelity=(_root_note(root, document.root_link, root_joint), *document.forgiven,
+                                *document.mimic_warnings, *inertial_warnings(element),
                                 *fidelity_notes(element), *mimic_notes),
                       mimic=mimic, root=root)
-        if strict and robot.warnings:
-            raise URDFError(f"{label}: strict loading refuses {len(robot.warnings)} warning(s): "
-                            + "; ".join(w.removeprefix(WARNING) for w in robot.warnings))
-    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as error:  # the parsers' own failures
-        if isinstance(error, UserInputError):
-            raise
-        raise URDFError(f"{label}: cannot read the URDF: {type(error).__name__}: {' '.join(str(error).split())} "
-                        "(a malformed attribute or element the checks above do not cover)") from None
+    if strict and robot.warnings:
+        raise URDFError(f"{label}: strict loading refuses {len(robot.warnings)} warning(s): "
+                        + "; ".join(w.removeprefix(WARNING) for w in robot.warnings))
     return robot
+
+
+def load_robot(source: str | Path, *, root: str = "fixed", strict: bool = False) -> Robot:
+    """Build a Robot from a URDF file path or a URDF XML string: :func:`read_urdf` then
+    :func:`robot_from_urdf` (their docstrings say what is refused, forgiven and warned)."""
+    if root not in ROOTS:
+        raise UserInputError(f"root '{root}' is unknown: expected one of {', '.join(ROOTS)}")
+    return robot_from_urdf(read_urdf(source), root, strict=strict)
 
 
 def _root_note(root: str, root_link: str, root_joint: str) -> str:

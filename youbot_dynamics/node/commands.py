@@ -55,6 +55,7 @@ import numpy as np
 
 from youbot_dynamics.io.stamps import MALFORMED_STAMP_NS, NS_PER_S
 from youbot_dynamics.model.robot import Robot
+from youbot_dynamics.node.interface import TIMEOUT_ACTIONS
 from youbot_dynamics.sim.controllers import Reference
 
 REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_joint",
@@ -79,10 +80,6 @@ WALL_CLOCK_WINDOW_NS = 24 * 3600 * NS_PER_S
 FUTURE_LIMIT_NS = 60 * NS_PER_S
 """How far ahead of node time a command or trajectory may be stamped (ns)."""
 
-TIMEOUT_ACTIONS = ("hold", "zero_torque")
-"""What the simulator applies once the last effort command is older than the timeout:
-``hold`` hands control back to the scene's controller (its set point or trajectory; zero
-torque in a scene without a controller), ``zero_torque`` applies zero torque."""
 
 
 class InputRejected(ValueError):

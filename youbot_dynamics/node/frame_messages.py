@@ -3,12 +3,18 @@
 /tf_static, /ee_pose, /ee_poses, /free_bodies, /free_bodies_markers and /scene_markers.
 
 Frame names: every frame the node names itself (the robot's links, the free bodies, the
-default root frame) carries ``prefix`` (robot_state_publisher's ``frame_prefix``: two robots
-on one /tf keep their frames apart); a ``root_frame`` given is used as it is.
+default root frame, odom and world) carries ``prefix`` (robot_state_publisher's
+``frame_prefix``: two robots on one /tf keep their frames apart); a ``root_frame`` given is
+used as it is. The tree (one root, one parent per frame) is
+:func:`~youbot_dynamics.node.frames.frame_tree`'s: with a fixed base the world frame is the
+root frame; with a moving base, odom -> base_footprint (odometry) and odom -> world (its
+drift) are on /tf every sample, and the world things (free bodies, world geometry) are in
+``world``. Every pose is computed in the frame its header names: /ee_pose and /ee_poses in
+the root frame (a moving base: the odometry pose composed with the link kinematics).
 
-Free bodies (simulate mode) appear like the robot's links: on /tf as ``<root frame> ->
+Free bodies (simulate mode) appear like the robot's links: on /tf as ``<world frame> ->
 <body name>``; on ROS, as one geometry_msgs/PoseArray on /free_bodies per sample (poses in
-the root frame, in the scene's order of ``free_bodies``). One message per sample keeps every
+the world frame, in the scene's order of ``free_bodies``). One message per sample keeps every
 body at the same stamp, and the topic set does not depend on body names (which need not be
 valid topic names).
 
@@ -19,8 +25,8 @@ one end effector per robot (``Robot.end_effectors``): /ee_pose is then the first
 every robot's in composition order, all in the root frame.
 
 Shapes for viewers (visualization_msgs/MarkerArray, namespace = the shape's name):
-/free_bodies_markers draws every free body at every sample (in the root frame);
-/scene_markers (latched) draws the static world geometry (root frame) and the geometry on
+/free_bodies_markers draws every free body at every sample (in the world frame);
+/scene_markers (latched) draws the static world geometry (world frame) and the geometry on
 links (in the link's frame, frame-locked). A halfspace is drawn as a plate
 (``io.drawn_shapes.drawn_shape``).
 
@@ -40,7 +46,8 @@ from youbot_dynamics.io import messages
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.frames import LinkFrames, LinkTransform, SampleFrames, pose_rows
+from youbot_dynamics.node.frames import (LinkFrames, LinkTransform, SampleFrames, composed_rows, frame_tree,
+                                         pose_rows)
 
 FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)
 """Colour (r, g, b, a in 0..1) of the free bodies' markers (light wood)."""
@@ -64,19 +71,21 @@ def marker_stamped(path: str) -> bool:
 
 
 class FrameMessages:
-    """/tf, /tf_static and /ee_pose messages of a robot in ``root_frame``, /tf, /free_bodies
+    """/tf, /tf_static and /ee_pose messages of a robot under ``root_frame``, /tf, /free_bodies
     and /free_bodies_markers messages of the free bodies among ``geometries`` (frame names
     distinct from the robot's links) and the /scene_markers of the others; frame names
-    carry ``prefix`` (see the module docstring). ``moving_root``: a moving base's
-    odom -> base_footprint is on /tf, not /tf_static."""
+    carry ``prefix`` (see the module docstring). ``moving_root``: odometry moves the robot's
+    root link (a moving base in simulate mode); ``tree`` holds the frames above the robot."""
 
     def __init__(self, robot: Robot, root_frame: str, ee_link: str | None,
                  geometries: Sequence[Geometry] = (), prefix: str = "", moving_root: bool = False) -> None:
         self.links = LinkFrames(robot, ee_link or None)
-        self.prefix, self.moving_root = prefix, moving_root
-        self.root_frame = root_frame or prefix + robot.root_link
+        self.prefix = prefix
         self.has_robot = bool(robot.tree)
         self.body_shapes = {g.name: (g.shape, g.placement) for g in geometries if g.owner == "body"}
+        self.tree = frame_tree(robot.root_link, prefix, root_frame, moving_root,
+                               [*(prefix + link for link in robot.link_names), *(prefix + b for b in self.body_shapes)])
+        self.root_frame, self.world_frame = self.tree.root, self.tree.world
         self.static_geometry = tuple(g for g in geometries if g.owner != "body")
         clash = sorted(set(self.body_shapes) & {root_frame or robot.root_link, *robot.link_names})
         if clash:
@@ -97,25 +106,25 @@ class FrameMessages:
                                           transform.quaternion_xyzw)
 
     def tf_static(self) -> object:
-        """/tf_static: every fixed link, and root frame -> URDF root link if they differ."""
-        transforms = [self._transform(0, t) for t in self.links.static]
-        root_link = self.prefix + self.links.root_link
-        if self.root_frame != root_link and not self.moving_root:  # a moving base's is on /tf
-            transforms.insert(0, messages.transform_stamped(0, self.root_frame, root_link,
-                                                            (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
-        return messages.tf_message(transforms)
+        """/tf_static: the tree's static edges above the robot (root frame -> URDF root link,
+        or -> odom, identities), then every fixed link."""
+        return messages.tf_message([
+            *(messages.transform_stamped(0, parent, child, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+              for parent, child in self.tree.static),
+            *(self._transform(0, t) for t in self.links.static)])
 
     def body_poses(self, samples: Sequence[dict[str, np.ndarray]]) -> np.ndarray:
         """(N, k, 7) rows of translation (m) and quaternion (x, y, z, w) of the free bodies in
-        the root frame, in the scene's order, from their world poses (4x4, m) in N samples."""
+        the world frame, in the scene's order, from their world poses (4x4, m) in N samples."""
         return pose_rows([pose for poses in samples for pose in poses.values()]).reshape(len(samples), -1, 7)
 
     def tf(self, stamps: Sequence[int], samples: Sequence[SampleFrames] | None,
-           bodies: Sequence[np.ndarray] | None = None, base: object | None = None) -> list[object]:
-        """/tf of N samples (``stamps`` ns): ``base`` (one sample's moving base odom ->
-        base_footprint TransformStamped), the moving links of each sample's kinematics (none
-        without a robot), then the free bodies (rows of :meth:`body_poses`)."""
-        blocks = [] if base is None else [np.tile(_transform_row(base).reshape(-1), (len(stamps), 1))]
+           bodies: Sequence[np.ndarray] | None = None, base: np.ndarray | None = None) -> list[object]:
+        """/tf of N samples (``stamps`` ns): ``base`` (N, 2, 7), the rows of a moving base's
+        odom -> base_footprint and odom -> world (``tree.moving``), the moving links of each
+        sample's kinematics (none without a robot), then the free bodies (rows of
+        :meth:`body_poses`, in the world frame)."""
+        blocks = [] if base is None else [np.reshape(base, (len(stamps), -1))]
         if samples is not None:
             blocks.append(np.array([sample.link_poses.reshape(-1) for sample in samples]))
         if bodies is not None and len(self.body_shapes):
@@ -123,25 +132,24 @@ class FrameMessages:
         values = np.hstack(blocks) if blocks else np.zeros((len(stamps), 0))
 
         def build(stamp_ns: int, values: np.ndarray) -> object:
-            edges = [] if base is None else [None]
+            edges = [] if base is None else list(self.tree.moving)
             edges += [(self.prefix + parent, self.prefix + child) for parent, child in samples[0].edges] \
                 if samples is not None else []
-            edges += [(self.root_frame, self.prefix + name) for name in self.body_shapes]
-            return messages.tf_message(
-                base if edge is None else messages.transform_stamped(stamp_ns, *edge, row[:3], row[3:])
-                for edge, row in zip(edges, values.reshape(-1, 7)))
+            edges += [(self.world_frame, self.prefix + name) for name in self.body_shapes]
+            return messages.tf_message(messages.transform_stamped(stamp_ns, *edge, row[:3], row[3:])
+                                       for edge, row in zip(edges, values.reshape(-1, 7)))
 
         return self._refilled["/tf"].many(stamps, values, build)
 
     def free_bodies(self, stamps: Sequence[int], bodies: Sequence[np.ndarray]) -> list[object]:
-        """/free_bodies of N samples: the bodies' poses in the root frame, in order."""
+        """/free_bodies of N samples: the bodies' poses in the world frame, in order."""
         return self._refilled["/free_bodies"].many(
             stamps, np.reshape(bodies, (len(stamps), -1)), lambda stamp_ns, values: messages.pose_array(
-                stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))
+                stamp_ns, self.world_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))
 
     def free_body_markers(self, stamps: Sequence[int], poses: Sequence[dict[str, np.ndarray]]) -> list[object]:
         """/free_bodies_markers of N samples: each body's shape at its world pose (4x4, m;
-        ``poses`` by name) in the root frame (namespace: the body's name; the same ids every
+        ``poses`` by name) in the world frame (namespace: the body's name; the same ids every
         sample, so each replaces the last)."""
         values = pose_rows([sample[name] @ local for sample in poses for name, locals_ in self._marker_poses.items()
                             for local in locals_]).reshape(len(poses), -1)
@@ -149,13 +157,13 @@ class FrameMessages:
         def build(stamp_ns: int, values: np.ndarray) -> object:
             return messages.marker_array(
                 marker for name, (shape, placement) in self.body_shapes.items()
-                for marker in messages.shape_markers(stamp_ns, self.root_frame, name, shape,
+                for marker in messages.shape_markers(stamp_ns, self.world_frame, name, shape,
                                                      poses[0][name] @ placement, FREE_BODY_RGBA))
 
         return self._refilled["/free_bodies_markers"].many(stamps, values, build)
 
     def scene_markers(self) -> object:
-        """/scene_markers (latched, stamp 0): the static world geometry in the root frame and
+        """/scene_markers (latched, stamp 0): the static world geometry in the world frame and
         the geometry on links in the link's frame (frame-locked: it moves with the link);
         namespace: the geometry's name."""
         return messages.marker_array(
@@ -164,28 +172,27 @@ class FrameMessages:
                                                  GEOMETRY_RGBA, frame_locked=g.owner == "link"))
 
     def _geometry_frame(self, geometry: Geometry) -> str:
-        """The frame static geometry is placed in: the root frame, or its link's frame."""
-        return self.root_frame if geometry.owner == "world" else self.prefix + geometry.owner_name
+        """The frame static geometry is placed in: the world frame, or its link's frame."""
+        return self.world_frame if geometry.owner == "world" else self.prefix + geometry.owner_name
 
     def ee_messages(self, stamps: Sequence[int], samples: Sequence[SampleFrames],
-                    wanted: frozenset[str] | None = None) -> list[tuple[str, list[object]]]:
+                    wanted: frozenset[str] | None = None, base: np.ndarray | None = None
+                    ) -> list[tuple[str, list[object]]]:
         """(topic, its N messages) of /ee_pose and, for a model of several robots, /ee_poses,
-        from N samples' kinematics at ``stamps`` (ns); only those in ``wanted`` if given."""
+        from N samples' kinematics at ``stamps`` (ns), in the root frame (``base``: the rows
+        (N, 2, 7) of :meth:`tf`; the odometry pose composed with the kinematics); only those
+        in ``wanted`` if given."""
         topics: list[tuple[str, list[object]]] = []
+        ee = [sample.ee if base is None else composed_rows(rows[0], sample.ee) for sample, rows in
+              zip(samples, samples if base is None else base)]
         if wanted is None or "/ee_pose" in wanted:
             topics.append(("/ee_pose", self._refilled["/ee_pose"].many(
-                stamps, np.array([sample.ee[sample.ee_index] for sample in samples]),
+                stamps, np.array([rows[sample.ee_index] for rows, sample in zip(ee, samples)]),
                 lambda stamp_ns, row: messages.pose_stamped(stamp_ns, self.root_frame, row[:3], row[3:]))))
         if len(self.links.ee_links) > 1 and (wanted is None or "/ee_poses" in wanted):
             topics.append(("/ee_poses", self._refilled["/ee_poses"].many(
-                stamps, np.array([sample.ee[:sample.ee_count].reshape(-1) for sample in samples]),
+                stamps, np.array([rows[:sample.ee_count].reshape(-1) for rows, sample in zip(ee, samples)]),
                 lambda stamp_ns, values: messages.pose_array(stamp_ns, self.root_frame,
                                                              [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))))
         return topics
-
-
-def _transform_row(transform: object) -> np.ndarray:
-    """Translation (m) and quaternion (x, y, z, w) of a TransformStamped, as one row."""
-    t, r = transform.transform.translation, transform.transform.rotation
-    return np.array([[t.x, t.y, t.z, r.x, r.y, r.z, r.w]])
 

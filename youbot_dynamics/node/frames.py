@@ -11,6 +11,18 @@ oMf[parent]^-1 oMf[child]. The screw-axis kinematics of ``model/screws.py`` are 
 of this pass, and the tests hold it to them. Poses are 4x4 homogeneous matrices (m);
 quaternions are (x, y, z, w) with w >= 0.
 
+The tree the node publishes (:func:`frame_tree`, REP 105) has one root and one parent per
+frame. A fixed base: the root is ``frame_id`` or the robot's root link (a static root ->
+root link joins them if they differ), and the free bodies and the world geometry are in the
+root frame (the robot's root link is the world's origin). A moving base (simulate mode):
+the root is ``frame_id`` or ``odom`` (a static root -> odom joins them: a user's
+``frame_id: map`` asks for it); odom -> root link is the wheel odometry (/odom), and the
+ground-truth frame ``world`` hangs under odom, odom -> world being the odometry's drift
+(the world's pose in odom: T_odom_base(odometry) T_world_base(true)^-1; identity at the
+start, where odometry starts at the true pose), so that the free bodies, the world geometry
+and /base_pose_ground_truth, all in ``world``, stay exact relative to the robot. A
+localiser's map -> odom can still be added above odom (odom keeps one parent).
+
 The relative poses and the quaternions are computed by compiled loops that repeat
 Pinocchio's arithmetic (``SE3.actInv``: R_p^T R_c and R_p^T (t_c - t_p), sums in index
 order; ``SE3ToXYZQUAT``: Eigen's rotation-to-quaternion, whose trace sums r00 + (r11 + r22)),
@@ -29,7 +41,56 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
+from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
+
+ODOM_FRAME = "odom"
+"""The odometry frame of a moving base (REP 105), before ``frame_prefix``."""
+WORLD_FRAME = "world"
+"""The ground-truth frame of a moving base's scene (free bodies, world geometry), before
+``frame_prefix``."""
+
+
+class FrameTree(NamedTuple):
+    """The frames above the robot's links in a node's tf tree (:func:`frame_tree`), names
+    prefixed: ``root`` the one root; ``base`` the robot's root link; ``world`` the frame of
+    the free bodies, the world geometry and the ground truth; ``odom`` the odometry frame
+    (None for a fixed base); ``static`` the latched edges (parent, child) above the robot
+    and ``moving`` the per-sample ones (a moving base: odom -> base, odom -> world)."""
+
+    root: str
+    base: str
+    world: str
+    odom: str | None
+    static: tuple[tuple[str, str], ...]
+    moving: tuple[tuple[str, str], ...]
+
+
+def frame_tree(root_link: str, prefix: str = "", frame_id: str = "", moving_base: bool = False,
+               taken: Sequence[str] = ()) -> FrameTree:
+    """The frames and parents of a node's tf tree above the robot (module docstring):
+    ``root_link`` the robot's root link, ``frame_id`` the root asked for ('' : the default,
+    prefixed), ``moving_base`` whether odometry moves the root link, ``taken`` the other
+    frame names of the tree (the robot's links and the free bodies, prefixed). A
+    ``frame_id`` or a frame of the tree that would give a frame a second parent is a
+    UserInputError."""
+    base = prefix + root_link
+    if not moving_base:
+        root = frame_id or base
+        tree = FrameTree(root, base, root, None, ((root, base),) if root != base else (), ())
+    else:
+        odom, world = prefix + ODOM_FRAME, prefix + WORLD_FRAME
+        root = frame_id or odom
+        tree = FrameTree(root, base, world, odom, ((root, odom),) if root != odom else (),
+                         ((odom, base), (odom, world)))
+    edges = (*tree.static, *tree.moving)
+    above = {frame for edge in edges for frame in edge} - {base}
+    clash = sorted((above & set(taken)) | ({root} & {child for _, child in edges}))
+    if clash:
+        raise UserInputError(f"frames {clash} of the tf tree (root {root!r}) would have two parents (a link, a "
+                             "free body or a frame of the tree): give another frame_id or rename them")
+    return tree
 
 
 class LinkTransform(NamedTuple):
@@ -139,6 +200,28 @@ def pose_rows(poses: Sequence[np.ndarray]) -> np.ndarray:
     rows = np.empty((len(stacked), 7))
     _pose_rows(stacked, rows)
     return rows
+
+
+def pose_matrices(rows: np.ndarray) -> np.ndarray:
+    """(..., 4, 4) poses (m) of rows (..., 7) of translation (m) and quaternion (x, y, z, w)."""
+    rows = np.asarray(rows, dtype=float)
+    matrices = np.zeros((*rows.shape[:-1], 4, 4))
+    matrices[..., :3, :3] = matrix_from_quaternion(rows[..., 3:])
+    matrices[..., :3, 3] = rows[..., :3]
+    matrices[..., 3, 3] = 1.0
+    return matrices
+
+
+def composed_rows(first: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Rows (k, 7) of ``first`` (one row: the pose of frame B in A) composed with ``rows``
+    (k, 7: poses in B): the poses in A."""
+    return pose_rows(pose_matrices(first) @ pose_matrices(rows))
+
+
+def planar_row(x: float, y: float, yaw: float) -> np.ndarray:
+    """The row (7,) of a planar pose: translation (x, y, 0) m and the quaternion of ``yaw``
+    (rad) about z."""
+    return np.array([x, y, 0.0, 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)])
 
 
 def _link_transform(parent: str, child: str, transform: np.ndarray) -> LinkTransform:

@@ -15,8 +15,10 @@ odom -> base_footprint transform and the ground-truth pose out.
   twist in base_footprint (the least-squares twist of the wheel speeds), covariances
   ``POSE_COVARIANCE`` and ``TWIST_COVARIANCE``. The odom frame is the world frame at the
   start: odometry starts at the base's true initial pose, and restarts there on reset.
-- ``/tf`` carries odom -> base_footprint with the /odom pose, every sample.
-- ``/base_pose_ground_truth`` (nav_msgs/Odometry, frame odom): the simulated pose and twist
+- ``/tf`` carries odom -> base_footprint with the /odom pose, and odom -> world (the
+  odometry's drift: where the true world frame is in odom), every sample
+  (:func:`~youbot_dynamics.node.frames.frame_tree`).
+- ``/base_pose_ground_truth`` (nav_msgs/Odometry, frame world): the simulated pose and twist
   (zero covariance), so that odometry drift can be measured.
 - /diagnostics ``base.slip`` (m/s): over the samples since the previous report, the largest
   speed, at a wheel hub, of the difference between the /odom twist and the true one (wheels
@@ -38,10 +40,10 @@ from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.io import messages
 from youbot_dynamics.node.commands import InputCounters, InputRejected
+from youbot_dynamics.node.frames import ODOM_FRAME, WORLD_FRAME, planar_row
 from youbot_dynamics.sim.engine import Snapshot
 from youbot_dynamics.sim.mobile_base import BaseModel
 
-ODOM_FRAME = "odom"
 #: Largest accepted speed (m/s) and turn rate (rad/s) on /cmd_vel (the youBot drives at up
 #: to about 0.8 m/s).
 MAX_LINEAR, MAX_ANGULAR = 5.0, 10.0
@@ -57,16 +59,16 @@ TWIST_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
 
 def _quaternion_of_yaw(yaw: float) -> tuple[float, float, float, float]:
     """Unit quaternion (x, y, z, w) of a rotation by ``yaw`` (rad) about z."""
-    return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
+    return tuple(planar_row(0.0, 0.0, yaw)[3:])
 
 
 class WheelOdometry:
     """Wheel odometry of a mecanum base from ``pose0`` (x, y, yaw in odom): each sample's
     wheel speeds (rad/s, ``mecanum.names`` order) held over the increment to the next."""
 
-    def __init__(self, mecanum: MecanumBase, pose0, prefix: str = "") -> None:
+    def __init__(self, mecanum: MecanumBase, pose0, prefix: str = "", base_link: str = "base_footprint") -> None:
         self.mecanum, self.pose0 = mecanum, np.array(pose0, dtype=float)
-        self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + "base_footprint"
+        self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + base_link
         self.reset()
 
     def reset(self) -> None:
@@ -74,9 +76,10 @@ class WheelOdometry:
         self.pose = self.pose0.copy()
         self.last: tuple[float, np.ndarray] | None = None
 
-    def outputs(self, stamp_ns: int, t: float, speeds: np.ndarray) -> tuple[object, object]:
-        """(/odom, the odom -> base_footprint transform) of a sample at time t (s) with wheel
-        speeds ``speeds``; advances the pose by the previous sample's speeds."""
+    def outputs(self, stamp_ns: int, t: float, speeds: np.ndarray) -> tuple[object, np.ndarray]:
+        """(/odom, the row (7,) of odom -> base_footprint: translation m, quaternion x, y, z,
+        w) of a sample at time t (s) with wheel speeds ``speeds``; advances the pose
+        (``pose``: x, y, yaw in odom) by the previous sample's speeds."""
         if self.last is not None:
             self.pose = odometry_step(self.mecanum, self.pose, self.last[1], t - self.last[0])
         self.last = (t, np.array(speeds, dtype=float))
@@ -84,18 +87,18 @@ class WheelOdometry:
         twist = base_twist(self.mecanum, speeds)
         odom = messages.odometry(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0), _quaternion_of_yaw(yaw),
                                  (twist[0], twist[1], 0.0, 0.0, 0.0, twist[2]), POSE_COVARIANCE, TWIST_COVARIANCE)
-        transform = messages.transform_stamped(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0),
-                                               _quaternion_of_yaw(yaw))
-        return odom, transform
+        return odom, planar_row(x, y, yaw)
 
 
 class MobileBase:
     """/cmd_vel, wheel odometry and the base's outputs of a session whose scene has a moving
     ``base``; ``wheels`` are the wheel joints' indices in the snapshot's v."""
 
-    def __init__(self, base: BaseModel, counters: InputCounters, timeout: float, prefix: str = "") -> None:
+    def __init__(self, base: BaseModel, counters: InputCounters, timeout: float, prefix: str = "",
+                 base_link: str = "base_footprint") -> None:
         self.base, self.counters, self.timeout = base, counters, float(timeout)
-        self.odometry = WheelOdometry(base.mecanum, base.pose0, prefix)
+        self.odometry = WheelOdometry(base.mecanum, base.pose0, prefix, base_link)
+        self.world_frame = prefix + WORLD_FRAME
         self.reset()
 
     def reset(self) -> None:
@@ -140,18 +143,22 @@ class MobileBase:
         return self.ramp
 
     # ---- outputs ---------------------------------------------------------------------------
-    def outputs(self, stamp_ns: int, t: float, snapshot: Snapshot) -> tuple[list[tuple[str, object]], object]:
-        """(/odom and /base_pose_ground_truth, the odom -> base_footprint transform) of the
-        sample at simulated time t (s); advances the odometry by the previous sample's wheel
-        speeds."""
-        odom, transform = self.odometry.outputs(stamp_ns, t, snapshot.v[self.base.wheels])
+    def outputs(self, stamp_ns: int, t: float, snapshot: Snapshot) -> tuple[list[tuple[str, object]], np.ndarray]:
+        """(/odom and /base_pose_ground_truth, the rows (2, 7) of odom -> base_footprint and
+        odom -> world) of the sample at simulated time t (s); advances the odometry by the
+        previous sample's wheel speeds. odom -> world is T_odom_base(odometry)
+        T_world_base(true)^-1, a planar pose: yaw e - yaw t, p_e - R(yaw e - yaw t) p_t."""
+        odom, row = self.odometry.outputs(stamp_ns, t, snapshot.v[self.base.wheels])
+        x, y, yaw = self.odometry.pose
         tx, ty, tyaw, vx, vy, wz = snapshot.base
         difference = base_twist(self.base.mecanum, snapshot.v[self.base.wheels]) - snapshot.base[3:]
         self.slip = max(self.slip, float(np.max(np.linalg.norm(self.base.mecanum.hub_velocities(difference), axis=1))))
-        frames = self.odometry.odom_frame, self.odometry.child_frame
-        truth = messages.odometry(stamp_ns, *frames, (tx, ty, 0.0), _quaternion_of_yaw(tyaw),
-                                  (vx, vy, 0.0, 0.0, 0.0, wz), np.zeros(36), np.zeros(36))
-        return [("/odom", odom), ("/base_pose_ground_truth", truth)], transform
+        truth = messages.odometry(stamp_ns, self.world_frame, self.odometry.child_frame, (tx, ty, 0.0),
+                                  _quaternion_of_yaw(tyaw), (vx, vy, 0.0, 0.0, 0.0, wz), np.zeros(36), np.zeros(36))
+        drift = yaw - tyaw
+        c, s = math.cos(drift), math.sin(drift)
+        rows = np.array([row, planar_row(x - (c * tx - s * ty), y - (s * tx + c * ty), drift)])
+        return [("/odom", odom), ("/base_pose_ground_truth", truth)], rows
 
     def report(self) -> tuple[str, dict[str, float]]:
         """(level, /diagnostics values) of the base since the previous report: ``base.slip``

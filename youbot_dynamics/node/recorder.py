@@ -1,6 +1,8 @@
 """The logs of one node run: an MCAP in rosbag2 form (:class:`~youbot_dynamics.io.mcap_log.McapLogger`)
 of the session's topics, and a Rerun recording (:class:`~youbot_dynamics.io.rerun_log.RerunLogger`)
-of the robot, the scene's static geometry and (simulate mode) its free bodies. Log times are
+of the robot, the scene's static geometry and (simulate mode) its free bodies, in the
+frames of the node's tf tree (:func:`~youbot_dynamics.node.frames.frame_tree`, without the
+frame prefix: Rerun names the URDF's frames by its link names). Log times are
 the messages' stamps: simulated time (simulate mode) or the sender's (inverse mode), in int ns.
 """
 from __future__ import annotations
@@ -10,10 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
+from youbot_dynamics.io.log_file import LogWriteFailed
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.interface import LATCHED_TOPICS, TOPIC_TYPES, Outputs
+from youbot_dynamics.node.frames import FrameTree
+from youbot_dynamics.node.interface import Outputs, topic_qos, topic_type
 from youbot_dynamics.scene.schema import Scene
 
 
@@ -32,26 +36,35 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
 
 
 class Recorder:
-    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (those in
-    :data:`LATCHED_TOPICS` offered latched), and a Rerun recording (``rrd_path``) of the
+    """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (each recorded as
+    offered with its profile in the interface table, :data:`TOPIC_QOS`, as the node's
+    publishers offer it), and a Rerun recording (``rrd_path``) of the
     robot, the scene's static geometry and (simulate mode) its free bodies; either may be
     None. ``close`` finalises both and may be called more than once."""
 
     def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
-                 mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
+                 mcap_path: str | Path | None, rrd_path: str | Path | None, tree: FrameTree) -> None:
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
             for topic in topics:
-                self.mcap.add_topic(topic, TOPIC_TYPES[topic], latched=topic in LATCHED_TOPICS)
+                self.mcap.add_topic(topic, topic_type(topic), qos=topic_qos(topic))
         self.rerun = RerunLogger(
             rrd_path, urdf_file(scene, robot, Path(rrd_path)), recording_name=f"{scene.name} ({mode})",
             geometries=[g for g in scene.geometries if mode == "simulate" or g.owner != "body"],
-            world_frame=root_frame) if rrd_path else None
+            world_frame=tree.world, root_frame=tree.root, static_frames=tree.static,
+            moving_frames=tree.moving) if rrd_path else None
 
     @property
     def paths(self) -> list[Path]:
         """The log files being written."""
         return [log.path for log in (self.mcap, self.rerun) if log is not None]
+
+    @property
+    def failures(self) -> dict[str, LogWriteFailed]:
+        """The logs whose writes failed (``mcap``, ``rerun``: the failure); each stopped
+        logging there, the other goes on."""
+        return {name: log.failure for name, log in (("mcap", self.mcap), ("rerun", self.rerun))
+                if log is not None and log.failure is not None}
 
     def write(self, outputs: Outputs, stamp_ns: int) -> None:
         """Log messages at ``stamp_ns`` (log and publish time)."""
@@ -65,11 +78,17 @@ class Recorder:
             self.rerun.log_sample(stamp_ns, names, q, v, tau, energy, ee_position)
 
     def bodies(self, stamp_ns: int, rows: np.ndarray) -> None:
-        """The free bodies' poses (rows of translation (m) and quaternion (x, y, z, w), root
+        """The free bodies' poses (rows of translation (m) and quaternion (x, y, z, w), world
         frame, in the scene's order, as the recording's ``bodies``) in the Rerun recording
         at ``stamp_ns`` (ns)."""
         if self.rerun is not None and not self.rerun.closed:
             self.rerun.log_body_rows(stamp_ns, rows)
+
+    def base(self, stamp_ns: int, rows: np.ndarray) -> None:
+        """A moving base's rows (2, 7) of the tree's moving edges (odom -> base_footprint,
+        odom -> world) in the Rerun recording at ``stamp_ns`` (ns)."""
+        if self.rerun is not None and not self.rerun.closed:
+            self.rerun.log_frame_rows(stamp_ns, rows)
 
     def records(self, topic: str) -> bool:
         """True if the MCAP log records ``topic`` (so its messages must be built)."""

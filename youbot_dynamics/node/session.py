@@ -28,7 +28,7 @@ has no joints and no end effector, and an empty or identity message would read a
 """
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from youbot_dynamics.io import messages
@@ -36,6 +36,7 @@ from youbot_dynamics.io.closing import ClosesOnExit
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.node.commands import InputCounters
 from youbot_dynamics.node.frame_messages import FrameMessages
+from youbot_dynamics.node.frames import frame_tree
 from youbot_dynamics.node.interface import Outputs, published, topics_of
 from youbot_dynamics.node.recorder import Recorder
 from youbot_dynamics.node.watchdog import Watchdog
@@ -51,16 +52,22 @@ class Session(ClosesOnExit):
     the /diagnostics status. ``features`` are the scene's (keys of
     :data:`~youbot_dynamics.node.interface.FEATURES`), ``topics`` those published per sample,
     in order. Subclasses say their ``mode`` and keep ``stamp_ns``, the stamp (ns) of their
-    latest output; ``moving_base`` says whether the scene's base moves."""
+    latest output; ``moving_base`` says whether the scene's base moves; ``sensors`` adds the
+    sensor features the scene has (``wrist_sensor``, ``contact_pairs``), ``pairs`` the contact
+    pairs' (first, second) geometry names, one topic each."""
 
     mode: str
     stamp_ns: int
     failure: str | None = None
     """Why the session stopped publishing (None while it runs)."""
+    namesakes: int = 0
+    """Other nodes on the graph with this node's full name (the ROS side counts them):
+    topics, services and parameter sets reach whichever answers."""
 
     def __init__(self, scene: Scene, robot: Robot, frame_id: str, ee_link: str,
                  mcap_path: str | Path | None, rrd_path: str | Path | None, callback_budget: float,
-                 frame_prefix: str, node_name: str, moving_base: bool = False, moving_root: bool = False) -> None:
+                 frame_prefix: str, node_name: str, moving_base: bool = False, moving_root: bool = False,
+                 sensors: frozenset[str] = frozenset(), pairs: Sequence[tuple[str, str]] = ()) -> None:
         self.scene, self.robot, self.node_name = scene, robot, node_name
         self.counters = InputCounters()
         self.watchdog = Watchdog(callback_budget)
@@ -70,15 +77,15 @@ class Session(ClosesOnExit):
             ("robot", self.frames.has_robot),
             ("several_robots", self.frames.has_robot and len(self.frames.links.ee_links) > 1),
             ("moving_base", moving_base), ("free_bodies", bool(self.frames.body_shapes)),
-            ("static_geometry", bool(self.frames.static_geometry))) if present)
-        self.topics = published(self.mode, self.features)
+            ("static_geometry", bool(self.frames.static_geometry))) if present) | sensors
+        self.topics = published(self.mode, self.features, pairs)
         latched = {"/tf_static": self.frames.tf_static, "/scene_markers": self.frames.scene_markers,
                    "/robot_description": lambda: messages.string(scene.urdf)}
         self.latched: Outputs = [(topic.name, latched[topic.name]())
                                  for topic in topics_of(self.mode, "pub", self.features, latched=True)]
         """Messages to publish once, latched (transient local), when the node starts."""
         self.recorder = Recorder(self.mode, scene, robot, (*self.topics, *(t for t, _ in self.latched)),
-                                 mcap_path, rrd_path, frame_id or robot.root_link)
+                                 mcap_path, rrd_path, frame_tree(robot.root_link, "", frame_id, moving_root))
         self.recorder.write(self.latched, 0)
         self.consumed_by(None)
 
@@ -99,10 +106,19 @@ class Session(ClosesOnExit):
         """/diagnostics with one status of this session (also logged); with a robot, its
         values name the /ee_pose link (``ee_link``) and the /ee_poses links in order
         (``ee_links``, comma-separated). The watchdog's values are added; an OK status turns
-        WARN when a callback overran its budget since the last report."""
+        WARN when a callback overran its budget since the last report or when other nodes of
+        the same full name are on the graph (``graph.namesakes``); any status turns ERROR
+        when a log's write failed (a full disk, a file-size limit: the reason and what the file
+        holds in ``log.mcap.*`` / ``log.rerun.*``), while the node goes on publishing."""
+        if level == "OK" and self.namesakes:
+            level, text = "WARN", (f"{self.namesakes} other node(s) named {self.node_name} on the graph: "
+                                   "services and parameter sets reach whichever answers")
         if level == "OK" and self.watchdog.fresh:
             level, text = "WARN", f"a callback overran its {self.watchdog.budget:g} s budget"
-        values = {**values, **self.watchdog.values()}
+        values = {**values, **self.watchdog.values(), "graph.namesakes": self.namesakes}
+        for name, failure in self.recorder.failures.items():
+            text = str(failure) if level != "ERROR" else f"{text}; {failure}"
+            level, values = "ERROR", {**values, **failure.key_values(f"log.{name}")}
         if self.frames.has_robot:
             values = {"ee_link": self.frames.links.ee_link, "ee_links": ",".join(self.frames.links.ee_links),
                       **values}

@@ -12,7 +12,8 @@ is recorded as an event: /diagnostics (also logged) carries ``resets`` and
 Free bodies are published on /free_bodies (their names, in that order, are the
 ``free_bodies`` value of /diagnostics) and drawn in the Rerun recording as their shapes. A
 moving base (:mod:`youbot_dynamics.node.mobile_base`) adds /cmd_vel, /odom and
-/base_pose_ground_truth.
+/base_pose_ground_truth; the sensors (:mod:`youbot_dynamics.node.sensors`) /wrist_wrench and
+/imu.
 """
 from __future__ import annotations
 
@@ -30,9 +31,10 @@ from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.node.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                            follow, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.node.frames import SampleFrames
+from youbot_dynamics.node.frames import SampleFrames, composed_rows
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.mobile_base import MobileBase
+from youbot_dynamics.node.sensors import SensorMessages
 from youbot_dynamics.node.session import Session
 from youbot_dynamics.scene.schema import Scene
 from youbot_dynamics.sim.simulator import Simulator, Snapshot
@@ -76,11 +78,16 @@ class SimulationSession(Session):
                  frame_prefix: str = "", node_name: str = "dynamics_node") -> None:
         self.simulator = Simulator(scene, scene.pinned_integrator())
         if self.simulator.model.base is not None:
-            self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix)
-            frame_id = frame_id or self.moving_base.odometry.odom_frame
+            self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix,
+                                          self.simulator.robot.root_link)
         moving = self.moving_base is not None
+        sensors = frozenset(feature for feature, present in (
+            ("wrist_sensor", self.simulator.model.sensors.wrist is not None),
+            ("contact_pairs", bool(scene.contacts))) if present)
         super().__init__(scene, self.simulator.robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget,
-                         frame_prefix, node_name, moving_base=moving, moving_root=moving)
+                         frame_prefix, node_name, moving_base=moving, moving_root=moving, sensors=sensors,
+                         pairs=[(pair.geometry1, pair.geometry2) for pair in scene.contacts])
+        self._sensors = SensorMessages(self.simulator.model, self.frames.prefix, self.frames.root_frame, self.topics)
         if self.moving_base is not None:
             self.moving_base.counters = self.counters
         self.step_ns = max(1, round(NS_PER_S / publish_rate))
@@ -123,7 +130,7 @@ class SimulationSession(Session):
         if self.moving_base is not None:
             self.moving_base.reset()
         self.k, self.failure, self.wall_time, self._pending, self._prebuilt = 0, None, 0.0, [], []
-        self.snapshot = self.simulator.snapshot()
+        self.snapshot = self.simulator.snapshot(self._sensors.wanted)
         self.energy0, self.energy_error = self.snapshot.energy, 0.0
         self._started = False
 
@@ -178,7 +185,8 @@ class SimulationSession(Session):
                 state.reference = dataclasses.replace(state.reference, base_twist=self.moving_base.twist(self.t))
             start = time.perf_counter()
             try:
-                self._pending = self.simulator.advance_through(times, self.commands.torque(self.t))[::-1]
+                self._pending = self.simulator.advance_through(times, self.commands.torque(self.t),
+                                                               self._sensors.wanted)[::-1]
             except DivergenceError as error:
                 self.failure = f"diverged after t = {self.t:.6f} s: {error}"
                 return []
@@ -205,35 +213,38 @@ class SimulationSession(Session):
         return [(self.wanted, *sample) for sample in reversed(built)]
 
     def _sample_messages(self, snapshots: Sequence[Snapshot], stamps: Sequence[int]
-                         ) -> list[tuple[Outputs, SampleFrames | None, np.ndarray | None]]:
+                         ) -> list[tuple[Outputs, SampleFrames | None, np.ndarray | None, np.ndarray | None]]:
         """The messages of the topics in ``wanted`` of N samples at ``stamps`` (ns), built
         together, with each sample's kinematics (one pass per sample feeds /tf, /ee_pose and
         the Rerun sample; none when nothing takes them) and its free bodies' rows. A moving
-        base's outputs advance its odometry: one sample at a time. Raises MessageFieldError."""
+        base's outputs advance its odometry: one sample at a time; its rows (odom ->
+        base_footprint, odom -> world) place /ee_pose(s) and go on /tf. Raises
+        MessageFieldError."""
         bodies = self.frames.body_poses([snapshot.bodies for snapshot in snapshots]) if self.frames.body_shapes \
             else None
         samples = [self.frames.links.at(snapshot.q) for snapshot in snapshots] \
             if self.frames.has_robot and self.kinematics_wanted else None
+        odometry, base = [], None
+        if self.moving_base is not None:     # always: it advances the odometry
+            odometry, rows = self.moving_base.outputs(stamps[0], self.scene_time, snapshots[0])
+            base = rows[np.newaxis]
         per_sample: list[Outputs] = [[] for _ in snapshots]
-        for topic, built in self._motion_messages(stamps, snapshots, samples, bodies):
+        for topic, built in self._motion_messages(stamps, snapshots, samples, bodies, base):
             for outputs, message in zip(per_sample, built):
                 outputs.append((topic, message))
-        base = None
-        if self.moving_base is not None:     # always: it advances the odometry
-            odometry, base = self.moving_base.outputs(stamps[0], self.scene_time, snapshots[0])
-            per_sample[0] += [(topic, message) for topic, message in odometry if topic in self.wanted]
+        per_sample[0] += [(topic, message) for topic, message in odometry if topic in self.wanted]
         if "/tf" in self.wanted:
             for outputs, message in zip(per_sample, self.frames.tf(stamps, samples, bodies, base)):
                 outputs.append(("/tf", message))
-        return [(outputs, None if samples is None else samples[k], None if bodies is None else bodies[k])
-                for k, outputs in enumerate(per_sample)]
+        return [(outputs, None if samples is None else samples[k], None if bodies is None else bodies[k],
+                 None if base is None else base[k]) for k, outputs in enumerate(per_sample)]
 
     def _motion_messages(self, stamps: Sequence[int], snapshots: Sequence[Snapshot],
-                         samples: Sequence[SampleFrames] | None, bodies: np.ndarray | None
-                         ) -> list[tuple[str, list[object]]]:
+                         samples: Sequence[SampleFrames] | None, bodies: np.ndarray | None,
+                         base: np.ndarray | None) -> list[tuple[str, list[object]]]:
         """(topic, its N messages) of the wanted topics before the base's and /tf: /clock,
-        /joint_states, /ee_pose(s) (from the kinematics ``samples``), /free_bodies and
-        /free_bodies_markers (from the body rows ``bodies``)."""
+        /joint_states, /ee_pose(s) (from the kinematics ``samples`` and a moving base's rows
+        ``base``), /free_bodies and /free_bodies_markers (from the body rows ``bodies``)."""
         wanted = self.wanted
         columns: list[tuple[str, list[object]]] = []
         if "/clock" in wanted:
@@ -241,31 +252,36 @@ class SimulationSession(Session):
         if "/joint_states" in wanted:
             columns.append(("/joint_states", self._joint_states_of(stamps, snapshots)))
         if samples is not None:
-            columns += self.frames.ee_messages(stamps, samples, wanted)
+            columns += self.frames.ee_messages(stamps, samples, wanted, base)
         if bodies is not None and "/free_bodies" in wanted:
             columns.append(("/free_bodies", self.frames.free_bodies(stamps, bodies)))
         if bodies is not None and "/free_bodies_markers" in wanted:
             columns.append(("/free_bodies_markers",
                             self.frames.free_body_markers(stamps, [s.bodies for s in snapshots])))
+        columns += self._sensors.columns(stamps, snapshots, wanted)
         return columns
 
     def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None = None) -> Outputs:
-        """The sample's messages (``prebuilt``: (wanted, messages, kinematics, body rows) of
-        :meth:`_block`, or built now), logged."""
+        """The sample's messages (``prebuilt``: (wanted, messages, kinematics, body rows, base
+        rows) of :meth:`_block`, or built now), logged (the Rerun recording's end effector in
+        the root frame: a moving base's odometry pose times the kinematics)."""
         stamp = self.stamp_ns
         self.snapshot = snapshot
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
         try:
-            outputs, sample, bodies = prebuilt[1:] if prebuilt is not None else \
+            outputs, sample, bodies, base = prebuilt[1:] if prebuilt is not None else \
                 self._sample_messages([snapshot], [stamp])[0]
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"
             return []
+        if base is not None:
+            self.recorder.base(stamp, base)
         if sample is not None:
+            ee = sample.ee[sample.ee_index] if base is None else composed_rows(base[0], sample.ee[[sample.ee_index]])[0]
             self.recorder.sample(stamp, snapshot.joint_names, snapshot.q, snapshot.v, snapshot.tau, snapshot.energy,
-                                 sample.ee[sample.ee_index, :3])
+                                 ee[:3])
         if bodies is not None:
             self.recorder.bodies(stamp, bodies)
         return outputs
@@ -281,12 +297,13 @@ class SimulationSession(Session):
         return self._joint_states.many(stamps, values, lambda stamp_ns, row: messages.joint_state(
             stamp_ns, (*snapshots[0].joint_names, *self.locked_names), *np.split(row, 3)))
 
-    def diagnostics(self, real_time_factor: float) -> Outputs:
+    def diagnostics(self, real_time_factor: float, progress: float | None = None) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
         energy (J), input counters, the free bodies (names in /free_bodies order) and the
-        contact events so far, a moving base's slip; level ERROR after a divergence, WARN when
-        paused or when the base's wheels slip. Figures not known (counters the integrator does
-        not report) are ``NOT_REPORTED``."""
+        contact events so far, a moving base's slip, and ``progress`` (percent of a run of set
+        duration) if given; level ERROR after a divergence, WARN when paused or when the base's
+        wheels slip. Figures not known (counters the integrator does not report) are
+        ``NOT_REPORTED``."""
         stats = {f"integrator.{key}": reported(value) for key, value in self.simulator.stats.as_dict().items()}
         base_level, base_values = self.moving_base.report() if self.moving_base is not None else ("OK", {})
         values = {"sim_time": self.t, "real_time_factor": reported(real_time_factor),
@@ -294,7 +311,7 @@ class SimulationSession(Session):
                   "paused": self.paused, "command": self._command_source(), "resets": self.resets,
                   "last_reset_at": "none" if self.last_reset_ns is None else self.last_reset_ns / NS_PER_S,
                   **stats, **self.counters.as_values(),
-                  **self.contact_values(), **base_values}
+                  **self.contact_values(), **base_values, **({} if progress is None else {"progress": progress})}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
         if (level, base_level) == ("OK", "WARN"):
             level, text = "WARN", f"base wheels slip: {base_values['base.slip']:.3g} m/s at a hub"

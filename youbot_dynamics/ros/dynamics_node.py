@@ -42,8 +42,17 @@ leaving, the node waits (up to :data:`~youbot_dynamics.ros.process.ACK_TIMEOUT`)
 subscribers have acknowledged every message.
 
 Run: ``ros2 run youbot_dynamics dynamics_node --ros-args --params-file config/dynamics_node.yaml``
-or ``python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing``.
-SIGINT and SIGTERM finalise the logs before the process ends.
+or ``python -m youbot_dynamics.ros.dynamics_node --ros-args -p scene:=arm_swing``;
+``--help`` prints the parameters (:mod:`youbot_dynamics.node.usage`, before rclpy is imported
+when run as the ``dynamics_node`` executable). SIGINT and SIGTERM finalise the logs before the
+process ends.
+
+Start-up: configure (the session: scene loaded and compiled, logs opened; publishers,
+subscriptions, services, timers), then activate (latched messages, then samples) and a
+``ready:`` log line of what the node offers (:func:`~youbot_dynamics.node.interface.offered`).
+A run whose ``duration`` exceeds 10 s logs every 10 % of simulated time
+(:mod:`youbot_dynamics.node.progress`); /diagnostics carries ``progress``. ``--managed``
+makes these steps lifecycle transitions (:class:`ManagedDynamicsNode`).
 """
 from __future__ import annotations
 
@@ -57,8 +66,10 @@ import rclpy.executors
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import QoSRequestedIncompatibleQoSInfo, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterValueException
+from rclpy.lifecycle import LifecycleNodeMixin, LifecycleState, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.publisher import Publisher
 from rclpy.qos import qos_policy_name_from_kind
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.serialization import deserialize_message
@@ -72,14 +83,21 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.configure import session_from_parameters
-from youbot_dynamics.node.interface import SERVICES, Outputs, Topic, check_choice, topics_of
+from youbot_dynamics.node import usage
+from youbot_dynamics.node.interface import (SERVICES, Outputs, Topic, check_choice, instances, offered,
+                                            topics_of)
+from youbot_dynamics.node.inverse_session import InverseSession
 from youbot_dynamics.node.pacing import Pacing, RealTimeFactor
+from youbot_dynamics.node.progress import Progress
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.node.topics import graph_name
+from youbot_dynamics.ros.actions import Controllers
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr
 from youbot_dynamics.ros.parameters import declare_all
 from youbot_dynamics.ros.process import stop_requests, wait_for_acknowledgements
 from youbot_dynamics.ros.qos import PROFILES, SUBSCRIPTION_PROFILES
 
+NODE_NAME = "dynamics_node"
 INVERSE_PERIOD = 0.01
 """Wall seconds between inverse-mode ticks: each takes the joint states received since the
 last as one batch (:meth:`~youbot_dynamics.node.inverse_session.InverseSession.joint_states`)."""
@@ -90,22 +108,41 @@ QUOTED_CHARACTERS = 500
 
 
 class DynamicsNode(Node):
-    """The node; ``finished`` turns true once ``duration`` simulated seconds have run."""
+    """The node, configured and active from the start; ``finished`` turns true once
+    ``duration`` simulated seconds have run. (:class:`ManagedDynamicsNode` is the same node
+    under lifecycle transitions.)"""
 
     def __init__(self, **node_options) -> None:
-        super().__init__("dynamics_node", **node_options)
+        super().__init__(NODE_NAME, **node_options)
+        self._declare()
+        self._configure()
+        self._activate()
+
+    # ---- lifecycle: declare, configure, activate, deactivate, clean up ---------------------
+    def _declare(self) -> None:
+        """Declare the parameters (a bad choice raises UserInputError) and their callbacks."""
         self.params = declare_all(self)
-        p = self.params
-        self.session = session_from_parameters(p, self.get_namespace(), self.get_fully_qualified_name())
-        self.finished = False
+        self.session: SimulationSession | InverseSession | None = None
+        self.publishers_: dict[str, Publisher] = {}
+        self.finished, self.active = False, False
         self._failures_logged: set[str] = set()
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+
+    def _configure(self) -> None:
+        """Load and compile the scene and open its logs (the session), create the publishers,
+        subscriptions, services and timers; nothing is published before :meth:`_activate`."""
+        p = self.params
+        self._before_configure = self._entities()
+        self.session = session_from_parameters(p, self.get_namespace(), self.get_fully_qualified_name())
+        self.progress = Progress(p["duration"])
         self._create_publishers()
         self._create_subscriptions_and_services()
         steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.controllers = None
         if p["mode"] == "simulate":
-            self._wait_deadline = time.monotonic() + p["wait_timeout"]
-            self._waiting = p["wait_for_subscribers"] > 0
             self.pacing = Pacing(self.session.k)
+            self.controllers = Controllers(self, self.session, p, self._subscribe)   # actions, <controller>/commands
             self.create_timer(1.0 / p["publish_rate"], self._guarded("step timer", self._on_tick), clock=steady)
         else:
             self._inbox: list[tuple] = []
@@ -114,19 +151,65 @@ class DynamicsNode(Node):
         self._real_time = RealTimeFactor(self.session.t)
         self.create_timer(p["diagnostics_period"], self._guarded("diagnostics timer", self._on_diagnostics),
                           clock=steady)
-        self.add_on_set_parameters_callback(self._check_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
         scene = self.session.scene
         self.get_logger().info(f"{p['mode']} {scene.name} ({scene.source}); logs: "
                                f"{', '.join(map(str, self.session.recorder.paths)) or 'none'}")
 
+    def _activate(self) -> None:
+        """Start publishing: the latched messages, then samples (simulate mode: after
+        ``wait_for_subscribers``); log the ready line."""
+        self.active = True
+        if self.params["mode"] == "simulate":
+            self._wait_deadline = time.monotonic() + self.params["wait_timeout"]
+            self._waiting = self.params["wait_for_subscribers"] > 0
+            self._restart_pacing()
+        self._real_time.mark(self.session.t)
+        self._publish(self.session.latched)
+        self.get_logger().info(self._ready_line())
+
+    def _ready_line(self) -> str:
+        """``ready: publishes ...; subscribes ...; services ...`` with the names as resolved
+        on the graph, from the interface table (:func:`~youbot_dynamics.node.interface.offered`)."""
+        parts = []
+        controllers = set() if self.controllers is None else {
+            group for group, joints in self.controllers.joints.items() if joints}   # their actions and commands
+        for kind, names in offered(self.session.mode, self.session.features | controllers,
+                                   self.session.topics).items():
+            resolve = self.resolve_service_name if kind == "services" else self.resolve_topic_name
+            resolved = [resolve(graph_name(name)) for name in names if name not in self._unpublished]
+            parts.append(f"{kind} {', '.join(resolved) or 'none'}")
+        return "ready: " + "; ".join(parts)
+
+    def _deactivate(self) -> None:
+        """Stop publishing: simulated time pauses (inverse mode drops what arrives) until
+        :meth:`_activate`."""
+        self.active = False
+        self.get_logger().info(f"inactive at t = {self.session.t:.3f} s: paused")
+
+    def _cleanup(self) -> None:
+        """Finalise the logs and destroy what :meth:`_configure` created."""
+        self.close()
+        for server in self.controllers.servers if self.controllers else ():
+            server.destroy()
+        before = self._before_configure
+        for kind, destroy in (("publishers", self.destroy_publisher), ("subscriptions", self.destroy_subscription),
+                              ("services", self.destroy_service), ("timers", self.destroy_timer)):
+            for entity in [e for e in getattr(self, kind) if id(e) not in before]:
+                destroy(entity)
+        self.publishers_, self.session = {}, None
+
+    def _entities(self) -> set[int]:
+        """Ids of the node's publishers, subscriptions, services and timers now."""
+        return {id(entity) for kind in ("publishers", "subscriptions", "services", "timers")
+                for entity in getattr(self, kind)}
+
     # ---- output ------------------------------------------------------------------------
     def _create_publishers(self) -> None:
         """A publisher per session topic (latched ones transient local; type and QoS from the
-        interface table), then the latched messages. A topic whose message package is not
+        interface table; the latched messages go out on activation). A topic whose message package is not
         installed (tf2_msgs without ``make``'s build) is left out, with one warning; it is
         still logged."""
-        self.publishers_, self._unpublished = {}, set()
+        self._unpublished: set[str] = set()
         mode, features = self.session.mode, self.session.features
         for topic in (*topics_of(mode, "pub", features), *topics_of(mode, "pub", features, latched=True)):
             try:
@@ -134,16 +217,18 @@ class DynamicsNode(Node):
             except ImportError:
                 self._unpublished.add(topic.name)
                 continue
-            self.publishers_[topic.name] = self.create_publisher(cls, graph_name(topic.name), PROFILES[topic.qos])
+            for name in instances(topic, self.session.topics):  # the per-pair topics: one each
+                self.publishers_[name] = self.create_publisher(cls, graph_name(name), PROFILES[topic.qos])
         if self._unpublished:
             self.get_logger().warning(f"not publishing {', '.join(sorted(self._unpublished))}: their message "
                                       "package is not installed (tf2_msgs: `make` builds it from interfaces/, "
                                       "or source a ROS 2 Jazzy); the MCAP still logs them")
-        self._publish(self.session.latched)
 
     def _publish(self, outputs: Outputs, subscribed: frozenset[str] | None = None) -> None:
         """Publish as CDR bytes (serialized once, also for the MCAP); with ``subscribed``,
-        only on those topics."""
+        only on those topics; nothing while inactive."""
+        if not self.active:
+            return
         for topic, message in outputs:
             if topic not in self._unpublished and (subscribed is None or topic in subscribed):
                 self.publishers_[topic].publish(to_cdr(message))
@@ -190,7 +275,8 @@ class DynamicsNode(Node):
 
     def _on_tick(self) -> None:
         session, p = self.session, self.params
-        if self.finished or session.paused or session.failure or (self._waiting and not self._subscribers_ready()):
+        if not self.active or self.finished or session.paused or session.failure or \
+                (self._waiting and not self._subscribers_ready()):
             return
         due = self.pacing.due(session.k, p["publish_rate"] * p["time_scale"])     # samples per wall s
         subscribed = self._subscribed()
@@ -198,23 +284,46 @@ class DynamicsNode(Node):
             self._publish(session.step(), subscribed)
             if session.failure:
                 self.get_logger().error(session.failure)
+                self.controllers.interrupt(None, f"Current goal cancelled: the simulation {session.failure}.")
                 return
+            self.controllers.on_sample()
             if p["duration"] and session.t >= p["duration"] - 1e-12:
                 self._finish()
                 return
+            mark = self.progress.passed(session.t)
+            if mark is not None:
+                self.get_logger().info(f"progress: {mark} % ({session.t:.2f} of {p['duration']:g} s simulated)")
 
     def _finish(self) -> None:
-        self._publish(self.session.diagnostics(self._real_time_factor()))
+        self._publish(self._diagnostics())
         self.session.close()
         self.finished = True
+        self.get_logger().info(f"done: {self.session.t:g} s simulated")
+
+    def _diagnostics(self) -> Outputs:
+        """/diagnostics now (simulate mode with a ``duration``: ``progress`` in percent)."""
+        if self.params["mode"] == "simulate":
+            return self.session.diagnostics(self._real_time_factor(), progress=self.progress.percent(self.session.t))
+        return self.session.diagnostics(self._real_time_factor())
 
     def _real_time_factor(self) -> float:
         """Simulated seconds per wall second since the last /diagnostics."""
         return self._real_time.since_last(self.session.t)
 
     def _on_diagnostics(self) -> None:
-        if not self.finished:
-            self._publish(self.session.diagnostics(self._real_time_factor()))
+        if self.active and not self.finished:
+            self._count_namesakes()
+            self._publish(self._diagnostics())
+
+    def _count_namesakes(self) -> None:
+        """Count the other nodes with this node's full name (two launches of one name in one
+        domain); warn in the log when their number changes (the status says it each time)."""
+        me = (self.get_name(), self.get_namespace())
+        namesakes = sum(node == me for node in self.get_node_names_and_namespaces()) - 1
+        if namesakes > 0 and namesakes != self.session.namesakes:
+            self.get_logger().warning(f"{namesakes} other node(s) named {self.get_fully_qualified_name()} "
+                                      "on the graph: give each its own name or namespace")
+        self.session.namesakes = max(namesakes, 0)
 
     # ---- the node boundary ---------------------------------------------------------------
     def _subscribe(self, topic: Topic, callback: Callable, **options) -> None:
@@ -302,6 +411,8 @@ class DynamicsNode(Node):
         self.session.trajectory(list(msg.joint_names), points, stamp_ns_of(msg.header.stamp))
 
     def _on_joint_state(self, msg: JointState) -> None:
+        if not self.active:
+            return
         self._inbox.append((list(msg.name), msg.position, msg.velocity, stamp_ns_of(msg.header.stamp),
                             self.get_clock().now().nanoseconds))
 
@@ -319,8 +430,9 @@ class DynamicsNode(Node):
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self.session.reset()
+        self.controllers.interrupt(None, "Current goal cancelled: the scene was reset (~/reset).")
         self._restart_pacing()
-        self._publish(self.session.diagnostics(self._real_time_factor()))     # the reset, as an event
+        self._publish(self._diagnostics())     # the reset, as an event
         response.success, response.message = True, (f"reset {self.session.scene.name}: its t = 0 is node time "
                                                      f"{self.session.epoch_ns / NS_PER_S:.6f} s")
         return response
@@ -344,7 +456,7 @@ class DynamicsNode(Node):
         """Post-set: make an accepted set take effect (``params`` holds the values in force;
         the writable ones act in simulate mode only)."""
         self.params.update((parameter.name, parameter.value) for parameter in parameters)
-        if self.params["mode"] != "simulate":
+        if self.params["mode"] != "simulate" or self.session is None:
             return
         if any(parameter.name == "time_scale" for parameter in parameters):
             self._restart_pacing()
@@ -353,21 +465,72 @@ class DynamicsNode(Node):
 
     def close(self) -> None:
         """Take the joint states still waiting (inverse mode), finalise the logs (idempotent)."""
+        if self.session is None:
+            return
         if getattr(self, "_inbox", None):
             self._on_joint_states()
         self.session.close()
+        paths = self.session.recorder.paths
+        if paths:
+            self.get_logger().info(f"logs closed: {', '.join(map(str, paths))}")
 
 
-def run(args: list[str] | None = None, overrides: dict[str, object] | None = None) -> tuple[int, DynamicsNode | None]:
-    """Run the node until ``duration`` is reached, SIGINT or SIGTERM, and finalise the logs.
+class ManagedDynamicsNode(LifecycleNodeMixin, DynamicsNode):
+    """The node as a managed (lifecycle) node (``dynamics_node --managed``): it starts
+    unconfigured with its parameters declared; configure loads and compiles the scene and
+    opens the logs, activate starts publishing, deactivate pauses, cleanup closes the logs
+    and destroys the topics, shutdown does the same from any state and ends the process.
+    A scene that cannot be loaded fails the configure transition (the node stays
+    unconfigured, the reason logged). ``finished`` also turns true once shut down."""
+
+    def __init__(self, **node_options) -> None:
+        Node.__init__(self, NODE_NAME, **node_options)
+        LifecycleNodeMixin.__init__(self)
+        self._declare()
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        try:
+            self._configure()
+        except UserInputError as error:
+            self.get_logger().error(f"configure failed: {error}")
+            self._cleanup()
+            return TransitionCallbackReturn.FAILURE
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self._activate()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self._deactivate()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self._cleanup()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.active = False
+        if self.session is not None:
+            self._cleanup()
+        self.finished = True
+        return TransitionCallbackReturn.SUCCESS
+
+
+def run(args: list[str] | None = None, overrides: dict[str, object] | None = None,
+        managed: bool = False) -> tuple[int, DynamicsNode | None]:
+    """Run the node until ``duration`` is reached, SIGINT or SIGTERM (a managed node: or its
+    shutdown transition), and finalise the logs.
 
     ``args`` are command-line arguments (``--ros-args ...``), ``overrides`` parameter values
-    that beat them. Returns the exit status (2: bad parameters) and the finished node.
+    that beat them; ``managed``: a :class:`ManagedDynamicsNode`. Returns the exit status (2:
+    bad parameters) and the finished node.
     """
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = stop_requests()
     try:
-        node = DynamicsNode(parameter_overrides=[Parameter(k, value=v) for k, v in (overrides or {}).items()])
+        node = (ManagedDynamicsNode if managed else DynamicsNode)(
+            parameter_overrides=[Parameter(k, value=v) for k, v in (overrides or {}).items()])
     except (UserInputError, InvalidParameterValueException) as error:
         print(f"dynamics_node: error: {error}", file=sys.stderr)
         rclpy.try_shutdown()
@@ -388,8 +551,9 @@ def run(args: list[str] | None = None, overrides: dict[str, object] | None = Non
 
 
 def main(args: list[str] | None = None) -> int:
-    """Entry point of the ``dynamics_node`` executable."""
-    return run(args)[0]
+    """``python -m youbot_dynamics.ros.dynamics_node``: the ``dynamics_node`` executable
+    (:mod:`youbot_dynamics.ros.dynamics_main`), ``--help`` included."""
+    return usage.main(args, lambda ros_args, managed: run(ros_args, managed=managed)[0])
 
 
 if __name__ == "__main__":

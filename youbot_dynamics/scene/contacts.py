@@ -127,9 +127,10 @@ def read_shape(reader: SceneReader, value: Any, key: str) -> Shape:
     return Shape(kind, **values)
 
 
-def read_composition(reader: SceneReader, value: Any, base_dir: Path | None) -> str:
+def read_composition(reader: SceneReader, value: Any, base_dir: Path | None, welded: bool = True) -> str:
     """The URDF text of ``robot: {compose: [{urdf, prefix, pose, inertials}, ...]}``
-    (model/compose.py composes it); files relative to ``base_dir``, else the package share."""
+    (model/compose.py composes it); files relative to ``base_dir``, else the package share;
+    ``welded`` False under a moving base (one robot, not welded to a world link)."""
     entries = reader.mapping(value, "robot", ("compose",)).get("compose")
     if not isinstance(entries, list) or not entries:
         raise SceneError(reader.source, "robot.compose", "expected a non-empty list of {urdf, prefix, pose}", entries)
@@ -141,7 +142,7 @@ def read_composition(reader: SceneReader, value: Any, base_dir: Path | None) -> 
                                     str(entry.get("prefix", "")), pose_matrix(reader, entry.get("pose"), f"{key}.pose"),
                                     read_inertials(reader, entry.get("inertials", {}), f"{key}.inertials")))
     try:
-        return composed_urdf(placements)
+        return composed_urdf(placements, welded)
     except CompositionError as error:
         raise SceneError(reader.source, f"robot.compose[{error.index}].{error.part}", error.problem) from None
 

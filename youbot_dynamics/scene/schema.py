@@ -38,6 +38,8 @@ Keys (units SI, angles rad; joint values are mappings by joint name)::
       energy_tolerance: J           # conservative scenes: allowed energy growth
     duration: s
     outputs: {rate: Hz, record: [q, v, z, base, base_v, tau, energy, ee_position]}
+    wrist_sensor: link | none       # the force/torque sensor at this link's joint to its parent
+                                    # (default: the first *gripper_palm_link, if any)
     robot: none | {compose: [...]}  # no robot, or several composed into one (model/compose.py)
     base: {mode: fixed | kinematic | dynamic, ...}   # the moving base (scene/base.py)
     free_bodies: [...]              # rigid objects (see scene/contacts.py for these four)
@@ -73,7 +75,7 @@ from youbot_dynamics.integrate.registry import (AUTO, REGISTRY, STEPPERS, integr
                                                 is_fixed_step)
 from youbot_dynamics.model import limits
 from youbot_dynamics.model.compose import EMPTY_ROBOT, robot_with_gravity
-from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
+from youbot_dynamics.model.robot import Robot, URDFDocument, keep_joints, read_urdf, robot_from_urdf
 from youbot_dynamics.scene.base import BaseSpec, read_base
 from youbot_dynamics.scene.contacts import (ContactPairSpec, FreeBodySpec, read_composition,
                                             read_contacts, read_free_bodies, read_geometries)
@@ -84,7 +86,7 @@ RECORDABLE = ("q", "v", "z", "base", "base_v", "tau", "energy", "ee_position")
 FRICTION_DEFAULTS = ("urdf", "none")
 CONTACT_SECTIONS = ("free_bodies", "world", "geometry", "contacts")
 TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "gravity", "friction",
-            "controller", "integrator", "duration", "outputs", "base", *CONTACT_SECTIONS)
+            "controller", "integrator", "duration", "outputs", "base", "wrist_sensor", *CONTACT_SECTIONS)
 #: The source of a scene given as a mapping without a label.
 DICT_SOURCE = "<dict>"
 
@@ -156,7 +158,9 @@ class Scene:
     ``robot`` is the Robot the scene simulates, loaded once: only the moving joints, the
     others locked at their values, with the scene's gravity. ``urdf`` is the full robot's
     URDF text (the file's, the composed one, or the empty robot's: /robot_description);
-    ``urdf_path`` the file it was read from (None for ``robot: none`` and composed robots).
+    ``urdf_path`` the file it was read from (None for ``robot: none`` and composed robots);
+    ``urdf_document`` that URDF as read and checked once, from which the compiler builds the
+    robot with another root joint (a moving base's planar root) without reading it again.
     ``friction`` maps a moving joint to its spec (law and parameters) for the joints the
     scene lists; the others follow ``friction_default``. ``free_bodies``, ``geometries``
     (free bodies' shapes first, then world and link geometry) and ``contacts`` are empty in
@@ -184,7 +188,10 @@ class Scene:
     geometries: tuple = ()
     contacts: tuple[ContactPairSpec, ...] = ()
     base: BaseSpec = BaseSpec()
+    wrist_sensor: str | None = None
+    """The link whose joint to its parent holds the wrist force/torque sensor (None: none)."""
     uncertain: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
+    urdf_document: URDFDocument | None = dataclasses.field(default=None, compare=False, repr=False)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = DICT_SOURCE, base_dir: Path | None = None,
@@ -291,7 +298,7 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     the order their mistakes are reported."""
     reader = SceneReader(source, values)
     data = reader.mapping(data, "(top level)", TOP_KEYS)
-    full, urdf, urdf_path = _full_robot(reader, data, base_dir)
+    full, document, urdf, urdf_path = _full_robot(reader, data, base_dir)
     robot, locked, gravity = _reduced_robot(reader, data, full)
     q0, v0 = _initial_state(reader, robot, data.get("initial", {}))
     friction_default, joint_friction = _friction(reader, robot, data.get("friction", {}))
@@ -302,11 +309,12 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     default_name = Path(source).stem if Path(source).suffix in (".yaml", ".yml") else "scene"
     scene = Scene(
         name=str(data.get("name", default_name)), description=str(data.get("description", "")),
-        source=source, robot=robot, urdf=urdf, urdf_path=urdf_path, moving=robot.joint_names,
+        source=source, robot=robot, urdf=urdf, urdf_path=urdf_path, urdf_document=document,
+        moving=robot.joint_names,
         locked=MappingProxyType(locked), q0=_frozen(q0), v0=_frozen(v0), gravity=_frozen(gravity),
         friction_default=friction_default, friction=MappingProxyType(joint_friction), controller=controller,
         integrator=integrator, duration=duration, outputs=outputs,
-        base=read_base(reader, data.get("base"), robot))
+        base=read_base(reader, data.get("base"), robot), wrist_sensor=_wrist_sensor(reader, data, robot))
     try:
         scene.joint_friction(robot)  # a bad law or parameter fails here, at load time
     except UserInputError as error:
@@ -317,20 +325,39 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
                                uncertain=MappingProxyType(dict(reader.uncertain)))
 
 
+WRIST_SENSOR_DEFAULT = "gripper_palm_link"
+"""The link of the default wrist sensor (the youBot's palm; the first robot's when composed)."""
+
+
+def _wrist_sensor(reader: SceneReader, data: Mapping[str, Any], robot: Robot) -> str | None:
+    """The ``wrist_sensor`` key: a link of the robot, or ``none``; absent: the first link
+    named (or prefixed) ``gripper_palm_link``, if the robot has one."""
+    value = data.get("wrist_sensor")
+    if value is None:
+        return next((link for link in robot.link_names if link.endswith(WRIST_SENSOR_DEFAULT)), None)
+    if value == "none":
+        return None
+    if not isinstance(value, str) or value not in robot.link_names:
+        raise SceneError(reader.source, "wrist_sensor", f"{value!r} is no link of the robot (a link name or none)")
+    return value
+
+
 def _full_robot(reader: SceneReader, data: Mapping[str, Any], base_dir: Path | None
-                ) -> tuple[Robot, str, Path | None]:
-    """(the full robot of ``robot:``, loaded with a fixed root; its URDF text as the file
-    holds it, for /robot_description; the file, None for a composed robot or none)."""
-    urdf_source = _robot_source(reader, data.get("robot"), base_dir)
+                ) -> tuple[Robot, URDFDocument, str, Path | None]:
+    """(the full robot of ``robot:``, loaded with a fixed root; its URDF as read once; its
+    text as the file holds it, for /robot_description; the file, None for a composed robot
+    or none)."""
+    urdf_source = _robot_source(reader, data.get("robot"), base_dir, data.get("base"))
     try:
-        full = load_robot(urdf_source)
+        document = read_urdf(urdf_source)
+        full = robot_from_urdf(document)
     except UserInputError as error:
         raise SceneError(reader.source, "robot", str(error), data.get("robot")) from None
     # the text as the file holds it, for /robot_description (a byte that is no UTF-8 is
-    # replaced there, never in the model, which load_robot read by the file's encoding)
+    # replaced there, never in the model, which read_urdf read by the file's encoding)
     if isinstance(urdf_source, str):
-        return full, urdf_source, None
-    return full, urdf_source.read_text(encoding="utf-8", errors="replace"), urdf_source
+        return full, document, urdf_source, None
+    return full, document, urdf_source.read_text(encoding="utf-8", errors="replace"), urdf_source
 
 
 def _reduced_robot(reader: SceneReader, data: Mapping[str, Any], full: Robot
@@ -423,10 +450,17 @@ def _contact_sections(reader: SceneReader, data: Mapping[str, Any], robot: Robot
     return bodies, geometries, contacts
 
 
-def _robot_source(reader: SceneReader, value: Any, base_dir: Path | None) -> str | Path:
-    """The full robot: its URDF file, or the URDF text of a composed robot or of none."""
+def _moving_base(value: Any) -> bool:
+    """Whether a scene's raw ``base:`` section asks for a moving base (validated later by
+    :func:`~youbot_dynamics.scene.base.read_base`)."""
+    return isinstance(value, Mapping) and value.get("mode", "fixed") in ("kinematic", "dynamic")
+
+
+def _robot_source(reader: SceneReader, value: Any, base_dir: Path | None, base: Any = None) -> str | Path:
+    """The full robot: its URDF file, or the URDF text of a composed robot (not welded to a
+    world link under a moving ``base``) or of none."""
     if isinstance(value, Mapping):
-        return read_composition(reader, value, base_dir)
+        return read_composition(reader, value, base_dir, welded=not _moving_base(base))
     if value == "none":
         return EMPTY_ROBOT
     return Path(default_urdf()) if value is None else reader.file(value, "robot", base_dir)

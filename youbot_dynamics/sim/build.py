@@ -39,6 +39,7 @@ from youbot_dynamics.sim.controllers import Control, ControllerCallback, Referen
 from youbot_dynamics.sim.divergence import DivergenceLimits, penetration_limit
 from youbot_dynamics.sim.mobile_base import POSE_LABELS, TWIST_LABELS, BaseModel, planar_robot
 from youbot_dynamics.sim.model import BLOCKS, SimModel
+from youbot_dynamics.sim.sensors import SensorModel
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
@@ -79,17 +80,18 @@ def compile(scene: Scene, integrator: IntegratorSpec | None = None, limits: Dive
         passive=passive, ee_frame=plant.frame_id(robot.end_effectors[0]),
         velocity_index=velocity_index(layout, scene, base), base=base,
         slices=MappingProxyType({symbol: layout.slice(symbol) for symbol in BLOCKS}),
-        coordinates=tuple(spec.rotation_coordinates for spec in scene.free_bodies))
+        coordinates=tuple(spec.rotation_coordinates for spec in scene.free_bodies),
+        sensors=SensorModel(plant, scene.wrist_sensor, contact, base is not None, scene.urdf))
 
 
 # ---- the plant and the base --------------------------------------------------------------------
 def build_plant(scene: Scene) -> tuple[Robot, list[int | None]]:
-    """The plant: the scene's robot (under a moving base reloaded with a planar root, the
-    scene's gravity) with one free-flyer joint per free body appended; and the frame id of
-    each of the scene's geometries (None: world)."""
+    """The plant: the scene's robot (under a moving base rebuilt with a planar root from the
+    URDF the scene read, with the scene's gravity) with one free-flyer joint per free body
+    appended; and the frame id of each of the scene's geometries (None: world)."""
     robot = scene.robot
     if scene.base.mode != "fixed":
-        robot = robot_with_gravity(planar_robot(scene.urdf_path or scene.urdf, scene.moving, scene.locked),
+        robot = robot_with_gravity(planar_robot(scene.urdf_document, scene.moving, scene.locked),
                                    scene.gravity)
     bodies = [spec.body for spec in scene.free_bodies]
     if not bodies:

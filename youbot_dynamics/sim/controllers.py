@@ -44,11 +44,19 @@ ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 class Reference:
     """What the controllers track: a trajectory, or a constant set point ``hold`` (rad); a
     moving base's twist command ``base_twist`` (vx m/s, vy m/s, wz rad/s, body frame, reached
-    within the base's a_max; None: the scene's base path)."""
+    within the base's a_max; None: the scene's base path); ``effort_limit`` (N m, N; one per
+    joint) clips the controller's torque where it is below the URDF effort limit (a
+    gripper's max_effort; None: the URDF's limits)."""
 
     hold: np.ndarray
     trajectory: PointToPointTrajectory | None = None
     base_twist: TwistRamp | None = None
+    effort_limit: np.ndarray | None = None
+
+    def limit(self, urdf_limit: np.ndarray) -> np.ndarray:
+        """The effort limit (N m, N) a controller clips to: the URDF's, lowered by
+        ``effort_limit`` where given."""
+        return urdf_limit if self.effort_limit is None else np.minimum(urdf_limit, self.effort_limit)
 
     def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Desired position, velocity and acceleration at t (s)."""
@@ -107,7 +115,8 @@ class GravityCompensatedPD:
     def torque(self, t: float, q: np.ndarray, v: np.ndarray, reference: Reference) -> np.ndarray:
         q_d, v_d, _ = reference.at(t)
         gravity = gravity_torque(self.robot, self.data, q)
-        return np.clip(gravity + self.kp * (q_d - q) + self.kd * (v_d - v), -self.limit, self.limit)
+        limit = reference.limit(self.limit)
+        return np.clip(gravity + self.kp * (q_d - q) + self.kd * (v_d - v), -limit, limit)
 
 
 @register_jitable
@@ -179,13 +188,14 @@ class ComputedTorque:
             if friction is not None:
                 bristles = NO_BRISTLES if friction.lugre is None else friction.steady_state_bristles(v_d)
                 add_friction_torque_unchecked(v_d, bristles, friction.table, tau)
-            _clip_to_limits_unchecked(self.limit, tau)
+            _clip_to_limits_unchecked(reference.limit(self.limit), tau)
             return tau
         a_command = a_d + self.kp * (q_d - q) + self.kd * (v_d - v)
         tau = inverse_dynamics(self.robot, self.data, q, v, a_command)
         if friction is not None:
             tau += friction.torque(v_d, friction.steady_state_bristles(v_d))
-        return np.clip(tau, -self.limit, self.limit)
+        limit = reference.limit(self.limit)
+        return np.clip(tau, -limit, limit)
 
 
 def make_controller(kind: str, robot: Robot, kp: np.ndarray, kd: np.ndarray,

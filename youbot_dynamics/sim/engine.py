@@ -51,6 +51,7 @@ from youbot_dynamics.sim.contact_events import MODE, ContactGuards
 from youbot_dynamics.sim.divergence import (Monitor, all_of, energy_ledger_monitor,
                                             penetration_monitor)
 from youbot_dynamics.sim.model import CARDAN_SEQUENCES, MIN_APPROACH_SPEED, SimModel
+from youbot_dynamics.sim.sensors import Readings, contact_forces
 from youbot_dynamics.sim.state import ContactEvent, SimState, StateLayout
 
 Progress = Callable[[float], None]
@@ -64,7 +65,8 @@ class Snapshot:
     the first robot's for composed robots, ``Robot.end_effectors``);
     bodies: the world pose (4x4, m) of each free body by name, in the scene's order;
     base: a moving base's (x, y, yaw, vx, vy, wz) (world pose in m and rad, body-frame twist
-    in m/s and rad/s), None for a fixed base."""
+    in m/s and rad/s), None for a fixed base; sensors: what the scene's sensors read
+    (:mod:`youbot_dynamics.sim.sensors`), when :func:`advance` was asked for them."""
 
     t: float
     joint_names: tuple[str, ...]
@@ -76,6 +78,7 @@ class Snapshot:
     ee_pose: np.ndarray
     bodies: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     base: np.ndarray | None = None
+    sensors: Readings | None = None
 
 
 @dataclass
@@ -250,7 +253,7 @@ class ConstraintStepping:
     divergence; a pair that starts carrying an impulse is a ``contact`` event."""
 
     def __init__(self, model: SimModel, state: SimState, torque: Callable[[float, np.ndarray], np.ndarray],
-                 deepest_allowed: float) -> None:
+                 deepest_allowed: float, record: bool = False) -> None:
         self.model, self.data, self.torque, self.twist = model, state.data, torque, state.reference.base_twist
         self.t, self.x = state.t, state.x.copy()
         self.q, self.v = model.configuration(self.x), model.velocity(self.x).copy()
@@ -259,6 +262,8 @@ class ConstraintStepping:
         self.events: list[ContactEvent] = []
         self.deepest, self.deepest_allowed = 0.0, deepest_allowed
         self.t_previous, self.x_previous = self.t, self.x
+        #: with ``record``: per output time, the last step's (report, acceleration, h)
+        self.records: dict[float, tuple] | None = {} if record else None
         # where the plant's q and v go in x, looked up once (packed at every step)
         root = model.plant.root_nq
         self._robot_q, self._q_block, self._v_block = slice(root, root + model.robot.nq), model.block("q"), \
@@ -303,6 +308,7 @@ class ConstraintStepping:
                     base = model.base
                     self.x[integral] += h * base.wheel_torques(self.t, self.v[model.joint_velocities][base.wheels],
                                                                self.x[integral], self.twist)[1]
+            v_before = self.v
             self.q, self.v, report = stepper.step(self.data, self.q, self.v, tau, h)
             self.t = t_target if i == count else start + i * h
             self.steps += 1
@@ -320,6 +326,8 @@ class ConstraintStepping:
                                       f"beyond the penetration limit {self.deepest_allowed:.3g} m")
         self.h = h
         self.x = self._pack()
+        if self.records is not None:
+            self.records[self.t] = (report, (self.v - v_before) / h, h)
 
     def interpolate(self, t: float) -> np.ndarray:
         share = (t - self.t_previous) / (self.t - self.t_previous)
@@ -359,6 +367,7 @@ class _Outcome:
     deepest: float
     touching: frozenset[str]
     held: HeldTorque | None = None
+    records: dict[float, tuple] | None = None
     attitude_events: dict[str, int] = dataclasses.field(default_factory=dict)
     quaternion_drift: float | None = None
 
@@ -399,7 +408,7 @@ def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None
 
 
 def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.ndarray | None,
-           max_steps: int | None, progress: Progress | None, energy0: float | None) -> _Outcome:
+           max_steps: int | None, progress: Progress | None, energy0: float | None, record: bool = False) -> _Outcome:
     """Integrate from the state over t_eval (its first time is the state's) with the checks."""
     data = state.data
     x0 = model.recentred(state.x)
@@ -416,7 +425,7 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
 
     reference = state.reference
     torque, rhs = right_hand_side(model, data, reference, command, held)
-    outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress)
+    outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress, record)
     outcome.held = held
     s = outcome.solution
     keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
@@ -429,11 +438,12 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
 
 
 def _integrate(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndarray, rhs, torque,
-               monitor: Monitor | None, max_steps: int | None, progress: Progress | None) -> _Outcome:
+               monitor: Monitor | None, max_steps: int | None, progress: Progress | None,
+               record: bool = False) -> _Outcome:
     spec, names = model.integrator, model.layout.names
     kind = integrator_kind(spec.method)
     if kind == "stepper":
-        return _step_constraints(model, state, x0, t_eval, torque, monitor, max_steps, progress)
+        return _step_constraints(model, state, x0, t_eval, torque, monitor, max_steps, progress, record)
     options = {"rtol": spec.rtol, "atol": spec.absolute_tolerance(x0), "state_names": names,
                "bounds": model.bounds, "monitor": monitor, "max_steps": max_steps, "progress": progress}
     if model.contact:
@@ -467,30 +477,32 @@ def _shortest_flight(model: SimModel) -> float:
 
 
 def _step_constraints(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndarray, torque,
-                      monitor: Monitor | None, max_steps: int | None, progress: Progress | None) -> _Outcome:
+                      monitor: Monitor | None, max_steps: int | None, progress: Progress | None,
+                      record: bool = False) -> _Outcome:
     start = time.perf_counter()
     z = model.block("z")
     if z.stop > z.start:
         raise UserInputError(f"{model.scene.source}: the constraint stepper does not integrate LuGre bristles")
     checked_fixed_step(model.integrator.method, model.integrator.dt, t_eval, max_steps)
     stepping = ConstraintStepping(model, dataclasses.replace(state, x=x0), torque,
-                                  min(model.penetration_limits.values(), default=math.inf))
+                                  min(model.penetration_limits.values(), default=math.inf), record)
     check = StateCheck(model.integrator.method, model.layout.names, model.bounds, monitor)
     solution = drive(stepping, model.integrator.method, t_eval, [], check, model.layout.names,
                      max_steps=max_steps, progress=progress)
     solution.stats.events = len(stepping.events)
     solution.stats.wall_time = time.perf_counter() - start
-    return _Outcome(solution, stepping.events, stepping.deepest, stepping.touching)
+    return _Outcome(solution, stepping.events, stepping.deepest, stepping.touching, records=stepping.records)
 
 
 # ---- public entry points ---------------------------------------------------------------------
 def advance(model: SimModel, state: SimState, times: Sequence[float] | np.ndarray,
-            command=None) -> list[Snapshot]:
+            command=None, sensors: bool = False) -> list[Snapshot]:
     """Move ``state`` on (in place) to each of ``times`` (s, increasing, after state.t) in
     ONE integrator run, returning a Snapshot at each; ``command`` (sequence in joint order or
     mapping by joint name, N m; clipped to the effort limits) replaces the controller over
     all of them (zero-order hold). The energy ledger of a passive scene spans the whole
-    passive stretch (since the reset or the last command that fed energy in), not one call."""
+    passive stretch (since the reset or the last command that fed energy in), not one call.
+    ``sensors``: each snapshot carries its sensor readings (:func:`snapshot`)."""
     times = np.asarray(times, dtype=float).reshape(-1)
     if not times.size or not times[0] > state.t or np.any(np.diff(times) <= 0.0):
         raise UserInputError(f"advance: times {times.tolist()} s must increase from after the "
@@ -501,14 +513,14 @@ def advance(model: SimModel, state: SimState, times: Sequence[float] | np.ndarra
     elif state.ledger_start is None:
         state.ledger_start = model.stored_energy(state.data, state.x)
     outcome = _solve(model, state, np.concatenate([[state.t], times]), command,
-                     model.limits.max_steps_per_call, None, state.ledger_start)
+                     model.limits.max_steps_per_call, None, state.ledger_start, sensors)
     _record(state, outcome)
     snapshots = []
     for t, x in zip(outcome.solution.t[1:], outcome.solution.x[1:]):
         state.t, state.x = float(t), x.copy()
         state.tau = np.array(outcome.held.value if outcome.held is not None else
                              robot_torque(model, state.reference, state.t, x, command), dtype=float)
-        snapshots.append(snapshot(model, state))
+        snapshots.append(snapshot(model, state, sensors, outcome.records and outcome.records.get(state.t)))
     return snapshots
 
 
@@ -562,11 +574,24 @@ def _series(model: SimModel, state: SimState, solution: Solution, wanted: set[st
     return series
 
 
-def snapshot(model: SimModel, state: SimState) -> Snapshot:
+def snapshot(model: SimModel, state: SimState, sensors: bool = False, step: tuple | None = None) -> Snapshot:
     """The state's instant as a Snapshot (one kinematics pass gives the end effector and the
-    bodies)."""
+    bodies). A kinematic base's wheels report the torque that imposes their motion
+    (:meth:`SimModel.applied_torque`). ``sensors``: with the sensor readings, from the
+    constraint ``step`` that ended here ((report, plant accelerations, h)) or, without one,
+    from the accelerations and compliant contact forces at the state."""
     x, data = state.x, state.data
+    tau, readings = np.array(state.tau), None
+    if sensors or (model.base is not None and not model.base.dynamic):
+        twist = state.reference.base_twist
+        a = step[1] if step is not None else derivative(model, data, x, tau, state.t, twist)[model.velocity_block]
+        tau = model.applied_torque(data, x, tau, a)
+        if sensors:
+            forces = contact_forces(model.contact, step[0], step[2]) if step is not None else \
+                model.compliant_point_forces(data, x)
+            readings = model.sensors.read(data, model.configuration(x), model.velocity(x), a, forces)
     return Snapshot(state.t, model.joint_names, x[model.block("q")].copy(), x[model.block("v")].copy(),
-                    x[model.block("z")].copy(), np.array(state.tau), model.energy(data, x), model.ee_pose(data, x),
+                    x[model.block("z")].copy(), tau, model.energy(data, x), model.ee_pose(data, x),
                     model.body_poses(data, x),
-                    None if model.base is None else np.concatenate([x[model.block("base")], x[model.block("base_v")]]))
+                    None if model.base is None else np.concatenate([x[model.block("base")], x[model.block("base_v")]]),
+                    readings)

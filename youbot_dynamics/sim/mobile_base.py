@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -44,7 +43,7 @@ from youbot_dynamics.dynamics.mobile.ramp import DEFAULT_A_MAX, TwistRamp
 from youbot_dynamics.dynamics.mobile.wheel_floor import (contact_slip_velocities, roller_forces,
                                                          wheel_normal_forces, wheel_spin_torques)
 from youbot_dynamics.dynamics.rigid_body import symmetrised
-from youbot_dynamics.model.robot import Robot, keep_joints, load_robot
+from youbot_dynamics.model.robot import Robot, URDFDocument, keep_joints, robot_from_urdf
 from youbot_dynamics.scene.base import BaseSpec
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
@@ -201,7 +200,7 @@ class BaseModel:
         return a
 
 
-def planar_robot(urdf: str | Path, moving: Sequence[str], locked: Mapping[str, float]) -> Robot:
-    """The scene's reduced robot (from its URDF file or text) with a planar root
+def planar_robot(urdf: URDFDocument, moving: Sequence[str], locked: Mapping[str, float]) -> Robot:
+    """The scene's reduced robot (from its URDF as the scene read it) with a planar root
     (Pinocchio's planar joint between the world and its root link)."""
-    return keep_joints(load_robot(urdf, root="planar"), moving, locked)
+    return keep_joints(robot_from_urdf(urdf, "planar"), moving, locked)

@@ -82,6 +82,7 @@ from youbot_dynamics.sim.controllers import (ComputedTorque, Control, Reference,
                                              commanded_acceleration)
 from youbot_dynamics.sim.divergence import DivergenceLimits
 from youbot_dynamics.sim.mobile_base import BaseModel, BaseMotion
+from youbot_dynamics.sim.sensors import SensorModel
 from youbot_dynamics.sim.state import StateLayout
 from youbot_dynamics.sim.trajectory import POINTS, TIMING, desired_motion
 
@@ -180,6 +181,7 @@ class SimModel:
     slices: Mapping[str, slice] = field(default_factory=dict)
     base: BaseModel | None = None
     coordinates: tuple[str, ...] = ()
+    sensors: SensorModel | None = None
 
     # ---- sizes and slices ----------------------------------------------------------------
     @property
@@ -278,7 +280,7 @@ class SimModel:
             return None
         nv, end, model, table, joints = fast
         points, timing = compiled
-        law = np.array([controller.kp, controller.kd, controller.limit], dtype=float)
+        law = np.array([controller.kp, controller.kd, reference.limit(controller.limit)], dtype=float)
         law.setflags(write=False)
         work = np.zeros((8, nv))
         command, left, q, v = work[3], work[4], work[6], work[7]
@@ -436,6 +438,32 @@ class SimModel:
             return forward_dynamics(self.plant, data, q, v, generalised)
         imposed = np.concatenate([motion.acceleration, motion.wheel_accelerations])
         return self.base.prescribed_accelerations(self.plant.model, data, q, v, generalised, imposed)
+
+    def applied_torque(self, data: pin.Data, x: np.ndarray, tau: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """The robot's applied joint torque (N m, N) at state x: ``tau`` (the controller's or
+        the command), except at a kinematic base's wheels, whose motion is imposed: there the
+        torque that imposes it, (M a + b)_wheel + friction (Pinocchio's RNEA at the plant's
+        accelerations ``a``)."""
+        if self.base is None or self.base.dynamic:
+            return tau
+        v = self.velocity(x)
+        joints, wheels = self.joint_velocities, self.base.wheels
+        applied = np.array(tau, dtype=float)
+        applied[wheels] = pin.rnea(self.plant.model, data, self.configuration(x), v, a)[joints][wheels]
+        if self.friction is not None:
+            z = x[self.block("z")]
+            applied[wheels] += self.friction.torque(v[joints], z if z.size else None)[wheels]
+        return applied
+
+    def compliant_point_forces(self, data: pin.Data, x: np.ndarray) -> list[tuple[int, np.ndarray, np.ndarray]]:
+        """The compliant pairs' contact forces at state x: (pair index, point (world, m), force
+        on the pair's second geometry (world, N)) per overlapping point."""
+        if not self.compliant:
+            return []
+        q = self.configuration(x)
+        pin.framesForwardKinematics(self.plant.model, data, q)
+        return [(k, point, force) for k, point, _, force in self.contact.compliant_point_forces(
+            data, q, self.velocity(x), self.contact.poses(data), self.compliant, x[self.block("s")])]
 
     def inverse_mass(self, data: pin.Data, q: np.ndarray) -> np.ndarray:
         """M(q)^-1 of the plant (nv x nv), symmetric."""

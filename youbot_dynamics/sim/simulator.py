@@ -178,10 +178,11 @@ class Simulator:
         return self.advance_through([t_next], tau_command)[-1]
 
     def advance_through(self, times: Sequence[float] | np.ndarray,
-                        tau_command: TorqueCommand | None = None) -> list[Snapshot]:
+                        tau_command: TorqueCommand | None = None, sensors: bool = False) -> list[Snapshot]:
         """A snapshot at each of ``times`` (s, increasing, after the current time) from ONE
-        integrator run; ``tau_command`` is held over all of them."""
-        return engine.advance(self.model, self.state, times, tau_command)
+        integrator run; ``tau_command`` is held over all of them; ``sensors``: with the
+        sensor readings (:mod:`youbot_dynamics.sim.sensors`)."""
+        return engine.advance(self.model, self.state, times, tau_command, sensors)
 
     @property
     def t(self) -> float:
@@ -230,6 +231,6 @@ class Simulator:
         """4x4 end-effector pose (m) in the root frame at the current time."""
         return self.model.ee_pose(self.state.data, self.state.x)
 
-    def snapshot(self) -> Snapshot:
-        """The current instant."""
-        return engine.snapshot(self.model, self.state)
+    def snapshot(self, sensors: bool = False) -> Snapshot:
+        """The current instant (``sensors``: with the sensor readings at the state)."""
+        return engine.snapshot(self.model, self.state, sensors)

@@ -1,0 +1,211 @@
+"""The tf check of issue 21 for every scene of config/scenes/ (fixed, kinematic and dynamic
+base, composed): the tree tf2's BufferCore would build from /tf_static and the /tf of one
+stamp has one root and one parent per frame, and every pose the session publishes equals
+the composed transform at the same stamp (<= 1e-9 m and 1e-9 rad), its header frame
+honoured: /ee_pose, /ee_poses, /free_bodies, /free_bodies_markers, /scene_markers, /odom and
+/base_pose_ground_truth. Against the simulator's own state: the free bodies and the world
+geometry relative to the robot's root link are the simulated ones (world poses and the true
+base pose), so the tree is not only consistent but true. The moving-base scenes drive 3 s
+(base_square has moved 1 m, mobile_pick has reached the table)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from youbot_dynamics.io import messages
+from youbot_dynamics.node.simulate import SimulationSession
+from youbot_dynamics.scene.schema import load_scene, scene_dir
+
+SCENES = sorted(path.stem for path in scene_dir().glob("*.yaml"))
+DRIVEN = {"base_square": 3.0, "mobile_pick": 3.0, "base_spin_arm": 3.0}
+"""Simulated seconds checked: moving bases drive 3 s, the other scenes 0.5 s."""
+TOLERANCE = 1e-9
+"""m and rad."""
+
+
+def _matrix(translation, rotation) -> np.ndarray:
+    """A 4x4 pose from geometry_msgs' Vector3/Point and Quaternion."""
+    matrix = np.eye(4)
+    matrix[:3, :3] = Rotation.from_quat([rotation.x, rotation.y, rotation.z, rotation.w]).as_matrix()
+    matrix[:3, 3] = translation.x, translation.y, translation.z
+    return matrix
+
+
+def _pose(pose) -> np.ndarray:
+    return _matrix(pose.position, pose.orientation)
+
+
+def _stamp(header) -> int:
+    return header.stamp.sec * 10**9 + header.stamp.nanosec
+
+
+class Tree:
+    """tf2 BufferCore's view at one stamp: the static transforms and the dynamic ones of
+    that stamp, each child with its parent; ``pose(target, source)`` is source in target."""
+
+    def __init__(self, static, dynamic, stamp_ns: int) -> None:
+        self.parents: dict[str, list[tuple[str, np.ndarray]]] = {}
+        for transform in (*static.transforms, *dynamic.transforms):
+            if transform in dynamic.transforms:
+                assert _stamp(transform.header) == stamp_ns, transform.child_frame_id
+            self.parents.setdefault(transform.child_frame_id, []).append(
+                (transform.header.frame_id, _matrix(transform.transform.translation, transform.transform.rotation)))
+        frames = set(self.parents) | {parent for edges in self.parents.values() for parent, _ in edges}
+        self.roots = sorted(frames - set(self.parents))
+        self.frames = frames
+
+    def check(self) -> None:
+        twice = {child: [p for p, _ in edges] for child, edges in self.parents.items() if len(edges) > 1}
+        assert not twice, f"frames with several parents: {twice}"
+        assert len(self.roots) == 1, f"roots {self.roots}"
+
+    def in_root(self, frame: str) -> np.ndarray:
+        assert frame in self.frames, f"{frame} is not in the tree"
+        pose, seen = np.eye(4), set()
+        while frame != self.roots[0]:
+            assert frame not in seen, f"cycle through {frame}"
+            seen.add(frame)
+            parent, transform = self.parents[frame][0]
+            pose, frame = transform @ pose, parent
+        return pose
+
+    def pose(self, target: str, source: str) -> np.ndarray:
+        return np.linalg.solve(self.in_root(target), self.in_root(source))
+
+
+def _error(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """(m, rad) between two poses."""
+    return (float(np.linalg.norm(a[:3, 3] - b[:3, 3])),
+            float(Rotation.from_matrix(a[:3, :3].T @ b[:3, :3]).magnitude()))
+
+
+def _assert_same(a: np.ndarray, b: np.ndarray, what: str) -> None:
+    metres, radians = _error(a, b)
+    assert metres <= TOLERANCE and radians <= TOLERANCE, f"{what}: {metres:.3g} m, {radians:.3g} rad"
+
+
+def _planar(x: float, y: float, yaw: float) -> np.ndarray:
+    pose = np.eye(4)
+    pose[:3, :3] = Rotation.from_euler("z", yaw).as_matrix()
+    pose[:2, 3] = x, y
+    return pose
+
+
+def _check_sample(session: SimulationSession, latched: dict, sample: dict) -> None:
+    stamp = session.stamp_ns
+    tree = Tree(latched["/tf_static"], sample["/tf"], stamp)
+    tree.check()
+    prefix, links = session.frames.prefix, session.frames.links
+    for topic, names in (("/ee_pose", [links.ee_link]), ("/ee_poses", links.ee_links),
+                         ("/free_bodies", [spec.body.name for spec in session.scene.free_bodies])):
+        if topic not in sample:
+            continue
+        message = sample[topic]
+        assert _stamp(message.header) == stamp
+        poses = [message.pose] if topic == "/ee_pose" else message.poses
+        assert len(poses) == len(names)
+        for name, pose in zip(names, poses):
+            _assert_same(_pose(pose), tree.pose(message.header.frame_id, prefix + name), f"{topic} {name}")
+    for topic in ("/odom", "/base_pose_ground_truth"):
+        if topic in sample:
+            message = sample[topic]
+            _assert_same(_pose(message.pose.pose), tree.pose(message.header.frame_id, message.child_frame_id), topic)
+    _check_world_things(session, tree, latched, sample)
+
+
+def _check_world_things(session: SimulationSession, tree: Tree, latched: dict, sample: dict) -> None:
+    """The free bodies (and their markers) and the world geometry relative to the robot's
+    root link, from the tree, equal the simulation's: world poses composed with the true
+    base pose (identity for a fixed base: the root link is the world's origin)."""
+    snapshot, base = session.snapshot, session.frames.prefix + session.robot.root_link
+    world_base = np.eye(4) if snapshot.base is None else _planar(*snapshot.base[:3])
+    if "/base_pose_ground_truth" in sample:
+        _assert_same(_pose(sample["/base_pose_ground_truth"].pose.pose), world_base, "/base_pose_ground_truth")
+    in_base = np.linalg.inv(world_base)
+    geometry = {g.name: g for g in session.scene.geometries}
+    for name, world_pose in snapshot.bodies.items():
+        _assert_same(tree.pose(base, session.frames.prefix + name), in_base @ world_pose, f"/tf {name}")
+    markers = [*(m for m in sample.get("/free_bodies_markers", messages.marker_array([])).markers),
+               *(m for m in latched.get("/scene_markers", messages.marker_array([])).markers)]
+    for marker in markers:
+        g = geometry[marker.ns]
+        owner = snapshot.bodies[g.name] if g.owner == "body" else np.eye(4) if g.owner == "world" else None
+        local = next(m for m in messages.shape_markers(0, "", g.name, g.shape, g.placement, (1, 1, 1, 1))
+                     if m.id == marker.id)
+        in_tree = tree.pose(base, marker.header.frame_id) @ _pose(marker.pose)
+        if owner is None:      # on a link: the link's frame
+            _assert_same(in_tree, tree.pose(base, session.frames.prefix + g.owner_name) @ _pose(local.pose),
+                         f"marker {g.name}")
+        else:
+            _assert_same(in_tree, in_base @ owner @ _pose(local.pose), f"marker {g.name}")
+
+
+def _run(scene_name: str, seconds: float, **options) -> None:
+    scene = load_scene(scene_name)
+    rate = scene.outputs.rate
+    with SimulationSession(scene, rate, **options) as session:
+        latched = dict(session.latched)
+        for k in range(round(seconds * rate) + 1):
+            sample = dict(session.step())
+            assert session.failure is None, session.failure
+            if k % 5 == 0 or k == round(seconds * rate):
+                _check_sample(session, latched, sample)
+        assert session.t == pytest.approx(seconds)
+
+
+@pytest.mark.parametrize("scene_name", SCENES)
+def test_one_tree_and_every_pose_topic_equals_its_transform(scene_name: str) -> None:
+    _run(scene_name, DRIVEN.get(scene_name, 0.5))
+
+
+@pytest.mark.parametrize("scene_name, options", [
+    ("mobile_pick", {"frame_id": "map", "frame_prefix": "r1/"}),
+    ("gripping", {"frame_id": "world", "frame_prefix": "r1/"}),
+    ("base_square", {"frame_prefix": "r2/"})])
+def test_the_tree_holds_with_a_root_frame_and_a_prefix(scene_name: str, options: dict) -> None:
+    _run(scene_name, 0.4, **options)
+
+
+@pytest.mark.parametrize("scene_name, frame_id", [("mobile_pick", "base_footprint"), ("mobile_pick", "world"),
+                                                  ("gripping", "yb1_arm_link_5"), ("gripping", "sphere")])
+def test_a_root_frame_inside_the_tree_is_refused(scene_name: str, frame_id: str) -> None:
+    with pytest.raises(Exception, match="frame_id|rename") as caught:
+        SimulationSession(load_scene(scene_name), 50.0, frame_id=frame_id)
+    assert frame_id in str(caught.value)
+
+
+def test_rerun_recording_holds_the_same_tree(tmp_path) -> None:
+    """mobile_pick's .rrd: odom -> base_footprint and odom -> world per sample equal to /tf
+    (float32), the end effector in odom equal to /ee_pose, the sphere under world and the
+    table in world: the recording carries the tree's numbers, not the base-relative ones."""
+    from test_viewers import rerun_rows
+    scene, rate = load_scene("mobile_pick"), 50.0
+    with SimulationSession(scene, rate, rrd_path=tmp_path / "run.rrd") as session:
+        samples = [dict(session.step()) for _ in range(101)]
+    temporal, static = rerun_rows(tmp_path / "run.rrd")
+    last = samples[-1]
+    edges = {(t.header.frame_id, t.child_frame_id): t.transform for t in last["/tf"].transforms}
+    for child in ("base_footprint", "world"):
+        row = max(temporal[f"/base_frames/{child}"], key=lambda r: r["sim_time"])
+        assert (row["Transform3D:parent_frame"], row["Transform3D:child_frame"]) == (["odom"], [child])
+        moved = edges[("odom", child)].translation
+        assert np.array_equal(row["Transform3D:translation"][0], np.float32([moved.x, moved.y, moved.z]))
+    ee = max(temporal["/ee/position"], key=lambda r: r["sim_time"])
+    palm = last["/ee_pose"].pose.position
+    assert np.array_equal(ee["Points3D:positions"][0], np.float32([palm.x, palm.y, palm.z]))
+    assert palm.x > -1.0          # the palm over the table in odom, 1 m from where the base started
+    sphere = max(temporal["/free_bodies/sphere"], key=lambda r: r["sim_time"])
+    assert sphere["Transform3D:parent_frame"] == ["world"]
+    assert static["/geometry/table"][0]["CoordinateFrame:frame"] == ["world"]
+    assert static["/ee/position"][0]["CoordinateFrame:frame"] == ["odom"]
+
+
+def test_mobile_picks_robot_description_has_one_root_for_robot_state_publisher() -> None:
+    """The composed URDF of a moving-base scene is rooted at base_footprint (no world link
+    welded to it), so robot_state_publisher's tree of it joins odom -> base_footprint."""
+    from xml.etree import ElementTree
+    root = ElementTree.fromstring(load_scene("mobile_pick").urdf)
+    links = {link.get("name") for link in root.iter("link")}
+    children = {joint.find("child").get("link") for joint in root.iter("joint")}
+    assert links - children == {"base_footprint"}

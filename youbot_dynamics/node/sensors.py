@@ -1,0 +1,53 @@
+"""The simulated sensors' messages: /wrist_wrench (geometry_msgs/WrenchStamped in the
+sensor link's frame), /imu (sensor_msgs/Imu in base_link) and per contact pair
+/contacts/<first>/<second> (geometry_msgs/WrenchStamped in the second geometry's frame), from
+the readings each snapshot carries (:mod:`youbot_dynamics.sim.sensors` computes them)."""
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+
+from youbot_dynamics.io import messages
+from youbot_dynamics.node.interface import pair_topic
+from youbot_dynamics.sim.engine import Snapshot
+from youbot_dynamics.sim.model import SimModel
+
+SENSOR_TOPICS = ("/wrist_wrench", "/imu")
+"""The sensor topics, in the order of the interface table."""
+IMU_COVARIANCES = ((0.0,) * 9,) * 3
+"""The IMU's orientation, angular velocity and acceleration covariances: all provided,
+exact (a noise-free simulation), so 0 (REP 145 keeps -1 for a quantity not provided)."""
+
+
+class SensorMessages:
+    """The sensor messages of a session simulating ``model``; ``prefix`` goes before the
+    frame names (``frame_prefix``), ``root_frame`` is the frame of world geometry;
+    ``topics``: the session's per-sample topics."""
+
+    def __init__(self, model: SimModel, prefix: str, root_frame: str, topics: Collection[str]) -> None:
+        sensors, contact = model.sensors, model.contact
+        #: per contact pair: (its topic, its name, the frame of its second geometry)
+        self.pairs = [] if contact is None else [
+            (pair_topic(contact.geometries[p.first].name, contact.geometries[p.second].name), p.name,
+             root_frame if contact.geometries[p.second].owner == "world"
+             else prefix + contact.geometries[p.second].owner_name) for p in contact.pairs]
+        self.wanted = any(topic in topics for topic in SENSOR_TOPICS) or any(t in topics for t, _, _ in self.pairs)
+        """Whether snapshots must carry their readings."""
+        self.wrist_frame = prefix + sensors.wrist.link if sensors.wrist is not None else ""
+        self.imu_frame = prefix + "base_link"
+
+    def columns(self, stamps: Sequence[int], snapshots: Sequence[Snapshot], wanted: Collection[str]
+                ) -> list[tuple[str, list[object]]]:
+        """(topic, its messages at ``stamps`` (ns)) of the wanted sensor topics."""
+        columns: list[tuple[str, list[object]]] = []
+        if "/wrist_wrench" in wanted:
+            columns.append(("/wrist_wrench", [messages.wrench_stamped(stamp, self.wrist_frame, *s.sensors.wrist)
+                                              for stamp, s in zip(stamps, snapshots)]))
+        if "/imu" in wanted:
+            columns.append(("/imu", [messages.imu(stamp, self.imu_frame, s.sensors.imu[2], s.sensors.imu[0],
+                                                  s.sensors.imu[1], IMU_COVARIANCES)
+                                     for stamp, s in zip(stamps, snapshots)]))
+        for topic, name, frame in self.pairs:
+            if topic in wanted:
+                columns.append((topic, [messages.wrench_stamped(stamp, frame, *s.sensors.pairs[name])
+                                        for stamp, s in zip(stamps, snapshots)]))
+        return columns
