@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import json
+import math
 import os
 import random
 import subprocess
@@ -184,3 +185,41 @@ def test_work_precision_cli(tmp_path, capsys, monkeypatch):
     assert len(report["points"]) == 4 and report["recommendation"]
     assert all(np.isfinite(p["q_error"]) for p in report["points"])
     assert main(["work-precision", "--scene", "arm_swing", "--target-error", "-1", "--out", str(tmp_path)]) == 2
+
+
+def test_errors_below_the_references_own_accuracy_are_flagged(study):
+    """A point whose error is below the reference's error estimate is not resolved: flagged
+    in the points (CSV, JSON) and printed as "< estimate (ref)", never as its figure (before:
+    printed as is, e.g. radau at 1e-10 on arm_swing: 5.7e-11 against a reference good to 1.5e-9)."""
+    scene, result = study
+    coarse = dataclasses.replace(result.reference, error_estimate=1e-5)  # a reference good to 1e-5 rad only
+    point = wp.sweep_point(scene, "rk45", 1e-8, coarse)
+    assert point.q_error < 1e-5 and point.below_reference
+    assert not wp.sweep_point(scene, "rk4", 1e-2, coarse).below_reference  # measured error 5e-5 > 1e-5
+    text = wp.markdown_table(scene, coarse, [point])
+    assert "| < 1e-05 (ref) |" in text and f"{point.q_error:.3g}" not in text and "not resolved" in text
+    assert all(p.below_reference == (p.q_error < result.reference.error_estimate) for p in result.points)
+
+
+def test_contact_scenes_are_swept_on_body_positions_or_refused_in_one_line(tmp_path, capsys, monkeypatch):
+    """ball_drop (no robot joints, compliant contact): the error is the ball's final position
+    (m) against the reference; box_slide (constraint-based contact, which only the fixed-step
+    constraint steppers integrate): one line, exit 2 (before: a ValueError and a
+    DivergenceError traceback)."""
+    monkeypatch.setattr(wp, "DEFAULT_GRID", {"rk45": (1e-4, 1e-8)})
+    assert main(["work-precision", "--scene", "ball_drop", "--duration", "0.6", "--out", str(tmp_path), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    errors = [p["q_error"] for p in report["points"]]
+    assert all(np.isfinite(errors)) and errors[1] < errors[0]
+    # what is compared is the ball's position: the reference's against a rigid bounce (1 m
+    # fall, restitution 0.8, 0.148 s of flight up again; the compliant contact lasts a few ms:
+    # measured 2.6 mm apart)
+    reference = wp.reference_solution(load_scene("ball_drop").with_duration(0.6))
+    assert reference.measure == wp.BODY_MEASURE and reference.q.shape == (3,)
+    g, landing = 9.81, math.sqrt(2.0 / 9.81)
+    up = 0.6 - landing
+    np.testing.assert_allclose(reference.q, [0.0, 0.0, 0.025 + 0.8 * g * landing * up - 0.5 * g * up ** 2], atol=5e-3)
+    assert main(["work-precision", "--scene", "box_slide", "--out", str(tmp_path)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "constraint-based contact" in lines[0], lines
+

@@ -120,3 +120,10 @@ def test_replay_of_a_file_that_is_no_bag_is_one_line(capsys, tmp_path: Path, nam
 def test_woodpecker_plot_samples_are_bounded_before_the_run(capsys, tmp_path: Path) -> None:
     # Before: int(1e308 * 2000) raised OverflowError (a traceback).
     _one_line_error(capsys, ["study", "woodpecker", "--duration", "1e308", "--plot", str(tmp_path / "w.png")], "output samples")
+
+
+@pytest.mark.parametrize("budget", ["-5", "0"])
+def test_a_step_budget_below_one_is_refused_when_parsed(capsys, budget: str) -> None:
+    # Before: accepted, and the run failed on its own budget of -5 steps.
+    _one_line_error(capsys, ["simulate", "--scene", "arm_swing", "--max-steps", budget], "--max-steps",
+                    "positive integer")

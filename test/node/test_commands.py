@@ -7,9 +7,10 @@ import math
 
 import numpy as np
 import pytest
+from builtin_interfaces.msg import Duration, Time
 
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.io.stamps import NS_PER_S as NS
+from youbot_dynamics.io.stamps import NS_PER_S as NS, stamp_ns_of
 from youbot_dynamics.model.lie import exp_so3, matrix_from_quaternion
 from youbot_dynamics.model.screws import fkin_space, screw_chain
 from youbot_dynamics.node.commands import (EffortCommands, InputCounters, InputRejected,
@@ -62,6 +63,18 @@ def test_bad_effort_commands_are_rejected_counted_and_change_nothing(
     assert commands.torque(10.0).tolist() == [0.0, 0.0, 0.25, 0.0, 0.0]
 
 
+@pytest.mark.parametrize(("sec", "kind"), [(5, "bad_timing"), (9, "bad_timing"), (5, "stale")])
+def test_a_nanosec_of_1e9_or_more_is_bad_timing_not_carried(commands: EffortCommands, sec, kind) -> None:
+    """builtin_interfaces/Time wants nanosec < 1e9: sec 5 with nanosec 1.5e9 is no stamp (carried
+    over it would read as 6.5 s, stale at now 10 s; sec 9 as 10.5 s, taken); sec 5 with
+    nanosec 0.5e9 is a valid stamp 5.5 s, stale."""
+    nanosec = 500_000_000 if kind == "stale" else 1_500_000_000
+    with pytest.raises(InputRejected) as error:
+        commands.accept(["arm_joint_1"], [1.0], stamp_ns=stamp_ns_of(Time(sec=sec, nanosec=nanosec)), now=10.0)
+    assert error.value.kind == kind
+    assert commands.counters.rejected[kind] == 1
+
+
 def test_efforts_beyond_the_urdf_limit_are_clamped_and_counted(commands: EffortCommands, simulator: Simulator) -> None:
     limit = np.asarray(simulator.robot.effort_limit)
     out = commands.accept(["arm_joint_1", "arm_joint_4"], [1e3, -1e3], stamp_ns=0, now=0.0)
@@ -104,6 +117,9 @@ def test_trajectory_is_followed_through_its_points(simulator: Simulator) -> None
         joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [3.0], ()), (NS // 2, [3.1], ())], 0, q0)
     with pytest.raises(InputRejected, match="bad_timing"):
         joint_trajectory(robot, robot.joint_names[:1], [(-1, [3.0], ())], 0, q0)
+    with pytest.raises(InputRejected, match="bad_timing"):  # a Duration with nanosec 1.5e9 is no time
+        joint_trajectory(robot, robot.joint_names[:1],
+                         [(stamp_ns_of(Duration(sec=0, nanosec=1_500_000_000)), [3.0], ())], 0, q0)
     with pytest.raises(InputRejected, match="out_of_limits"):
         joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [100.0], ())], 0, q0)
     scene_free = Simulator(load_scene("arm_swing"))

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from youbot_dynamics.dynamics.mobile.odometry import se2_step
 from youbot_dynamics.node.commands import InputRejected
@@ -34,7 +35,7 @@ def test_odom_every_sample_and_tf_agrees(session):
     assert {"/odom", "/base_pose_ground_truth"} <= set(session.topics)
     static = session.latched[0][1]
     assert all(t.child_frame_id != "base_footprint" for t in static.transforms)  # odom -> base_footprint moves
-    stamps = []
+    stamps, twists = [], []
     for _ in range(60):
         session.base_command((0.2, 0.1, 0.0), (0.0, 0.0, 0.4))  # a /cmd_vel stream at the publish rate
         out = by_topic(session.step())
@@ -48,16 +49,25 @@ def test_odom_every_sample_and_tf_agrees(session):
         np.testing.assert_allclose([t.x, t.y, t.z, q.x, q.y, q.z, q.w], [p.x, p.y, p.z, r.x, r.y, r.z, r.w],
                                    atol=1e-12, rtol=0)
         assert np.all(np.diag(odom.pose.covariance.reshape(6, 6)) > 0.0)
+        truth_twist = out["/base_pose_ground_truth"].twist.twist
+        twists.append((truth_twist.linear.x, truth_twist.linear.y, truth_twist.angular.z))
     assert np.all(np.diff(stamps) == round(1e9 / RATE))  # one /odom per sample, at the publish rate
-    # a kinematic base follows the held twist: odometry and ground truth on the SE(2) exponential
+    # a kinematic base follows the twist command, reached at base_square's a_max (1 per axis)
+    # in 0.4 s: the ground truth on an independent integration of the pose rates
     truth = out["/base_pose_ground_truth"].pose.pose
-    t = 59 / RATE
-    expected = se2_step(np.zeros(3), [0.2, 0.1, 0.4], t)
+    ramp = lambda t: min(t / 0.4, 1.0) * np.array([0.2, 0.1, 0.4])  # noqa: E731
+    rates = lambda t, pose: [*(rotation(pose[2]) @ ramp(t)[:2]), ramp(t)[2]]  # noqa: E731
+    expected = solve_ivp(rates, (0.0, 59 / RATE), np.zeros(3), rtol=1e-12, atol=1e-12, max_step=0.01).y[:, -1]
     np.testing.assert_allclose([truth.position.x, truth.position.y, yaw_of(truth.orientation)], expected, atol=1e-6)
-    # the odometry holds each sample's wheel speeds over the next increment: the first one
-    # (the t = 0 sample, before the command) was at rest
-    np.testing.assert_allclose([p.x, p.y, yaw_of(r)], se2_step(np.zeros(3), [0.2, 0.1, 0.4], t - 1 / RATE),
-                               atol=1e-12)
+    # the odometry holds each sample's wheel speeds (the true twist: no slip) over the next increment
+    pose = np.zeros(3)
+    for twist in twists[:-1]:
+        pose = se2_step(pose, twist, 1 / RATE)
+    np.testing.assert_allclose([p.x, p.y, yaw_of(r)], pose, atol=1e-12)
+
+
+def rotation(yaw: float) -> np.ndarray:
+    return np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
 
 
 def test_cmd_vel_timeout_stops_the_base(session):

@@ -22,6 +22,7 @@ import yaml
 
 from youbot_dynamics.dynamics.mobile.mecanum import wheel_speeds
 from youbot_dynamics.dynamics.mobile.odometry import se2_step
+from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import DivergenceError
 from youbot_dynamics.scene.schema import Scene, SceneError, load_scene, scene_dir
@@ -192,7 +193,7 @@ def test_a_held_twist_command_moves_the_kinematic_base_on_se2():
     model = compile(load_scene(scene_dir() / "base_square.yaml"))
     state = initial_state(model)
     twist = np.array([0.2, -0.1, 0.5])
-    state.reference = dataclasses.replace(state.reference, base_twist=twist)
+    state.reference = dataclasses.replace(state.reference, base_twist=TwistRamp.held(twist))
     advance(model, state, [0.5, 1.0, 2.0])
     np.testing.assert_allclose(state.x[model.block("base")], se2_step(model.base.pose0, twist, 2.0), atol=1e-6)
     np.testing.assert_array_equal(state.x[model.block("base_v")], twist)
@@ -206,7 +207,7 @@ def test_a_held_twist_command_drives_the_dynamic_base():
     model = compile(swing_scene(braked, integrator={"method": "rk45", "rtol": 1e-7, "atol": 1e-9}))
     state = initial_state(model)
     twist = np.array([0.3, 0.0, 0.0])
-    state.reference = dataclasses.replace(state.reference, base_twist=twist)
+    state.reference = dataclasses.replace(state.reference, base_twist=TwistRamp.held(twist))
     advance(model, state, [1.0, 2.0])
     # the arm swings on it, so the base tracks within the PI's disturbance rejection
     # (measured within 0.02 m/s)

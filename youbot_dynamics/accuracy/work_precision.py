@@ -6,12 +6,17 @@
   sweep point is only as trustworthy as that figure).
 - Sweep: each integrator over a grid of step sizes (fixed-step methods) or tolerances
   (adaptive ones, atol = rtol / 100). Per point: the final-state error in joint space
-  (max_i |q_i - q_ref,i|, rad) and of the end-effector position (|p - p_ref|, m), the
+  (max_i |q_i - q_ref,i|, rad; a scene without robot joints, such as a ball on a floor:
+  of the free bodies' final positions, max_b |p_b - p_ref,b|, m) and of the end-effector
+  position (|p - p_ref|, m), whether that error is below the reference's own error estimate
+  (then it is not resolved: the table prints ``< estimate (ref)``), the
   maximum energy drift max_t |E(t) - E(0)| (J) where the scene conserves energy, the wall
   time (s), the rhs and Jacobian evaluations, the counted work (:func:`counted_work`) and
   the failure (a DivergenceError or IntegrationError message) if the run failed. The
   energy-growth check is off during the sweep (a drifting run is a data point, not a
   failure); non-finite states and the velocity bound stay on.
+- Scenes with constraint-based contact (law ``constraint``) are refused in one line: only
+  the constraint steppers integrate them, at a fixed dt, against no ODE reference.
 - Output: CSV, markdown table and a PNG work-precision plot (matplotlib Agg).
 - ``recommend``: the point of least counted work whose joint-space error meets a target
   (ties: registry order, then the looser setting). Counts, not wall time, so that the same
@@ -65,16 +70,24 @@ def spec_for(method: str, value: float) -> IntegratorSpec:
     return IntegratorSpec(method, rtol=value, atol=value * ATOL_PER_RTOL, energy_tolerance=math.inf)
 
 
+#: What the error column measures: a robot's joint positions, else the free bodies' positions.
+JOINT_MEASURE = "max |q - q_ref| (rad)"
+BODY_MEASURE = "max |p - p_ref| of the free bodies' positions (m)"
+
+
 @dataclass(frozen=True)
 class Reference:
-    """The reference run's final q (rad), end-effector position (m), its settings and the
-    estimate of its own error (rad): max |q_tight - q_loose| over two tolerances."""
+    """The reference run's final configuration ``q`` (the robot's joint positions, rad, or
+    for a scene without robot joints the free bodies' positions, m: ``measure`` says
+    which), end-effector position (m; empty without a robot), its settings and the
+    estimate of its own error: max |q_tight - q_loose| over two tolerances."""
 
     spec: IntegratorSpec
     state_dim: int
     q: np.ndarray
     ee_position: np.ndarray
     error_estimate: float
+    measure: str = JOINT_MEASURE
 
 
 @dataclass(frozen=True)
@@ -93,6 +106,7 @@ class SweepPoint:
     work: float | None
     steps: int | None
     failure: str | None
+    below_reference: bool = False
 
     @property
     def spec(self) -> IntegratorSpec:
@@ -117,13 +131,30 @@ def counted_work(rhs_evals: int | None, jac_evals: int | None, state_dim: int) -
 
 
 def final_figures(simulator: Simulator, result: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
-    """Final joint positions (rad) and end-effector position (m) of a run."""
+    """Final configuration and end-effector position (m) of a run: the joint positions
+    (rad), or without robot joints the free bodies' positions (m, (bodies x 3) flattened)
+    and no end effector."""
     q = result.x[-1, simulator.layout.slice("q")]
+    if not q.size:
+        return simulator.model.body_motion(result.x[-1:])["position"][0].ravel(), np.zeros(0)
     return q, simulator.ee_pose_of(q)[:3, 3]
+
+
+def check_sweepable(scene: Scene) -> None:
+    """UserInputError (one line) for a scene work-precision cannot sweep: constraint-based
+    contact, or nothing that moves."""
+    constrained = [pair.name for pair in scene.contacts if pair.law.law == "constraint"]
+    if constrained:
+        raise UserInputError(f"scene {scene.name!r} has constraint-based contact "
+                             f"({', '.join(constrained)}), which only the constraint steppers integrate at a fixed "
+                             "dt, with no ODE reference to compare against; use a compliant contact law")
+    if not (scene.robot.nv or scene.free_bodies):
+        raise UserInputError(f"scene {scene.name!r} has neither robot joints nor free bodies: nothing to sweep")
 
 
 def reference_solution(scene: Scene) -> Reference:
     """The tight-tolerance reference and its error estimate from a 10x looser run."""
+    check_sweepable(scene)
     method = "radau" if scene.integrator.method != AUTO and REGISTRY[scene.integrator.method].stiff else "dop853"
     finals = []
     for rtol in (REFERENCE_RTOL, 10 * REFERENCE_RTOL):
@@ -131,7 +162,7 @@ def reference_solution(scene: Scene) -> Reference:
         finals.append(final_figures(simulator, simulator.run()))
     (q, ee), (q_loose, _) = finals
     return Reference(spec_for(method, REFERENCE_RTOL), simulator.state_dim, q, ee,
-                     float(np.max(np.abs(q - q_loose))))
+                     float(np.max(np.abs(q - q_loose))), JOINT_MEASURE if ee.size else BODY_MEASURE)
 
 
 def sweep_point(scene: Scene, method: str, value: float, reference: Reference) -> SweepPoint:
@@ -147,10 +178,12 @@ def sweep_point(scene: Scene, method: str, value: float, reference: Reference) -
                           time.perf_counter() - start, None, None, None, None, str(error))
     q, ee = final_figures(simulator, result)
     stats = result.stats
-    return SweepPoint(method, parameter, value, float(np.max(np.abs(q - reference.q))),
-                      float(np.linalg.norm(ee - reference.ee_position)), result.energy_error,
+    error = float(np.max(np.abs(q - reference.q)))
+    return SweepPoint(method, parameter, value, error,
+                      float(np.linalg.norm(ee - reference.ee_position)) if ee.size else math.nan, result.energy_error,
                       stats.wall_time, stats.rhs_evals, stats.jac_evals,
-                      counted_work(stats.rhs_evals, stats.jac_evals, reference.state_dim), stats.steps, None)
+                      counted_work(stats.rhs_evals, stats.jac_evals, reference.state_dim), stats.steps, None,
+                      error < reference.error_estimate)
 
 
 def sweep(scene: Scene, reference: Reference, grid: dict[str, Sequence[float]] | None = None,
@@ -201,29 +234,37 @@ def _cell(value: float | int | None) -> str:
 def markdown_table(scene: Scene, reference: Reference, points: Sequence[SweepPoint],
                    best: SweepPoint | None = None, target_error: float | None = None) -> str:
     """The sweep as a markdown document: reference, one row per point, recommendation."""
+    unit = "rad" if reference.measure == JOINT_MEASURE else "m"
     lines = [f"# Work-precision: {scene.name}", "",
              f"Scene `{scene.source}`, {scene.duration:g} s, state dimension "
              f"{reference.state_dim}, reference "
-             f"{reference.spec.describe()} (own error estimate {reference.error_estimate:.2g} rad).", "",
-             "| integrator | dt or rtol | q error (rad) | EE error (m) | energy drift (J) | wall time (s) "
+             f"{reference.spec.describe()} (own error estimate {reference.error_estimate:.2g} {unit}). "
+             f"Error: {reference.measure}.", "",
+             f"| integrator | dt or rtol | error ({unit}) | EE error (m) | energy drift (J) | wall time (s) "
              "| rhs evals | Jacobians | work | steps | failure |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for p in points:
         failure = "" if p.failure is None else p.failure.replace("|", "/")[:80]
-        lines.append(f"| {p.integrator} | {p.parameter}={p.value:g} | {_cell(p.q_error)} | {_cell(p.ee_error)} "
+        error = f"< {reference.error_estimate:.3g} (ref)" if p.below_reference else _cell(p.q_error)
+        ee = _cell(p.ee_error) if reference.ee_position.size else "-"
+        lines.append(f"| {p.integrator} | {p.parameter}={p.value:g} | {error} | {ee} "
                      f"| {_cell(p.energy_drift)} | {p.wall_time:.3g} | {_cell(p.rhs_evals)} | {_cell(p.jac_evals)} "
                      f"| {_cell(p.work)} | {_cell(p.steps)} | {failure} |")
     lines += ["", "Work: rhs evaluations + Jacobians x state dimension (counted, the same on any machine)."]
+    if any(p.below_reference for p in points):
+        lines += ["", "(ref): below the reference's own error estimate, so not resolved (the true error may be as "
+                  "large as the estimate)."]
     if target_error is not None:
-        lines += ["", f"Target joint-space error {target_error:g} rad: " +
+        lines += ["", f"Target error {target_error:g} {unit}: " +
                   ("no configuration meets it." if best is None else
                    f"cheapest is **{best.spec.describe()}** (work {best.work:.4g}, {best.wall_time:.3g} s, "
-                   f"error {best.q_error:.2g} rad).")]
+                   f"error {best.q_error:.2g} {unit}).")]
     return "\n".join(lines) + "\n"
 
 
-def plot(scene: Scene, points: Sequence[SweepPoint], path: Path) -> None:
-    """Work-precision PNG: wall time and rhs evaluations against joint-space error."""
+def plot(scene: Scene, points: Sequence[SweepPoint], path: Path, measure: str = JOINT_MEASURE) -> None:
+    """Work-precision PNG: wall time and rhs evaluations against the final error
+    (``measure``: what it measures)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -238,7 +279,7 @@ def plot(scene: Scene, points: Sequence[SweepPoint], path: Path) -> None:
         axes[0].loglog(errors, [p.wall_time for p in good], "o-", label=method)
         axes[1].loglog(errors, [p.rhs_evals or np.nan for p in good], "o-", label=method)
     for ax, label in zip(axes, ("wall time (s)", "rhs evaluations")):
-        ax.set_xlabel("final joint-space error max|q - q_ref| (rad)")
+        ax.set_xlabel(f"final error {measure}")
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)
@@ -265,6 +306,7 @@ def work_precision(scene: Scene, out_dir: str | Path, *, target_error: float | N
     PNG in ``out_dir``, and the recommendation."""
     if target_error is not None and not target_error > 0:
         raise UserInputError(f"--target-error must be positive (rad), got {target_error!r}")
+    check_sweepable(scene)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     reference = reference_solution(scene)
@@ -274,7 +316,7 @@ def work_precision(scene: Scene, out_dir: str | Path, *, target_error: float | N
     files = (stem.with_suffix(".csv"), stem.with_suffix(".md"), stem.with_suffix(".png"))
     write_csv(points, files[0])
     files[1].write_text(markdown_table(scene, reference, points, best, target_error), encoding="utf-8")
-    plot(scene, points, files[2])
+    plot(scene, points, files[2], reference.measure)
     return WorkPrecision(reference, tuple(points), best, files)
 
 

@@ -119,6 +119,14 @@ def positive(text: str) -> float:
     return value
 
 
+def positive_int(text: str) -> int:
+    """An argparse type: a positive integer (a count)."""
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
 def relative_tolerance(text: str) -> float:
     """An argparse type: a relative tolerance within [MIN_RTOL, MAX_RTOL]
     (youbot_dynamics.model.limits)."""

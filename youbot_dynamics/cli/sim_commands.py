@@ -16,7 +16,7 @@ from tqdm import tqdm
 from youbot_dynamics.accuracy.work_precision import resolve_integrator, work_precision, write_back
 from youbot_dynamics.cli.common import (CommandError, add_duration, add_json, add_out_folder,
                                         add_sweep_arguments, add_tolerance_arguments, finite_or_none,
-                                        output_file, output_folder)
+                                        output_file, output_folder, positive_int)
 from youbot_dynamics.integrate.integrators import (IntegrationError, StepBudgetError,
                                                    checked_fixed_step, fixed_step_count)
 from youbot_dynamics.integrate.registry import INTEGRATORS, REGISTRY, STEPPERS, integrator_names
@@ -33,7 +33,7 @@ ACCURACY = {"simulate": "--tol",
 
 def add_step_budget_argument(parser: argparse.ArgumentParser) -> None:
     """--max-steps: the budget of a fixed-step run."""
-    parser.add_argument("--max-steps", type=int, default=MAX_STEPS, metavar="N",
+    parser.add_argument("--max-steps", type=positive_int, default=MAX_STEPS, metavar="N",
                         help=f"refuse a fixed-step run of more than N steps (default {MAX_STEPS:g})")
 
 
@@ -83,9 +83,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                   "tolerances against a tight reference; write CSV, markdown "
                                   "and PNG; with --target-error recommend the setting of least "
                                   "counted work (rhs evaluations + Jacobians x state dimension) "
-                                  "that meets it; with --write-back pin it into the scene file.")
+                                  "that meets it; with --write-back pin it into the scene file. "
+                                  "The error is the final joint-space one (rad), or without robot "
+                                  "joints the free bodies' final positions (m); errors below the "
+                                  "reference's own accuracy print as '< estimate (ref)'. Scenes with "
+                                  "constraint-based contact are refused (only the constraint steppers "
+                                  "integrate them).")
     study.add_argument("--scene", required=True, metavar="NAME_OR_PATH")
-    study.add_argument("--target-error", type=float, help="final joint-space error to meet, rad "
+    study.add_argument("--target-error", type=float, help="final error to meet, rad (m without robot joints) "
                        "(default with --write-back: the scene's integrator.target_error)")
     study.add_argument("--write-back", action="store_true",
                        help="pin the recommended method and tolerance (or dt) into the scene file's integrator "

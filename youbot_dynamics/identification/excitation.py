@@ -9,8 +9,13 @@ Joint j follows, with fundamental pulsation w = 2 pi / period and L harmonics,
 periodic, so a measurement can be averaged over periods and needs no windowing. The
 coefficients are chosen by scipy.optimize (SLSQP) to minimise cond(Y_base) over one period
 sampled at ``grid`` points, under the URDF's position limits (less ``margin``), a fraction
-of its velocity limits and an acceleration limit (the URDF has none: an option), with
-qd(0) = qdd(0) = 0 so the robot can start from rest at q(0).
+of its velocity limits, an acceleration limit (the URDF has none: an option) and a fraction
+of its effort limits (the nominal robot's inverse dynamics with friction, Y theta), with
+qd(0) = qdd(0) = 0 so the robot can start from rest at q(0). Between grid points the effort
+is checked again on a dense grid and the series shrunk about q0 until it fits.
+
+Written as /joint_trajectory points, a period fits one message: :func:`message_rate`
+samples it at most as densely as the node takes (``MAX_TRAJECTORY_POINTS`` points).
 """
 from __future__ import annotations
 
@@ -25,6 +30,18 @@ import yaml
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.identification.base_parameters import BaseParameters
 from youbot_dynamics.identification.regressor import RegressorLayout
+from youbot_dynamics.node.commands import MAX_TRAJECTORY_POINTS  # one /joint_trajectory's points
+
+#: Hz: the sample rate of written points unless one message cannot hold them (:func:`message_rate`).
+DEFAULT_RATE = 100.0
+#: Points per period on which the effort limits are checked after the optimisation.
+DENSE_GRID = 2000
+
+
+def message_rate(duration: float, rate: float = DEFAULT_RATE) -> float:
+    """The sample rate (Hz), at most ``rate``, at which the points of [0, duration] s (both
+    ends) fit one /joint_trajectory: at most ``MAX_TRAJECTORY_POINTS``, the node's bound."""
+    return min(rate, (MAX_TRAJECTORY_POINTS - 1) / duration)
 
 
 @dataclass(frozen=True)
@@ -54,11 +71,17 @@ class FourierTrajectory:
         acc = -(sin * wl) @ self.a.T + (cos * wl) @ self.b.T
         return q, v, acc
 
-    def to_dict(self, rate: float = 100.0, periods: int = 1) -> dict[str, Any]:
-        """The series and its samples at ``rate`` Hz over ``periods`` periods, as
-        trajectory_msgs/JointTrajectory fields (joint_names, points with positions,
-        velocities, accelerations, time_from_start {sec, nanosec}) plus ``fourier``."""
-        steps = int(round(periods * self.period * rate))
+    def point_count(self, rate: float, periods: int = 1) -> int:
+        """How many points ``periods`` periods sampled at ``rate`` Hz hold (both ends)."""
+        return int(round(periods * self.period * rate)) + 1
+
+    def to_dict(self, rate: float | None = None, periods: int = 1) -> dict[str, Any]:
+        """The series and its samples at ``rate`` Hz (default :func:`message_rate`) over
+        ``periods`` periods, as trajectory_msgs/JointTrajectory fields (joint_names, points
+        with positions, velocities, accelerations, time_from_start {sec, nanosec}) plus
+        ``fourier``."""
+        rate = message_rate(periods * self.period) if rate is None else rate
+        steps = self.point_count(rate, periods) - 1
         t_ns = np.rint(np.arange(steps + 1) * 1e9 / rate).astype(np.int64)
         q, v, acc = self.evaluate(t_ns * 1e-9)
         points = [{"positions": q[k].tolist(), "velocities": v[k].tolist(), "accelerations": acc[k].tolist(),
@@ -68,7 +91,7 @@ class FourierTrajectory:
                 "fourier": {"period": self.period, "q0": self.q0.tolist(), "a": self.a.tolist(),
                             "b": self.b.tolist()}}
 
-    def write(self, path: str | Path, rate: float = 100.0, periods: int = 1) -> None:
+    def write(self, path: str | Path, rate: float | None = None, periods: int = 1) -> None:
         """Write :meth:`to_dict` as YAML."""
         Path(path).write_text(yaml.safe_dump(self.to_dict(rate, periods), sort_keys=False))
 
@@ -89,11 +112,14 @@ class FourierTrajectory:
 class ExcitationLimits:
     """Bounds an excitation must keep: position limits shrunk by ``margin`` (rad), speeds
     within ``velocity_fraction`` of the URDF's velocity limits, |qdd| <= ``acceleration``
-    (rad/s^2; the URDF states none)."""
+    (rad/s^2; the URDF states none), the nominal robot's joint efforts within
+    ``effort_fraction`` of the URDF's effort limits on the optimiser's grid (within the limits
+    themselves on a dense one)."""
 
     margin: float = 0.1
     velocity_fraction: float = 0.8
     acceleration: float = 4.0
+    effort_fraction: float = 0.95
 
 
 @dataclass(frozen=True)
@@ -119,9 +145,44 @@ def _bounds(layout: RegressorLayout, limits: ExcitationLimits) -> tuple[np.ndarr
     return lower, upper, vmax, np.full(robot.nv, limits.acceleration)
 
 
+def efforts(layout: RegressorLayout, q: np.ndarray, v: np.ndarray, acc: np.ndarray) -> np.ndarray:
+    """(N, nv) joint efforts (N m) of the nominal robot (the layout's URDF, its friction
+    included) along N samples of q, qd, qdd: Y(q, qd, qdd) theta."""
+    return (layout.stacked(q, v, acc) @ layout.standard_parameters()).reshape(len(q), -1)
+
+
+def effort_ratio(layout: RegressorLayout, trajectory: FourierTrajectory, grid: int = DENSE_GRID) -> np.ndarray:
+    """(nv,) the largest |effort| / effort limit per joint over one period sampled at
+    ``grid`` points (0 for a joint without a limit)."""
+    q, v, acc = trajectory.evaluate(np.linspace(0.0, trajectory.period, grid, endpoint=False))
+    return (np.abs(efforts(layout, q, v, acc)) / _effort_limits(layout)).max(axis=0)
+
+
+def _effort_limits(layout: RegressorLayout) -> np.ndarray:
+    limit = np.asarray(layout.robot.effort_limit, dtype=float)
+    return np.where(np.isfinite(limit) & (limit > 0.0), limit, np.inf)
+
+
+def within_efforts(layout: RegressorLayout, trajectory: FourierTrajectory, fraction: float = 1.0,
+                   grid: int = DENSE_GRID) -> FourierTrajectory:
+    """``trajectory`` with its Fourier coefficients shrunk about q0 (by factors of 0.95) until
+    the nominal efforts stay within ``fraction`` of the effort limits on ``grid`` points per
+    period (itself if they do); UserInputError when even a small motion about q0 exceeds them."""
+    for _ in range(100):
+        ratio = effort_ratio(layout, trajectory, grid)
+        if ratio.max() <= fraction:
+            return trajectory
+        trajectory = FourierTrajectory(trajectory.joint_names, trajectory.period, trajectory.q0,
+                                       0.95 * trajectory.a, 0.95 * trajectory.b)
+    joint = layout.robot.joint_names[int(np.argmax(ratio))]
+    raise UserInputError(f"excitation: {joint} needs {ratio.max():.3g} x its effort limit even near q0 "
+                         f"(the static load at mid-range exceeds it)")
+
+
 def random_fourier(layout: RegressorLayout, period: float, harmonics: int, limits: ExcitationLimits,
                    rng: np.random.Generator, grid: int = 200) -> FourierTrajectory:
-    """A random series about mid-range that starts at rest and is scaled into the limits."""
+    """A random series about mid-range that starts at rest and is scaled into the limits
+    (positions, speeds and accelerations at once, then the efforts)."""
     lower, upper, vmax, amax = _bounds(layout, limits)
     n, harmonic = layout.robot.nv, np.arange(1, harmonics + 1)
     a, b = rng.standard_normal((n, harmonics)), rng.standard_normal((n, harmonics))
@@ -132,7 +193,8 @@ def random_fourier(layout: RegressorLayout, period: float, harmonics: int, limit
     span = np.abs(q - q[0]).max(axis=0) + np.abs(q[0])                   # |q - q0| bound, q0 = 0
     scale = 0.9 * np.min([((upper - lower) / 2 / span).min(), (vmax / np.abs(v).max(axis=0)).min(),
                           (amax / np.abs(acc).max(axis=0)).min()])
-    return FourierTrajectory(shape.joint_names, period, (lower + upper) / 2, scale * a, scale * b)
+    return within_efforts(layout, FourierTrajectory(shape.joint_names, period, (lower + upper) / 2,
+                                                    scale * a, scale * b), limits.effort_fraction, grid)
 
 
 def condition_number(layout: RegressorLayout, base: BaseParameters, trajectory: FourierTrajectory,
@@ -146,8 +208,13 @@ def optimise_excitation(layout: RegressorLayout, base: BaseParameters, *, period
                         harmonics: int = 5, limits: ExcitationLimits = ExcitationLimits(), grid: int = 60,
                         iterations: int = 60, seed: int = 0) -> ExcitationResult:
     """Minimise cond(Y_base) over the Fourier coefficients (SLSQP, finite-difference
-    gradients) from a random feasible series; constraints on ``grid`` points per period."""
+    gradients) from a random feasible series; constraints on ``grid`` points per period. The
+    result is the feasible iterate of least condition number (the last one shrunk about its
+    q0 until feasible among them), its efforts checked again on ``DENSE_GRID``
+    (:func:`within_efforts`)."""
     lower, upper, vmax, amax = _bounds(layout, limits)
+    tau_max = limits.effort_fraction * _effort_limits(layout)
+    limited = np.isfinite(tau_max)
     initial = random_fourier(layout, period, harmonics, limits, np.random.default_rng(seed))
     n, harmonic = layout.robot.nv, np.arange(1, harmonics + 1)
     times = np.linspace(0.0, period, grid, endpoint=False)
@@ -157,25 +224,49 @@ def optimise_excitation(layout: RegressorLayout, base: BaseParameters, *, period
         a, b = x[n:].reshape(2, n, harmonics)
         return FourierTrajectory(initial.joint_names, period, x[:n], a, b)
 
+    theta, cache = layout.standard_parameters(), {}
+
+    def along(x: np.ndarray) -> tuple[np.ndarray, ...]:
+        """q, qd, qdd on the grid and the stacked regressor there (the last x's, kept)."""
+        key = x.tobytes()
+        if key not in cache:
+            q, v, acc = unpack(x).evaluate(times)
+            cache.clear()
+            cache[key] = q, v, acc, layout.stacked(q, v, acc)
+        return cache[key]
+
     def objective(x: np.ndarray) -> float:
-        q, v, acc = unpack(x).evaluate(times)
-        return float(np.log(np.linalg.cond(base.columns(layout.stacked(q, v, acc)))))
+        return float(np.log(np.linalg.cond(base.columns(along(x)[3]))))
 
     def inequalities(x: np.ndarray) -> np.ndarray:
-        q, v, acc = unpack(x).evaluate(times)
+        q, v, acc, regressor = along(x)
+        tau = np.abs(regressor @ theta).reshape(len(times), -1)
         return np.concatenate([(q - lower).ravel(), (upper - q).ravel(), (vmax - np.abs(v)).ravel(),
-                               (amax - np.abs(acc)).ravel()])
+                               (amax - np.abs(acc)).ravel(), (tau_max[limited] - tau[:, limited]).ravel()])
 
     def at_rest(x: np.ndarray) -> np.ndarray:
         a, b = x[n:].reshape(2, n, harmonics)
         return np.concatenate([a.sum(axis=1), w * (b @ harmonic)])
 
     x0 = np.concatenate([initial.q0, initial.a.ravel(), initial.b.ravel()])
+    kept = {"x": x0, "objective": objective(x0)}          # the random start is feasible
+
+    def keep(x: np.ndarray) -> bool:
+        """Remember the feasible iterate of least condition number (SLSQP's callback);
+        whether ``x`` is feasible."""
+        feasible = bool(np.all(inequalities(x) >= -1e-6) and np.all(np.abs(at_rest(x)) <= 1e-9))
+        if feasible and objective(x) < kept["objective"]:
+            kept.update(x=x.copy(), objective=objective(x))
+        return feasible
+
     result = scipy.optimize.minimize(objective, x0, method="SLSQP",
                                      constraints=[{"type": "ineq", "fun": inequalities},
                                                   {"type": "eq", "fun": at_rest}],
-                                     options={"maxiter": iterations})
-    best = unpack(result.x) if np.all(inequalities(result.x) >= -1e-6) else initial
+                                     options={"maxiter": iterations}, callback=keep)
+    for k in range(60):      # the last iterate, shrunk about its q0 until it is feasible
+        if keep(np.concatenate([result.x[:n], 0.95 ** k * result.x[n:]])):
+            break
+    best = within_efforts(layout, unpack(kept["x"]))
     return ExcitationResult(best, initial, condition_number(layout, base, best),
                             condition_number(layout, base, initial), int(result.nit), str(result.message))
 

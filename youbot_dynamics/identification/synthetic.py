@@ -26,14 +26,13 @@ import yaml
 
 from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch
-from youbot_dynamics.identification.excitation import FourierTrajectory
+from youbot_dynamics.identification.excitation import FourierTrajectory, message_rate
 from youbot_dynamics.io import messages
 from youbot_dynamics.io.bag_reader import read_bag
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.model.robot import Robot, keep_joints
-from youbot_dynamics.node.commands import MAX_TRAJECTORY_POINTS  # one /joint_trajectory's points
 from youbot_dynamics.scene.schema import Scene, load_scene, scene_dir
 
 #: The scene that records an excitation (computed torque, URDF friction, at rest until a
@@ -103,9 +102,8 @@ def excitation_scene(robot_urdf: str | Path, trajectory: FourierTrajectory, dura
 
 def trajectory_points(trajectory: FourierTrajectory, duration: float) -> list[tuple[int, list, list]]:
     """The trajectory over [0, duration] s as /joint_trajectory points (time_from_start in
-    ns, positions, velocities), as densely as one message allows (at most
-    MAX_TRAJECTORY_POINTS, at most 100 Hz)."""
-    rate = min(100.0, (MAX_TRAJECTORY_POINTS - 1) / duration)
+    ns, positions, velocities), as densely as one message allows (:func:`message_rate`)."""
+    rate = message_rate(duration)
     t_ns = np.rint(np.arange(int(duration * rate) + 1) * NS_PER_S / rate).astype(np.int64)
     q, v, _ = trajectory.evaluate(t_ns / NS_PER_S)
     return [(int(t), q[k].tolist(), v[k].tolist()) for k, t in enumerate(t_ns)]

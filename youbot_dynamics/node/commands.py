@@ -21,7 +21,8 @@ Time semantics (the one place they are written down)
   the clock); in inverse mode the sender's stamps (see below). Stamps and trajectory times
   are integer nanoseconds; ``now`` in seconds where noted.
 - A stamp must be what builtin_interfaces/Time holds (0 <= stamp < 2^31 s; a negative sec,
-  or a nanosec of 1e9 or more carried over, is ``bad_timing``).
+  or a nanosec of 1e9 or more, is ``bad_timing``: :func:`~youbot_dynamics.io.stamps.stamp_ns_of`
+  marks the latter, so that it is not carried into the next second).
 - Stamp 0 means "not stamped": the receive time stands in for it (node time for commands
   and trajectories). Inverse mode: a 0 after a 0 takes the node clock's receive time; a
   single 0 is taken as the stamp it is (a stream in simulated time starts at 0, and a
@@ -52,7 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from youbot_dynamics.io.stamps import NS_PER_S
+from youbot_dynamics.io.stamps import MALFORMED_STAMP_NS, NS_PER_S
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.node.interface import TIMEOUT_ACTIONS
 from youbot_dynamics.sim.controllers import Reference
@@ -159,6 +160,8 @@ def _values(values: Sequence[float], label: str, count: int) -> np.ndarray:
 
 def stamp_in_range(stamp_ns: int, what: str) -> int:
     """``stamp_ns`` as an int; raises ``bad_timing`` outside [0, ``STAMP_LIMIT_NS``)."""
+    if stamp_ns == MALFORMED_STAMP_NS:
+        raise InputRejected("bad_timing", f"{what} stamped with a nanosec of 1e9 or more")
     if not 0 <= stamp_ns < STAMP_LIMIT_NS:
         raise InputRejected("bad_timing", f"{what} stamped {stamp_ns} ns, outside builtin_interfaces/Time's "
                             "0 .. 2^31 s")

@@ -111,7 +111,7 @@ TOPICS: tuple[Topic, ...] = (
           "wheel odometry of the received /joint_states' wheel speeds"),
     Topic("/diagnostics", "pub", "diagnostic_msgs/msg/DiagnosticArray", "reliable", BOTH, None,
           "one status: real-time factor, integrator statistics, energy, input counters, callback overruns, "
-          "contact events (simulate); torques published, input counters, estimator restarts (inverse)"),
+          "contact events, base wheel slip (simulate); torques published, input counters, estimator restarts (inverse)"),
     Topic("/tf_static", "pub", "tf2_msgs/msg/TFMessage", "latched", BOTH, None,
           "every fixed link in its parent, and root frame -> URDF root link (or -> odom) if they differ"),
     Topic("/robot_description", "pub", "std_msgs/msg/String", "latched", BOTH, "robot",
@@ -125,7 +125,8 @@ TOPICS: tuple[Topic, ...] = (
           "a joint trajectory for the scene's tracking controller (positions, optional velocities)",
           max_bytes=1024 * 1024),
     Topic("/cmd_vel", "sub", "geometry_msgs/msg/Twist", "reliable", SIMULATE, "moving_base",
-          "the base's twist in base_footprint (vx, vy, wz), held for command_timeout, then stop",
+          "the base's twist in base_footprint (vx, vy, wz), reached within the scene's a_max, held for "
+          "command_timeout, then stop",
           max_bytes=1024),
     Topic("/joint_states", "sub", "sensor_msgs/msg/JointState", "joint_states_qos", INVERSE, None,
           "measured joint positions and velocities by name (unstamped samples take the receive time)",

@@ -6,7 +6,9 @@ odom -> base_footprint transform and the ground-truth pose out.
   wy (the base moves in the plane only) is rejected and counted like /joint_commands'. A
   command is held for the session's command timeout, then the base is told to stop (the
   zero twist), never left running. Before the first command the scene's base path (or rest)
-  is followed.
+  is followed. The base reaches each command within the scene's a_max (kinematic and
+  dynamic: :class:`~youbot_dynamics.dynamics.mobile.ramp.TwistRamp` from the twist it was
+  commanded at that instant).
 - ``/odom`` (nav_msgs/Odometry): the pose of base_footprint in odom from wheel odometry (the
   measured wheel speeds of each sample held over the increment to the next, integrated
   exactly on SE(2) by :func:`~youbot_dynamics.dynamics.mobile.odometry.odometry_step`), the
@@ -18,6 +20,9 @@ odom -> base_footprint transform and the ground-truth pose out.
   (:func:`~youbot_dynamics.node.frames.frame_tree`).
 - ``/base_pose_ground_truth`` (nav_msgs/Odometry, frame world): the simulated pose and twist
   (zero covariance), so that odometry drift can be measured.
+- /diagnostics ``base.slip`` (m/s): over the samples since the previous report, the largest
+  speed, at a wheel hub, of the difference between the /odom twist and the true one (wheels
+  that roll without slip give the true twist exactly); WARN above ``SLIP_WARN``.
 
 :class:`WheelOdometry` is the odometry alone (/odom and its transform from wheel speeds):
 the simulate mode feeds it the simulated wheel speeds, the inverse mode those of the
@@ -32,6 +37,7 @@ import numpy as np
 
 from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase, base_twist
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
+from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.io import messages
 from youbot_dynamics.node.commands import InputCounters, InputRejected
 from youbot_dynamics.node.frames import ODOM_FRAME, WORLD_FRAME, planar_row
@@ -41,6 +47,10 @@ from youbot_dynamics.sim.mobile_base import BaseModel
 #: Largest accepted speed (m/s) and turn rate (rad/s) on /cmd_vel (the youBot drives at up
 #: to about 0.8 m/s).
 MAX_LINEAR, MAX_ANGULAR = 5.0, 10.0
+#: Slip (m/s at a wheel hub) above which /diagnostics warns: the regularised rollers' creep
+#: stays below 0.025 m/s while the dynamic scenes drive (mobile_pick 0.005; base_spin_arm
+#: accelerating at its a_max 0.023); 0.05 m/s is an odometry drift of 5 cm per second.
+SLIP_WARN = 0.05
 #: /odom covariances (row-major 6x6 diagonals: x, y, z, rotation about x, y, z), the values
 #: of ros2_controllers' diff_drive_controller defaults.
 POSE_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
@@ -95,6 +105,8 @@ class MobileBase:
         """Forget the command; odometry back to the base's initial pose."""
         self.command: np.ndarray | None = None
         self.command_time = -math.inf
+        self.ramp: TwistRamp | None = None
+        self.slip = 0.0
         self.odometry.reset()
 
     # ---- /cmd_vel ---------------------------------------------------------------------------
@@ -118,12 +130,17 @@ class MobileBase:
         self.counters.accepted += 1
         self.command, self.command_time = values[[0, 1, 5]], t
 
-    def twist(self, t: float) -> np.ndarray | None:
-        """The twist the base is to follow at t (s): the last command within the timeout,
-        the zero twist after it (stop), None before any command (the scene's path)."""
+    def twist(self, t: float) -> TwistRamp | None:
+        """The twist command the base is to follow from t (s): toward the last command
+        within the timeout, toward the zero twist after it (stop), from the twist commanded
+        at t, within the base's a_max; None before any command (the scene's path)."""
         if self.command is None:
             return None
-        return self.command if t - self.command_time <= self.timeout else np.zeros(3)
+        target = self.command if t - self.command_time <= self.timeout else np.zeros(3)
+        if self.ramp is None:
+            self.ramp = TwistRamp(t, self.base.command(t)[1], target, self.base.a_max)
+        self.ramp = self.ramp.toward(t, target)
+        return self.ramp
 
     # ---- outputs ---------------------------------------------------------------------------
     def outputs(self, stamp_ns: int, t: float, snapshot: Snapshot) -> tuple[list[tuple[str, object]], np.ndarray]:
@@ -134,9 +151,17 @@ class MobileBase:
         odom, row = self.odometry.outputs(stamp_ns, t, snapshot.v[self.base.wheels])
         x, y, yaw = self.odometry.pose
         tx, ty, tyaw, vx, vy, wz = snapshot.base
+        difference = base_twist(self.base.mecanum, snapshot.v[self.base.wheels]) - snapshot.base[3:]
+        self.slip = max(self.slip, float(np.max(np.linalg.norm(self.base.mecanum.hub_velocities(difference), axis=1))))
         truth = messages.odometry(stamp_ns, self.world_frame, self.odometry.child_frame, (tx, ty, 0.0),
                                   _quaternion_of_yaw(tyaw), (vx, vy, 0.0, 0.0, 0.0, wz), np.zeros(36), np.zeros(36))
         drift = yaw - tyaw
         c, s = math.cos(drift), math.sin(drift)
         rows = np.array([row, planar_row(x - (c * tx - s * ty), y - (s * tx + c * ty), drift)])
         return [("/odom", odom), ("/base_pose_ground_truth", truth)], rows
+
+    def report(self) -> tuple[str, dict[str, float]]:
+        """(level, /diagnostics values) of the base since the previous report: ``base.slip``
+        (m/s) and WARN above ``SLIP_WARN`` (else OK); starts the next window."""
+        slip, self.slip = self.slip, 0.0
+        return ("WARN" if slip > SLIP_WARN else "OK"), {"base.slip": slip}

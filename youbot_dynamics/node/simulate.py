@@ -300,17 +300,21 @@ class SimulationSession(Session):
     def diagnostics(self, real_time_factor: float, progress: float | None = None) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
         energy (J), input counters, the free bodies (names in /free_bodies order) and the
-        contact events so far, and ``progress`` (percent of a run of set duration) if given;
-        level ERROR after a divergence, WARN when paused. Figures not known (counters the
-        integrator does not report) are ``NOT_REPORTED``."""
+        contact events so far, a moving base's slip, and ``progress`` (percent of a run of set
+        duration) if given; level ERROR after a divergence, WARN when paused or when the base's
+        wheels slip. Figures not known (counters the integrator does not report) are
+        ``NOT_REPORTED``."""
         stats = {f"integrator.{key}": reported(value) for key, value in self.simulator.stats.as_dict().items()}
+        base_level, base_values = self.moving_base.report() if self.moving_base is not None else ("OK", {})
         values = {"sim_time": self.t, "real_time_factor": reported(real_time_factor),
                   "energy": self.snapshot.energy, "energy_error": self.energy_error,
                   "paused": self.paused, "command": self._command_source(), "resets": self.resets,
                   "last_reset_at": "none" if self.last_reset_ns is None else self.last_reset_ns / NS_PER_S,
                   **stats, **self.counters.as_values(),
-                  **self.contact_values(), **({} if progress is None else {"progress": progress})}
+                  **self.contact_values(), **base_values, **({} if progress is None else {"progress": progress})}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
+        if (level, base_level) == ("OK", "WARN"):
+            level, text = "WARN", f"base wheels slip: {base_values['base.slip']:.3g} m/s at a hub"
         return self._diagnostic_outputs(level, text, values)
 
     def contact_values(self) -> dict[str, object]:

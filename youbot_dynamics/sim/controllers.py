@@ -31,6 +31,7 @@ from numba.extending import register_jitable
 from youbot_dynamics.dynamics.friction import (FLOAT, NO_BRISTLES, READ_VECTOR, WRITTEN_VECTOR,
                                                JointFriction, add_friction_torque_unchecked,
                                                unchecked)
+from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.rigid_body import gravity_torque, inverse_dynamics
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
@@ -42,14 +43,14 @@ ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 @dataclass(frozen=True)
 class Reference:
     """What the controllers track: a trajectory, or a constant set point ``hold`` (rad); a
-    moving base's held twist command ``base_twist`` (vx m/s, vy m/s, wz rad/s, body frame;
-    None: the scene's base path); ``effort_limit`` (N m, N; one per joint) clips the
-    controller's torque where it is below the URDF effort limit (a gripper's max_effort;
-    None: the URDF's limits)."""
+    moving base's twist command ``base_twist`` (vx m/s, vy m/s, wz rad/s, body frame, reached
+    within the base's a_max; None: the scene's base path); ``effort_limit`` (N m, N; one per
+    joint) clips the controller's torque where it is below the URDF effort limit (a
+    gripper's max_effort; None: the URDF's limits)."""
 
     hold: np.ndarray
     trajectory: PointToPointTrajectory | None = None
-    base_twist: np.ndarray | None = None
+    base_twist: TwistRamp | None = None
     effort_limit: np.ndarray | None = None
 
     def limit(self, urdf_limit: np.ndarray) -> np.ndarray:

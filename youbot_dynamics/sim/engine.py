@@ -12,8 +12,8 @@ The equations: the plant's accelerations come from ABA with joint friction and t
 contact forces (:meth:`SimModel.accelerations`); dq/dt = v for the robot joints, the free
 bodies' charts follow their twists. A moving base (:mod:`youbot_dynamics.sim.mobile_base`) adds
 its pose rate R(yaw) (vx, vy), wz, the floor's roller forces and the wheel-speed PI (dynamic),
-or imposes its path's motion on the root and the wheels (kinematic); a held twist command
-(``Reference.base_twist``) replaces the path. Every integrator of the registry runs through
+or imposes its path's motion on the root and the wheels (kinematic); a twist command
+(``Reference.base_twist``, reached within the base's a_max) replaces the path. Every integrator of the registry runs through
 ``drive()`` (integrate/drive.py) with the same divergence checks: the ODE integrators
 (through ``integrate`` or, with contact guards, ``simulate_hybrid``), IDA, and the constraint
 stepper (:class:`ConstraintStepping`, a Stepper whose steps are Pinocchio contact solves).
@@ -35,6 +35,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.mobile.wheel_floor import TipOverError
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.drive import StateCheck, drive
@@ -187,9 +188,9 @@ def robot_torque(model: SimModel, reference, t: float, x: np.ndarray, command: n
 
 
 def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float = 0.0,
-               twist: np.ndarray | None = None) -> np.ndarray:
+               twist: TwistRamp | None = None) -> np.ndarray:
     """dx/dt at state x and time t (s) under robot joint torques tau (N m, N) and a moving
-    base's held ``twist`` command (None: its path)."""
+    base's ``twist`` command (None: its path)."""
     if model.robot_alone:
         return model.robot_derivative(data, x, tau)
     motion = model.base_motion(t, twist)

@@ -10,7 +10,9 @@ reference pose, no folding guard and no normalisation, and every ODE integrator 
 root on its manifold (cos^2 + sin^2 = 1 by construction).
 
 The kinematic base prescribes the root and the wheels: pose, twist and body-frame
-acceleration from the path (:meth:`BaseModel.command`), wheel speeds u = H V and
+acceleration from the path or from a twist command, which the base reaches within the
+path's a_max (:class:`~youbot_dynamics.dynamics.mobile.ramp.TwistRamp`, both modes;
+:meth:`BaseModel.command`), wheel speeds u = H V and
 accelerations H dV/dt (no slip); the other degrees of freedom f obey
 M_ff a_f = tau_f - (M_fp a_p + b)_f, the whole-body equations with the prescribed
 accelerations a_p given (RNEA at (q, v, [a_p, 0]) gives M_fp a_p + b).
@@ -37,6 +39,7 @@ import pinocchio as pin
 from youbot_dynamics.dynamics.mobile.base_controller import WheelSpeedPI
 from youbot_dynamics.dynamics.mobile.mecanum import (MecanumBase, mecanum_base_from_robot,
                                                      wheel_speeds)
+from youbot_dynamics.dynamics.mobile.ramp import DEFAULT_A_MAX, TwistRamp
 from youbot_dynamics.dynamics.mobile.wheel_floor import (contact_slip_velocities, roller_forces,
                                                          wheel_normal_forces, wheel_spin_torques)
 from youbot_dynamics.dynamics.rigid_body import symmetrised
@@ -68,7 +71,9 @@ class BaseModel:
     """A scene's moving base, compiled (immutable). ``wheels``: indices of the wheel joints
     in the robot's joints, ``mecanum.names`` order; ``prescribed`` and ``free``: indices
     into the plant's velocity of what a kinematic base imposes (root and wheels) and of the
-    rest; ``gravity`` (m/s^2) the magnitude the wheel loads use."""
+    rest; ``gravity`` (m/s^2) the magnitude the wheel loads use; ``a_max`` (m/s^2, m/s^2,
+    rad/s^2; body frame) the acceleration limits a twist command is reached within: the
+    path's, else :data:`~youbot_dynamics.dynamics.mobile.ramp.DEFAULT_A_MAX`."""
 
     mode: str
     mecanum: MecanumBase
@@ -83,6 +88,7 @@ class BaseModel:
     pi: WheelSpeedPI | None
     release: float
     gravity: float
+    a_max: np.ndarray
 
     @classmethod
     def compile(cls, spec: BaseSpec, robot: Robot, plant_nv: int, gravity: np.ndarray) -> BaseModel:
@@ -98,8 +104,9 @@ class BaseModel:
         if spec.controller is not None:
             c = spec.controller
             pi, release = WheelSpeedPI(mecanum, c.kp, c.ki, c.torque_limit), c.release
+        a_max = np.array(DEFAULT_A_MAX if spec.path is None else spec.path.a_max, dtype=float)
         return cls(spec.mode, mecanum, wheels, prescribed, free, path, np.array(spec.pose0), np.array(spec.twist0),
-                   spec.mu, spec.velocity_scale, pi, release, float(np.linalg.norm(gravity)))
+                   spec.mu, spec.velocity_scale, pi, release, float(np.linalg.norm(gravity)), a_max)
 
     @property
     def dynamic(self) -> bool:
@@ -107,14 +114,14 @@ class BaseModel:
         return self.mode == "dynamic"
 
     # ---- the commanded motion -----------------------------------------------------------------
-    def command(self, t: float, twist: np.ndarray | None = None) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
+    def command(self, t: float, twist: TwistRamp | None = None) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
         """The commanded pose (x, y, yaw; world, m and rad), body-frame twist (vx, vy, wz) and
-        its time derivative at t (s): a held ``twist`` command's (no pose: the base
-        integrates it; zero derivative), else the path's, or rest at the initial pose.
+        its time derivative at t (s): a ``twist`` command's, reached within ``a_max`` (no
+        pose: the base integrates it), else the path's, or rest at the initial pose.
         With R the path's yaw rotation, V = (R^T p', yaw') and
         dV/dt = (R^T p'' - yaw' S V_xy, yaw'') with S (vx, vy) = (-vy, vx)."""
         if twist is not None:
-            return None, np.asarray(twist, dtype=float), np.zeros(3)
+            return None, *twist.at(t)
         if self.path is None:
             return self.pose0, np.zeros(3), np.zeros(3)
         pose, rate, acceleration = self.path.evaluate(t)
@@ -123,8 +130,8 @@ class BaseModel:
         ax, ay = c * acceleration[0] + s * acceleration[1], -s * acceleration[0] + c * acceleration[1]
         return pose, np.array([vx, vy, rate[2]]), np.array([ax + rate[2] * vy, ay - rate[2] * vx, acceleration[2]])
 
-    def motion(self, t: float, twist: np.ndarray | None = None) -> BaseMotion:
-        """The commanded motion at t (s) (of a held ``twist`` if given) with the wheels rolling
+    def motion(self, t: float, twist: TwistRamp | None = None) -> BaseMotion:
+        """The commanded motion at t (s) (of a ``twist`` command if given) with the wheels rolling
         without slip along it: speeds H V and accelerations H dV/dt."""
         pose, twist, acceleration = self.command(t, twist)
         return BaseMotion(pose, twist, acceleration, wheel_speeds(self.mecanum, twist),
@@ -171,7 +178,7 @@ class BaseModel:
         return generalised
 
     def wheel_torques(self, t: float, speeds: np.ndarray, integral: np.ndarray,
-                      twist: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                      twist: TwistRamp | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(torque N m, d integral/dt N m/s) of the PI loop per wheel (``mecanum.names``
         order) toward the commanded twist at t (s) (``twist`` if given, else the path's);
         zero once released or without a loop."""

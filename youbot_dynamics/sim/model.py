@@ -69,6 +69,7 @@ from youbot_dynamics.dynamics.friction import (FLOAT, JOINTS, READ_VECTOR, TABLE
                                                JointFriction, accumulate_friction_torque,
                                                friction_left_and_rates_unchecked,
                                                left_torque_and_rates, unchecked)
+from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.rigid_body import (forward_dynamics, kinetic_energy, potential_energy,
                                                  symmetrised)
 from youbot_dynamics.model.lie import matrix_from_quaternion, quaternion_from_matrix
@@ -395,8 +396,8 @@ class SimModel:
         x[self.block("chart")] = 0.0
         return x
 
-    def base_motion(self, t: float, twist: np.ndarray | None = None) -> BaseMotion | None:
-        """A kinematic base's commanded motion at t (s) (under a held ``twist`` command if
+    def base_motion(self, t: float, twist: TwistRamp | None = None) -> BaseMotion | None:
+        """A kinematic base's commanded motion at t (s) (under a ``twist`` command if
         given); None for a fixed or dynamic base."""
         return None if self.base is None or self.base.dynamic else self.base.motion(t, twist)
 
