@@ -19,8 +19,9 @@ namespace: ``youbot1/arm_link_1``), so two robots on one /tf never name the same
 /diagnostics status carries the node's full name (``/youbot1/dynamics_node: ...``).
 
 Bounded work per message: the subscriptions take the serialized message and refuse (count
-as ``rejected.too_large``, without deserialising) one over its ``max_bytes`` in the table; the
-session's checks are linear in the message and refuse more than
+as ``rejected.too_large``, without deserialising) one over its ``max_bytes`` in the table or
+one announcing more joint names or trajectory points than the limits below
+(:mod:`youbot_dynamics.node.input_size` reads the counts from the bytes); the session's checks are linear in the message and refuse more than
 :data:`~youbot_dynamics.node.commands.MAX_NAMES` names or
 :data:`~youbot_dynamics.node.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
 callback against ``callback_budget`` and reports overruns in /diagnostics (level WARN,
@@ -56,7 +57,7 @@ import rclpy
 import rclpy.executors
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import QoSRequestedIncompatibleQoSInfo, SubscriptionEventCallbacks
-from rclpy.exceptions import InvalidParameterValueException
+from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_policy_name_from_kind
@@ -72,6 +73,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.configure import session_from_parameters
+from youbot_dynamics.node.input_size import check_serialized
 from youbot_dynamics.node.interface import SERVICES, Outputs, Topic, check_choice, topics_of
 from youbot_dynamics.node.pacing import Pacing, RealTimeFactor
 from youbot_dynamics.node.topics import graph_name
@@ -221,16 +223,18 @@ class DynamicsNode(Node):
         """Subscribe ``callback`` to ``topic`` (its graph name: relative, see
         :mod:`~youbot_dynamics.node.topics`; its QoS: the table's, or the profile of the
         parameter it names) behind the node boundary, taking the serialized message: one
-        over ``topic.max_bytes`` is rejected (counted, ``too_large``) before it is
-        deserialised."""
+        over ``topic.max_bytes``, or announcing more names or points than allowed
+        (:func:`~youbot_dynamics.node.input_size.check_serialized`), is rejected (counted,
+        ``too_large``) before it is deserialised."""
         limit, msg_type = topic.max_bytes, rclpy_class(topic.type)
         qos = SUBSCRIPTION_PROFILES[self.params[topic.qos]] if topic.qos in self.params else PROFILES[topic.qos]
 
         def decode(data: bytes) -> object:
-            if len(data) > limit:
-                error = InputRejected("too_large", f"{len(data)} bytes, more than the {limit} byte limit")
+            try:
+                check_serialized(data, topic.type, limit)
+            except InputRejected as error:
                 self.session.counters.reject(error)
-                raise error
+                raise
             return deserialize_message(data, msg_type)
 
         self.create_subscription(msg_type, graph_name(topic.name), self._guarded(topic.name, callback, decode), qos,
@@ -358,20 +362,36 @@ class DynamicsNode(Node):
         self.session.close()
 
 
+START_UP_ERRORS = (UserInputError, ParameterException, NameValidationException)
+"""What a node refuses to start with (exit status 2, one line): a scene that cannot be read
+or run, a log path that cannot be written (the session's UserInputError), a parameter of the
+wrong type or out of range, an invalid name."""
+
+
+def _start_up_error(reason: str) -> int:
+    """Say why the node cannot start, on one line of stderr; returns the exit status 2."""
+    print(f"dynamics_node: error: {' '.join(reason.split())}", file=sys.stderr)
+    return 2
+
+
 def run(args: list[str] | None = None, overrides: dict[str, object] | None = None) -> tuple[int, DynamicsNode | None]:
     """Run the node until ``duration`` is reached, SIGINT or SIGTERM, and finalise the logs.
 
     ``args`` are command-line arguments (``--ros-args ...``), ``overrides`` parameter values
-    that beat them. Returns the exit status (2: bad parameters) and the finished node.
+    that beat them. Returns the exit status (2: a start-up error, said in one line on stderr:
+    bad ROS arguments or parameters, a scene or log path that cannot be used) and the finished
+    node.
     """
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except RuntimeError as error:     # rclpy's RCLError, UnknownROSArgsError: bad --ros-args
+        return _start_up_error(f"bad ROS arguments: {error}"), None
     stop = stop_requests()
     try:
         node = DynamicsNode(parameter_overrides=[Parameter(k, value=v) for k, v in (overrides or {}).items()])
-    except (UserInputError, InvalidParameterValueException) as error:
-        print(f"dynamics_node: error: {error}", file=sys.stderr)
+    except START_UP_ERRORS as error:
         rclpy.try_shutdown()
-        return 2, None
+        return _start_up_error(str(error)), None
     executor = rclpy.executors.SingleThreadedExecutor()
     executor.add_node(node)
     try:
