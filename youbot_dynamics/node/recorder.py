@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
@@ -31,14 +32,30 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
     return path
 
 
+def writable(path: Path, parameter: str) -> None:
+    """Make sure the log file ``path`` (given as ``parameter``) can be written: its folder
+    created if missing, the file opened for appending. Raises UserInputError naming the
+    parameter, the path and the reason (a read-only folder, a directory at ``path``)."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with path.open("ab"):
+            pass
+    except OSError as error:
+        raise UserInputError(f"{parameter} {path}: cannot write it ({error.strerror or error})") from error
+
+
 class Recorder:
     """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (those in
     :data:`LATCHED_TOPICS` offered latched), and a Rerun recording (``rrd_path``) of the
     robot, the scene's static geometry and (simulate mode) its free bodies; either may be
-    None. ``close`` finalises both and may be called more than once."""
+    None; a path that cannot be written raises UserInputError. ``close`` finalises both and
+    may be called more than once."""
 
     def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
                  mcap_path: str | Path | None, rrd_path: str | Path | None, root_frame: str) -> None:
+        for parameter, path in (("mcap_path", mcap_path), ("rrd_path", rrd_path)):
+            if path:
+                writable(Path(path), parameter)
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
             for topic in topics:
