@@ -1,7 +1,9 @@
 """The logs of one node run: an MCAP in rosbag2 form (:class:`~youbot_dynamics.io.mcap_log.McapLogger`)
 of the session's topics, and a Rerun recording (:class:`~youbot_dynamics.io.rerun_log.RerunLogger`)
 of the robot, the scene's static geometry and (simulate mode) its free bodies. Log times are
-the messages' stamps: simulated time (simulate mode) or the sender's (inverse mode), in int ns.
+int ns: simulated time, the messages' stamps (simulate mode), or the receive time of the
+sample they come from on the node's monotonic receive clock (inverse mode; the messages keep
+the sender's stamps). The Rerun recording takes the stamps.
 """
 from __future__ import annotations
 

@@ -75,6 +75,7 @@ from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.configure import session_from_parameters
 from youbot_dynamics.node.input_size import check_serialized
 from youbot_dynamics.node.interface import SERVICES, Outputs, Topic, check_choice, topics_of
+from youbot_dynamics.node.inverse_session import receive_time_ns
 from youbot_dynamics.node.pacing import Pacing, RealTimeFactor
 from youbot_dynamics.node.topics import graph_name
 from youbot_dynamics.ros.conversions import rclpy_class, to_cdr
@@ -307,7 +308,7 @@ class DynamicsNode(Node):
 
     def _on_joint_state(self, msg: JointState) -> None:
         self._inbox.append((list(msg.name), msg.position, msg.velocity, stamp_ns_of(msg.header.stamp),
-                            self.get_clock().now().nanoseconds))
+                            receive_time_ns()))
 
     def _on_joint_states(self) -> None:
         """The joint states received since the last tick, as one batch."""
