@@ -15,9 +15,9 @@ pytestmark = [pytest.mark.ros, pytest.mark.timeout(240)]
 from rclpy.parameter import Parameter  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory  # noqa: E402
 
-import youbot_dynamics.ros.dynamics_node as dynamics_node  # noqa: E402
 from youbot_dynamics.io.messages import TYPESTORE  # noqa: E402
 from youbot_dynamics.node.interface import TOPICS  # noqa: E402
+from youbot_dynamics.ros import dynamics_node  # noqa: E402
 from youbot_dynamics.ros.qos import RELIABLE_DEEP  # noqa: E402
 
 TRAJECTORY = "trajectory_msgs/msg/JointTrajectory"
