@@ -81,6 +81,7 @@ class InverseSession(Session):
         self._position_low, self._position_high = position_bounds(self.robot)
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
         self.stamp_ns, self.samples, self.log_ns = 0, 0, 0
+        """The last torque's stamp (ns), torques published, the last log time (ns)."""
         self._last_taken_ns: int | None = None
         """The stamp (ns) of the last sample taken (a next one stamped the same is a duplicate)."""
         self._input_ns: int | None = None
