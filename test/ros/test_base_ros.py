@@ -120,13 +120,17 @@ def test_live_cmd_vel_moves_the_base_and_odom_matches_tf():
     with ros_context(29) as (context, _):
         node = dynamics_node.DynamicsNode(context=context, parameter_overrides=[
             Parameter("scene", value=str(scene_dir() / "base_square.yaml")), Parameter("publish_rate", value=100.0),
-            Parameter("time_scale", value=0.0), Parameter("wait_for_subscribers", value=1)])
+            # paced to the wall clock: as fast as possible, a reader slower than the node loses
+            # samples from the publisher's keep-last history, and this test counts them all
+            Parameter("time_scale", value=1.0), Parameter("wait_for_subscribers", value=1)])
         collector = Collector(context, {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage"})
         publisher = collector.create_publisher(Twist, "cmd_vel", 10)
         command = Twist()
         command.linear.x, command.angular.z = 0.3, 0.2
         collector.create_timer(0.01, lambda: publisher.publish(command))
-        with spinning(context, node, collector):
+        # the node on its own single-threaded executor, as its process runs it (a multi-threaded
+        # one starves its /cmd_vel and the collector while the step timer is due)
+        with spinning(context, node, single_threaded=True), spinning(context, collector):
             wait_until(lambda: collector.count("/odom") >= 150, what="150 /odom samples")
         node.close()
     odom = collector.messages("/odom")

@@ -20,7 +20,7 @@ from ros_support import Collector, diagnostic_values, ros_context, spinning, sta
 
 REPO = Path(__file__).resolve().parents[2]
 LIMIT = 1_000_000
-"""Bytes a file of the node's may reach: about 4 s of arm_swing's log at 500 Hz; above the
+"""Bytes a file of the node's may reach: about 5 s of arm_swing's log at 500 Hz; above the
 shared-memory segments Fast DDS creates (512 kB), so its transport is untouched."""
 HANG_GUARD = 60.0
 """Seconds allowed for start-up, for the limit to be reached and for the exit: hang guards only."""
@@ -42,7 +42,7 @@ def test_a_full_log_stops_logging_not_publishing(tmp_path: Path) -> None:
         with spinning(context, collector), log.open("w") as out:
             process = subprocess.Popen(
                 [sys.executable, "-m", "youbot_dynamics.ros.dynamics_node", "--ros-args",
-                 "-p", "scene:=arm_swing", "-p", "duration:=1000.0", "-p", "time_scale:=4.0",
+                 "-p", "scene:=arm_swing", "-p", "duration:=1000.0", "-p", "time_scale:=2.0",
                  "-p", f"mcap_path:={mcap}"],
                 cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain)}, stdout=out,
                 stderr=subprocess.STDOUT, preexec_fn=limited_file_size)
@@ -67,10 +67,12 @@ def test_a_full_log_stops_logging_not_publishing(tmp_path: Path) -> None:
     assert process.returncode == 0, text
     assert "EFBIG" in status.status[0].message and values["log.mcap.error"] == "EFBIG", values
     assert int(values["log.mcap.bytes"]) <= LIMIT and values["log.mcap.path"] == str(mcap)
-    # publishing went on at the publish rate: consecutive samples 2 ms of simulated time apart
-    stamps = [stamp_ns(m) for m in collector.messages("/joint_states")]
-    after = [s for s in stamps if s > stopped_at]
-    assert len(after) >= 250 and max(b - a for a, b in zip(after, after[1:])) == 2_000_000
+    # publishing went on at the publish rate: samples on the 2 ms grid of simulated time, over
+    # more than half a simulated second after the stop (a reader that falls behind the keep-last
+    # history may miss some of them: their count is not the point)
+    after = [s for s in (stamp_ns(m) for m in collector.messages("/joint_states")) if s > stopped_at]
+    assert len(after) >= 100 and all(s % 2_000_000 == 0 for s in after)
+    assert after[-1] - after[0] > 500_000_000
     # the log is whole as it is
     with mcap.open("rb") as stream:
         reader = make_reader(stream)

@@ -221,8 +221,9 @@ def test_cli_fast_replay_loses_nothing_into_a_slower_inverse_node(tmp_path: Path
     count, bag = 3000, tmp_path / "many.mcap"
     with McapLogger(bag) as log:
         log.add_topic("/joint_states", "sensor_msgs/msg/JointState")
+        centre = (scene.robot.lower + scene.robot.upper) / 2      # within the joint limits
         for k in range(count):
-            q = 1.0 + 0.1 * np.sin(np.full(len(scene.moving), k * 1e-3))
+            q = centre + 0.1 * np.sin(np.full(len(scene.moving), k * 1e-3))
             log.write("/joint_states", messages.joint_state(k * 10**6, scene.moving, q, np.zeros(len(scene.moving))),
                       k * 10**6)
     with ros_context(18) as (context, domain):

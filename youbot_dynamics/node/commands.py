@@ -37,11 +37,13 @@ Time semantics (the one place they are written down)
   rejected as ``stale``. A rejected stamp is counted and never latched: nothing later is
   measured against it.
 - Inverse mode: samples carry the sender's time base; it is never compared with node
-  time. A sample that is not later than the previous one, or comes more than the
-  estimator's ``max_gap_ns`` after it, restarts the acceleration estimate
+  time. A sample stamped as the last one taken is a ``duplicate``: counted, dropped, and
+  the estimate goes on. A sample before the previous one, or more than the estimator's
+  ``max_gap_ns`` after it, restarts the acceleration estimate
   (:class:`~youbot_dynamics.node.inverse.AccelerationEstimator`), so a replay that restarts,
   a one-off stamp of 1e6 s or a pause in the stream costs at most one stencil (three
-  samples) of torques.
+  samples) of torques. Log time is not the sender's: every message is logged at the
+  receive time of its sample on the node's monotonic receive clock.
 """
 from __future__ import annotations
 
@@ -60,7 +62,7 @@ from youbot_dynamics.sim.controllers import Reference
 
 REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_joint",
                    "missing_joint", "out_of_limits", "stale", "bad_timing", "no_controller", "empty",
-                   "too_large", "implausible_torque")
+                   "too_large", "implausible_torque", "duplicate")
 """Kinds of rejected input, as counted in /diagnostics."""
 
 STAMP_LIMIT_NS = 2**31 * NS_PER_S

@@ -311,7 +311,8 @@ PARAMETERS: dict[str, Spec] = {
     "default_effort_limit": Spec(100.0, "simulate mode: effort limit (N m, N) of joints whose URDF gives none "
                                  "(continuous joints); commands beyond it are clamped", (0.001, 1.0e6)),
     "max_sample_gap": Spec(0.1, "inverse mode: longest spacing (s) of /joint_states samples in one difference "
-                           "stencil; a longer gap or a stamp back in time restarts the estimate", (1.0e-4, 60.0)),
+                           "stencil; a longer gap or a stamp back in time restarts the estimate; /diagnostics "
+                           "warns after this much input time without a torque", (1.0e-4, 60.0)),
     "callback_budget": Spec(0.05, "wall seconds a callback (a step tick, a message, a service) may take; an "
                             "overrun is counted and reported in /diagnostics (WARN)", (0.001, 60.0)),
     "acceleration_filter": Spec(0.0, "inverse mode: low-pass time constant (s) on the central-difference "

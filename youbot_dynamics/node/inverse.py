@@ -29,13 +29,18 @@ next torque comes after three good samples. So does an estimate that is not fini
 overflowing velocity difference): it is rejected, never filtered. ``restarts`` counts the
 restarts by cause.
 
-Plausibility (rule: ``PLAUSIBLE_FACTOR`` = 10 times the URDF's rated limits): a measured
-robot neither moves nor pushes much beyond its ratings. A sample with |v_i| >
-10 x velocity_limit_i on some joint (a velocity jump of 1e6 rad/s, which gave 3e11 N m) is
-rejected (``out_of_limits``) before it enters the stencil; a torque with |tau_i| >
-10 x effort_limit_i (``DEFAULT_EFFORT_LIMIT`` where the URDF has none) comes from bad
-samples (a velocity step within the velocity bound, 10 rad/s in 2 ms) and is not
-published; the estimate then restarts. :func:`implausible_joints` names the joints.
+Plausibility: a measured robot neither moves nor pushes much beyond its ratings, nor
+stands outside its joint limits. A sample with |v_i| > ``PLAUSIBLE_FACTOR`` (10) x
+velocity_limit_i on some joint (a velocity jump of 1e6 rad/s, which gave 3e11 N m), or a
+position outside [lower_i - m_i, upper_i + m_i] (m_i: ``POSITION_MARGIN`` of the joint's
+range, at least ``MIN_POSITION_MARGIN``; |q_i| <= ``UNLIMITED_POSITION_BOUND`` for a joint
+without limits: a position of 1e308 rad is no measurement) is rejected (``out_of_limits``)
+before it enters the stencil. A torque with |tau_i| > ``EFFORT_FACTOR`` (2) x
+effort_limit_i (``DEFAULT_EFFORT_LIMIT`` where the URDF has none) is more than the motors
+give, so it comes from bad samples (a velocity step within the velocity bound, 10 rad/s in
+2 ms; an unstamped stream whose receive times bunch up, which gave 56.9 N m on a 9.5 N m
+joint) and is not published; the estimate then restarts. The same gates apply to a
+single sample and to every row of a batch. :func:`implausible_joints` names the joints.
 
 Friction: the scene's model at the measured velocity; LuGre bristles are taken at their
 steady state for v (the bristle deflection cannot be measured).
@@ -60,7 +65,18 @@ DEFAULT_MAX_GAP_NS = 100_000_000
 """Largest spacing (ns) of two samples in one stencil by default (0.1 s: 50 periods of a
 500 Hz stream); a longer gap restarts the estimate."""
 PLAUSIBLE_FACTOR = 10.0
-"""A velocity or torque beyond this multiple of a joint's URDF limit is implausible."""
+"""A velocity beyond this multiple of a joint's URDF velocity limit is implausible."""
+EFFORT_FACTOR = 2.0
+"""A torque beyond this multiple of a joint's URDF effort limit is implausible (the youBot's
+rated efforts are what its drives deliver; a clean stream of the arm stays within 0.65 of
+them)."""
+POSITION_MARGIN = 0.1
+"""Fraction of a joint's range by which a measured position may lie outside its limits."""
+MIN_POSITION_MARGIN = 0.01
+"""Smallest margin (rad or m) outside a joint's limits."""
+UNLIMITED_POSITION_BOUND = 1.0e7
+"""Largest |position| (rad or m) of a joint without limits (a continuous wheel: 1e7 rad is
+11 days at 10 rad/s in one direction; a double there still resolves 2e-9 rad)."""
 RESTART_CAUSES = ("backwards", "gap", "non_finite", "implausible")
 """Why the estimate restarted: a sample not after the previous one, a gap longer than
 ``max_gap_ns``, a non-finite estimate, an implausible torque (counted by the session)."""
@@ -238,11 +254,25 @@ class AccelerationEstimator:
 
 def plausible_limit(robot: Robot, quantity: str = "effort") -> np.ndarray:
     """|tau_i| (N m, N; ``quantity`` "effort") or |v_i| (rad/s, m/s; "velocity") above which
-    a value is implausible: ``PLAUSIBLE_FACTOR`` times the URDF limit; where the URDF has
-    none, ``DEFAULT_EFFORT_LIMIT`` for efforts and no bound for velocities."""
-    limit = np.asarray(robot.effort_limit if quantity == "effort" else robot.velocity_limit, dtype=float)
-    return PLAUSIBLE_FACTOR * np.where(np.isfinite(limit), limit,
-                                       DEFAULT_EFFORT_LIMIT if quantity == "effort" else np.inf)
+    a value is implausible: ``EFFORT_FACTOR`` or ``PLAUSIBLE_FACTOR`` times the URDF limit;
+    where the URDF has none, ``DEFAULT_EFFORT_LIMIT`` for efforts and no bound for velocities."""
+    if quantity == "effort":
+        limit = np.asarray(robot.effort_limit, dtype=float)
+        return EFFORT_FACTOR * np.where(np.isfinite(limit), limit, DEFAULT_EFFORT_LIMIT)
+    limit = np.asarray(robot.velocity_limit, dtype=float)
+    return PLAUSIBLE_FACTOR * np.where(np.isfinite(limit), limit, np.inf)
+
+
+def position_bounds(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest and highest plausible measured position of each joint (rad or m, joint
+    order; see the module docstring): its limits widened by ``POSITION_MARGIN`` of its
+    range (at least ``MIN_POSITION_MARGIN``), or +-``UNLIMITED_POSITION_BOUND`` without
+    limits."""
+    lower, upper = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
+    limited = np.isfinite(lower) & np.isfinite(upper)
+    margin = np.maximum(POSITION_MARGIN * np.where(limited, upper - lower, 0.0), MIN_POSITION_MARGIN)
+    return (np.where(limited, lower - margin, -UNLIMITED_POSITION_BOUND),
+            np.where(limited, upper + margin, UNLIMITED_POSITION_BOUND))
 
 
 def implausible_joints(robot: Robot, values: np.ndarray, quantity: str = "effort") -> list[str]:

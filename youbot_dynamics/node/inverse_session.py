@@ -13,6 +13,7 @@ taken (:class:`~youbot_dynamics.node.mobile_base.WheelOdometry`).
 """
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -28,7 +29,7 @@ from youbot_dynamics.node.commands import STAMP_LIMIT_NS, InputRejected, JointSa
 from youbot_dynamics.node.frames import SampleFrames
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, Estimates,
-                                          InverseDynamics, implausible_joints, plausible_limit)
+                                          InverseDynamics, implausible_joints, plausible_limit, position_bounds)
 from youbot_dynamics.node.mobile_base import WheelOdometry
 from youbot_dynamics.node.session import Session
 from youbot_dynamics.scene.schema import Scene
@@ -38,6 +39,14 @@ JointStateFields = tuple[Sequence[str], Sequence[float], Sequence[float], int, i
 stamp_ns, received_ns)."""
 Built = list[tuple[Outputs, SampleFrames | None]]
 """Each torque's messages and, when built, its sample's kinematics."""
+_WALL_OFFSET_NS = time.time_ns() - time.monotonic_ns()
+"""The wall clock minus the monotonic clock when the process started."""
+
+
+def receive_time_ns() -> int:
+    """Now on the node's receive clock (int ns): the monotonic clock, started at the wall
+    clock's time when the process started, so it reads as wall time but never jumps back."""
+    return time.monotonic_ns() + _WALL_OFFSET_NS
 
 
 class InverseSession(Session):
@@ -69,8 +78,15 @@ class InverseSession(Session):
         ``_remember_names``)."""
         self._velocity_bound = plausible_limit(self.robot, "velocity")
         self._effort_bound = plausible_limit(self.robot, "effort")
+        self._position_low, self._position_high = position_bounds(self.robot)
         self.estimator = AccelerationEstimator(filter_time_constant, max_gap_ns)
-        self.stamp_ns, self.samples = 0, 0
+        self.stamp_ns, self.samples, self.log_ns = 0, 0, 0
+        """The last torque's stamp (ns), torques published, the last log time (ns)."""
+        self._last_taken_ns: int | None = None
+        """The stamp (ns) of the last sample taken (a next one stamped the same is a duplicate)."""
+        self._input_ns: int | None = None
+        self._quiet_since_ns: int | None = None
+        """Input time (ns): of the latest sample received, and since which no torque has come."""
         self.last_unstamped = False
         """True when the last sample taken was stamped 0."""
 
@@ -92,10 +108,15 @@ class InverseSession(Session):
         (no torque is computed across it: the next torque needs three good samples after
         it), and so does a gap or a jump back in the stamps (see
         :mod:`youbot_dynamics.node.inverse`). A sample whose velocity is beyond the
-        velocity-limit bound is rejected (``out_of_limits``). A torque that is implausible
-        (beyond the effort-limit bound) or not finite is not published: the sample counts as
-        accepted, the torque as rejected (``implausible_torque`` or ``non_finite``), and the
-        estimate restarts."""
+        velocity-limit bound, or whose position is outside the joint limits plus a margin
+        (:func:`~youbot_dynamics.node.inverse.position_bounds`), is rejected
+        (``out_of_limits``); one stamped as the last sample taken is a ``duplicate``, dropped
+        without breaking the stencil. A torque that is implausible (beyond the effort-limit
+        bound) or not finite is not published: the sample counts as accepted, the torque as
+        rejected (``implausible_torque`` or ``non_finite``), and the estimate restarts.
+        Everything is logged at the receive time ``received_ns`` (the session's receive
+        clock, :func:`receive_time_ns`, when not given), never earlier than what was logged
+        before; the messages keep the sender's stamps."""
         outputs, rejected = self.joint_states([(names, position, velocity, stamp_ns, received_ns)])
         if rejected:
             raise rejected[0]
@@ -106,12 +127,70 @@ class InverseSession(Session):
         received_ns)), the same outputs in the same order, the rejected samples' errors
         returned (counted) instead of raised. The samples are checked, differenced and
         their torques computed as arrays (Pinocchio's batch RNEA)."""
+        log_times = self._log_times(samples)
+        self._observe_input(samples)
         stamps, q, v, taken, rejected = self._checked(samples)
+        kept = self._without_duplicates(stamps, taken, rejected)
+        if kept is not None:
+            stamps, taken, log_times = [stamps[k] for k in kept], [taken[k] for k in kept], log_times[kept]
+            q, v = q[kept], v[kept]
         outputs: Outputs = []
         start = 0
         while start < len(stamps):
-            start = self._torques_from(stamps, q, v, taken, start, outputs)
+            start = self._torques_from(stamps, q, v, taken, log_times, start, outputs)
         return outputs, rejected
+
+    def _log_times(self, samples: Sequence[JointStateFields]) -> np.ndarray:
+        """The log time (int64 ns) of each sample: its receive time (now on the receive clock
+        when not given), never before the one logged last."""
+        now = None
+        times = np.empty(len(samples), dtype=np.int64)
+        for k, sample in enumerate(samples):
+            received = sample[4]
+            if received is None:
+                now = receive_time_ns() if now is None else now
+                received = now
+            self.log_ns = times[k] = max(self.log_ns, int(received))
+        return times
+
+    def _observe_input(self, samples: Sequence[JointStateFields]) -> None:
+        """Advance input time: each sample's stamp, or its receive time when unstamped (a
+        sample with neither in range is left out); a stamp back in time restarts the wait for
+        a torque there."""
+        for *_, stamp_ns, received_ns in samples:
+            stamp = stamp_ns if stamp_ns else received_ns
+            if not (isinstance(stamp, (int, np.integer)) and 0 <= stamp < STAMP_LIMIT_NS):
+                continue
+            if self._quiet_since_ns is None or stamp < self._quiet_since_ns:
+                self._quiet_since_ns = int(stamp)
+            self._input_ns = int(stamp)
+
+    @property
+    def silent_ns(self) -> int:
+        """Input time (ns) since the last torque published (since the first sample before
+        one); 0 before any input."""
+        if self._input_ns is None or self._quiet_since_ns is None:
+            return 0
+        return max(0, self._input_ns - self._quiet_since_ns)
+
+    def _without_duplicates(self, stamps: list[int], taken: list[bool], rejected: list[InputRejected]
+                            ) -> list[int] | None:
+        """Drop the samples taken with the stamp of the sample taken before them (a
+        duplicate: counted, not accepted, and it does not break the stencil); the indices of
+        the rows kept, or None when there is no duplicate."""
+        previous, kept = self._last_taken_ns, []
+        for k, (stamp, good) in enumerate(zip(stamps, taken)):
+            if good and stamp == previous:
+                error = InputRejected("duplicate", f"joint state stamped {stamp} ns, as the one before it")
+                self.counters.accepted -= 1
+                self.counters.reject(error)
+                rejected.append(error)
+                continue
+            if good:
+                previous = stamp
+            kept.append(k)
+        self._last_taken_ns = previous
+        return None if len(kept) == len(stamps) else kept
 
     def _checked(self, samples: Sequence[tuple]
                  ) -> tuple[list[int], np.ndarray, np.ndarray, list[bool], list[InputRejected]]:
@@ -167,7 +246,7 @@ class InverseSession(Session):
     def _good_rows(self, samples: Sequence[tuple], stamps: Sequence[int | InputRejected]
                    ) -> tuple[np.ndarray, np.ndarray, list[bool]] | None:
         """(q, v) rows in joint order and which rows pass every check of ``_joint_sample``
-        (one comparison: |position| and |velocity| within ``_row_bounds``), for samples that
+        (one comparison: positions and velocities within ``_row_bounds``), for samples that
         name the joints exactly as the last accepted one did; None when they cannot be taken
         as arrays."""
         key, count = self._names_key, len(samples)
@@ -179,7 +258,8 @@ class InverseSession(Session):
             return None
         if values.shape != (2 * count, len(key)):
             return None
-        within = np.abs(values.reshape(2, count, -1)) <= self._row_bounds
+        rows = values.reshape(2, count, -1)
+        within = (self._row_bounds[0] <= rows) & (rows <= self._row_bounds[1])
         good = [not isinstance(s, InputRejected) and 0 <= s < STAMP_LIMIT_NS for s in stamps]
         if not within.all():
             good = [g and w for g, w in zip(good, within.all(axis=(0, 2)).tolist())]
@@ -193,6 +273,12 @@ class InverseSession(Session):
         if not (np.abs(sample.v) <= self._velocity_bound).all():
             raise InputRejected("out_of_limits", f"velocity beyond {PLAUSIBLE_FACTOR:g} x the URDF velocity "
                                 f"limit of {', '.join(implausible_joints(self.robot, sample.v, 'velocity'))}")
+        outside = ~((self._position_low <= sample.q) & (sample.q <= self._position_high))
+        if outside.any():
+            joints = [f"{name} ({value:g})" for name, value, flag in zip(self.robot.joint_names, sample.q, outside)
+                      if flag]
+            raise InputRejected("out_of_limits", f"position beyond the joint limits plus a margin of "
+                                f"{', '.join(joints)}")
         key = tuple(str(name) for name in names)
         if key != self._names_key:
             self._remember_names(key)
@@ -201,20 +287,26 @@ class InverseSession(Session):
     def _remember_names(self, key: tuple[str, ...]) -> None:
         """Cache what the array checks need for samples naming ``key``: ``_columns``, the
         columns of the robot's joints in joint order (a slice when the names are in joint
-        order), and ``_row_bounds`` (2, 1, len(key)), the largest |position| (the largest
-        float: finite) and |velocity| (the velocity bound, finite) of each column."""
+        order), and ``_row_bounds`` (2, 2, 1, len(key)), the lowest and highest position
+        (the position bounds; the largest float, so finite, for joints that do not move) and
+        velocity (the velocity bound, finite) of each column."""
         position_of = {name: i for i, name in enumerate(key)}
         index = np.array([position_of[n] for n in self.robot.joint_names])
         largest = np.finfo(float).max
-        bounds = np.full((2, 1, len(key)), largest)
-        bounds[1, 0, index] = np.minimum(self._velocity_bound, largest)
+        high = np.full((2, 1, len(key)), largest)
+        high[0, 0, index] = self._position_high
+        high[1, 0, index] = np.minimum(self._velocity_bound, largest)
+        low = -high
+        low[0, 0, index] = self._position_low
+        bounds = np.stack((low, high))
         in_order = len(key) == len(index) and (index == np.arange(len(index))).all()
         self._names_key, self._columns, self._row_bounds = key, slice(None) if in_order else index, bounds
 
-    def _torques_from(self, stamps: list[int], q: np.ndarray, v: np.ndarray, taken: list[bool], start: int,
-                      outputs: Outputs) -> int:
+    def _torques_from(self, stamps: list[int], q: np.ndarray, v: np.ndarray, taken: list[bool],
+                      log_times: np.ndarray, start: int, outputs: Outputs) -> int:
         """Difference the checked rows from ``start`` on (stamps int ns, q and v rows in joint
-        order, which were ``taken``), compute their torques and append (and log) the outputs
+        order, which were ``taken``, logged at ``log_times``), compute their torques and append
+        (and log, a torque at the log time of the row that completes it) the outputs
         of each row taken in turn: /odom, then the torque of the middle sample once three are
         known. Up to and including the first implausible torque or message that cannot be
         built (not published; the estimate restarts there, counted); returns the row after
@@ -237,23 +329,26 @@ class InverseSession(Session):
         for row in range(start, end):
             if not taken[row]:
                 continue
-            odom = self._odometry(stamps[row], v[row])
+            log_ns = int(log_times[row])
+            odom = self._odometry(stamps[row], v[row], log_ns)
             k = torque_at.get(row)
             if k is not None and k == bad:
                 outputs += self._rejected_torque(estimates, tau[k], failure, odom)
             elif k is not None:
-                outputs += odom + self._logged(estimates.stamps[k], estimates.q[k], estimates.v[k], tau[k], *built[k])
+                outputs += odom + self._logged(estimates.stamps[k], estimates.q[k], estimates.v[k], tau[k], log_ns,
+                                               *built[k])
+                self._quiet_since_ns = max(self._quiet_since_ns or 0, stamps[row])
             else:
                 outputs += odom
         return end
 
-    def _odometry(self, stamp: int, v: np.ndarray) -> Outputs:
-        """/odom of a sample taken (stamp int ns, v in joint order), logged; none without a
-        moving base."""
+    def _odometry(self, stamp: int, v: np.ndarray, log_ns: int) -> Outputs:
+        """/odom of a sample taken (stamp int ns, v in joint order), logged at ``log_ns``;
+        none without a moving base."""
         if self.odometry is None:
             return []
         odom = [("/odom", self.odometry.outputs(stamp, stamp / NS_PER_S, v[self.wheels])[0])]
-        self.recorder.write(odom, stamp)
+        self.recorder.write(odom, log_ns)
         return odom
 
     def _rejected_torque(self, estimates: Estimates, tau: np.ndarray, failure: Exception | None,
@@ -310,12 +405,13 @@ class InverseSession(Session):
         """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
         return messages.joint_state(stamp_ns, self.robot.joint_names, *np.split(values, 3))
 
-    def _logged(self, stamp: int, q: np.ndarray, v: np.ndarray, tau: np.ndarray, outputs: Outputs,
+    def _logged(self, stamp: int, q: np.ndarray, v: np.ndarray, tau: np.ndarray, log_ns: int, outputs: Outputs,
                 sample: SampleFrames | None) -> Outputs:
         """``outputs``, the messages of the torque ``tau`` at a sample (stamp int ns, q, v),
-        logged (the Rerun recording takes the sample, its energy (J) and end effector)."""
+        logged at ``log_ns`` (the Rerun recording takes the sample at its stamp, its energy
+        (J) and end effector)."""
         stamp = int(stamp)
-        self.recorder.write(outputs, stamp)
+        self.recorder.write(outputs, log_ns)
         if self.recorder.samples:
             data = self.dynamics.data
             energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)
@@ -323,9 +419,24 @@ class InverseSession(Session):
         self.stamp_ns, self.samples = stamp, self.samples + 1
         return outputs
 
+    @property
+    def log_time_ns(self) -> int:
+        """Log time (ns) of a message sent now (/diagnostics): now on the receive clock,
+        never before what was logged last."""
+        self.log_ns = max(self.log_ns, receive_time_ns())
+        return self.log_ns
+
     def diagnostics(self, real_time_factor: float) -> Outputs:
-        """/diagnostics now: samples processed, input counters and the estimator's restarts
-        by cause (``estimator.restarts.<cause>``)."""
+        """/diagnostics now: samples processed, input counters, the estimator's restarts by
+        cause (``estimator.restarts.<cause>``) and the input time since the last torque
+        (``input_without_torque_s``); WARN when that is longer than the estimator's
+        ``max_gap_ns`` (samples come but no torque does: all rejected, duplicated or
+        restarting the estimate)."""
+        silent = self.silent_ns
         values = {"torques_published": self.samples, **self.counters.as_values(),
-                  **{f"estimator.restarts.{cause}": count for cause, count in self.estimator.restarts.items()}}
+                  **{f"estimator.restarts.{cause}": count for cause, count in self.estimator.restarts.items()},
+                  "input_without_torque_s": f"{silent / NS_PER_S:.6f}"}
+        if silent > self.estimator.max_gap_ns:
+            return self._diagnostic_outputs("WARN", f"no torque published for {silent / NS_PER_S:.3f} s of input "
+                                            f"(max_sample_gap {self.estimator.max_gap_ns / NS_PER_S:g} s)", values)
         return self._diagnostic_outputs("OK", "running", values)

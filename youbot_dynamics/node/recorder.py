@@ -2,8 +2,10 @@
 of the session's topics, and a Rerun recording (:class:`~youbot_dynamics.io.rerun_log.RerunLogger`)
 of the robot, the scene's static geometry and (simulate mode) its free bodies, in the
 frames of the node's tf tree (:func:`~youbot_dynamics.node.frames.frame_tree`, without the
-frame prefix: Rerun names the URDF's frames by its link names). Log times are
-the messages' stamps: simulated time (simulate mode) or the sender's (inverse mode), in int ns.
+frame prefix: Rerun names the URDF's frames by its link names). Log times are int ns:
+simulated time, the messages' stamps (simulate mode), or the receive time of the sample they
+come from on the node's monotonic receive clock (inverse mode; the messages keep the sender's
+stamps). The Rerun recording takes the stamps.
 """
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from youbot_dynamics.io.log_file import LogWriteFailed
+from youbot_dynamics.io.log_file import LogPathError, LogWriteFailed, describe_os_error
 from youbot_dynamics.io.mcap_log import McapLogger
 from youbot_dynamics.io.rerun_log import RerunLogger
 from youbot_dynamics.model.robot import Robot
@@ -35,15 +37,32 @@ def urdf_file(scene: Scene, robot: Robot, rrd_path: Path) -> Path | None:
     return path
 
 
+def writable(path: Path, parameter: str) -> None:
+    """Make sure the log file ``path`` (given as ``parameter``) can be written, before either
+    log is opened: its folder created if missing, the file opened for appending. Raises
+    LogPathError naming the parameter, the path and the reason (a read-only folder, a
+    directory at ``path``)."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with path.open("ab"):
+            pass
+    except OSError as error:
+        raise LogPathError(f"{parameter} {path}: cannot write it ({describe_os_error(error)})") from error
+
+
 class Recorder:
     """The logs of one node run: an MCAP (``mcap_path``) of ``topics`` (each recorded as
     offered with its profile in the interface table, :data:`TOPIC_QOS`, as the node's
-    publishers offer it), and a Rerun recording (``rrd_path``) of the
-    robot, the scene's static geometry and (simulate mode) its free bodies; either may be
-    None. ``close`` finalises both and may be called more than once."""
+    publishers offer it), and a Rerun recording (``rrd_path``) of the robot, the scene's
+    static geometry and (simulate mode) its free bodies; either may be None; a path that
+    cannot be written raises LogPathError (a UserInputError). ``close`` finalises both and
+    may be called more than once."""
 
     def __init__(self, mode: str, scene: Scene, robot: Robot, topics: Sequence[str],
                  mcap_path: str | Path | None, rrd_path: str | Path | None, tree: FrameTree) -> None:
+        for parameter, path in (("mcap_path", mcap_path), ("rrd_path", rrd_path)):
+            if path:
+                writable(Path(path), parameter)
         self.mcap = McapLogger(mcap_path) if mcap_path else None
         if self.mcap is not None:
             for topic in topics:

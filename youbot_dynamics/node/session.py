@@ -125,8 +125,14 @@ class Session(ClosesOnExit):
         status = messages.diagnostic_status(f"{self.node_name}: {self.scene.name} ({self.mode})", level, text,
                                             hardware_id=self.robot.name, values=values)
         outputs = [("/diagnostics", messages.diagnostic_array(self.stamp_ns, [status]))]
-        self.recorder.write(outputs, self.stamp_ns)
+        self.recorder.write(outputs, self.log_time_ns)
         return outputs
+
+    @property
+    def log_time_ns(self) -> int:
+        """Log time (ns) of a message sent now: its stamp (the inverse session: its receive
+        clock)."""
+        return self.stamp_ns
 
     def close(self) -> None:
         """Finalise the logs (idempotent)."""

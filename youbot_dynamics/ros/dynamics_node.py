@@ -19,8 +19,9 @@ namespace: ``youbot1/arm_link_1``), so two robots on one /tf never name the same
 /diagnostics status carries the node's full name (``/youbot1/dynamics_node: ...``).
 
 Bounded work per message: the subscriptions take the serialized message and refuse (count
-as ``rejected.too_large``, without deserialising) one over its ``max_bytes`` in the table; the
-session's checks are linear in the message and refuse more than
+as ``rejected.too_large``, without deserialising) one over its ``max_bytes`` in the table or
+one announcing more joint names or trajectory points than the limits below
+(:mod:`youbot_dynamics.node.input_size` reads the counts from the bytes); the session's checks are linear in the message and refuse more than
 :data:`~youbot_dynamics.node.commands.MAX_NAMES` names or
 :data:`~youbot_dynamics.node.commands.MAX_TRAJECTORY_POINTS` points. A watchdog times every
 callback against ``callback_budget`` and reports overruns in /diagnostics (level WARN,
@@ -65,7 +66,7 @@ import rclpy
 import rclpy.executors
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import QoSRequestedIncompatibleQoSInfo, SubscriptionEventCallbacks
-from rclpy.exceptions import InvalidParameterValueException
+from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.lifecycle import LifecycleNodeMixin, LifecycleState, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -84,9 +85,10 @@ from youbot_dynamics.io.stamps import NS_PER_S, stamp_ns_of
 from youbot_dynamics.node.commands import InputRejected
 from youbot_dynamics.node.configure import session_from_parameters
 from youbot_dynamics.node import usage
+from youbot_dynamics.node.input_size import check_serialized
 from youbot_dynamics.node.interface import (SERVICES, Outputs, Topic, check_choice, instances, offered,
                                             topics_of)
-from youbot_dynamics.node.inverse_session import InverseSession
+from youbot_dynamics.node.inverse_session import InverseSession, receive_time_ns
 from youbot_dynamics.node.pacing import Pacing, RealTimeFactor
 from youbot_dynamics.node.progress import Progress
 from youbot_dynamics.node.simulate import SimulationSession
@@ -330,16 +332,18 @@ class DynamicsNode(Node):
         """Subscribe ``callback`` to ``topic`` (its graph name: relative, see
         :mod:`~youbot_dynamics.node.topics`; its QoS: the table's, or the profile of the
         parameter it names) behind the node boundary, taking the serialized message: one
-        over ``topic.max_bytes`` is rejected (counted, ``too_large``) before it is
-        deserialised."""
+        over ``topic.max_bytes``, or announcing more names or points than allowed
+        (:func:`~youbot_dynamics.node.input_size.check_serialized`), is rejected (counted,
+        ``too_large``) before it is deserialised."""
         limit, msg_type = topic.max_bytes, rclpy_class(topic.type)
         qos = SUBSCRIPTION_PROFILES[self.params[topic.qos]] if topic.qos in self.params else PROFILES[topic.qos]
 
         def decode(data: bytes) -> object:
-            if len(data) > limit:
-                error = InputRejected("too_large", f"{len(data)} bytes, more than the {limit} byte limit")
+            try:
+                check_serialized(data, topic.type, limit)
+            except InputRejected as error:
                 self.session.counters.reject(error)
-                raise error
+                raise
             return deserialize_message(data, msg_type)
 
         self.create_subscription(msg_type, graph_name(topic.name), self._guarded(topic.name, callback, decode), qos,
@@ -414,7 +418,7 @@ class DynamicsNode(Node):
         if not self.active:
             return
         self._inbox.append((list(msg.name), msg.position, msg.velocity, stamp_ns_of(msg.header.stamp),
-                            self.get_clock().now().nanoseconds))
+                            receive_time_ns()))
 
     def _on_joint_states(self) -> None:
         """The joint states received since the last tick, as one batch."""
@@ -517,24 +521,39 @@ class ManagedDynamicsNode(LifecycleNodeMixin, DynamicsNode):
         return TransitionCallbackReturn.SUCCESS
 
 
+START_UP_ERRORS = (UserInputError, ParameterException, NameValidationException)
+"""What a node refuses to start with (exit status 2, one line): a scene that cannot be read
+or run, a log path that cannot be written (the session's UserInputError), a parameter of the
+wrong type or out of range, an invalid name."""
+
+
+def _start_up_error(reason: str) -> int:
+    """Say why the node cannot start, on one line of stderr; returns the exit status 2."""
+    print(f"dynamics_node: error: {' '.join(reason.split())}", file=sys.stderr)
+    return 2
+
+
 def run(args: list[str] | None = None, overrides: dict[str, object] | None = None,
         managed: bool = False) -> tuple[int, DynamicsNode | None]:
     """Run the node until ``duration`` is reached, SIGINT or SIGTERM (a managed node: or its
     shutdown transition), and finalise the logs.
 
     ``args`` are command-line arguments (``--ros-args ...``), ``overrides`` parameter values
-    that beat them; ``managed``: a :class:`ManagedDynamicsNode`. Returns the exit status (2:
-    bad parameters) and the finished node.
+    that beat them; ``managed``: a :class:`ManagedDynamicsNode`. Returns the exit status (2: a
+    start-up error, said in one line on stderr: bad ROS arguments or parameters, a scene or log
+    path that cannot be used) and the finished node.
     """
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except RuntimeError as error:     # rclpy's RCLError, UnknownROSArgsError: bad --ros-args
+        return _start_up_error(f"bad ROS arguments: {error}"), None
     stop = stop_requests()
     try:
         node = (ManagedDynamicsNode if managed else DynamicsNode)(
             parameter_overrides=[Parameter(k, value=v) for k, v in (overrides or {}).items()])
-    except (UserInputError, InvalidParameterValueException) as error:
-        print(f"dynamics_node: error: {error}", file=sys.stderr)
+    except START_UP_ERRORS as error:
         rclpy.try_shutdown()
-        return 2, None
+        return _start_up_error(str(error)), None
     executor = rclpy.executors.SingleThreadedExecutor()
     executor.add_node(node)
     try:
