@@ -6,6 +6,8 @@ and a domain id per test from :func:`domain_id`, distinct across pytest-xdist wo
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -25,6 +27,20 @@ WAIT = 30.0
 """Generous upper bound (s) on any wait for discovery or messages."""
 SPIN_PERIOD = 0.05
 """Longest wait (s) of one spin_once in :func:`spinning`: how late a stop is noticed."""
+
+
+def interrupt(*processes: subprocess.Popen, timeout: float = 2 * WAIT) -> None:
+    """SIGINT to each process still running, then wait for them (a hang guard: what has
+    not ended after ``timeout`` s is killed, and its return code says so)."""
+    for process in processes:
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+    for process in processes:
+        try:
+            process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
 
 
 def domain_id(test_offset: int) -> int:

@@ -16,7 +16,7 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 
-from ros_support import Collector, diagnostic_values, ros_context, spinning, stamp_ns, wait_until
+from ros_support import Collector, diagnostic_values, interrupt, ros_context, spinning, stamp_ns, wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 LIMIT = 1_000_000
@@ -57,12 +57,8 @@ def test_a_full_log_stops_logging_not_publishing(tmp_path: Path) -> None:
                 wait_until(lambda: sum(stamp_ns(m) > stopped_at + 500_000_000
                                        for m in collector.messages("/joint_states")) > 0,
                            HANG_GUARD, "joint states half a simulated second after the log stopped")
-                process.send_signal(signal.SIGINT)
-                process.wait(timeout=HANG_GUARD)
             finally:
-                if process.poll() is None:
-                    process.kill()
-                    process.wait()
+                interrupt(process, timeout=HANG_GUARD)     # SIGINT: the exit status is checked below
     text = log.read_text()
     assert process.returncode == 0, text
     assert "EFBIG" in status.status[0].message and values["log.mcap.error"] == "EFBIG", values

@@ -4,14 +4,13 @@ the clash (/diagnostics WARN, ``graph.namesakes``) and keep running."""
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-from ros_support import Collector, diagnostic_values, ros_context, spinning, wait_until
+from ros_support import Collector, diagnostic_values, interrupt, ros_context, spinning, wait_until
 from youbot_dynamics.io.bag_reader import read_bag
 
 REPO = Path(__file__).resolve().parents[2]
@@ -26,19 +25,6 @@ def start(domain: int, log: Path, *parameters: str) -> subprocess.Popen:
             [sys.executable, "-m", "youbot_dynamics.ros.dynamics_node", "--ros-args", "-p", "scene:=arm_swing",
              "-p", "duration:=1000.0", *(arg for p in parameters for arg in ("-p", p))],
             cwd=REPO, env={**os.environ, "ROS_DOMAIN_ID": str(domain)}, stdout=out, stderr=subprocess.STDOUT)
-
-
-def stop(*processes: subprocess.Popen) -> None:
-    """SIGINT, then wait (kill what hangs)."""
-    for process in processes:
-        if process.poll() is None:
-            process.send_signal(signal.SIGINT)
-    for process in processes:
-        try:
-            process.wait(timeout=HANG_GUARD)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
 
 
 @pytest.mark.ros
@@ -57,7 +43,7 @@ def test_a_second_writer_on_one_log_path_is_refused(tmp_path: Path) -> None:
                 wait_until(lambda: collector.count("/joint_states") > before + 10, HANG_GUARD,
                            "the first node going on")
             finally:
-                stop(first)
+                interrupt(first)
     refusal = (tmp_path / "second.log").read_text().strip()
     assert second.returncode == 2, refusal
     assert len(refusal.splitlines()) == 1 and str(mcap) in refusal and f"pid {first.pid}" in refusal, refusal
@@ -81,7 +67,7 @@ def test_two_nodes_of_one_name_report_the_clash(tmp_path: Path) -> None:
                            HANG_GUARD * 2, "WARN statuses naming the other node")
                 assert all(process.poll() is None for process in nodes)
             finally:
-                stop(*nodes)
+                interrupt(*nodes)
     status = clashes()[0].status[0]
     assert "other node(s) named /dynamics_node" in status.message, status.message
     logs = [(tmp_path / f"node{k}.log").read_text() for k in (1, 2)]

@@ -222,6 +222,19 @@ def print_json(record: dict[str, Any]) -> None:
     print(text)
 
 
+def print_result(args: argparse.Namespace, record: dict[str, Any], text: str) -> int:
+    """The end of a command that may have drawn ``args.plot``: with ``--json`` its
+    ``record`` and the plot's path as JSON (:func:`print_json`), else its ``text`` and where
+    the plot went. Returns the exit status 0."""
+    if args.json:
+        print_json({**record, "plot": args.plot})
+        return 0
+    print(text)
+    if args.plot:
+        print(f"plot written to {args.plot}")
+    return 0
+
+
 def output_file(path: str, flag: str) -> Path:
     """Check, before any work, that a file can be written at ``path``: its folder exists, it
     is no folder, and it opens for appending (an existing file is left unchanged, a new one is

@@ -12,7 +12,7 @@ import sys
 import numpy as np
 
 from youbot_dynamics.cli.common import (add_json, add_tolerance_arguments, output_file, positive,
-                                        relative_tolerance, tolerances)
+                                        print_result, relative_tolerance, tolerances)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import IntegrationError
 from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS
@@ -96,13 +96,7 @@ def run_rotations(args: argparse.Namespace) -> int:
     if args.plot:
         from youbot_dynamics.studies.rotations_figures import plot_rotations
         plot_rotations(study.results, args.plot)
-    if args.json:
-        print(json.dumps({**rotations.as_json(study), "plot": args.plot}, indent=2))
-        return 0
-    print(rotations.text(study))
-    if args.plot:
-        print(f"plot written to {args.plot}")
-    return 0
+    return print_result(args, rotations.as_json(study), rotations.text(study))
 
 
 #: The unicycle's parameters as options: field of Unicycle -> unit.

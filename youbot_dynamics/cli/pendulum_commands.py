@@ -13,7 +13,7 @@ import sys
 import numpy as np
 
 from youbot_dynamics.cli.common import (add_json, add_sweep_arguments, add_tolerance_arguments,
-                                        output_file, positive, tolerances)
+                                        output_file, positive, print_result, tolerances)
 from youbot_dynamics.cli.sim_commands import (add_step_budget_argument, checked_step_budget,
                                               progress_bar)
 from youbot_dynamics.errors import UserInputError
@@ -187,13 +187,7 @@ def run_uncertainty(args: argparse.Namespace) -> int:
     if args.plot:
         from youbot_dynamics.studies.uncertain_pendulum_figures import plot_band
         plot_band(result, args.plot)
-    if args.json:
-        print(json.dumps({**uncertain_pendulum.as_json(result), "plot": args.plot}, indent=2))
-        return 0
-    print(uncertain_pendulum.text(result))
-    if args.plot:
-        print(f"plot written to {args.plot}")
-    return 0
+    return print_result(args, uncertain_pendulum.as_json(result), uncertain_pendulum.text(result))
 
 
 #: The studies this module adds under ``study``: name -> function adding its options.

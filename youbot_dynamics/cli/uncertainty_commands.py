@@ -3,10 +3,9 @@ one output (accuracy/scene_uncertainty.py), linear band against Monte Carlo."""
 from __future__ import annotations
 
 import argparse
-import json
 
-from youbot_dynamics.cli.common import (add_duration, add_json, add_plot, add_sweep_arguments, output_file,
-                                        positive)
+from youbot_dynamics.cli.common import (add_duration, add_json, add_plot, add_sweep_arguments,
+                                        output_file, positive, print_result)
 
 #: The commands here that run an integrator, and where their accuracy comes from (see
 #: youbot_dynamics.cli: "--tol" or the reason the command takes none).
@@ -28,15 +27,11 @@ def run_scene_uncertainty(args: argparse.Namespace) -> int:
     figures = comparison(linear, sampled)
     if args.plot:
         plot_uncertainty(linear, sampled, traces, args.plot, f"{args.scene}: {args.output}", args.output)
-    if args.json:
-        print(json.dumps({**figures, "output": args.output, "parameters": list(keys),
-                          "sensitivities_end": dict(zip(keys, sensitivities[:, -1].tolist())),
-                          "samples": args.samples, "seed": args.seed, "plot": args.plot}, indent=2))
-        return 0
-    print(summary_text(args.scene, args.output, keys, args.samples, args.seed, figures))
-    if args.plot:
-        print(f"plot written to {args.plot}")
-    return 0
+    record = {**figures, "output": args.output, "parameters": list(keys),
+              "sensitivities_end": dict(zip(keys, sensitivities[:, -1].tolist())),
+              "samples": args.samples, "seed": args.seed}
+    return print_result(args, record, summary_text(args.scene, args.output, keys, args.samples, args.seed,
+                                                   figures))
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
