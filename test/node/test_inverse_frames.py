@@ -18,10 +18,11 @@ from youbot_dynamics.scene.schema import load_scene
 RATE = 100.0
 
 
-def replayed(scene_name: str, seconds: float, **options) -> tuple[dict, dict[int, dict], dict[int, dict]]:
+def replayed(scene_name: str, seconds: float, **options) -> tuple[dict, dict[int, dict], dict[int, dict], str]:
     """(the inverse session's latched messages, its outputs by stamp (ns) and topic, the
-    simulate session's outputs by stamp and topic) of a simulated run's /joint_states fed,
-    one message at a time, to an inverse-mode session of the same scene."""
+    simulate session's outputs by stamp and topic, the frame of its /ee_pose link) of a
+    simulated run's /joint_states fed, one message at a time, to an inverse-mode session of
+    the same scene."""
     scene = load_scene(scene_name)
     simulated: dict[int, dict] = {}
     with SimulationSession(scene, RATE) as simulation:
@@ -31,17 +32,19 @@ def replayed(scene_name: str, seconds: float, **options) -> tuple[dict, dict[int
     inverse_outputs: dict[int, dict] = {}
     with InverseSession(scene, **options) as inverse:
         latched = dict(inverse.latched)
+        ee_frame = inverse.frames.prefix + inverse.frames.links.ee_link
         for stamp, outputs in sorted(simulated.items()):
             state = outputs["/joint_states"]
             for topic, message in inverse.joint_state(list(state.name), state.position, state.velocity, stamp):
                 header = message.transforms[0].header if topic == "/tf" else message.header
                 inverse_outputs.setdefault(stamp_of(header), {})[topic] = message
-    return latched, inverse_outputs, simulated
+    return latched, inverse_outputs, simulated, ee_frame
 
 
-def checked_trees(latched: dict, outputs: dict[int, dict], root: str) -> list[tuple[int, Tree]]:
+def checked_trees(latched: dict, outputs: dict[int, dict], root: str, ee_frame: str) -> list[tuple[int, Tree]]:
     """The tree at every stamp with a /tf: one root, ``root``, and one parent per frame;
-    /ee_pose (and /odom, where present) equal to the composed transforms."""
+    /ee_pose (the pose of ``ee_frame``) and /odom, where present, equal to the composed
+    transforms."""
     trees = []
     for stamp, sample in sorted(outputs.items()):
         if "/tf" not in sample:
@@ -51,7 +54,7 @@ def checked_trees(latched: dict, outputs: dict[int, dict], root: str) -> list[tu
         assert tree.roots == [root]
         ee = sample["/ee_pose"]
         assert ee.header.frame_id == root
-        assert_same(pose_of(ee.pose), tree.pose(root, tree_palm(tree)), f"/ee_pose at {stamp} ns")
+        assert_same(pose_of(ee.pose), tree.pose(root, ee_frame), f"/ee_pose at {stamp} ns")
         if "/odom" in sample:
             odom = sample["/odom"]
             assert_same(pose_of(odom.pose.pose), tree.pose(odom.header.frame_id, odom.child_frame_id),
@@ -60,15 +63,10 @@ def checked_trees(latched: dict, outputs: dict[int, dict], root: str) -> list[tu
     return trees
 
 
-def tree_palm(tree: Tree) -> str:
-    """The palm's frame in the tree (prefixed or not)."""
-    return next(frame for frame in tree.frames if frame.endswith("gripper_palm_link"))
-
-
 @pytest.mark.parametrize("options, root", [({}, "odom"), ({"frame_id": "map", "frame_prefix": "r1/"}, "map")])
 def test_a_moving_base_in_inverse_mode_has_one_tree_rooted_at_odom(options: dict, root: str) -> None:
-    latched, outputs, simulated = replayed("mobile_pick", 2.5, **options)
-    trees = checked_trees(latched, outputs, root)
+    latched, outputs, simulated, ee_frame = replayed("mobile_pick", 2.5, **options)
+    trees = checked_trees(latched, outputs, root, ee_frame)
     assert len(trees) == round(2.5 * RATE) - 1           # a torque (and its /tf) for every middle sample
     prefix = options.get("frame_prefix", "")
     stamp, tree = trees[-1]
@@ -88,8 +86,9 @@ def test_a_moving_base_in_inverse_mode_has_one_tree_rooted_at_odom(options: dict
 
 @pytest.mark.parametrize("scene_name, root", [("arm_ptp", "base_footprint"), ("gripping", "world")])
 def test_a_fixed_base_in_inverse_mode_is_rooted_at_the_robots_root_link(scene_name: str, root: str) -> None:
-    latched, outputs, simulated = replayed(scene_name, 0.3)
-    trees = checked_trees(latched, outputs, root)
+    latched, outputs, simulated, ee_frame = replayed(scene_name, 0.3)
+    assert ee_frame == ("yb1_" if scene_name == "gripping" else "") + "gripper_palm_link"
+    trees = checked_trees(latched, outputs, root, ee_frame)
     assert trees and all("odom" not in tree.frames for _, tree in trees)
     for stamp, _ in trees:
         assert_same(pose_of(outputs[stamp]["/ee_pose"].pose), pose_of(simulated[stamp]["/ee_pose"].pose),
