@@ -13,6 +13,7 @@ import pytest
 from tf_support import Tree, assert_same, pose_of, stamp_of
 from youbot_dynamics.node.inverse_session import InverseSession
 from youbot_dynamics.node.simulate import SimulationSession
+from youbot_dynamics.ros.conversions import to_cdr
 from youbot_dynamics.scene.schema import load_scene
 
 RATE = 100.0
@@ -93,3 +94,30 @@ def test_a_fixed_base_in_inverse_mode_is_rooted_at_the_robots_root_link(scene_na
     for stamp, _ in trees:
         assert_same(pose_of(outputs[stamp]["/ee_pose"].pose), pose_of(simulated[stamp]["/ee_pose"].pose),
                     "palm against simulate")
+
+
+@pytest.mark.parametrize("size", [7, 64])
+def test_a_moving_base_batch_gives_what_one_by_one_gives(size: int) -> None:
+    """The odometry previewed through a batch (for the torques' /tf and /ee_pose) is the one
+    each sample then publishes: batches give the messages of the samples taken one by one, bit
+    for bit, across a velocity step (an implausible torque: the estimate restarts inside the
+    batch), a NaN (rejected) and a duplicate."""
+    scene = load_scene("mobile_pick")
+    with SimulationSession(scene, RATE) as simulation:
+        states = [dict(simulation.step())["/joint_states"] for _ in range(150)]
+    samples = [[list(s.name), np.array(s.position), np.array(s.velocity), stamp_of(s.header), None] for s in states]
+    samples[40][2] = samples[40][2] + 30.0 * (np.array(samples[40][0]) == "arm_joint_2")
+    samples[80][1] = np.where(np.array(samples[80][0]) == "arm_joint_1", np.nan, samples[80][1])
+    samples.insert(120, list(samples[119]))
+    samples = [(names, q.tolist(), v.tolist(), stamp, stamp) for names, q, v, stamp, _ in samples]
+    expected, outputs = [], []
+    with InverseSession(scene) as single, InverseSession(scene) as batched:
+        for sample in samples:
+            expected += single.joint_states([sample])[0]
+        for start in range(0, len(samples), size):
+            outputs += batched.joint_states(samples[start:start + size])[0]
+        assert single.counters.rejected == batched.counters.rejected
+        assert {"implausible_torque", "non_finite", "duplicate"} <= set(single.counters.rejected)
+    assert [topic for topic, _ in outputs] == [topic for topic, _ in expected]
+    assert [to_cdr(message) for _, message in outputs] == [to_cdr(message) for _, message in expected]
+    assert sum(topic == "/tf" for topic, _ in expected) > 100
