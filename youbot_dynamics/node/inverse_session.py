@@ -327,8 +327,9 @@ class InverseSession(Session):
         tau = self.dynamics.torques(estimates.q, estimates.v, estimates.a)
         plausible = (np.abs(tau) <= self._effort_bound).all(axis=1)     # NaN too
         count = len(tau) if plausible.all() else int(np.argmin(plausible))
-        base = None if self.odometry is None or not count else self._base_rows(stamps[start:], v[start:], taken[start:],
-                                                                  estimates.stamps[:count].tolist())
+        base = None
+        if self.odometry is not None and count:
+            base = self._base_rows(stamps[start:], v[start:], taken[start:], estimates.stamps[:count].tolist())
         built, failure = self._torque_messages(estimates.stamps[:count].tolist(), estimates.q, estimates.v, tau, base)
         bad = None if failure is None and count == len(tau) else len(built)
         end = len(stamps)
