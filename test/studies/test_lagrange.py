@@ -173,3 +173,14 @@ def test_3d_particle_path_is_the_documents_rB():
                 -length * np.cos(q1) - arm * np.cos(q3) * np.cos(q1 + q2)]
     np.testing.assert_allclose(m.particle_path(np.r_[q1, q2, q3, 0, 0, 0], p)[0], expected,
                                atol=1e-14)
+
+
+def test_3d_defaults_are_the_documents_and_ours_second():
+    """Appendix B: m = 0.5 kg (rod and particle), l = 0.5 m (both rods), g = 9.82 m/s^2;
+    our second set m1 = 1, m2 = 0.1, l2 = 1, g = 9.81."""
+    m = model("3d")
+    assert dict(zip(map(str, m.parameters), m.parameter_values())) == {
+        "m1": 0.5, "l": 0.5, "m2": 0.5, "l2": 0.5, "g": 9.82, "c": 0.0}
+    assert dict(zip(map(str, m.parameters), m.parameter_values(OUR_3D))) == {
+        "m1": 1.0, "l": 0.5, "m2": 0.1, "l2": 1.0, "g": 9.81, "c": 0.0}
+    assert DOCUMENT_INITIAL["3d"] == ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
