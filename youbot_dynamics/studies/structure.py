@@ -383,6 +383,29 @@ def structure_report(example: str) -> dict:
     return pantelides_report(example)
 
 
+def assign_list(matching: dict[int, int], n_variables: int) -> list[int]:
+    """A matching variable -> equation as ModiaBase's assign list (1-based, 0 = none)."""
+    return [matching[j] + 1 if j in matching else 0 for j in range(n_variables)]
+
+
+def document_assign_report(equation_vars: list[set[int]], unknowns: list[int],
+                           n_variables: int) -> dict:
+    """Document 000's low-pass assign list checked (a perfect matching? its blocks) and the
+    lists AUGMENTPATH gives in either variable order."""
+    document = {j: i - 1 for j, i in enumerate(LOWPASS_DOCUMENT_ASSIGN) if i}
+    orders = {"first to last": False, "last to first": True}
+    return {
+        "document_assign": list(LOWPASS_DOCUMENT_ASSIGN),
+        "document_assign_is_perfect_matching": is_perfect_matching(equation_vars,
+                                                                   LOWPASS_DOCUMENT_ASSIGN),
+        "document_assign_blocks": [[i + 1 for i in block]
+                                   for block in block_lower_triangular(equation_vars, document)],
+        "augmenting_path_assign": {
+            order: assign_list(augmenting_path_matching(equation_vars, unknowns, last_first),
+                               n_variables) for order, last_first in orders.items()},
+    }
+
+
 def lowpass_report() -> dict:
     """The low-pass filter's incidence (document 000 section 3): our matching as ModiaBase's
     ``assign`` list (variable -> equation, 0 = known), the BLT blocks, and the document's
@@ -403,18 +426,9 @@ def lowpass_report() -> dict:
         "known": list(LOWPASS_KNOWN),
         "equations": [f"f{i + 1}" for i in range(len(equation_vars))],
         "incidence": incidence_rows(equation_vars, n_variables),
-        "assign": [matching[j] + 1 if j in matching else 0 for j in range(n_variables)],
+        "assign": assign_list(matching, n_variables),
         "perfect_matching": len(matching) == len(equation_vars),
-        "document_assign": list(LOWPASS_DOCUMENT_ASSIGN),
-        "document_assign_is_perfect_matching": is_perfect_matching(equation_vars,
-                                                                   LOWPASS_DOCUMENT_ASSIGN),
-        "document_assign_blocks": [[i + 1 for i in block] for block in block_lower_triangular(
-            equation_vars, {j: i - 1 for j, i in enumerate(LOWPASS_DOCUMENT_ASSIGN) if i})],
-        "augmenting_path_assign": {
-            order: [found[j] + 1 if j in found else 0 for j in range(n_variables)]
-            for order, found in (("first to last", augmenting_path_matching(
-                equation_vars, unknowns)), ("last to first", augmenting_path_matching(
-                    equation_vars, unknowns, last_first=True)))},
+        **document_assign_report(equation_vars, unknowns, n_variables),
         "blocks": [[i + 1 for i in block] for block in blocks],
         "blt": blt_view(equation_vars, matching, blocks, names,
                         [str(j + 1) for j in range(n_variables)]),
