@@ -269,6 +269,7 @@ def draw_lowpass(result: object, out: Path, full: bool) -> dict[str, tuple[str, 
     axis.plot(t, exact, "k:", linewidth=0.8, label="U0 (1 - exp(-t / (R1 + R2) C))")
     axis.plot(t, current * 100.0, linewidth=1.0, label="i (A) x 100")
     axis.set_xlabel("t (s)")
+    axis.set_ylabel("vC (V); i (A) x 100")
     axis.legend(fontsize=7)
     save(figure, out / "pipeline_lowpass.png", "Low-pass filter simulated by the pipeline")
     drawn["pipeline_lowpass.png"] = (
@@ -293,7 +294,7 @@ def draw_cartesian_pendulum(result: object, out: Path, full: bool) -> dict[str, 
     axis.plot(t, reference[:, 0], "k:", linewidth=0.8, label="hand-written (angle form)")
     axis.plot(t, reference[:, 1], "k:", linewidth=0.8)
     axis.set_xlabel("t (s)")
-    axis.set_ylabel("m")
+    axis.set_ylabel("x, y (m)")
     axis.legend(fontsize=7)
     save(figure, out / "pipeline_pendulum.png",
          "Cartesian pendulum: the pipeline's ODE against the hand-written one")
