@@ -79,28 +79,38 @@ REQUIRED = ("id", "document", "item", "quantity", "document_value", "verdict", "
 FIELD_NAMES = tuple(field.name for field in fields(Row))
 
 
-def row_problems(record: object, document: str) -> list[str]:
-    """What is wrong with one row (a YAML mapping) of ``document``'s file; [] if nothing."""
-    if not isinstance(record, dict):
-        return [f"a row must be a mapping of {', '.join(FIELD_NAMES)}, got {type(record).__name__}"]
+def field_problems(record: dict) -> list[str]:
+    """Unknown fields, missing required text, a missing our_value."""
     problems = [f"unknown field {key!r}" for key in record if key not in FIELD_NAMES]
     problems += [f"{key} is missing or empty" for key in REQUIRED
                  if not isinstance(record.get(key), str) or not record[key].strip()]
     if "our_value" not in record:
         problems.append("our_value is missing (null only for a tool-specific row)")
-    verdict, ours = record.get("verdict"), record.get("our_value")
-    if verdict not in VERDICTS and "verdict is missing or empty" not in problems:
+    elif record["our_value"] is not None and not isinstance(record["our_value"], (str, int, float)):
+        problems.append(f"our_value must be text (with units), got {type(record['our_value']).__name__}")
+    return problems
+
+
+def verdict_problems(record: dict) -> list[str]:
+    """A verdict outside VERDICTS, a difference without a reason, an empty value of ours on
+    a row that is not tool-specific."""
+    verdict, problems = record.get("verdict"), []
+    if verdict is not None and verdict not in VERDICTS:
         problems.append(f"verdict {verdict!r} is none of {', '.join(VERDICTS)}")
     if verdict != "agree" and not str(record.get("reason") or "").strip():
         problems.append(f"a {verdict} row needs a reason (the evidence for the difference)")
-    if ours is None and "our_value" in record and verdict != "tool-specific":
+    if "our_value" in record and record["our_value"] is None and verdict != "tool-specific":
         problems.append("our_value is null on a row that is not tool-specific")
-    if ours is not None and not isinstance(ours, (str, int, float)):
-        problems.append(f"our_value must be text (with units), got {type(ours).__name__}")
-    row_id = str(record.get("id", ""))
-    if record.get("id") and not ID_PATTERN.match(row_id):
+    return problems
+
+
+def place_problems(record: dict, document: str) -> list[str]:
+    """An id not of the form '<document>-<name>' or of another document, a row in another
+    document's file, evidence that names neither a test node id nor a study."""
+    row_id, problems = record.get("id"), []
+    if isinstance(row_id, str) and row_id and not ID_PATTERN.match(row_id):
         problems.append(f"id {row_id!r} is not lowercase '<document>-<name>'")
-    elif record.get("id") and row_id[:3] != document:
+    elif isinstance(row_id, str) and row_id and row_id[:3] != document:
         problems.append(f"id {row_id!r} does not start with its document number {document}")
     if record.get("document") not in (None, document):
         problems.append(f"document {record.get('document')!r} in the file of document {document}")
@@ -109,6 +119,13 @@ def row_problems(record: object, document: str) -> list[str]:
         problems.append(f"evidence {evidence!r} names no test node id (test/...py::test_name) "
                         "and no `study NAME`")
     return problems
+
+
+def row_problems(record: object, document: str) -> list[str]:
+    """What is wrong with one row (a YAML mapping) of ``document``'s file; [] if nothing."""
+    if not isinstance(record, dict):
+        return [f"a row must be a mapping of {', '.join(FIELD_NAMES)}, got {type(record).__name__}"]
+    return field_problems(record) + verdict_problems(record) + place_problems(record, document)
 
 
 def read_document(path: Path) -> list[Row]:
