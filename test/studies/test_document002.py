@@ -15,6 +15,8 @@ from youbot_dynamics.dynamics import friction
 from youbot_dynamics.dynamics.contact import hunt_crossley_force, newton_impulse, regularised_coulomb
 from youbot_dynamics.identification.estimation import ordinary_least_squares
 from youbot_dynamics.identification.excitation import FourierTrajectory
+from youbot_dynamics.identification.regressor import RegressorLayout, random_samples
+from youbot_dynamics.integrate.integrators import DivergenceError, integrate
 from youbot_dynamics.studies import planar_base_parameters as planar
 from youbot_dynamics.studies.unicycle import Unicycle, simulate_unicycle, unicycle_closed_form, unicycle_rhs
 
@@ -290,3 +292,56 @@ def test_rk4_at_one_millisecond_over_five_seconds():
     solution = simulate_unicycle(model, 0.4, 0.4, 5.0, "rk4", dt=1e-3, n_out=51)
     closed = np.array([unicycle_closed_form(model, 0.4, 0.4, np.zeros(5), t) for t in solution.t])
     assert np.abs(solution.x - closed).max() < 1e-10
+
+
+# --------------------------------------------------------------------------------------
+# The pitfalls ("Pièges et bonnes pratiques")
+# --------------------------------------------------------------------------------------
+def spring(stiffness: float, mass: float = 1.0):
+    """x'' = -(k / m) x as x' = (position, velocity)."""
+    return lambda t, x: np.array([x[1], -stiffness / mass * x[0]])
+
+
+def test_contact_stiffness_limit_of_rk4_at_one_millisecond():
+    """'k > 1e7 -> unstable integration': RK4 at dt = 1 ms on a 1 kg contact spring is stable
+    for h sqrt(k / m) < 2.785 (its real-axis stability limit), k < 7.76e6 N/m. Ours: k = 1e6
+    stays within its 1e-3 m amplitude over 1 s; k = 1e7 grows past 1e10 m (measured: it
+    overflows, a DivergenceError at t = 0.935 s)."""
+    t = np.linspace(0.0, 1.0, 11)
+    soft = integrate(spring(1e6), [1e-3, 0.0], t, "rk4", dt=1e-3)
+    assert np.abs(soft.x[:, 0]).max() <= 1e-3 * (1 + 1e-9)
+    with np.errstate(over="ignore", invalid="ignore"):
+        try:
+            stiff = np.abs(integrate(spring(1e7), [1e-3, 0.0], t, "rk4", dt=1e-3).x[-1, 0])
+        except DivergenceError:
+            stiff = math.inf
+    assert stiff > 1e10
+
+
+def test_semi_implicit_euler_keeps_the_energy_explicit_euler_does_not():
+    """'Semi-implicit Euler (symplectic) more stable for mechanical systems': on the spring
+    k = 1e4 N/m, m = 1 kg at dt = 1 ms over 2 s, explicit Euler's energy grows by
+    (1 + h^2 k / m)^N = 1.01^2000 = 4.4e8; symplectic Euler's stays within its modified
+    energy's bound (h w / 2) / (1 - h w / 2) = 5.263 % (h w = 0.1; measured 5.2630 %)."""
+    t = np.linspace(0.0, 2.0, 201)
+
+    def energy(x):
+        return 0.5 * x[:, 1] ** 2 + 0.5 * 1e4 * x[:, 0] ** 2
+    explicit = integrate(spring(1e4), [0.01, 0.0], t, "euler", dt=1e-3).x
+    symplectic = integrate(spring(1e4), [0.01, 0.0], t, "symplectic_euler", dt=1e-3, n_positions=1).x
+    growth = energy(explicit)[-1] / energy(explicit)[0]
+    assert math.isclose(growth, (1 + 1e-6 * 1e4) ** 2000, rel_tol=1e-6)
+    assert np.abs(energy(symplectic) / energy(symplectic)[0] - 1).max() < 0.0527
+
+
+def test_full_inertial_parameters_are_not_identifiable():
+    """'Identifying every individual parameter is under-determined': the planar arm's
+    stacked regressor has rank 6 of its 20 inertial columns, so Y^T Y is singular (its
+    smallest pivot below 1e-8 of the largest, measured 1e-17); the 6 base columns are well
+    posed (condition number below 1e3)."""
+    layout = RegressorLayout(planar.robot(ARM), friction_terms=())
+    q, v, a = random_samples(layout.robot, 200, np.random.default_rng(0))
+    stacked = layout.stacked(q, v, a)
+    assert stacked.shape[1] == 20 and np.linalg.matrix_rank(stacked) == 6
+    base = planar.base_parameters(layout)
+    assert np.linalg.cond(base.columns(stacked)) < 1e3

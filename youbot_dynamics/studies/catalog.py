@@ -7,8 +7,9 @@ as ``youbot-dynamics study NAME`` does), never through the command line. The pro
 accuracy tools that the page also shows (a scene's uncertain parameters, contact at its
 extremes, work-precision) run through accuracy/. Short forms (``full`` False) keep the
 whole report to minutes on two cores; ``full`` runs the source documents' sizes. Studies that sweep
-on Dask themselves run serially here (``workers=0``): each is already one case on a
-worker of the report's cluster.
+on Dask themselves pass ``workers=enclosing_workers()``: their cases go to the cluster the
+report runs them on (every worker takes some while the section waits), or run serially
+when the report is serial (``--workers 0``).
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from typing import Callable
 from youbot_dynamics.accuracy import scene_uncertainty
 from youbot_dynamics.accuracy.contact_extremes import TABLES
 from youbot_dynamics.accuracy.propagation import comparison, plot_uncertainty
+from youbot_dynamics.accuracy.sweeps import enclosing_workers
 from youbot_dynamics.accuracy.work_precision import work_precision
 from youbot_dynamics.io.text_tables import records_table
 from youbot_dynamics.scene.schema import load_scene
@@ -63,7 +65,8 @@ def pendulum_tables_section(out: Path, full: bool) -> tuple[str, object]:
 
 def bdf_section(out: Path, full: bool) -> tuple[str, object]:
     """``study bdf [--short]``."""
-    result = bdf_study.run(bdf_study.BdfConfig(short=not full, workers=0, progress=False))
+    result = bdf_study.run(bdf_study.BdfConfig(short=not full, workers=enclosing_workers(),
+                                                progress=False))
     return bdf_study.text(result), result
 
 
@@ -119,7 +122,7 @@ def rotations_section(out: Path, full: bool) -> tuple[str, object]:
 def uncertainty_section(out: Path, full: bool) -> tuple[str, object]:
     """``study uncertainty`` (200 samples short, 1000 full)."""
     result = uncertain_pendulum.run(uncertain_pendulum.UncertaintyConfig(
-        samples=1000 if full else 200, workers=0))
+        samples=1000 if full else 200, workers=enclosing_workers()))
     return uncertain_pendulum.text(result), result
 
 
@@ -143,9 +146,10 @@ def scene_uncertainty_section(out: Path, full: bool) -> tuple[str, object]:
     """``scene-uncertainty uncertain_pendulum --output q[pivot]`` with its band plot (40
     samples over 3 s short; 1000 over the scene's 10 s full)."""
     samples, duration = (1000, None) if full else (40, 3.0)
-    linear, _ = scene_uncertainty.linear_propagation(SCENE, SCENE_OUTPUT, duration, workers=0)
+    linear, _ = scene_uncertainty.linear_propagation(SCENE, SCENE_OUTPUT, duration,
+                                                   workers=enclosing_workers())
     sampled, keys, _, traces = scene_uncertainty.monte_carlo(SCENE, SCENE_OUTPUT, samples, 0,
-                                                             duration, workers=0)
+                                                             duration, workers=enclosing_workers())
     figures = comparison(linear, sampled)
     plot_uncertainty(linear, sampled, traces, str(out / SCENE_PLOT), f"{SCENE}: {SCENE_OUTPUT}",
                      SCENE_OUTPUT)
@@ -170,7 +174,8 @@ def work_precision_section(out: Path, full: bool) -> tuple[str, object]:
     scene = load_scene(WORK_SCENE)
     if not full:
         scene = scene.with_duration(0.2)
-    study = work_precision(scene, out / WORK_FOLDER, progress=False, workers=0)
+    study = work_precision(scene, out / WORK_FOLDER, progress=False,
+                           workers=enclosing_workers())
     return (study.files[1].read_text(encoding="utf-8") + "\n"
             + "written: " + ", ".join(str(f) for f in study.files)), study
 

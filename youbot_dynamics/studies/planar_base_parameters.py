@@ -114,9 +114,8 @@ def symbolic_torques() -> tuple[sp.Matrix, sp.Matrix]:
     torques = [sp.diff(lagrangian.diff(qi.diff(t)), t) - lagrangian.diff(qi) for qi in (q1, q2)]
     plain = {q1.diff(t, 2): A[0], q2.diff(t, 2): A[1], q1.diff(t): V[0], q2.diff(t): V[1]}
     plain_q = {q1: Q[0], q2: Q[1]}
-    tau = sp.Matrix([sp.expand(sp.simplify(tq.subs(plain).subs(plain_q))) for tq in torques])
-    mass = tau.jacobian(A)
-    return tau, sp.simplify(mass)
+    tau = sp.Matrix([sp.expand(tq.subs(plain).subs(plain_q)) for tq in torques])
+    return tau, sp.trigsimp(tau.jacobian(A))
 
 
 GROUP_SYMBOLS = sp.symbols(" ".join(GROUPS), real=True)
@@ -131,7 +130,7 @@ def grouped_torques() -> sp.Matrix:
     replaced = {i1: zz1r - m1 * (c1_ ** 2 + d1_ ** 2) - m2 * l1 ** 2,
                 i2: zz2 - m2 * (c2_ ** 2 + d2_ ** 2), c1: c1_, d1: d1_, c2: c2_, d2: d2_}
     tau, _ = symbolic_torques()
-    return sp.Matrix([sp.simplify(sp.expand(entry.subs(replaced, simultaneous=True))) for entry in tau])
+    return sp.Matrix([sp.trigsimp(sp.expand(entry.subs(replaced, simultaneous=True))) for entry in tau])
 
 
 def document_list() -> tuple[sp.Expr, sp.Expr, sp.Expr]:
