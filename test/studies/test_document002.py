@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 import sympy as sp
 
+import youbot_dynamics.cli as cli
 from youbot_dynamics.dynamics import friction
 from youbot_dynamics.dynamics.contact import hunt_crossley_force, newton_impulse, regularised_coulomb
 from youbot_dynamics.identification.estimation import ordinary_least_squares
@@ -81,6 +82,57 @@ def test_document_rnea_code_never_uses_q_nor_the_child_links():
         np.testing.assert_array_equal(printed, document_compute_torques(links, -q, v, a))
         np.testing.assert_allclose(printed, [ARM.I1 * a[0], ARM.I2 * (a[0] + a[1])], rtol=1e-14, atol=1e-15)
         assert np.abs(printed - pin.rnea(robot.model, data, q, v, a)).max() > 1.0
+
+
+def printed_recursion(arm: planar.PlanarArm, q, qd, qdd, transport: bool):
+    """The printed RNEA on the planar arm, frames at the joints turned by q (R_i = Ry(q_i)):
+    the forward phase of the equations (the code's, with R turned), then the printed backward
+    phase F_i = R F_{i+1} + [f_i; n_i + c_i x f_i], tau_i = F_i . z (moment part), with
+    ``transport`` adding the moment the printed phase leaves out, r_{i+1} x (R f_{i+1})."""
+    z, gravity_up = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 9.81])
+    offsets = [np.zeros(3), np.array([arm.l1, 0.0, 0.0])]
+    coms = [np.array([arm.c1, 0.0, arm.d1]), np.array([arm.c2, 0.0, arm.d2])]
+    masses, inertias = (arm.m1, arm.m2), (np.eye(3) * arm.I1, np.eye(3) * arm.I2)
+    turns = [pin.utils.rotate("y", angle) for angle in q]
+    omega, omega_d, v_d = [np.zeros(3)], [np.zeros(3)], [gravity_up]
+    for i in range(2):
+        R, r = turns[i], offsets[i]
+        v_d.append(R.T @ (v_d[i] + np.cross(omega_d[i], r) + np.cross(omega[i], np.cross(omega[i], r))))
+        omega.append(R.T @ omega[i] + qd[i] * z)
+        omega_d.append(R.T @ omega_d[i] + qdd[i] * z + np.cross(R.T @ omega[i], qd[i] * z))
+    force, moment, tau = np.zeros(3), np.zeros(3), np.zeros(2)
+    for i in (1, 0):
+        w, w_d, c = omega[i + 1], omega_d[i + 1], coms[i]
+        f = masses[i] * (v_d[i + 1] + np.cross(w_d, c) + np.cross(w, np.cross(w, c)))
+        n = inertias[i] @ w_d + np.cross(w, inertias[i] @ w)
+        R = turns[i + 1] if i + 1 < 2 else np.eye(3)
+        carried = R @ moment + (np.cross(offsets[i + 1], R @ force) if transport and i + 1 < 2 else 0.0)
+        force, moment = R @ force + f, carried + n + np.cross(c, f)
+        tau[i] = moment @ z
+    return tau
+
+
+def test_printed_backward_phase_misses_the_childs_moment_arm():
+    """The printed backward phase carries the child's wrench by the rotation alone: with the
+    moment r_{i+1} x (R f_{i+1}) added it is Pinocchio's RNEA to 1e-12 N m at random states
+    (COMs off the link axes); as printed, the level arm at rest gets tau1 = -g (m1 c1 + m2 c2)
+    = -9.565 N m where Pinocchio (and the completed recursion) hold it with -19.865 N m: the
+    missing -g m2 l1 = -10.30 N m."""
+    arm = planar.PlanarArm(d1=0.04, d2=-0.03)
+    robot = planar.robot(arm)
+    data = robot.model.createData()
+    rng = np.random.default_rng(9)
+    for _ in range(10):
+        q, v, a = rng.uniform(-2, 2, (3, 2))
+        np.testing.assert_allclose(printed_recursion(arm, q, v, a, transport=True),
+                                   pin.rnea(robot.model, data, q, v, a), rtol=0, atol=1e-12)
+    rest = np.zeros(2)
+    printed = printed_recursion(ARM, rest, rest, rest, transport=False)
+    np.testing.assert_allclose(printed, [-9.81 * (ARM.m1 * ARM.c1 + ARM.m2 * ARM.c2), -9.81 * ARM.m2 * ARM.c2],
+                               rtol=1e-12)
+    assert math.isclose(printed[0], -9.565, rel_tol=1e-3)
+    completed = printed_recursion(ARM, rest, rest, rest, transport=True)
+    assert math.isclose(completed[0] - printed[0], -9.81 * ARM.m2 * ARM.l1, rel_tol=1e-12)
 
 
 # --------------------------------------------------------------------------------------
@@ -229,6 +281,9 @@ def test_excitation_series_is_ours():
                   - b[0, k - 1] / (omega_f * k) * np.cos(omega_f * k * t) for k in range(1, 6))
     q, _, _ = FourierTrajectory(("j",), 20.0, np.zeros(1), a, b).evaluate(t)
     np.testing.assert_allclose(q[:, 0], printed, rtol=0, atol=1e-14)
+    # `excite`'s defaults: 5 harmonics and 100 Hz as the document, a 10 s period against its 20 s
+    args = cli.build_parser(("youbot_dynamics.cli.identify_commands",)).parse_args(["excite"])
+    assert (args.harmonics, args.rate, args.period) == (5, 100.0, 10.0)
 
 
 def test_least_squares_is_ours_and_the_condition_is_of_y():
