@@ -148,3 +148,11 @@ def test_study_ledger_json_text_and_filters(capsys, rows):
     assert "| document 002 |" in text and "### Document 002" in text and "002-unicycle-parameters" in text
     assert cli.main(["study", "ledger", "--verdict", "differs"]) == 2
     assert "invalid choice: 'differs'" in capsys.readouterr().err
+
+
+def test_a_rows_figure_links_to_its_subsection_where_drawn():
+    row = ledger.Row(**{**ROW, "figure": "woodpecker_z"})
+    linked = ledger.rows_table([row], lambda name: f"[{name}](#figure-{name})")
+    assert "; figure [woodpecker_z](#figure-woodpecker_z) |" in linked
+    assert "; figure woodpecker_z |" in ledger.rows_table([row], lambda name: None)
+    assert ledger.table_cell("a | b\nc") == "a \\| b c" and ledger.table_cell(None) == "-"

@@ -67,6 +67,17 @@ def assert_report(out: Path, names) -> str:
     return page
 
 
+def test_the_catalogue_and_the_commands_say_source_document_not_seed(capsys):
+    """The report's own words (section titles, the documents' parts, methods) and the help of
+    `study` and `report` name the documents as source documents or by number."""
+    for section in SECTIONS:
+        for text in (section.title, section.seed, section.method):
+            assert not re.search(r"\bseeds?\b", text, re.I), (section.name, text)
+    for argv in (["study", "--help"], ["report", "--help"]):
+        assert main(argv) == 0
+        assert not re.search(r"\bseeds?\b", capsys.readouterr().out, re.I), argv
+
+
 def test_the_figure_sets_declare_the_documents_figures():
     specs = all_specs()
     files = [spec.file for spec in specs]
