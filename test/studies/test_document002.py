@@ -409,9 +409,9 @@ def test_semi_implicit_euler_keeps_the_energy_explicit_euler_does_not():
 
 def test_full_inertial_parameters_are_not_identifiable():
     """'Identifying every individual parameter is under-determined': the planar arm's
-    stacked regressor has rank 6 of its 20 inertial columns, so Y^T Y is singular (its
-    smallest pivot below 1e-8 of the largest, measured 1e-17); the 6 base columns are well
-    posed (condition number below 1e3)."""
+    stacked regressor has rank 6 of its 20 inertial columns, so Y^T Y is singular (the 7th
+    singular value is 9.6e-17 of the first); the 6 base columns are well posed (condition
+    number 13.3, bound 1e3)."""
     layout = RegressorLayout(planar.robot(ARM), friction_terms=())
     q, v, a = random_samples(layout.robot, 200, np.random.default_rng(0))
     stacked = layout.stacked(q, v, a)
