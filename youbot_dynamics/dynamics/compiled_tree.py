@@ -9,8 +9,9 @@ rotor armature, gravity), results equal to Pinocchio's to rounding (test_compile
 1e-12 relative). Friction (:func:`~youbot_dynamics.dynamics.friction.accumulate_friction_torque`)
 enters as in :mod:`~youbot_dynamics.dynamics.rigid_body`.
 
-:func:`tree_of` reads a Pinocchio model into two arrays: ``ints`` (n, 2) int64 (parent body
-index, -1 for the root; joint kind, 0 revolute, 1 prismatic) and ``reals`` (n + 1, 52)
+:func:`tree_of` reads a Pinocchio model into two arrays: ``ints`` (n, 3) int64 (parent body
+index, -1 for the root; joint kind, 0 revolute, 1 prismatic; the coordinate axis (0, 1, 2)
+of Pinocchio's RX, RY, RZ joints, else -1) and ``reals`` (n + 1, 52)
 float64: per body the joint placement in its parent's frame (rotation, row-major, 9; then
 translation, 3), the joint axis in the joint frame (3), the spatial inertia at the joint
 frame's origin (6 x 6, row-major, 36), the armature (1); the last row starts with gravity
@@ -26,7 +27,12 @@ import pinocchio as pin
 from numba import njit, types
 from numba.extending import register_jitable
 
+from youbot_dynamics.dynamics.friction import TABLE, accumulate_friction_torque
+
 REVOLUTE, PRISMATIC = 0, 1
+_ALIGNED = ("JointModelRX", "JointModelRY", "JointModelRZ")
+"""Pinocchio's revolute joints about a coordinate axis, whose rotation it writes with an
+exact 1 on the diagonal (the others: the Rodrigues formula, as here)."""
 _PLACEMENT, _AXIS, _INERTIA, _ARMATURE, WIDTH = 0, 12, 15, 51, 52
 WORK_ROWS = 30
 """Scratch rows per body (of 6 values): see :func:`_aba`."""
@@ -40,7 +46,7 @@ def tree_of(model: pin.Model) -> tuple[np.ndarray, np.ndarray] | None:
     n = model.njoints - 1
     if n == 0 or model.nq != n or model.nv != n or getattr(model, "mimicking_joints", []):
         return None
-    ints, reals = np.zeros((n, 2), dtype=np.int64), np.zeros((n + 1, WIDTH))
+    ints, reals = np.zeros((n, 3), dtype=np.int64), np.zeros((n + 1, WIDTH))
     for i, joint in enumerate(model.joints[1:]):
         if joint.nq != 1 or joint.nv != 1 or joint.idx_q != i or joint.idx_v != i:
             return None
@@ -53,7 +59,8 @@ def tree_of(model: pin.Model) -> tuple[np.ndarray, np.ndarray] | None:
         if kind < 0 or abs(np.linalg.norm(axis) - 1.0) > 1e-12 or not _moves_as(joint, kind, axis):
             return None
         placement = model.jointPlacements[i + 1]
-        ints[i] = (model.parents[i + 1] - 1, kind)
+        aligned = joint.shortname() in _ALIGNED
+        ints[i] = (model.parents[i + 1] - 1, kind, int(np.argmax(np.abs(axis))) if aligned else -1)
         reals[i, _PLACEMENT:_PLACEMENT + 9] = placement.rotation.ravel()
         reals[i, _PLACEMENT + 9:_AXIS] = placement.translation
         reals[i, _AXIS:_INERTIA] = axis
@@ -82,28 +89,42 @@ def _cross(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> 
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
+@register_jitable(inline="always")
+def _eigen_dot(row: int, a: float, b: float, c: float) -> float:
+    """a + b + c summed as Eigen sums row ``row`` of a 3 x 3 product (rows 0 and 1 in one
+    packet, left to right; row 2 alone, split in halves), so the poses equal Pinocchio's."""
+    return (a + b) + c if row < 2 else a + (b + c)
+
+
 @register_jitable
-def _joint_transform(reals: np.ndarray, kind: int, i: int, q: float, T: np.ndarray) -> None:
+def _joint_transform(reals: np.ndarray, ints: np.ndarray, i: int, q: float, T: np.ndarray) -> None:
     """T (12: rotation row-major, then translation) = the placement of body i in its
     parent's frame at coordinate q: the joint placement times the joint's rotation about
     (Rodrigues: I + sin q [a]x + (1 - cos q) [a]x^2), or translation along, its axis."""
     ax, ay, az = reals[i, _AXIS], reals[i, _AXIS + 1], reals[i, _AXIS + 2]
-    if kind == REVOLUTE:
+    if ints[i, 1] == REVOLUTE:
         s, c = math.sin(q), math.cos(q)
         k = 1.0 - c
         j00, j01, j02 = c + k * ax * ax, k * ax * ay - s * az, k * ax * az + s * ay
         j10, j11, j12 = k * ax * ay + s * az, c + k * ay * ay, k * ay * az - s * ax
         j20, j21, j22 = k * ax * az - s * ay, k * ay * az + s * ax, c + k * az * az
+        aligned = ints[i, 2]      # Pinocchio's RX, RY, RZ: the entry on the axis exactly 1
+        if aligned == 0:
+            j00 = 1.0
+        elif aligned == 1:
+            j11 = 1.0
+        elif aligned == 2:
+            j22 = 1.0
         t0 = t1 = t2 = 0.0
     else:
         j00, j01, j02, j10, j11, j12, j20, j21, j22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
         t0, t1, t2 = ax * q, ay * q, az * q
     for r in range(3):
         p0, p1, p2 = reals[i, 3 * r], reals[i, 3 * r + 1], reals[i, 3 * r + 2]
-        T[3 * r] = p0 * j00 + p1 * j10 + p2 * j20
-        T[3 * r + 1] = p0 * j01 + p1 * j11 + p2 * j21
-        T[3 * r + 2] = p0 * j02 + p1 * j12 + p2 * j22
-        T[9 + r] = reals[i, 9 + r] + p0 * t0 + p1 * t1 + p2 * t2
+        T[3 * r] = _eigen_dot(r, p0 * j00, p1 * j10, p2 * j20)
+        T[3 * r + 1] = _eigen_dot(r, p0 * j01, p1 * j11, p2 * j21)
+        T[3 * r + 2] = _eigen_dot(r, p0 * j02, p1 * j12, p2 * j22)
+        T[9 + r] = reals[i, 9 + r] + _eigen_dot(r, p0 * t0, p1 * t1, p2 * t2)
 
 
 @register_jitable
@@ -196,7 +217,7 @@ def rnea(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndarray, a: n
     for i in range(n):
         parent, kind = ints[i, 0], ints[i, 1]
         T = work[i, 24:26].reshape(12)
-        _joint_transform(reals, kind, i, q[i], T)
+        _joint_transform(reals, ints, i, q[i], T)
         vi, ai, fi, h = work[i, 0], work[i, 1], work[i, 2], work[i, 3]
         if parent >= 0:
             _motion_to_child(T, work[parent, 0], vi)
@@ -229,7 +250,7 @@ def _aba_velocities(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.nd
     for i in range(ints.shape[0]):
         parent, kind = ints[i, 0], ints[i, 1]
         T = work[i, 24:26].reshape(12)
-        _joint_transform(reals, kind, i, q[i], T)
+        _joint_transform(reals, ints, i, q[i], T)
         vi, ci, fi = work[i, 0], work[i, 1], work[i, 2]
         if parent >= 0:
             _motion_to_child(T, work[parent, 0], vi)
@@ -361,6 +382,72 @@ def compiled_rnea(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndar
                   work: np.ndarray, tau: np.ndarray) -> None:
     """:func:`rnea` as a compiled call."""
     rnea(ints, reals, q, v, a, work, tau)
+
+
+@njit(types.void(_INTS, _REALS, types.Array(types.float64, 2, "C", readonly=True),
+                 types.Array(types.float64, 2, "C", readonly=True), types.Array(types.float64, 2, "C", readonly=True),
+                 TABLE, _WORK, types.Array(types.float64, 2, "C")), cache=True)
+def compiled_rnea_rows(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray,
+                       table: np.ndarray, work: np.ndarray, tau: np.ndarray) -> None:
+    """tau[k] = RNEA(q[k], v[k], a[k]) + tau_friction(v[k]) of every row (N, n), the
+    friction's ``table`` without LuGre joints (their bristles are states this call does not
+    take)."""
+    bristles = np.empty(0)
+    for k in range(q.shape[0]):
+        rnea(ints, reals, q[k], v[k], a[k], work, tau[k])
+        accumulate_friction_torque(v[k], bristles, table, 1.0, tau[k])
+
+
+def frame_placements_of(model: pin.Model, frames: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """(the body of each frame of ``frames`` (int64: -1 for the root), its placement in that
+    body's joint frame (F, 3, 4): rotation, then translation) for :func:`frame_poses`."""
+    bodies = np.array([model.frames[f].parentJoint - 1 for f in frames], dtype=np.int64)
+    placements = np.array([model.frames[f].placement.homogeneous[:3] for f in frames]).reshape(-1, 3, 4)
+    return bodies, placements
+
+
+@njit(types.void(_INTS, _REALS, types.Array(types.float64, 2, "C", readonly=True),
+                 types.Array(types.int64, 1, "C", readonly=True), types.Array(types.float64, 3, "C", readonly=True),
+                 _WORK, types.Array(types.float64, 4, "C")), cache=True)
+def frame_poses(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, bodies: np.ndarray, placements: np.ndarray,
+                work: np.ndarray, out: np.ndarray) -> None:
+    """out[k, f] = the pose (4 x 4) in the root frame of frame f (its body ``bodies[f]`` and
+    its placement there, :func:`frame_placements_of`) at the configuration q[k], for every row
+    of q (N, n): Pinocchio's forward kinematics and frame placements (oMi = oMparent liMi,
+    oMf = oMi placement, composed as pin.SE3 products are)."""
+    n = ints.shape[0]
+    for k in range(q.shape[0]):
+        for i in range(n):
+            T = work[i, 24:26].reshape(12)
+            _joint_transform(reals, ints, i, q[k, i], T)
+            world = work[i, 6:10]       # oMi, 4 x 4 (rows 6-9 hold 4 x 6)
+            parent = ints[i, 0]
+            for r in range(3):
+                for c in range(3):
+                    if parent < 0:
+                        world[r, c] = T[3 * r + c]
+                    else:
+                        up = work[parent, 6:10]
+                        world[r, c] = _eigen_dot(r, up[r, 0] * T[c], up[r, 1] * T[3 + c], up[r, 2] * T[6 + c])
+                if parent < 0:
+                    world[r, 3] = T[9 + r]
+                else:
+                    up = work[parent, 6:10]
+                    world[r, 3] = up[r, 3] + _eigen_dot(r, up[r, 0] * T[9], up[r, 1] * T[10], up[r, 2] * T[11])
+        for f in range(bodies.shape[0]):
+            pose, local, body = out[k, f], placements[f], bodies[f]
+            for r in range(3):
+                for c in range(4):
+                    if body < 0:
+                        pose[r, c] = local[r, c]
+                    else:
+                        world = work[body, 6:10]
+                        pose[r, c] = _eigen_dot(r, world[r, 0] * local[0, c], world[r, 1] * local[1, c],
+                                                world[r, 2] * local[2, c])
+                        if c == 3:
+                            pose[r, c] = world[r, 3] + pose[r, c]
+            pose[3, 0] = pose[3, 1] = pose[3, 2] = 0.0
+            pose[3, 3] = 1.0
 
 
 @register_jitable

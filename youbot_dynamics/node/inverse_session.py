@@ -389,7 +389,7 @@ class InverseSession(Session):
         tau), those wanted, with each sample's kinematics (None when nothing takes it).
         Raises MessageFieldError."""
         wanted, count = self.wanted, len(stamps)
-        samples = [self.frames.links.at(row) for row in q[:count]] if self.kinematics_wanted else None
+        samples = self.frames.links.at_many(q[:count]) if self.kinematics_wanted else None
         columns: list[tuple[str, list[object]]] = []
         if "/computed_torques" in wanted:
             columns.append(("/computed_torques", self._torques.many(
