@@ -27,7 +27,6 @@ import pinocchio as pin
 from numba import njit, types
 from numba.extending import register_jitable
 
-from youbot_dynamics.dynamics.friction import TABLE, accumulate_friction_torque
 
 REVOLUTE, PRISMATIC = 0, 1
 _ALIGNED = ("JointModelRX", "JointModelRY", "JointModelRZ")
@@ -89,7 +88,7 @@ def _cross(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> 
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@register_jitable(inline="always")
+@register_jitable
 def _eigen_dot(row: int, a: float, b: float, c: float) -> float:
     """a + b + c summed as Eigen sums row ``row`` of a 3 x 3 product (rows 0 and 1 in one
     packet, left to right; row 2 alone, split in halves), so the poses equal Pinocchio's."""
@@ -382,20 +381,6 @@ def compiled_rnea(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndar
                   work: np.ndarray, tau: np.ndarray) -> None:
     """:func:`rnea` as a compiled call."""
     rnea(ints, reals, q, v, a, work, tau)
-
-
-@njit(types.void(_INTS, _REALS, types.Array(types.float64, 2, "C", readonly=True),
-                 types.Array(types.float64, 2, "C", readonly=True), types.Array(types.float64, 2, "C", readonly=True),
-                 TABLE, _WORK, types.Array(types.float64, 2, "C")), cache=True)
-def compiled_rnea_rows(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray,
-                       table: np.ndarray, work: np.ndarray, tau: np.ndarray) -> None:
-    """tau[k] = RNEA(q[k], v[k], a[k]) + tau_friction(v[k]) of every row (N, n), the
-    friction's ``table`` without LuGre joints (their bristles are states this call does not
-    take)."""
-    bristles = np.empty(0)
-    for k in range(q.shape[0]):
-        rnea(ints, reals, q[k], v[k], a[k], work, tau[k])
-        accumulate_friction_torque(v[k], bristles, table, 1.0, tau[k])
 
 
 def frame_placements_of(model: pin.Model, frames: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:

@@ -325,18 +325,19 @@ class InverseSession(Session):
             estimates = self.estimator.push_rows(stamps[start:end], q[start:end], v[start:end], taken[start:end])
         for error in estimates.errors:
             self.counters.reject(error)
-        torque_at = {start + int(row): k for k, row in enumerate(estimates.ends.tolist())}
+        torque_at = dict(zip((estimates.ends + start).tolist(), range(len(estimates.ends))))
+        no_odometry: Outputs = []
         for row in range(start, end):
             if not taken[row]:
                 continue
             log_ns = int(log_times[row])
-            odom = self._odometry(stamps[row], v[row], log_ns)
+            odom = no_odometry if self.odometry is None else self._odometry(stamps[row], v[row], log_ns)
             k = torque_at.get(row)
             if k is not None and k == bad:
                 outputs += self._rejected_torque(estimates, tau[k], failure, odom)
             elif k is not None:
-                outputs += odom + self._logged(estimates.stamps[k], estimates.q[k], estimates.v[k], tau[k], log_ns,
-                                               *built[k])
+                outputs += odom
+                outputs += self._logged(estimates, tau, k, log_ns, *built[k])
                 self._quiet_since_ns = max(self._quiet_since_ns or 0, stamps[row])
             else:
                 outputs += odom
@@ -405,14 +406,15 @@ class InverseSession(Session):
         """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
         return messages.joint_state(stamp_ns, self.robot.joint_names, *np.split(values, 3))
 
-    def _logged(self, stamp: int, q: np.ndarray, v: np.ndarray, tau: np.ndarray, log_ns: int, outputs: Outputs,
+    def _logged(self, estimates: Estimates, torques: np.ndarray, k: int, log_ns: int, outputs: Outputs,
                 sample: SampleFrames | None) -> Outputs:
-        """``outputs``, the messages of the torque ``tau`` at a sample (stamp int ns, q, v),
+        """``outputs``, the messages of torque k of ``estimates`` (``torques`` their rows),
         logged at ``log_ns`` (the Rerun recording takes the sample at its stamp, its energy
         (J) and end effector)."""
-        stamp = int(stamp)
+        stamp = int(estimates.stamps[k])
         self.recorder.write(outputs, log_ns)
         if self.recorder.samples:
+            q, v, tau = estimates.q[k], estimates.v[k], torques[k]
             data = self.dynamics.data
             energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)
             self.recorder.sample(stamp, self.robot.joint_names, q, v, tau, energy, sample.ee[sample.ee_index, :3])
