@@ -269,33 +269,50 @@ def _aba_velocities(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.nd
 
 
 @register_jitable
+def _cross_matrix_times(p: np.ndarray, M: np.ndarray, r0: int, c0: int, r: int, c: int) -> float:
+    """([p]x M)[r, c] of the 3 x 3 block of M at (r0, c0)."""
+    if r == 0:
+        return -p[2] * M[r0 + 1, c0 + c] + p[1] * M[r0 + 2, c0 + c]
+    if r == 1:
+        return p[2] * M[r0, c0 + c] - p[0] * M[r0 + 2, c0 + c]
+    return -p[1] * M[r0, c0 + c] + p[0] * M[r0 + 1, c0 + c]
+
+
+@register_jitable
 def _pass_inertia(T: np.ndarray, inertia: np.ndarray, X: np.ndarray, product: np.ndarray,
                   parent_inertia: np.ndarray) -> None:
     """parent_inertia += X^T inertia X, X the motion transform from the parent's frame to the
-    child's (T: the child's placement, see :func:`_joint_transform`); X and product (6 x 6)
-    scratch."""
-    X[:, :] = 0.0
+    child's (T: the child's placement (R, p), see :func:`_joint_transform`), by blocks: with
+    inertia = [[A, B], [B^T, C]] and A', B', C' = R A R^T, R B R^T, R C R^T (rotated),
+    P = [p]x and H = B' - A' P, it is [[A', H], [H^T, C' + P H + (P B')^T]]; X and product
+    (6 x 6) scratch."""
+    for block in range(3):        # product = R (A, B, C), X = the rotated blocks A', B', C'
+        r0, c0 = (0, 0) if block == 0 else (0, 3) if block == 1 else (3, 3)
+        for r in range(3):
+            for c in range(3):
+                product[r0 + r, c0 + c] = (T[3 * r] * inertia[r0, c0 + c] + T[3 * r + 1] * inertia[r0 + 1, c0 + c]
+                                           + T[3 * r + 2] * inertia[r0 + 2, c0 + c])
+        for r in range(3):
+            for c in range(3):
+                X[r0 + r, c0 + c] = (product[r0 + r, c0] * T[3 * c] + product[r0 + r, c0 + 1] * T[3 * c + 1]
+                                     + product[r0 + r, c0 + 2] * T[3 * c + 2])
+    p = T[9:12]
+    for r in range(3):            # H = B' - A' P, in X's lower left block
+        a0, a1, a2 = X[r, 0], X[r, 1], X[r, 2]
+        X[3 + r, 0] = X[r, 3] - (a1 * p[2] - a2 * p[1])
+        X[3 + r, 1] = X[r, 4] - (a2 * p[0] - a0 * p[2])
+        X[3 + r, 2] = X[r, 5] - (a0 * p[1] - a1 * p[0])
     for r in range(3):
-        for col in range(3):
-            X[r, col] = X[3 + r, 3 + col] = T[3 * col + r]
-    for r in range(3):       # -R^T [p]x
-        X[r, 3] = T[6 + r] * T[10] - T[3 + r] * T[11]
-        X[r, 4] = T[r] * T[11] - T[6 + r] * T[9]
-        X[r, 5] = T[3 + r] * T[9] - T[r] * T[10]
-    for r in range(6):       # Ia^A X (X's lower left block is zero)
-        for col in range(6):
-            total = 0.0
-            for k in range(3 if col < 3 else 6):
-                total += inertia[r, k] * X[k, col]
-            product[r, col] = total
-    for r in range(6):       # += X^T Ia^A X (symmetric: the upper triangle, mirrored)
-        for col in range(r, 6):
-            total = 0.0
-            for k in range(3 if r < 3 else 6):
-                total += X[k, r] * product[k, col]
-            parent_inertia[r, col] += total
-            if col > r:
-                parent_inertia[col, r] += total
+        for c in range(3):
+            parent_inertia[r, c] += X[r, c]
+            parent_inertia[r, 3 + c] += X[3 + r, c]
+            parent_inertia[3 + c, r] += X[3 + r, c]
+    for r in range(3):            # C' + P H + (P B')^T
+        for c in range(r, 3):
+            total = X[3 + r, 3 + c] + _cross_matrix_times(p, X, 3, 0, r, c) + _cross_matrix_times(p, X, 0, 3, c, r)
+            parent_inertia[3 + r, 3 + c] += total
+            if c > r:
+                parent_inertia[3 + c, 3 + r] += total
 
 
 @register_jitable
