@@ -1,13 +1,14 @@
-"""Pinocchio's articulated-body algorithm (ABA) and recursive Newton-Euler (RNEA) for a
-fixed-root tree of one-degree-of-freedom joints, compiled (numba), so that a loop of
-integration steps (integrate/compiled_steps.py) never leaves compiled code.
+"""Pinocchio's articulated-body algorithm (ABA) and forward kinematics of frames for a
+fixed-root tree of one-degree-of-freedom joints, compiled (numba): a loop of integration
+steps (sim/compiled_steps.py) never leaves compiled code, and the kinematics of many
+samples (node/frames.py, ``LinkFrames.at_many``) take one call.
 
-The same algorithms as Pinocchio's ``aba`` and ``rnea`` (Featherstone, Rigid Body Dynamics
-Algorithms, tables 5.1 and 7.1), written in each body's joint frame with spatial vectors in
-Pinocchio's order (linear, angular): the same model (joint placements, spatial inertias,
-rotor armature, gravity), results equal to Pinocchio's to rounding (test_compiled_tree:
-1e-12 relative). Friction (:func:`~youbot_dynamics.dynamics.friction.accumulate_friction_torque`)
-enters as in :mod:`~youbot_dynamics.dynamics.rigid_body`.
+The same algorithms as Pinocchio's ``aba`` (Featherstone, Rigid Body Dynamics Algorithms,
+table 7.1) and ``framesForwardKinematics``, written in each body's joint frame with spatial
+vectors in Pinocchio's order (linear, angular), on the same model (joint placements,
+spatial inertias, rotor armature, gravity): accelerations equal to Pinocchio's to rounding
+(test_compiled_tree: 1e-12 relative), the frames' poses summed in Eigen's order (equal to
+the bit on the youBot's joints).
 
 :func:`tree_of` reads a Pinocchio model into two arrays: ``ints`` (n, 3) int64 (parent body
 index, -1 for the root; joint kind, 0 revolute, 1 prismatic; the coordinate axis (0, 1, 2)
@@ -205,43 +206,6 @@ def _along_axis(kind: int, reals: np.ndarray, i: int, f: np.ndarray) -> float:
 
 
 @register_jitable
-def rnea(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, work: np.ndarray,
-         tau: np.ndarray) -> None:
-    """tau = RNEA(q, v, a) (N m, N), armature included; ``work`` (n, WORK_ROWS, 6) scratch
-    (rows as :func:`aba` uses them: 0 velocity, 1 acceleration, 2 force, 3 a product)."""
-    n = ints.shape[0]
-    joint, gravity = work[0, 26], work[0, 28]
-    for r in range(3):
-        gravity[r], gravity[3 + r] = -reals[n, r], 0.0
-    for i in range(n):
-        parent, kind = ints[i, 0], ints[i, 1]
-        T = work[i, 24:26].reshape(12)
-        _joint_transform(reals, ints, i, q[i], T)
-        vi, ai, fi, h = work[i, 0], work[i, 1], work[i, 2], work[i, 3]
-        if parent >= 0:
-            _motion_to_child(T, work[parent, 0], vi)
-            _motion_to_child(T, work[parent, 1], ai)
-        else:
-            vi[:] = 0.0
-            _motion_to_child(T, gravity, ai)
-        _joint_velocity(kind, reals, i, v[i], joint)
-        for r in range(6):
-            vi[r] += joint[r]
-        _motion_cross(vi, joint, h)
-        _joint_velocity(kind, reals, i, a[i], joint)
-        for r in range(6):
-            ai[r] += joint[r] + h[r]
-        _inertia_times(reals, i, ai, fi)
-        _inertia_times(reals, i, vi, h)
-        _add_force_cross(vi, h, fi)
-    for i in range(n - 1, -1, -1):
-        parent, kind = ints[i, 0], ints[i, 1]
-        tau[i] = _along_axis(kind, reals, i, work[i, 2]) + reals[i, _ARMATURE] * a[i]
-        if parent >= 0:
-            _add_force_to_parent(work[i, 24:26].reshape(12), work[i, 2], work[parent, 2])
-
-
-@register_jitable
 def _aba_velocities(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndarray, work: np.ndarray) -> None:
     """The first pass of :func:`aba`: each body's placement, velocity, bias acceleration,
     bias force and (to start from) its own inertia."""
@@ -381,23 +345,7 @@ def aba(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndarray, tau: 
 
 _INTS = types.Array(types.int64, 2, "C", readonly=True)
 _REALS = types.Array(types.float64, 2, "C", readonly=True)
-_READ = types.Array(types.float64, 1, "A", readonly=True)
 _WORK = types.Array(types.float64, 3, "C")
-_OUT = types.Array(types.float64, 1, "A")
-
-
-@njit(types.void(_INTS, _REALS, _READ, _READ, _READ, _WORK, _OUT), cache=True)
-def compiled_aba(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
-                 work: np.ndarray, a: np.ndarray) -> None:
-    """:func:`aba` as a compiled call."""
-    aba(ints, reals, q, v, tau, work, a)
-
-
-@njit(types.void(_INTS, _REALS, _READ, _READ, _READ, _WORK, _OUT), cache=True)
-def compiled_rnea(ints: np.ndarray, reals: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray,
-                  work: np.ndarray, tau: np.ndarray) -> None:
-    """:func:`rnea` as a compiled call."""
-    rnea(ints, reals, q, v, a, work, tau)
 
 
 def frame_placements_of(model: pin.Model, frames: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
