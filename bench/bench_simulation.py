@@ -71,9 +71,10 @@ def rhs_table(calls: int, repeat: int) -> None:
               f"| {mine:.1f} | {theirs:.1f} | {mine / theirs:.1f}x |")
 
 
-def mujoco_urdf(scene: Scene) -> str:
+def mujoco_urdf(scene: Scene, fuse: bool = False) -> str:
     """The scene's URDF as MuJoCo should load it: locked joints fixed (all locked at 0 in
-    arm_swing), no <dynamics>, no visuals, a <mujoco> compiler block keeping every body."""
+    arm_swing), no <dynamics>, no visuals, a <mujoco> compiler block keeping every body (or,
+    ``fuse``, merging the bodies fixed to one another: the minimal model, same dynamics)."""
     root = etree.parse(scene.urdf_path).getroot()
     for joint in root.findall("joint"):
         if joint.get("type") != "fixed" and joint.get("name") not in scene.moving:
@@ -85,18 +86,18 @@ def mujoco_urdf(scene: Scene) -> str:
         for element in link.findall("visual"):
             link.remove(element)
     extension = etree.SubElement(root, "mujoco")
-    etree.SubElement(extension, "compiler", fusestatic="false", discardvisual="true", balanceinertia="false")
+    etree.SubElement(extension, "compiler", fusestatic=str(fuse).lower(), discardvisual="true", balanceinertia="false")
     return etree.tostring(root, encoding="unicode")
 
 
 class MujocoArm:
     """arm_swing in MuJoCo: q, v mapped by joint name to our order."""
 
-    def __init__(self, scene: Scene) -> None:
+    def __init__(self, scene: Scene, fuse: bool = False) -> None:
         import mujoco
 
         self.mj = mujoco
-        self.model = mujoco.MjModel.from_xml_string(mujoco_urdf(scene))
+        self.model = mujoco.MjModel.from_xml_string(mujoco_urdf(scene, fuse))
         self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_LIMIT
         self.model.opt.gravity[:] = scene.gravity
         self.data = mujoco.MjData(self.model)

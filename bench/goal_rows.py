@@ -14,7 +14,16 @@
   it (the samples of each 10 ms tick as one batch), with /computed_torques subscribed alone
   and with every output built, against ``inverse_dynamics_batch`` per sample on the same
   INVERSE_SAMPLES samples of arm_ptp's robot (a smooth motion at 500 Hz);
-- contact against MuJoCo at equal accuracy (bench/bench_contact_mujoco.py, --quick sweeps).
+- contact against MuJoCo at equal accuracy (bench/bench_contact_mujoco.py, --quick sweeps);
+- the free arm (arm_swing) against MuJoCo's RK4 on the minimal model of the same dynamics
+  (bench_simulation.MujocoArm with fuse: the bodies fixed to one another merged, 6 bodies
+  instead of 17): the same method and step (rk4, ARM_DT), and each side at its cheapest
+  setting that reaches ARM_TARGET rad at the end (against our reference): MuJoCo's RK4 and
+  our rk4 at the largest step halving from 2 ms, our dop853 at the loosest rtol by decades.
+
+Inverse mode and the free arm are timed as CPU time of this thread (time.thread_time), best
+of alternating rounds, so ours and the peer see the same machine load; ``python
+bench/goal_rows.py`` prints those rows with the load average.
 
 Each row: figure, ours, peer (None: no peer), unit, ratio, goal, met (None: not measured).
 """
@@ -33,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a sourc
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_base import session_wall  # noqa: E402
-from bench_simulation import rhs_pair  # noqa: E402
+from bench_simulation import MujocoArm, rhs_pair  # noqa: E402
 from bench_contact_mujoco import TARGETS, UNITS, comparisons, equal_accuracy  # noqa: E402
 from timing import best_per_call  # noqa: E402
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch  # noqa: E402
@@ -45,6 +54,20 @@ from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 GRIP_RUN, GRIP_STEPS = 6.0, 2000  # s simulated, then steps of the scene's 1 ms
 SESSION_RUN, SESSION_RATE = 3.0, 500.0  # s simulated, Hz
 INVERSE_SAMPLES, INVERSE_RATE = 1000, 500.0  # samples, Hz
+ARM_DT, ARM_TARGET = 2.5e-4, 1e-6  # s, rad
+
+
+def best_cpu(calls: list, repeat: int) -> list[float]:
+    """Best CPU time (s, time.thread_time) of each call, ``repeat`` alternating rounds after
+    one that warms up."""
+    best = [math.inf] * len(calls)
+    for round_ in range(repeat + 1):
+        for k, call in enumerate(calls):
+            start = time.thread_time()
+            call()
+            if round_:
+                best[k] = min(best[k], time.thread_time() - start)
+    return best
 
 
 def row(figure: str, ours: float | None, peer: float | None, unit: str, goal: str, met: bool | None,
@@ -99,9 +122,10 @@ def rhs_rows(calls: int, repeat: int) -> list[dict]:
 
 
 def inverse_rows(repeat: int) -> list[dict]:
-    """Inverse mode against the batch function, per sample (arm_ptp's robot and friction):
-    the node's path (the samples of each INVERSE_PERIOD tick as one batch, 5 at 500 Hz) with
-    /computed_torques subscribed alone, and with every output built (the library default)."""
+    """Inverse mode per sample (arm_ptp's robot and friction) against the batch function and
+    against a bare pin.rnea per sample: the node's path (the samples of each INVERSE_PERIOD
+    tick as one batch, 5 at 500 Hz) with /computed_torques subscribed alone, and with every
+    output built (the library default)."""
     from youbot_dynamics.ros.dynamics_node import INVERSE_PERIOD
     scene = load_scene("arm_ptp")
     robot, friction = scene.robot, scene.joint_friction(scene.robot)
@@ -116,31 +140,72 @@ def inverse_rows(repeat: int) -> list[dict]:
                                                                                            INVERSE_SAMPLES))]
              for start in range(0, INVERSE_SAMPLES, per_tick)]
     pool = pin.ModelPool(robot.model, 1)
+    data = robot.model.createData()
 
-    def session_time(subscribed: set[str] | None) -> float:
+    def session(subscribed: set[str] | None) -> None:
         session = InverseSession(scene)
         session.consumed_by(subscribed)
-        start = time.perf_counter()
         for batch in ticks:
             session.joint_states(batch)
-        elapsed = time.perf_counter() - start
         assert session.samples == INVERSE_SAMPLES - 2, f"{session.samples} torques of {INVERSE_SAMPLES} samples"
-        return elapsed
 
-    best_torques = best_all = best_batch = math.inf
-    for _ in range(repeat + 1):  # alternating; the first round warms up
-        best_torques = min(best_torques, session_time({"/computed_torques"}))
-        best_all = min(best_all, session_time(None))
-        start = time.perf_counter()
-        inverse_dynamics_batch(robot, q, v, a, friction, pool=pool)
-        best_batch = min(best_batch, time.perf_counter() - start)
-    peer = best_batch / INVERSE_SAMPLES * 1e6
-    torques, every = (best / INVERSE_SAMPLES * 1e6 for best in (best_torques, best_all))
-    where = f"arm_ptp, {INVERSE_SAMPLES} samples at {INVERSE_RATE:g} Hz, {per_tick} per tick"
+    def rnea() -> None:
+        for k in range(INVERSE_SAMPLES):
+            pin.rnea(robot.model, data, q[k], v[k], a[k])
+
+    best = best_cpu([lambda: session({"/computed_torques"}), lambda: session(None),
+                     lambda: inverse_dynamics_batch(robot, q, v, a, friction, pool=pool), rnea], repeat)
+    torques, every, batch, bare = (b / INVERSE_SAMPLES * 1e6 for b in best)
+    where = f"arm_ptp, {INVERSE_SAMPLES} samples at {INVERSE_RATE:g} Hz, {per_tick} per tick, CPU time"
     return [row(f"inverse mode, /computed_torques subscribed, vs inverse_dynamics_batch, per sample ({where})",
-                torques, peer, "us", "ratio <= 3", torques / peer <= 3.0),
-            row(f"inverse mode, every output built, vs inverse_dynamics_batch, per sample ({where})",
-                every, peer, "us", "-", None)]
+                torques, batch, "us", "ratio <= 3", torques / batch <= 3.0),
+            row(f"inverse mode, /computed_torques subscribed, vs pin.rnea, per sample ({where})",
+                torques, bare, "us", "-", None),
+            row(f"inverse mode, every output built, vs pin.rnea, per sample ({where})",
+                every, bare, "us", "ratio <= 3", every / bare <= 3.0)]
+
+
+def arm_rows(repeat: int) -> list[dict]:
+    """The free arm against MuJoCo's RK4 on the minimal model (see the module docstring):
+    rk4 at ARM_DT both sides, and each side at its largest step that reaches ARM_TARGET."""
+    import mujoco
+    from youbot_dynamics.accuracy.work_precision import reference_solution
+    from youbot_dynamics.scene.schema import IntegratorSpec
+
+    scene = load_scene("arm_swing")
+    arm = MujocoArm(scene, fuse=True)
+    reference = reference_solution(scene).q
+
+    def ours(dt: float, method: str = "rk4", rtol: float = 1e-6):
+        spec = IntegratorSpec(method=method, dt=dt) if method == "rk4" else \
+            IntegratorSpec(method=method, rtol=rtol, atol=rtol * 1e-2)
+        simulator = Simulator(scene, spec)
+        return lambda: simulator.run().x[-1, :5]
+
+    def theirs(dt: float):
+        return lambda: arm.run("mjINT_RK4", dt, scene.duration)[0]
+
+    def largest_step(run) -> float:
+        dt = 2e-3
+        while np.abs(run(dt)() - reference).max() > ARM_TARGET:
+            dt /= 2
+        return dt
+
+    ours_dt, mujoco_dt = largest_step(ours), largest_step(theirs)
+    rtol = 1e-6     # dop853: the loosest tolerance, by decades, that reaches the target
+    while np.abs(ours(0.0, "dop853", rtol)() - reference).max() > ARM_TARGET:
+        rtol /= 10
+    same = best_cpu([ours(ARM_DT), theirs(ARM_DT)], repeat)
+    accurate = best_cpu([ours(ours_dt), ours(0.0, "dop853", rtol), theirs(mujoco_dt)], repeat)
+    best = int(np.argmin(accurate[:2]))
+    setting = f"rk4 dt={ours_dt * 1e3:g} ms" if best == 0 else f"dop853 rtol={rtol:g}"
+    accurate = [accurate[best], accurate[2]]
+    where = f"arm_swing {scene.duration:g} s, MuJoCo {mujoco.__version__} minimal model ({arm.model.nbody} bodies)"
+    return [row(f"free arm, rk4 dt={ARM_DT * 1e3:g} ms both, vs MuJoCo RK4 ({where}), CPU time", same[0] * 1e3,
+                same[1] * 1e3, "ms", "ratio <= 1.5", same[0] / same[1] <= 1.5),
+            row(f"free arm to {ARM_TARGET:g} rad: ours {setting} (cheaper of rk4, dop853) vs MuJoCo RK4 dt="
+                f"{mujoco_dt * 1e3:g} ms ({where}), CPU time", accurate[0] * 1e3, accurate[1] * 1e3, "ms",
+                "ratio <= 0.5", accurate[0] / accurate[1] <= 0.5)]
 
 
 def mujoco_rows() -> list[dict]:
@@ -156,3 +221,11 @@ def mujoco_rows() -> list[dict]:
         rows.append(row(f"{figure} vs MuJoCo {version}", result["ours_s"], result["mujoco_s"], "s", "ratio <= 3",
                         met, result["ratio"]))
     return rows
+
+
+if __name__ == "__main__":
+    import os
+
+    print(f"load average {', '.join(f'{x:.1f}' for x in os.getloadavg())}")
+    for result in inverse_rows(5) + arm_rows(5):
+        print(result)

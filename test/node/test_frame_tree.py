@@ -145,3 +145,17 @@ def test_mobile_picks_robot_description_has_one_root_for_robot_state_publisher()
     links = {link.get("name") for link in root.iter("link")}
     children = {joint.find("child").get("link") for joint in root.iter("joint")}
     assert links - children == {"base_footprint"}
+
+
+@pytest.mark.parametrize("scene_name", ["arm_ptp", "mobile_pick"])
+def test_frames_of_many_samples_equal_each_samples_frames(scene_name: str) -> None:
+    """LinkFrames.at_many (one compiled pass for them all) gives each sample's frames to the
+    bit."""
+    from youbot_dynamics.node.frames import LinkFrames
+    robot = load_scene(scene_name).robot
+    links = LinkFrames(robot)
+    rng = np.random.default_rng(4)
+    q = rng.uniform(-1.0, 1.0, (6, robot.nq))
+    for many, one in zip(links.at_many(q), (links.at(row) for row in q)):
+        assert many.edges == one.edges and many.ee_index == one.ee_index and many.ee_count == one.ee_count
+        assert np.array_equal(many.link_poses, one.link_poses) and np.array_equal(many.ee, one.ee)

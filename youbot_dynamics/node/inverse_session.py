@@ -339,7 +339,7 @@ class InverseSession(Session):
             estimates = self.estimator.push_rows(stamps[start:end], q[start:end], v[start:end], taken[start:end])
         for error in estimates.errors:
             self.counters.reject(error)
-        torque_at = {start + int(row): k for k, row in enumerate(estimates.ends.tolist())}
+        torque_at = dict(zip((estimates.ends + start).tolist(), range(len(estimates.ends))))
         for row in range(start, end):
             if not taken[row]:
                 continue
@@ -349,8 +349,8 @@ class InverseSession(Session):
             if k is not None and k == bad:
                 outputs += self._rejected_torque(estimates, tau[k], failure, odom)
             elif k is not None:
-                outputs += odom + self._logged(estimates.stamps[k], estimates.q[k], estimates.v[k], tau[k], log_ns,
-                                               *built[k])
+                outputs += odom
+                outputs += self._logged(estimates, tau, k, log_ns, *built[k])
                 self._quiet_since_ns = max(self._quiet_since_ns or 0, stamps[row])
             else:
                 outputs += odom
@@ -420,7 +420,7 @@ class InverseSession(Session):
         each sample's kinematics (None when nothing takes it) and base rows. Raises
         MessageFieldError."""
         wanted, count = self.wanted, len(stamps)
-        samples = [self.frames.links.at(row) for row in q[:count]] if self.kinematics_wanted else None
+        samples = self.frames.links.at_many(q[:count]) if self.kinematics_wanted else None
         columns: list[tuple[str, list[object]]] = []
         if "/computed_torques" in wanted:
             columns.append(("/computed_torques", self._torques.many(
@@ -436,14 +436,15 @@ class InverseSession(Session):
         """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
         return messages.joint_state(stamp_ns, self.robot.joint_names, *np.split(values, 3))
 
-    def _logged(self, stamp: int, q: np.ndarray, v: np.ndarray, tau: np.ndarray, log_ns: int, outputs: Outputs,
+    def _logged(self, estimates: Estimates, torques: np.ndarray, k: int, log_ns: int, outputs: Outputs,
                 sample: SampleFrames | None, base: np.ndarray | None = None) -> Outputs:
-        """``outputs``, the messages of the torque ``tau`` at a sample (stamp int ns, q, v),
+        """``outputs``, the messages of torque k of ``estimates`` (``torques`` their rows),
         logged at ``log_ns`` (the Rerun recording takes the sample at its stamp, its energy
         (J), end effector in the root frame and a moving base's ``base`` rows)."""
-        stamp = int(stamp)
+        stamp = int(estimates.stamps[k])
         self.recorder.write(outputs, log_ns)
         if self.recorder.samples:
+            q, v, tau = estimates.q[k], estimates.v[k], torques[k]
             data = self.dynamics.data
             energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)
             ee = sample.ee[sample.ee_index] if base is None else composed_rows(base[0], sample.ee[[sample.ee_index]])[0]
