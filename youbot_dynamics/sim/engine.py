@@ -28,6 +28,7 @@ commanded effort) a stored energy that grows by more than ``integrator.energy_to
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -62,7 +63,9 @@ class Snapshot:
     """The simulation at one instant: t (s), q (rad, m), v (rad/s, m/s), z (LuGre bristle
     deflections), tau (applied joint torque, N m or N), energy (kinetic + potential, J) and
     ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m;
-    the first robot's for composed robots, ``Robot.end_effectors``);
+    the first robot's for composed robots, ``Robot.end_effectors``; computed when first
+    read, from the state ``x`` kept in ``kinematics``, with a Data of its own: the node's
+    session never reads it, so its samples skip that kinematics pass);
     bodies: the world pose (4x4, m) of each free body by name, in the scene's order;
     base: a moving base's (x, y, yaw, vx, vy, wz) (world pose in m and rad, body-frame twist
     in m/s and rad/s), None for a fixed base; sensors: what the scene's sensors read
@@ -75,10 +78,15 @@ class Snapshot:
     z: np.ndarray
     tau: np.ndarray
     energy: float
-    ee_pose: np.ndarray
+    kinematics: tuple[SimModel, np.ndarray] = dataclasses.field(repr=False, compare=False)
     bodies: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     base: np.ndarray | None = None
     sensors: Readings | None = None
+
+    @functools.cached_property
+    def ee_pose(self) -> np.ndarray:
+        model, x = self.kinematics
+        return model.ee_pose(model.plant.model.createData(), x)
 
 
 @dataclass
@@ -575,9 +583,8 @@ def _series(model: SimModel, state: SimState, solution: Solution, wanted: set[st
 
 
 def snapshot(model: SimModel, state: SimState, sensors: bool = False, step: tuple | None = None) -> Snapshot:
-    """The state's instant as a Snapshot (one kinematics pass gives the end effector and the
-    bodies). A kinematic base's wheels report the torque that imposes their motion
-    (:meth:`SimModel.applied_torque`). ``sensors``: with the sensor readings, from the
+    """The state's instant as a Snapshot (the end effector's pose on demand). A kinematic
+    base's wheels report the torque that imposes their motion (:meth:`SimModel.applied_torque`). ``sensors``: with the sensor readings, from the
     constraint ``step`` that ended here ((report, plant accelerations, h)) or, without one,
     from the accelerations and compliant contact forces at the state."""
     x, data = state.x, state.data
@@ -591,7 +598,7 @@ def snapshot(model: SimModel, state: SimState, sensors: bool = False, step: tupl
                 model.compliant_point_forces(data, x)
             readings = model.sensors.read(data, model.configuration(x), model.velocity(x), a, forces)
     return Snapshot(state.t, model.joint_names, x[model.block("q")].copy(), x[model.block("v")].copy(),
-                    x[model.block("z")].copy(), tau, model.energy(data, x), model.ee_pose(data, x),
+                    x[model.block("z")].copy(), tau, model.energy(data, x), (model, x.copy()),
                     model.body_poses(data, x),
                     None if model.base is None else np.concatenate([x[model.block("base")], x[model.block("base_v")]]),
                     readings)
