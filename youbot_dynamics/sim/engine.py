@@ -28,7 +28,6 @@ commanded effort) a stored energy that grows by more than ``integrator.energy_to
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 import time
 from dataclasses import dataclass
@@ -63,9 +62,7 @@ class Snapshot:
     """The simulation at one instant: t (s), q (rad, m), v (rad/s, m/s), z (LuGre bristle
     deflections), tau (applied joint torque, N m or N), energy (kinetic + potential, J) and
     ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m;
-    the first robot's for composed robots, ``Robot.end_effectors``; computed when first
-    read, from the state ``x`` kept in ``kinematics``, with a Data of its own: the node's
-    session never reads it, so its samples skip that kinematics pass);
+    the first robot's for composed robots, ``Robot.end_effectors``; computed when read, from ``kinematics`` = (model, x));
     bodies: the world pose (4x4, m) of each free body by name, in the scene's order;
     base: a moving base's (x, y, yaw, vx, vy, wz) (world pose in m and rad, body-frame twist
     in m/s and rad/s), None for a fixed base; sensors: what the scene's sensors read
@@ -83,10 +80,9 @@ class Snapshot:
     base: np.ndarray | None = None
     sensors: Readings | None = None
 
-    @functools.cached_property
+    @property
     def ee_pose(self) -> np.ndarray:
-        model, x = self.kinematics
-        return model.ee_pose(model.plant.model.createData(), x)
+        return self.kinematics[0].ee_pose(self.kinematics[0].plant.model.createData(), self.kinematics[1])
 
 
 @dataclass
@@ -583,10 +579,10 @@ def _series(model: SimModel, state: SimState, solution: Solution, wanted: set[st
 
 
 def snapshot(model: SimModel, state: SimState, sensors: bool = False, step: tuple | None = None) -> Snapshot:
-    """The state's instant as a Snapshot (the end effector's pose on demand). A kinematic
-    base's wheels report the torque that imposes their motion (:meth:`SimModel.applied_torque`). ``sensors``: with the sensor readings, from the
-    constraint ``step`` that ended here ((report, plant accelerations, h)) or, without one,
-    from the accelerations and compliant contact forces at the state."""
+    """The state's instant as a Snapshot (its end effector's pose on demand). A kinematic base's
+    wheels report the torque that imposes their motion (:meth:`SimModel.applied_torque`). ``sensors``:
+    with the readings, from the constraint ``step`` that ended here ((report, plant accelerations,
+    h)) or, without one, from the accelerations and compliant contact forces at the state."""
     x, data = state.x, state.data
     tau, readings = np.array(state.tau), None
     if sensors or (model.base is not None and not model.base.dynamic):
