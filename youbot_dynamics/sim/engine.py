@@ -583,7 +583,7 @@ def snapshot(model: SimModel, state: SimState, sensors: bool = False, step: tupl
     wheels report the torque that imposes their motion (:meth:`SimModel.applied_torque`). ``sensors``:
     with the readings, from the constraint ``step`` that ended here ((report, plant accelerations,
     h)) or, without one, from the accelerations and compliant contact forces at the state."""
-    x, data = state.x, state.data
+    x, data, q = state.x, state.data, model.configuration(state.x)     # q: once for the readings, energy, bodies
     tau, readings = np.array(state.tau), None
     if sensors or (model.base is not None and not model.base.dynamic):
         twist = state.reference.base_twist
@@ -592,9 +592,9 @@ def snapshot(model: SimModel, state: SimState, sensors: bool = False, step: tupl
         if sensors:
             forces = contact_forces(model.contact, step[0], step[2]) if step is not None else \
                 model.compliant_point_forces(data, x)
-            readings = model.sensors.read(data, model.configuration(x), model.velocity(x), a, forces)
+            readings = model.sensors.read(data, q, model.velocity(x), a, forces)
     return Snapshot(state.t, model.joint_names, x[model.block("q")].copy(), x[model.block("v")].copy(),
-                    x[model.block("z")].copy(), tau, model.energy(data, x), (model, x.copy()),
-                    model.body_poses(data, x),
+                    x[model.block("z")].copy(), tau, model.energy(data, x, q), (model, x.copy()),
+                    model.body_poses(data, x, q),
                     None if model.base is None else np.concatenate([x[model.block("base")], x[model.block("base_v")]]),
                     readings)
