@@ -11,13 +11,13 @@ the real-time factor with and without publishing and logging.
 
 Goal (issue 4): 500 Hz held within 2 % while at or faster than real time.
 
-Issue 14 (``--issue14``): the main job (``youbot-dynamics main-job``: gripping, 500 Hz,
+Issue 14 (``--issue14``): the main job (``youbot-dynamics main-job``: gripping or ``--scene``, 500 Hz,
 MCAP + Rerun) and its real-time factor with logs against the integrator's alone
 (:func:`main_job`); the session's output cost per sample, logs off and on, of this source
 tree and of another (``--old DIR``, e.g. ``git archive main | tar -x -C DIR``), measured in
 one run (:func:`output_cost`); inverse mode's cost per sample in batches against
 ``inverse_dynamics_batch``'s (:func:`inverse_cost`).
-Run: python bench/bench_node.py [--duration S] [--issue14 [--old DIR]]
+Run: python bench/bench_node.py [--duration S] [--issue14 [--old DIR] [--scene NAME]]
 """
 from __future__ import annotations
 
@@ -105,15 +105,17 @@ def main_job(duration: float = 4.0, source: Path = REPO) -> tuple[float, float]:
     return main_job_figures(duration, source)[:2]
 
 
-def main_job_figures(duration: float = 4.0, source: Path = REPO) -> tuple[float, float, float]:
-    """:func:`main_job` and, third, simulated s per CPU s of the whole process (start-up
-    included): what a machine to itself would give as wall time."""
+def main_job_figures(duration: float = 4.0, source: Path = REPO, scene: str = "gripping"
+                     ) -> tuple[float, float, float]:
+    """:func:`main_job` (of ``scene``) and, third, simulated s per CPU s of the whole process
+    (start-up included): what a machine to itself would give as wall time."""
     import resource
 
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     with tempfile.TemporaryDirectory() as folder:
         process = subprocess.run(
-            [sys.executable, "-m", "youbot_dynamics", "main-job", "--duration", str(duration), "--out", folder],
+            [sys.executable, "-m", "youbot_dynamics", "main-job", "--scene", scene, "--duration", str(duration),
+             "--out", folder],
             cwd=source, env={**os.environ, "PYTHONPATH": str(source), "ROS_DOMAIN_ID": str(DOMAIN)},
             capture_output=True, text=True, timeout=1200)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -134,7 +136,7 @@ costs = []
 for logs in (False, True):
     with tempfile.TemporaryDirectory() as folder:
         paths = {"mcap_path": Path(folder) / "a.mcap", "rrd_path": Path(folder) / "a.rrd"} if logs else {}
-        session = SimulationSession(load_scene("gripping"), 500.0, samples_per_solve=10, **paths)
+        session = SimulationSession(load_scene(sys.argv[2]), 500.0, samples_per_solve=10, **paths)
         spent = [0.0]
         for name in ("_outputs", "_block"):          # _block: the samples of a solve built at once
             method = getattr(session, name, None)
@@ -157,13 +159,13 @@ print(json.dumps(costs))
 '''
 
 
-def output_cost(source: Path = REPO, samples: int = 1000) -> tuple[float, float]:
+def output_cost(source: Path = REPO, samples: int = 1000, scene: str = "gripping") -> tuple[float, float]:
     """(logs off, MCAP + Rerun) us per sample the session spends building (and logging)
-    the messages of gripping at 500 Hz, everything consumed, over ``samples`` steps (the
+    the messages of ``scene`` at 500 Hz, everything consumed, over ``samples`` steps (the
     integrator not counted), with the package from ``source``, in its own process. CPU time
     of the process (``time.process_time``): on a shared machine, wall time counts the
     others' work."""
-    process = subprocess.run([sys.executable, "-c", OUTPUT_COST, str(samples)], cwd=source, capture_output=True,
+    process = subprocess.run([sys.executable, "-c", OUTPUT_COST, str(samples), scene], cwd=source, capture_output=True,
                              text=True, env={**os.environ, "PYTHONPATH": str(source)}, timeout=600)
     if process.returncode != 0:
         raise RuntimeError(process.stderr)
@@ -208,13 +210,14 @@ def inverse_cost(samples: int = 2000, batch: int = 20) -> tuple[float, float]:
     return mode * 1e6, whole * 1e6
 
 
-def issue14(duration: float, old: Path | None) -> None:
-    """Print the issue-14 figures: output cost (this tree and ``old``), main job, inverse mode."""
+def issue14(duration: float, old: Path | None, scene: str = "gripping") -> None:
+    """Print the issue-14 figures of ``scene``: output cost (this tree and ``old``), main
+    job, inverse mode."""
     trees = [("this tree", REPO)] + ([("old", old)] if old else [])
-    costs = [(label, *output_cost(source)) for label, source in trees]
+    costs = [(label, *output_cost(source, scene=scene)) for label, source in trees]
     print(table(("source", "outputs us/sample, no logs", "outputs us/sample, MCAP + Rerun"),
                 [(label, f"{off:.0f}", f"{on:.0f}") for label, off, on in costs]))
-    rows = [(label, *(f"{x:.2f}" for x in main_job_figures(duration, source))) for label, source in trees]
+    rows = [(label, *(f"{x:.2f}" for x in main_job_figures(duration, source, scene))) for label, source in trees]
     print(table(("source", f"main job real-time factor with logs ({duration:g} s, wall)", "integrator alone (wall)",
                  "simulated s per CPU s (start-up included)"), rows))
     mode, whole = inverse_cost()
@@ -227,9 +230,10 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=4.0, help="simulated seconds per run (default 4)")
     parser.add_argument("--issue14", action="store_true", help="only the issue-14 figures (see the docstring)")
     parser.add_argument("--old", type=Path, default=None, help="another source tree to compare (--issue14)")
+    parser.add_argument("--scene", default="gripping", help="the scene of the --issue14 figures (default gripping)")
     args = parser.parse_args()
     if args.issue14:
-        issue14(args.duration, args.old)
+        issue14(args.duration, args.old, args.scene)
         return
     with tempfile.TemporaryDirectory() as folder:
         logs = Path(folder)

@@ -159,3 +159,21 @@ def test_frames_of_many_samples_equal_each_samples_frames(scene_name: str) -> No
     for many, one in zip(links.at_many(q), (links.at(row) for row in q)):
         assert many.edges == one.edges and many.ee_index == one.ee_index and many.ee_count == one.ee_count
         assert np.array_equal(many.link_poses, one.link_poses) and np.array_equal(many.ee, one.ee)
+
+
+def test_pose_matrices_keep_matrix_from_quaternion_roundings() -> None:
+    """The compiled pose_matrices gives, bit for bit, the rotation of the numpy formula
+    (lie.matrix_from_quaternion, unnormalised quaternions included) and the translation, in
+    any batch shape, and matches scipy's rotation to round-off."""
+    from youbot_dynamics.model.lie import matrix_from_quaternion
+    from youbot_dynamics.node.frames import pose_matrices
+
+    rows = np.random.default_rng(7).normal(size=(3, 5, 7)) * [1, 1, 1, 2, 2, 2, 2]
+    matrices = pose_matrices(rows)
+    assert matrices.shape == (3, 5, 4, 4)
+    assert np.array_equal(matrices[..., :3, :3], matrix_from_quaternion(rows[..., 3:]))
+    assert np.array_equal(matrices[..., :3, 3], rows[..., :3])
+    assert np.array_equal(matrices[..., 3, :], np.broadcast_to([0.0, 0.0, 0.0, 1.0], (3, 5, 4)))
+    assert pose_matrices(rows[0, 0]).shape == (4, 4)
+    reference = Rotation.from_quat(rows[..., 3:].reshape(-1, 4)).as_matrix()     # measured 4e-16, bound 1e-14
+    assert np.abs(matrices[..., :3, :3].reshape(-1, 3, 3) - reference).max() < 1e-14

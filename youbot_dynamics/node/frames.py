@@ -43,7 +43,6 @@ from numba import njit, types
 
 from youbot_dynamics.dynamics.compiled_tree import frame_placements_of, frame_poses, tree_of, work_for
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
 
 ODOM_FRAME = "odom"
@@ -203,14 +202,30 @@ def pose_rows(poses: Sequence[np.ndarray]) -> np.ndarray:
     return rows
 
 
+@njit(types.void(types.Array(types.float64, 2, "C", readonly=True), types.Array(types.float64, 3, "C")),
+      cache=True)
+def _pose_matrices(rows: np.ndarray, out: np.ndarray) -> None:
+    """out[e] = the pose (4x4) of rows[e] (translation, quaternion (x, y, z, w), normalised
+    here), with the roundings of :func:`~youbot_dynamics.model.lie.matrix_from_quaternion`."""
+    for e in range(rows.shape[0]):
+        x, y, z, w = rows[e, 3], rows[e, 4], rows[e, 5], rows[e, 6]
+        norm = math.sqrt(x * x + y * y + z * z + w * w)
+        x, y, z, w = x / norm, y / norm, z / norm, w / norm
+        m = out[e]
+        m[0, 0], m[0, 1], m[0, 2] = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)
+        m[1, 0], m[1, 1], m[1, 2] = 2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)
+        m[2, 0], m[2, 1], m[2, 2] = 2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)
+        m[0, 3], m[1, 3], m[2, 3] = rows[e, 0], rows[e, 1], rows[e, 2]
+        m[3, 0], m[3, 1], m[3, 2], m[3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
 def pose_matrices(rows: np.ndarray) -> np.ndarray:
     """(..., 4, 4) poses (m) of rows (..., 7) of translation (m) and quaternion (x, y, z, w)."""
     rows = np.asarray(rows, dtype=float)
-    matrices = np.zeros((*rows.shape[:-1], 4, 4))
-    matrices[..., :3, :3] = matrix_from_quaternion(rows[..., 3:])
-    matrices[..., :3, 3] = rows[..., :3]
-    matrices[..., 3, 3] = 1.0
-    return matrices
+    flat = np.ascontiguousarray(rows.reshape(-1, 7))
+    matrices = np.empty((len(flat), 4, 4))
+    _pose_matrices(flat, matrices)
+    return matrices.reshape(*rows.shape[:-1], 4, 4)
 
 
 def composed_rows(first: np.ndarray, rows: np.ndarray) -> np.ndarray:

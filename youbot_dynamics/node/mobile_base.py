@@ -27,7 +27,8 @@ odom -> base_footprint transform and the ground-truth pose out.
 :class:`WheelOdometry` is the odometry alone (/odom and its transform from wheel speeds):
 the simulate mode feeds it the simulated wheel speeds, the inverse mode those of the
 /joint_states it receives, so a recorded run replayed into an inverse-mode node gives the
-recorded /odom again.
+recorded /odom again. Both odometry messages refill their CDR template after the first
+(:class:`~youbot_dynamics.io.cdr_template.Refilled`; the covariances stay the first's).
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase, base_twist
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.node.commands import InputCounters, InputRejected
 from youbot_dynamics.node.frames import ODOM_FRAME, WORLD_FRAME, planar_row
 from youbot_dynamics.sim.engine import Snapshot
@@ -58,9 +60,15 @@ POSE_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
 TWIST_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
 
 
-def _quaternion_of_yaw(yaw: float) -> tuple[float, float, float, float]:
-    """Unit quaternion (x, y, z, w) of a rotation by ``yaw`` (rad) about z."""
-    return tuple(planar_row(0.0, 0.0, yaw)[3:])
+def _not_covariance(path: str) -> bool:
+    return "covariance" not in path
+
+
+def odometry_values(row: np.ndarray, twist: tuple[float, float, float]) -> np.ndarray:
+    """The refilled fields of a planar nav_msgs/Odometry in field order: the pose ``row``
+    (x, y, 0, quaternion x, y, z, w), then the twist (vx, vy, 0, 0, 0, wz) of ``twist``
+    (vx, vy m/s, wz rad/s)."""
+    return np.array([*row, twist[0], twist[1], 0.0, 0.0, 0.0, twist[2]])
 
 
 class WheelOdometry:
@@ -70,6 +78,7 @@ class WheelOdometry:
     def __init__(self, mecanum: MecanumBase, pose0, prefix: str = "", base_link: str = "base_footprint") -> None:
         self.mecanum, self.pose0 = mecanum, np.array(pose0, dtype=float)
         self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + base_link
+        self._odom = Refilled(_not_covariance)
         self.reset()
 
     def reset(self) -> None:
@@ -84,9 +93,11 @@ class WheelOdometry:
         self.pose, self.last = self._advanced(self.pose, self.last, t, speeds)
         x, y, yaw = self.pose
         twist = base_twist(self.mecanum, speeds)
-        odom = messages.odometry(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0), _quaternion_of_yaw(yaw),
-                                 (twist[0], twist[1], 0.0, 0.0, 0.0, twist[2]), POSE_COVARIANCE, TWIST_COVARIANCE)
-        return odom, planar_row(x, y, yaw)
+        row = planar_row(x, y, yaw)
+        odom = self._odom(stamp_ns, odometry_values(row, (twist[0], twist[1], twist[2])), lambda stamp, values:
+                          messages.odometry(stamp, self.odom_frame, self.child_frame, values[:3], values[3:7],
+                                            values[7:], POSE_COVARIANCE, TWIST_COVARIANCE))
+        return odom, row
 
     def _advanced(self, pose: np.ndarray, last: tuple[float, np.ndarray] | None, t: float, speeds: np.ndarray
                   ) -> tuple[np.ndarray, tuple[float, np.ndarray]]:
@@ -116,6 +127,7 @@ class MobileBase:
         self.base, self.counters, self.timeout = base, counters, float(timeout)
         self.odometry = WheelOdometry(base.mecanum, base.pose0, prefix, base_link)
         self.world_frame = prefix + WORLD_FRAME
+        self._truth = Refilled(_not_covariance)
         self.reset()
 
     def reset(self) -> None:
@@ -163,19 +175,25 @@ class MobileBase:
     def outputs(self, stamp_ns: int, t: float, snapshot: Snapshot) -> tuple[list[tuple[str, object]], np.ndarray]:
         """(/odom and /base_pose_ground_truth, the rows (2, 7) of odom -> base_footprint and
         odom -> world) of the sample at simulated time t (s); advances the odometry by the
-        previous sample's wheel speeds. odom -> world is T_odom_base(odometry)
+        previous sample's wheel speeds (call once per sample, in order; :meth:`track_slip`
+        when the sample is published). odom -> world is T_odom_base(odometry)
         T_world_base(true)^-1, a planar pose: yaw e - yaw t, p_e - R(yaw e - yaw t) p_t."""
         odom, row = self.odometry.outputs(stamp_ns, t, snapshot.v[self.base.wheels])
         x, y, yaw = self.odometry.pose
         tx, ty, tyaw, vx, vy, wz = snapshot.base
-        difference = base_twist(self.base.mecanum, snapshot.v[self.base.wheels]) - snapshot.base[3:]
-        self.slip = max(self.slip, float(np.max(np.linalg.norm(self.base.mecanum.hub_velocities(difference), axis=1))))
-        truth = messages.odometry(stamp_ns, self.world_frame, self.odometry.child_frame, (tx, ty, 0.0),
-                                  _quaternion_of_yaw(tyaw), (vx, vy, 0.0, 0.0, 0.0, wz), np.zeros(36), np.zeros(36))
+        truth = self._truth(stamp_ns, odometry_values(planar_row(tx, ty, tyaw), (vx, vy, wz)), lambda stamp, values:
+                            messages.odometry(stamp, self.world_frame, self.odometry.child_frame, values[:3],
+                                              values[3:7], values[7:], np.zeros(36), np.zeros(36)))
         drift = yaw - tyaw
         c, s = math.cos(drift), math.sin(drift)
         rows = np.array([row, planar_row(x - (c * tx - s * ty), y - (s * tx + c * ty), drift)])
         return [("/odom", odom), ("/base_pose_ground_truth", truth)], rows
+
+    def track_slip(self, snapshot: Snapshot) -> None:
+        """Count a published sample's slip in ``base.slip``: the largest hub speed of the
+        difference between the wheel speeds' twist and the true one."""
+        difference = base_twist(self.base.mecanum, snapshot.v[self.base.wheels]) - snapshot.base[3:]
+        self.slip = max(self.slip, float(np.max(np.linalg.norm(self.base.mecanum.hub_velocities(difference), axis=1))))
 
     def report(self) -> tuple[str, dict[str, float]]:
         """(level, /diagnostics values) of the base since the previous report: ``base.slip``

@@ -1,12 +1,17 @@
 """The simulated sensors' messages: /wrist_wrench (geometry_msgs/WrenchStamped in the
 sensor link's frame), /imu (sensor_msgs/Imu in base_link) and per contact pair
 /contacts/<first>/<second> (geometry_msgs/WrenchStamped in the second geometry's frame), from
-the readings each snapshot carries (:mod:`youbot_dynamics.sim.sensors` computes them)."""
+the readings each snapshot carries (:mod:`youbot_dynamics.sim.sensors` computes them). Each
+topic's first message is built by ``io.messages``, the next ones refill its CDR bytes
+(:class:`~youbot_dynamics.io.cdr_template.Refilled`)."""
 from __future__ import annotations
 
 from collections.abc import Collection, Sequence
 
+import numpy as np
+
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.node.interface import pair_topic
 from youbot_dynamics.sim.engine import Snapshot
 from youbot_dynamics.sim.model import SimModel
@@ -34,20 +39,34 @@ class SensorMessages:
         """Whether snapshots must carry their readings."""
         self.wrist_frame = prefix + sensors.wrist.link if sensors.wrist is not None else ""
         self.imu_frame = prefix + "base_link"
+        self._templates: dict[str, Refilled] = {}
 
     def columns(self, stamps: Sequence[int], snapshots: Sequence[Snapshot], wanted: Collection[str]
                 ) -> list[tuple[str, list[object]]]:
         """(topic, its messages at ``stamps`` (ns)) of the wanted sensor topics."""
         columns: list[tuple[str, list[object]]] = []
         if "/wrist_wrench" in wanted:
-            columns.append(("/wrist_wrench", [messages.wrench_stamped(stamp, self.wrist_frame, *s.sensors.wrist)
-                                              for stamp, s in zip(stamps, snapshots)]))
+            columns.append(("/wrist_wrench", self._wrenches("/wrist_wrench", self.wrist_frame, stamps,
+                                                            [s.sensors.wrist for s in snapshots])))
         if "/imu" in wanted:
-            columns.append(("/imu", [messages.imu(stamp, self.imu_frame, s.sensors.imu[2], s.sensors.imu[0],
-                                                  s.sensors.imu[1], IMU_COVARIANCES)
-                                     for stamp, s in zip(stamps, snapshots)]))
+            values = np.array([np.concatenate([s.sensors.imu[2], s.sensors.imu[0], s.sensors.imu[1]])
+                               for s in snapshots])
+            columns.append(("/imu", self._refilled("/imu").many(stamps, values, lambda stamp, row: messages.imu(
+                stamp, self.imu_frame, row[:4], row[4:7], row[7:], IMU_COVARIANCES))))
         for topic, name, frame in self.pairs:
             if topic in wanted:
-                columns.append((topic, [messages.wrench_stamped(stamp, frame, *s.sensors.pairs[name])
-                                        for stamp, s in zip(stamps, snapshots)]))
+                columns.append((topic, self._wrenches(topic, frame, stamps, [s.sensors.pairs[name] for s in snapshots])))
         return columns
+
+    def _refilled(self, topic: str) -> Refilled:
+        """The topic's refilled messages (the covariances stay the first message's)."""
+        if topic not in self._templates:
+            self._templates[topic] = Refilled(lambda path: "covariance" not in path)
+        return self._templates[topic]
+
+    def _wrenches(self, topic: str, frame: str, stamps: Sequence[int],
+                  wrenches: Sequence[tuple[np.ndarray, np.ndarray]]) -> list[object]:
+        """geometry_msgs/WrenchStamped in ``frame`` of (force, torque) pairs at ``stamps``."""
+        values = np.array([np.concatenate(wrench) for wrench in wrenches])
+        return self._refilled(topic).many(stamps, values, lambda stamp, row: messages.wrench_stamped(
+            stamp, frame, row[:3], row[3:]))

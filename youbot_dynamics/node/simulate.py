@@ -129,7 +129,7 @@ class SimulationSession(Session):
         self.commands.clear()
         if self.moving_base is not None:
             self.moving_base.reset()
-        self.k, self.failure, self.wall_time, self._pending, self._prebuilt = 0, None, 0.0, [], []
+        self.k, self.failure, self.wall_time, self._pending, self._prebuilt, self._based = 0, None, 0.0, [], [], []
         self.snapshot = self.simulator.snapshot(self._sensors.wanted)
         self.energy0, self.energy_error = self.snapshot.energy, 0.0
         self._started = False
@@ -177,7 +177,8 @@ class SimulationSession(Session):
             return []
         if not self._started:
             self._started = True
-            return self._outputs(self.snapshot)
+            based = self._base_outputs([self.snapshot], self.k)
+            return self._outputs(self.snapshot, None, based[0] if based else None)
         if not self._pending:
             times = (self.k + 1 + np.arange(self.samples_per_solve)) * self.step_ns / NS_PER_S
             if self.moving_base is not None:
@@ -192,47 +193,56 @@ class SimulationSession(Session):
                 return []
             finally:
                 self.wall_time += time.perf_counter() - start
-            self._prebuilt = self._block(self._pending[::-1])
+            pending = self._pending[::-1]
+            self._based = self._base_outputs(pending, self.k + 1)[::-1]
+            self._prebuilt = self._block(pending, self._based[::-1])
         self.k += 1
         prebuilt = self._prebuilt.pop() if self._prebuilt else None
+        based = self._based.pop() if self._based else None
         return self._outputs(self._pending.pop(), prebuilt if prebuilt is not None and prebuilt[0] == self.wanted
-                             else None)
+                             else None, based)
 
-    def _block(self, snapshots: list[Snapshot]) -> list[tuple]:
-        """The messages of the next samples (``snapshots``, in time order) built at once, in
-        pop order, each with the ``wanted`` they were built for; none with a moving base
-        (its odometry advances sample by sample) or when a message would be invalid (then
-        each is built at its own step, so that the failure falls on its sample)."""
-        if self.moving_base is not None:
+    def _base_outputs(self, snapshots: list[Snapshot], first: int) -> list[tuple[Outputs, np.ndarray]]:
+        """A moving base's outputs (/odom and /base_pose_ground_truth, rows (2, 7)) of samples
+        ``first``, ``first + 1``, ... (``snapshots``, in time order), advancing its odometry
+        once per sample in order ([] for a fixed base)."""
+        if self.moving_base is None:
             return []
+        return [self.moving_base.outputs(self.epoch_ns + k * self.step_ns, k * self.step_ns / NS_PER_S, snapshot)
+                for k, snapshot in enumerate(snapshots, start=first)]
+
+    def _block(self, snapshots: list[Snapshot], based: list[tuple[Outputs, np.ndarray]]) -> list[tuple]:
+        """The messages of the next samples (``snapshots``, in time order; ``based``: a moving
+        base's outputs of each) built at once, in pop order, each with the ``wanted`` they
+        were built for; none when a message would be invalid (then each is built at its own
+        step, so that the failure falls on its sample)."""
         stamps = [self.epoch_ns + (self.k + 1 + j) * self.step_ns for j in range(len(snapshots))]
         try:
-            built = self._sample_messages(snapshots, stamps)
+            built = self._sample_messages(snapshots, stamps, based)
         except messages.MessageFieldError:
             return []
         return [(self.wanted, *sample) for sample in reversed(built)]
 
-    def _sample_messages(self, snapshots: Sequence[Snapshot], stamps: Sequence[int]
+    def _sample_messages(self, snapshots: Sequence[Snapshot], stamps: Sequence[int],
+                         based: Sequence[tuple[Outputs, np.ndarray]]
                          ) -> list[tuple[Outputs, SampleFrames | None, np.ndarray | None, np.ndarray | None]]:
         """The messages of the topics in ``wanted`` of N samples at ``stamps`` (ns), built
         together, with each sample's kinematics (one pass per sample feeds /tf, /ee_pose and
         the Rerun sample; none when nothing takes them) and its free bodies' rows. A moving
-        base's outputs advance its odometry: one sample at a time; its rows (odom ->
-        base_footprint, odom -> world) place /ee_pose(s) and go on /tf. Raises
-        MessageFieldError."""
+        base's outputs (``based``, per sample: see :meth:`_base_outputs`) add /odom and
+        /base_pose_ground_truth; their rows (odom -> base_footprint, odom -> world) place
+        /ee_pose(s) and go on /tf. Raises MessageFieldError."""
         bodies = self.frames.body_poses([snapshot.bodies for snapshot in snapshots]) if self.frames.body_shapes \
             else None
         samples = [self.frames.links.at(snapshot.q) for snapshot in snapshots] \
             if self.frames.has_robot and self.kinematics_wanted else None
-        odometry, base = [], None
-        if self.moving_base is not None:     # always: it advances the odometry
-            odometry, rows = self.moving_base.outputs(stamps[0], self.scene_time, snapshots[0])
-            base = rows[np.newaxis]
+        base = np.array([rows for _, rows in based]) if based else None
         per_sample: list[Outputs] = [[] for _ in snapshots]
         for topic, built in self._motion_messages(stamps, snapshots, samples, bodies, base):
             for outputs, message in zip(per_sample, built):
                 outputs.append((topic, message))
-        per_sample[0] += [(topic, message) for topic, message in odometry if topic in self.wanted]
+        for outputs, (odometry, _) in zip(per_sample, based):
+            outputs += [(topic, message) for topic, message in odometry if topic in self.wanted]
         if "/tf" in self.wanted:
             for outputs, message in zip(per_sample, self.frames.tf(stamps, samples, bodies, base)):
                 outputs.append(("/tf", message))
@@ -261,17 +271,21 @@ class SimulationSession(Session):
         columns += self._sensors.columns(stamps, snapshots, wanted)
         return columns
 
-    def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None = None) -> Outputs:
+    def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None, based: tuple[Outputs, np.ndarray] | None
+                 ) -> Outputs:
         """The sample's messages (``prebuilt``: (wanted, messages, kinematics, body rows, base
-        rows) of :meth:`_block`, or built now), logged (the Rerun recording's end effector in
-        the root frame: a moving base's odometry pose times the kinematics)."""
+        rows) of :meth:`_block`, or built now; ``based``: a moving base's outputs of the
+        sample), logged (the Rerun recording's end effector in the root frame: a moving
+        base's odometry pose times the kinematics)."""
         stamp = self.stamp_ns
         self.snapshot = snapshot
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
+        if self.moving_base is not None:
+            self.moving_base.track_slip(snapshot)
         try:
             outputs, sample, bodies, base = prebuilt[1:] if prebuilt is not None else \
-                self._sample_messages([snapshot], [stamp])[0]
+                self._sample_messages([snapshot], [stamp], [based] if based is not None else [])[0]
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
             self.failure = f"non-finite output at t = {self.t:.6f} s: {error}"

@@ -62,7 +62,7 @@ class Snapshot:
     """The simulation at one instant: t (s), q (rad, m), v (rad/s, m/s), z (LuGre bristle
     deflections), tau (applied joint torque, N m or N), energy (kinetic + potential, J) and
     ee_pose (4x4 homogeneous pose of the end-effector link in the robot's root frame, m;
-    the first robot's for composed robots, ``Robot.end_effectors``);
+    the first robot's for composed robots, ``Robot.end_effectors``; computed when read, from ``kinematics`` = (model, x));
     bodies: the world pose (4x4, m) of each free body by name, in the scene's order;
     base: a moving base's (x, y, yaw, vx, vy, wz) (world pose in m and rad, body-frame twist
     in m/s and rad/s), None for a fixed base; sensors: what the scene's sensors read
@@ -75,10 +75,14 @@ class Snapshot:
     z: np.ndarray
     tau: np.ndarray
     energy: float
-    ee_pose: np.ndarray
+    kinematics: tuple[SimModel, np.ndarray] = dataclasses.field(repr=False, compare=False)
     bodies: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     base: np.ndarray | None = None
     sensors: Readings | None = None
+
+    @property
+    def ee_pose(self) -> np.ndarray:
+        return self.kinematics[0].ee_pose(self.kinematics[0].plant.model.createData(), self.kinematics[1])
 
 
 @dataclass
@@ -578,12 +582,11 @@ def _series(model: SimModel, state: SimState, solution: Solution, wanted: set[st
 
 
 def snapshot(model: SimModel, state: SimState, sensors: bool = False, step: tuple | None = None) -> Snapshot:
-    """The state's instant as a Snapshot (one kinematics pass gives the end effector and the
-    bodies). A kinematic base's wheels report the torque that imposes their motion
-    (:meth:`SimModel.applied_torque`). ``sensors``: with the sensor readings, from the
-    constraint ``step`` that ended here ((report, plant accelerations, h)) or, without one,
-    from the accelerations and compliant contact forces at the state."""
-    x, data = state.x, state.data
+    """The state's instant as a Snapshot (its end effector's pose on demand). A kinematic base's
+    wheels report the torque that imposes their motion (:meth:`SimModel.applied_torque`). ``sensors``:
+    with the readings, from the constraint ``step`` that ended here ((report, plant accelerations,
+    h)) or, without one, from the accelerations and compliant contact forces at the state."""
+    x, data, q = state.x, state.data, model.configuration(state.x)     # q: once for the readings, energy, bodies
     tau, readings = np.array(state.tau), None
     if sensors or (model.base is not None and not model.base.dynamic):
         twist = state.reference.base_twist
@@ -592,9 +595,9 @@ def snapshot(model: SimModel, state: SimState, sensors: bool = False, step: tupl
         if sensors:
             forces = contact_forces(model.contact, step[0], step[2]) if step is not None else \
                 model.compliant_point_forces(data, x)
-            readings = model.sensors.read(data, model.configuration(x), model.velocity(x), a, forces)
+            readings = model.sensors.read(data, q, model.velocity(x), a, forces)
     return Snapshot(state.t, model.joint_names, x[model.block("q")].copy(), x[model.block("v")].copy(),
-                    x[model.block("z")].copy(), tau, model.energy(data, x), model.ee_pose(data, x),
-                    model.body_poses(data, x),
+                    x[model.block("z")].copy(), tau, model.energy(data, x, q), (model, x.copy()),
+                    model.body_poses(data, x, q),
                     None if model.base is None else np.concatenate([x[model.block("base")], x[model.block("base_v")]]),
                     readings)

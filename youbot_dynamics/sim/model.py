@@ -505,9 +505,10 @@ class SimModel:
         pin.framesForwardKinematics(self.plant.model, data, q)
         return self.contact.poses(data)
 
-    def energy(self, data: pin.Data, x: np.ndarray) -> float:
-        """Kinetic plus potential energy (J) of robot and bodies at state x."""
-        q, v = self.configuration(x), self.velocity(x)
+    def energy(self, data: pin.Data, x: np.ndarray, q: np.ndarray | None = None) -> float:
+        """Kinetic plus potential energy (J) of robot and bodies at state x (``q``: its
+        configuration, if known)."""
+        q, v = self.configuration(x) if q is None else q, self.velocity(x)
         return kinetic_energy(self.plant, data, q, v) + potential_energy(self.plant, data, q)
 
     def stored_energy(self, data: pin.Data, x: np.ndarray) -> float:
@@ -517,11 +518,12 @@ class SimModel:
             springs = self.contact.elastic_energy(self.geometry_poses(data, self.configuration(x)), self.compliant)
         return self.energy(data, x) + springs
 
-    def body_poses(self, data: pin.Data, x: np.ndarray) -> dict[str, np.ndarray]:
-        """World pose (4x4, m) of every free body at state x, by name."""
+    def body_poses(self, data: pin.Data, x: np.ndarray, q: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """World pose (4x4, m) of every free body at state x (``q``: its configuration, if
+        known), by name."""
         if not self.body_names:
             return {}
-        q = self.configuration(x)
+        q = self.configuration(x) if q is None else q
         nq = self.body_offset
         return {name: pin.XYZQUATToSE3(q[nq + 7 * k:nq + 7 * k + 7]).homogeneous
                 for k, name in enumerate(self.body_names)}

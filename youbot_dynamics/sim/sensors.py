@@ -111,8 +111,11 @@ def link_inertias(model: pin.Model) -> dict[str, pin.Inertia]:
 
 
 def _world_wrench(point: np.ndarray, force: np.ndarray) -> pin.Force:
-    """A force (world, N) at a point (world, m) as a spatial force about the world origin."""
-    return pin.Force(force, np.cross(point, force))
+    """A force (world, N) at a point (world, m) as a spatial force about the world origin
+    (the moment point x force in Python floats: numpy.cross's arithmetic, without its
+    overhead on one pair of 3-vectors)."""
+    (p0, p1, p2), (f0, f1, f2) = point.tolist(), force.tolist()
+    return pin.Force(force, np.array([p1 * f2 - p2 * f1, p2 * f0 - p0 * f2, p0 * f1 - p1 * f0]))
 
 
 def pair_wrenches(contact: ContactModel, frames: list[int | None], data: pin.Data,
