@@ -22,7 +22,7 @@ from youbot_dynamics.accuracy.propagation import comparison, plot_uncertainty
 from youbot_dynamics.accuracy.work_precision import work_precision
 from youbot_dynamics.io.text_tables import records_table
 from youbot_dynamics.scene.schema import load_scene
-from youbot_dynamics.studies import (bdf_study, elastic_pendulum, equation_figures, lagrange,
+from youbot_dynamics.studies import (bdf_figures, bdf_study, elastic_pendulum, equation_figures, lagrange,
                                      lagrange_figures, pendulum_figures, pipeline_report,
                                      rotations, rotations_figures, squeezer, squeezer_figures,
                                      structure, uncertain_pendulum, uncertain_pendulum_figures,
@@ -280,7 +280,7 @@ SECTION_NAMES = tuple(section.name for section in SECTIONS)
 
 #: Section name -> the figure set drawn after its run.
 FIGURE_SETS: dict[str, FigureSet] = {figure_set.name: figure_set for figure_set in (
-    pendulum_figures.PENDULUM_SET, pendulum_figures.BDF_SET, squeezer_figures.SQUEEZER_SET,
+    pendulum_figures.PENDULUM_SET, bdf_figures.BDF_SET, squeezer_figures.SQUEEZER_SET,
     woodpecker_figures.WOODPECKER_SET, lagrange_figures.LAGRANGE_2D_SET,
     lagrange_figures.LAGRANGE_3D_SET, *equation_figures.STRUCTURE_SETS,
     *equation_figures.PIPELINE_SETS, rotations_figures.ROTATIONS_SET,

@@ -1,12 +1,13 @@
-"""The elastic (spring) pendulum, the seed's first study (shared/benchmarks.md section 3).
+"""The elastic (spring) pendulum, document 001's first study (its section 1).
 
 A unit point mass on a spring of unit rest length and stiffness k, unit gravity along -y.
 State x = (x, y, vx, vy) in the plane (m, m/s with all units 1):
     x' = vx, y' = vy, vx' = -x lambda, vy' = -y lambda - 1, lambda = k (r - 1) / r.
 Energy E = (vx^2 + vy^2) / 2 + y + k (r - 1)^2 / 2 is conserved.
 
-:func:`elastic_pendulum_study` reproduces the seed's tables with our integrators and puts
-the seed's figures beside ours.
+:func:`elastic_pendulum_study` reproduces the document's tables with our integrators and
+puts the document's figures beside ours. :func:`taylor_reference` is an independent
+reference: mpmath's Taylor-series integrator at 30 digits.
 """
 from __future__ import annotations
 
@@ -23,9 +24,13 @@ from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.io.text_tables import cell, markdown_table
 
 STATE_NAMES = ("x", "y", "vx", "vy")
-#: The seed's initial state: spring stretched to r = 1.2 along x, at rest.
+#: Document 001's initial state of sections 1.7-1.11: spring stretched to r = 1.2 along x,
+#: at rest; its time span (s).
 SEED_STATE0 = (1.2, 0.0, 0.0, 0.0)
 SEED_T_END = 20.0
+#: Its free swings (Figs 1-9): k -> initial state. Figs 1-6 start at x = 1 unstretched
+#: (section 1.4: "all zeros except for the x which is set to 1"), Figs 7-9 at x = 1.2.
+FREE_SWINGS = {0.75: (1.0, 0.0, 0.0, 0.0), 100.0: (1.0, 0.0, 0.0, 0.0), 10.0: SEED_STATE0}
 #: "Stable": the run stays finite, inside |state| <= STABLE_BOUND, with the maximum energy
 #: error below STABLE_ENERGY_ERROR (the pendulum's potential-energy scale m g L = 1).
 #: "Accurate": maximum energy error below ACCURATE_ENERGY_ERROR.
@@ -92,7 +97,7 @@ def simulate_elastic_pendulum(k: float, state0: Sequence[float], t_end: float,
 
     Returns the solution and the energy error max |E(t) - E(0)| over the outputs. The
     implicit methods get the analytic Jacobian, or with ``jacobian="difference"`` build
-    their own by difference quotients (as the seed's Assimulo runs did). ``bounds`` bounds
+    their own by difference quotients (as document 001's Assimulo runs did). ``bounds`` bounds
     |every component|; energy growth beyond :func:`energy_growth_monitor`'s limit is a
     DivergenceError. ``max_steps`` (step budget), ``progress(t)`` and ``max_order``
     (CVODE's order cap) go to :func:`integrate`.
@@ -122,9 +127,29 @@ def simulate_elastic_pendulum(k: float, state0: Sequence[float], t_end: float,
     return solution, float(np.max(np.abs(energy - energy[0])))
 
 
+def taylor_reference(k: float, state0: Sequence[float], times: Sequence[float],
+                     digits: int = 30) -> np.ndarray:
+    """The state (x, y, vx, vy) at ``times`` (s, ascending from 0) by mpmath's Taylor-series
+    integrator (``mpmath.odefun``) at ``digits`` significant digits: an independent
+    reference for the float integrators (n, 4)."""
+    import mpmath
+    with mpmath.workdps(digits):
+        stiffness = mpmath.mpf(k)
+
+        def rhs(t, state):
+            x, y, vx, vy = state
+            r = mpmath.sqrt(x * x + y * y)
+            lam = stiffness * (r - 1) / r
+            return [vx, vy, -x * lam, -y * lam - 1]
+        solution = mpmath.odefun(rhs, 0, [mpmath.mpf(v) for v in state0],
+                                 tol=mpmath.mpf(10) ** (-digits + 5))
+        return np.array([[float(v) for v in solution(t)] for t in times])
+
+
 @dataclass
 class StudyRow:
-    """One line of a study table: our measurement and, where the seed gives it, the seed's."""
+    """One line of a study table: our measurement and, where document 001 gives it, its
+    value (``seed``: the column's key, kept for the report's verdict count)."""
 
     table: str
     integrator: str
@@ -145,7 +170,7 @@ class StudyRow:
 
 def stability_verdict(k: float, n_steps: int, integrator: str = "euler"
                       ) -> tuple[str, float | None, Solution | None]:
-    """Run N fixed steps on the seed's problem; "unstable" if it diverges (non-finite or
+    """Run N fixed steps on document 001's problem; "unstable" if it diverges (non-finite or
     beyond STABLE_BOUND) or its energy error reaches STABLE_ENERGY_ERROR, "accurate" below
     ACCURATE_ENERGY_ERROR, else "stable, inaccurate"."""
     try:
@@ -171,11 +196,11 @@ def study_row(table: str, integrator: str, k: float, setting: str, solution: Sol
                     None if stats is None else stats.wall_time, seed)
 
 
-#: The seed's figures (benchmarks.md section 3).
+#: Document 001's Table 1 verdicts and Tables 5-6 counts.
 SEED_EULER = {(1, 1000): "stable, inaccurate", (1, 10000): "accurate", (20, 1000): "unstable",
               (20, 10000): "accurate"}
-#: The CVODE rows are run with CVODE's own difference-quotient Jacobian, as the seed's
-#: Assimulo runs were (no Jacobian given): BDF k = 10 then takes the seed's 536 steps
+#: The CVODE rows are run with CVODE's own difference-quotient Jacobian, as document 001's
+#: Assimulo runs were (no Jacobian given): BDF k = 10 then takes the document's 536 steps
 #: exactly (545 with the analytic Jacobian).
 SEED_CVODE = {("cvode_bdf", 10): "536 steps, 580 f-evals, 9 J-evals",
               ("cvode_adams", 10): "381 steps, 455 f-evals",
@@ -188,7 +213,7 @@ SEED_CVODE = {("cvode_bdf", 10): "536 steps, 580 f-evals, 9 J-evals",
 def elastic_pendulum_study(energy_k: float = 10.0,
                            fixed_steps: Sequence[int] = (1000, 10000),
                            tolerances: Sequence[float] = (1e-4, 1e-6, 1e-8)) -> list[StudyRow]:
-    """The seed's tables with our integrators, seed figures beside ours:
+    """Document 001's tables with our integrators, its figures beside ours:
 
     1. explicit Euler stable or not for k = 1, 20 with N = 1000, 10000 steps on [0, 20];
     2. CVODE BDF vs Adams (and Dormand-Prince) at rtol = atol = 1e-6, k = 10 and 50;
