@@ -85,7 +85,7 @@ def test_smoke_report_on_a_local_cluster(tmp_path, capsys):
     assert "Seed blocks [[6], [1, 2, 3, 4], [5]] (an algebraic loop of four); ours the " \
            "same." in page
     # the studies' own figures reached the page: the seed's 22 beak hits beside ours
-    assert "beak hits (seed over 2 s: 22)" in page and "structural index 3" in page
+    assert "beak hits (document 001 over 2 s: 22)" in page and "structural index 3" in page
     assert page.index("Woodpecker") < page.index("Uncertain")  # the order of SECTIONS
 
 
