@@ -109,7 +109,7 @@ DOCUMENT_SETTINGS = (
     ((1e-6, 1e5, 1e5), ("w", "lambda"), ("Yes", "Yes")),
 )
 #: Step budget of a DOCUMENT_SETTINGS run (the document's runs took 843 and 1603).
-DOCUMENT_SETTINGS_BUDGET = 5000
+DOCUMENT_SETTINGS_BUDGET = 2500
 
 
 @dataclass(frozen=True)
