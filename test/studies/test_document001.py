@@ -201,3 +201,40 @@ def test_woodpecker_ida_statistics_beside_table15():
     stats = run(WoodpeckerConfig(integrator="ida")).solution.stats
     assert (stats.steps, stats.rhs_evals, stats.jac_evals, stats.rejected_steps,
             stats.events) == (8439, 10413, 3485, 191, 177)
+
+
+def test_squeezer_figure_runs():
+    """The runs behind Figs 25-28, 31-32 at rtol 1e-6 with 500 outputs: q at 0.03 s off
+    the IVP test set's reference by 9.5e-6 (index 3, Radau IIA, 160 steps, 2072 f-evals)
+    and 7.4e-5 (index 2, IDA); index 2's lambda at 0.03 s (199, -29.8, 23.1, 31.4, 22.6,
+    11.6); max |g(q)| of index 1: plain 8.6e-8 m, Baumgarte 6.2e-9, projection 9.9e-13; at
+    0.03 s index 2 6e-8 m, index 3 6.9e-11 m."""
+    index3 = squeezer.simulate_squeezer("index3", "radau5")
+    index2 = squeezer.simulate_squeezer("index2", "ida")
+    assert f"{np.max(squeezer.reference_error(index3.q[-1])):.2g}" == "9.5e-06"
+    assert (index3.stats.steps, index3.stats.rhs_evals) == (160, 2072)
+    assert f"{np.max(squeezer.reference_error(index2.q[-1])):.2g}" == "7.4e-05"
+    assert [float(f"{value:.3g}") for value in index2.multipliers[-1]] == [
+        199, -29.8, 23.1, 31.4, 22.6, 11.6]
+    drift = {name: f"{np.max(np.abs(squeezer.simulate_squeezer(name, 'rk45').position_residual)):.2g}"
+             for name in ("index1", "index1-baumgarte", "index1-projection")}
+    assert drift == {"index1": "8.6e-08", "index1-baumgarte": "6.2e-09",
+                     "index1-projection": "9.9e-13"}
+    assert f"{np.max(np.abs(index2.position_residual[-1])):.2g}" == "6e-08"
+    assert f"{np.max(np.abs(index3.position_residual[-1])):.2g}" == "6.9e-11"
+
+
+def test_woodpecker_figure_run():
+    """Figs 37-41's run (DOP853, rtol 1e-6, 4000 outputs): phiS in [-0.1034, 0.105] rad,
+    phiB in [-0.65, 0.12] rad, phiB' in [-24.3, 24.5] rad/s; phiS' = 0 in modes II and III;
+    155 mode switches (45 II releases, 44 II blocks, 22 III blocks, 22 III releases, 22
+    hits)."""
+    solution = Woodpecker().simulate(2.0, "dop853", rtol=1e-6, atol=1e-8, n_out=4000)
+    x = solution.x
+    assert (round(x[:, 1].min(), 4), round(x[:, 1].max(), 3)) == (-0.1034, 0.105)
+    assert (round(x[:, 2].min(), 2), round(x[:, 2].max(), 2)) == (-0.65, 0.12)
+    assert (round(x[:, 5].min(), 1), round(x[:, 5].max(), 1)) == (-24.3, 24.5)
+    blocked = np.isin(np.array(solution.mode), ("II", "III"))
+    assert np.max(np.abs(x[blocked, 4])) == 0.0
+    kinds = [switch.kind for switch in solution.switches]
+    assert len(kinds) == 155 and kinds.count(BEAK) == 22
