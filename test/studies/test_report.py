@@ -81,7 +81,7 @@ def test_smoke_report_on_a_local_cluster(tmp_path, capsys):
     page = assert_report(tmp_path, SMOKE)
     assert "4 studies ran, 0 failed" in page
     # the figures' own measurements reached the page: the beak hits, the seed's BLT blocks
-    assert "Seed: 22 beak hits over 2 s, ours 22." in page
+    assert "Document: 22 beak hits over 2 s, ours 22." in page
     assert "Seed blocks [[6], [1, 2, 3, 4], [5]] (an algebraic loop of four); ours the " \
            "same." in page
     # the studies' own figures reached the page: the seed's 22 beak hits beside ours

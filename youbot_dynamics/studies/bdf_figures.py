@@ -91,7 +91,7 @@ def plot_choppy_traces(path: str) -> dict:
     plt = pyplot()
 
     runs = loose_tolerance_runs()
-    figure, axes = plt.subplots(1, len(runs), figsize=(3.2 * len(runs), 3.8), sharey=True)
+    figure, axes = plt.subplots(1, len(runs), figsize=(2.9 * len(runs), 3.8), sharey=True)
     for axis, (name, run) in zip(axes, runs.items()):
         k, rtol, atol = LOOSE_TOLERANCE_RUNS[name]
         axis.plot(run["reference"].x[:, 0], run["reference"].x[:, 1], color="grey",

@@ -149,7 +149,7 @@ def taylor_reference(k: float, state0: Sequence[float], times: Sequence[float],
 @dataclass
 class StudyRow:
     """One line of a study table: our measurement and, where document 001 gives it, its
-    value (``seed``: the column's key, kept for the report's verdict count)."""
+    value (``document``)."""
 
     table: str
     integrator: str
@@ -161,7 +161,7 @@ class StudyRow:
     rhs_evals: int | None
     jac_evals: int | None
     wall_time: float | None
-    seed: str
+    document: str
 
     def as_dict(self) -> dict:
         """The row as plain data."""
@@ -186,14 +186,14 @@ def stability_verdict(k: float, n_steps: int, integrator: str = "euler"
 
 
 def study_row(table: str, integrator: str, k: float, setting: str, solution: Solution | None,
-              error: float | None, seed: str, verdict: str | None = None) -> StudyRow:
+              error: float | None, document: str, verdict: str | None = None) -> StudyRow:
     """A StudyRow from a run (solution None: the run diverged)."""
     stats = None if solution is None else solution.stats
     return StudyRow(table, integrator, k, setting, verdict, error,
                     None if stats is None else stats.steps,
                     None if stats is None else stats.rhs_evals,
                     None if stats is None else stats.jac_evals,
-                    None if stats is None else stats.wall_time, seed)
+                    None if stats is None else stats.wall_time, document)
 
 
 #: Document 001's Table 1 verdicts and Tables 5-6 counts.
@@ -326,24 +326,25 @@ TABLE_TITLES = {
                        f"accurate: max|E-E0| < {ACCURATE_ENERGY_ERROR:g})",
     "cvode_statistics": "Statistics at rtol = atol = 1e-6 from x0 = 1.2 on [0, 20] (CVODE "
                         "and LSODA with their own difference-quotient Jacobians, as the "
-                        "seed's runs; scipy's LSODA beside the seed's LSODAR)",
+                        "document 001's runs; scipy's LSODA beside its LSODAR)",
     "energy_error": "Energy error max|E-E0| versus step size / tolerance",
 }
 TABLE_COLUMNS = ("integrator", "k", "setting", "verdict", "energy_error", "steps", "rhs_evals",
-                 "jac_evals", "wall_time", "seed")
-TEXT_COLUMNS = ("integrator", "setting", "verdict", "seed")
+                 "jac_evals", "wall_time", "document")
+TEXT_COLUMNS = ("integrator", "setting", "verdict", "document")
 
 
 def tables_text(rows: Sequence[StudyRow]) -> str:
-    """The study's tables (Markdown) with each verdict that differs from the seed's noted."""
+    """The study's tables (Markdown) with each verdict that differs from the document's
+    noted."""
     lines = []
     for table, title in TABLE_TITLES.items():
         lines += [f"\n{title}\n", markdown_table(TABLE_COLUMNS, (
             [(getattr(row, c) or "-") if c in TEXT_COLUMNS else getattr(row, c)
              for c in TABLE_COLUMNS] for row in rows if row.table == table), digits=3)]
-        lines += [f"- k={row.k:g} {row.setting}: the seed says {row.seed!r}, our energy "
+        lines += [f"- k={row.k:g} {row.setting}: document 001 says {row.document!r}, our energy "
                   f"criterion {row.verdict!r} (max|E-E0| {cell(row.energy_error)}); "
                   f"study bdf judges position against a reference instead"
-                  for row in rows if row.table == table and row.verdict and row.seed
-                  and row.verdict != row.seed]
+                  for row in rows if row.table == table and row.verdict and row.document
+                  and row.verdict != row.document]
     return "\n".join(lines)
