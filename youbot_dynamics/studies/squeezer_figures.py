@@ -19,7 +19,8 @@ from youbot_dynamics.integrate.constrained import ConstrainedRun
 from youbot_dynamics.studies.figures import FigureSet, panels, pyplot, save, specs
 from youbot_dynamics.dynamics.constraints import index1_rhs
 from youbot_dynamics.studies.hairer_dopri5 import hairer_dopri5
-from youbot_dynamics.studies.squeezer import (POSITION_NAMES, Q0, SEED_FIGURES, T_REFERENCE, V0,
+from youbot_dynamics.studies.squeezer import (POSITION_NAMES, Q0, Q_REFERENCE, SEED_FIGURES,
+                                              T_REFERENCE, V0,
                                               SqueezerResult, index2_step_sizes,
                                               reference_error, simulate_squeezer,
                                               squeezer_system)
@@ -98,6 +99,9 @@ def squeezer_quantity_plot(path: Path, run, quantity: str) -> None:
     figure, axis = panels(size=(7.5, 3.8))
     for column, name in enumerate(names):
         axis.plot(run.t * 1e3, values[:, column], linewidth=0.8, label=name)
+    if quantity == "positions":
+        axis.plot(np.full(7, T_REFERENCE * 1e3), wrapped(Q_REFERENCE), "kx", markersize=7,
+                  label="IVP test set q(0.03 s)")
     axis.set_xlabel("t (ms)")
     axis.set_ylabel(QUANTITIES[quantity])
     if quantity == "lambdas":

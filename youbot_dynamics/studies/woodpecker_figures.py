@@ -15,6 +15,11 @@ from youbot_dynamics.studies.woodpecker import (BEAK, MODES, SEED_BEAK_HITS, SEE
                                                 SEED_INITIAL_MODE, SEED_INITIAL_STATE, Woodpecker)
 
 
+#: Document 001's initial lambda (N): its text's, and its Dymola listing's start values.
+DOCUMENT_TEXT_LAMBDA0 = (-0.628993, 0.047088)
+DOCUMENT_DYMOLA_LAMBDA0 = (-0.6911, -0.1416)
+
+
 def plot_woodpecker(woodpecker: Woodpecker, solution: HybridSolution, path: str) -> None:
     """Save a PNG (matplotlib, Agg) of z, phiS, phiB, lambda1, lambda2 and the mode index
     (I = 1, II = 2, III = 3) over time."""
@@ -100,6 +105,10 @@ def draw_woodpecker(result: object, out: Path, full: bool) -> dict[str, tuple[st
     figure, axis = panels(size=(7.5, 3.2))
     axis.plot(solution.t, lambdas[:, 0], linewidth=0.8, label="lambda1 (corner normal)")
     axis.plot(solution.t, lambdas[:, 1], linewidth=0.8, label="lambda2 (sticking)")
+    axis.plot([0.0, 0.0], DOCUMENT_TEXT_LAMBDA0, "rx", markersize=7,
+              label="document's text: lambda(0) = (-0.628993, 0.047088)")
+    axis.plot([0.0, 0.0], DOCUMENT_DYMOLA_LAMBDA0, "k+", markersize=9,
+              label="document's Dymola listing: (-0.6911, -0.1416)")
     axis.set_xlabel("t (s)")
     axis.set_ylabel("N")
     axis.legend(fontsize=7)
