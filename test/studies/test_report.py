@@ -80,10 +80,10 @@ def test_smoke_report_on_a_local_cluster(tmp_path, capsys):
     assert all(f"{name} " in printed and "FAILED" not in printed for name in SMOKE)
     page = assert_report(tmp_path, SMOKE)
     assert "4 studies ran, 0 failed" in page
-    # the figures' own measurements reached the page: the beak hits, the seed's BLT blocks
+    # the figures' own measurements reached the page: the beak hits, document 000's BLT blocks
     assert "Document: 22 beak hits over 2 s, ours 22." in page
-    assert "Seed blocks [[6], [1, 2, 3, 4], [5]] (an algebraic loop of four); ours the " \
-           "same." in page
+    assert "Document blocks [6], [2, 4, 3, 1], [5] (an algebraic loop of four); ours " \
+           "[[6], [1, 2, 3, 4], [5]], the same sets (either matching)." in page
     # the studies' own figures reached the page: the seed's 22 beak hits beside ours
     assert "beak hits (document 001 over 2 s: 22)" in page and "structural index 3" in page
     assert page.index("Woodpecker") < page.index("Uncertain")  # the order of SECTIONS
