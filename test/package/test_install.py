@@ -145,6 +145,7 @@ def test_every_imported_library_is_a_requirement() -> None:
 
 #: requirements.txt name -> the rosdep key that package.xml must name.
 ROSDEP_KEYS = {"numpy": "python3-numpy", "scipy": "python3-scipy", "sympy": "python3-sympy",
+               "mpmath": "python3-mpmath",
                "networkx": "python3-networkx", "pyyaml": "python3-yaml", "lxml": "python3-lxml",
                "matplotlib": "python3-matplotlib", "tqdm": "python3-tqdm",
                "ros-jazzy-rclpy": "rclpy", "ros-jazzy-common-interfaces": "sensor_msgs"}

@@ -97,11 +97,11 @@ def test_smoke_report_on_a_local_cluster(tmp_path, capsys):
     assert ledger_at < page.index("## Contents") < page.index("## Structural analysis")
     assert "| all |" in page[ledger_at:] and "002-unicycle-parameters" in page
     # the figures' own measurements reached the page: the beak hits, document 000's BLT blocks
-    assert "22 beak hits over 2 s, ours 22." in page
+    assert "Document: 22 beak hits over 2 s, ours 22." in page
     assert "Document blocks [6], [2, 4, 3, 1], [5] (an algebraic loop of four); ours " \
            "[[6], [1, 2, 3, 4], [5]], the same sets (either matching)." in page
     # the studies' own figures reached the page: the document's 22 beak hits beside ours
-    assert re.search(r"beak hits \(\w+ over 2 s: 22\)", page) and "structural index 3" in page
+    assert "beak hits (document 001 over 2 s: 22)" in page and "structural index 3" in page
     studies_at = page.index("## Contents")     # after the ledger, which names studies too
     assert page.index("Woodpecker", studies_at) < page.index("Uncertain", studies_at)  # the order of SECTIONS
 

@@ -159,7 +159,7 @@ def test_cli_suppression_tables(capsys):
                  "--json"]) == 0
     tables = json.loads(capsys.readouterr().out)
     index3, index2 = tables["index3"]["rows"][0], tables["index2"]["rows"][0]
-    assert tables["index3"]["seed_table"] == 8 and tables["index2"]["seed_table"] == 9
+    assert tables["index3"]["document_table"] == 8 and tables["index2"]["document_table"] == 9
     assert index3["radau5, all in error test"]["failure"].startswith("t = 0 s")
     assert index3["radau5, index-scaled"]["error"] < 2e-2
     assert index2["ida, suppressed"]["error"] < 1e-2

@@ -128,8 +128,8 @@ def add_bdf(parser: argparse.ArgumentParser) -> None:
                              "at k = 50 (a short form for CI)")
     parser.add_argument("--plot", metavar="PATH", help="write the stability-region plot")
     parser.add_argument("--choppy-plot", metavar="PATH",
-                        help="write the source document's loose-tolerance traces: CVODE BDF and Adams at "
-                             "rtol = atol = 0.1, k = 10")
+                        help="write the source document's loose-tolerance traces (its Figs "
+                             "19-23): CVODE BDF with rtol or atol at 0.1, k = 10 and 50")
     add_sweep_arguments(parser)
     add_json(parser)
     parser.set_defaults(run=run_bdf)
@@ -138,7 +138,7 @@ def add_bdf(parser: argparse.ArgumentParser) -> None:
 def run_bdf(args: argparse.Namespace) -> int:
     """Print (or JSON) Tables 1-4, the stability figures, measured orders and the CVODE
     order-cap rows; optionally plot the stability regions and the choppy traces."""
-    from youbot_dynamics.studies.pendulum_figures import plot_choppy_traces, plot_stability_regions
+    from youbot_dynamics.studies.bdf_figures import plot_choppy_traces, plot_stability_regions
     for path, flag in ((args.plot, "--plot"), (args.choppy_plot, "--choppy-plot")):
         if path:
             output_file(path, flag)
@@ -156,7 +156,7 @@ def run_bdf(args: argparse.Namespace) -> int:
     if args.plot:
         print(f"\nplot written to {args.plot}")
     if choppy:
-        print(f"rtol = atol = 0.1 traces written to {args.choppy_plot}: " + "; ".join(
+        print(f"loose-tolerance traces written to {args.choppy_plot}: " + "; ".join(
             f"{name} {figures['steps']} steps, position off by up to "
             f"{figures['position_error']:.2f} m" for name, figures in choppy.items()))
     return 0

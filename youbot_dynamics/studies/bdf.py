@@ -1,4 +1,4 @@
-"""Fixed-step BDF1-4 written out (seed 001 sections 1.6-1.9), and their stability regions.
+"""Fixed-step BDF1-6 written out (document 001 sections 1.6-1.9), and their stability regions.
 
 The k-step backward differentiation formula on x' = f(t, x) with step h:
 
@@ -8,8 +8,11 @@ is implicit in x_{n+1}; each step solves G(y) = y - h b f(t_{n+1}, y) - psi = 0 
 -sum_{j>=1} a_j x_{n+1-j}) by Newton's method from the polynomial extrapolation of the
 previous points, with the matrix I - h b df/dx,
 df/dx analytic when given, else by forward differences, refreshed every JACOBIAN_REFRESH
-iterations and inverted (the systems here are small; the seed used scipy's fsolve). The first
-k - 1 steps are classic RK4 steps (integrate/fixed_step.py), accurate enough not to spoil order k.
+iterations and inverted (the systems here are small; document 001 used scipy's fsolve). The
+first k - 1 steps are classic RK4 steps (integrate/fixed_step.py), accurate enough not to
+spoil order k, or with ``start="bdf"`` steps of BDF1, BDF2, ... BDF(k-1) (the usual
+classroom start, and likely document 001's: its listings 2 and 3 are not in the text). The
+start changes only the first few steps' errors, never the roots that decide stability.
 
 Stability on x' = lambda x, z = h lambda: the characteristic polynomial
 rho(zeta) - z sigma(zeta), rho(zeta) = sum_j a_j zeta^(k-j), sigma(zeta) = b zeta^k, must
@@ -35,7 +38,13 @@ BDF_COEFFICIENTS = {
     2: ((1.0, -4.0 / 3.0, 1.0 / 3.0), 2.0 / 3.0),
     3: ((1.0, -18.0 / 11.0, 9.0 / 11.0, -2.0 / 11.0), 6.0 / 11.0),
     4: ((1.0, -48.0 / 25.0, 36.0 / 25.0, -16.0 / 25.0, 3.0 / 25.0), 12.0 / 25.0),
+    5: ((1.0, -300.0 / 137.0, 300.0 / 137.0, -200.0 / 137.0, 75.0 / 137.0, -12.0 / 137.0),
+        60.0 / 137.0),
+    6: ((1.0, -360.0 / 147.0, 450.0 / 147.0, -400.0 / 147.0, 225.0 / 147.0, -72.0 / 147.0,
+         10.0 / 147.0), 60.0 / 147.0),
 }
+#: Starting procedures of :func:`bdf_fixed_step`.
+STARTS = ("rk4", "bdf")
 #: Newton stops when the update's max-norm is below NEWTON_TOL (1 + |x|_max).
 NEWTON_TOL = 1e-12
 NEWTON_MAX_ITERATIONS = 20
@@ -78,18 +87,21 @@ class FixedBdfSolution:
 def bdf_fixed_step(rhs: Callable[[float, np.ndarray], np.ndarray], x0, t_end: float,
                    n_steps: int, order: int, *,
                    jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
-                   bound: float = np.inf) -> FixedBdfSolution:
-    """N steps of BDF``order`` with h = t_end / N from x0 at t = 0 (s).
+                   bound: float = np.inf, start: str = "rk4") -> FixedBdfSolution:
+    """N steps of BDF``order`` with h = t_end / N from x0 at t = 0 (s); the first
+    order - 1 steps by RK4 (``start="rk4"``) or by BDF of rising order (``"bdf"``).
 
     A step whose Newton iteration fails to converge within
     NEWTON_MAX_ITERATIONS, or a state beyond ``bound`` (max-norm) or non-finite, is a
     DivergenceError naming the time and step.
     """
-    a, b = coefficients(order)
+    coefficients(order)
     if n_steps < order or not t_end > 0:
         raise UserInputError(f"BDF{order} needs t_end > 0 and at least {order} steps, got "
                              f"t_end={t_end!r}, N={n_steps!r}")
-    start = time.perf_counter()
+    if start not in STARTS:
+        raise UserInputError(f"start must be one of {STARTS}, got {start!r}")
+    began = time.perf_counter()
     name = f"bdf{order}_fixed"
     h = t_end / n_steps
     stats = IntegratorStats(name, nonlinear_convergence_failures=0)
@@ -97,37 +109,45 @@ def bdf_fixed_step(rhs: Callable[[float, np.ndarray], np.ndarray], x0, t_end: fl
     x[0] = np.asarray(x0, dtype=float)
     t = h * np.arange(n_steps + 1)
     counted = _counted(rhs, stats)
-    for n in range(min(order - 1, n_steps)):
-        x[n + 1] = rk4_step(counted, t[n], x[n], h, 0)
-    identity = np.eye(x.shape[1])
-    for n in range(order - 1, n_steps):
-        psi = -sum(a[j] * x[n + 1 - j] for j in range(1, order + 1))
-        y, t_new = extrapolated(x, n, order), t[n + 1]
-        for iteration in range(NEWTON_MAX_ITERATIONS):
-            f = counted(t_new, y)
-            if iteration == 0 or iteration % JACOBIAN_REFRESH == 0:
-                df = jac(t_new, y) if jac is not None else forward_difference_jacobian(
-                    counted, t_new, y, f)
-                stats.jac_evals += 1
-                newton_inverse = np.linalg.inv(identity - h * b * df)
-            update = newton_inverse @ (psi + h * b * f - y)
-            y += update
-            stats.nonlinear_iterations += 1
-            if np.max(np.abs(update)) <= NEWTON_TOL * (1.0 + np.max(np.abs(y))):
-                break
-        else:
-            stats.nonlinear_convergence_failures += 1
-            raise DivergenceError(float(t_new), name, h, f"Newton did not converge in "
-                                  f"{NEWTON_MAX_ITERATIONS} iterations")
+    for n in range(n_steps):
+        if n < order - 1 and start == "rk4":
+            x[n + 1] = rk4_step(counted, t[n], x[n], h, 0)
+            continue
+        y = bdf_step(counted, jac, x, t, h, n, min(order, n + 1), stats, name)
         if not np.all(np.isfinite(y)) or np.max(np.abs(y)) > bound:
-            raise DivergenceError(float(t_new), name, h, f"|x| beyond {bound:g}",
+            raise DivergenceError(float(t[n + 1]), name, h, f"|x| beyond {bound:g}",
                                   {f"x{i}": float(v) for i, v in enumerate(y)})
         x[n + 1] = y
     stats.steps = n_steps
     stats.rejected_steps = 0
     stats.simulated_time = t_end
-    stats.wall_time = time.perf_counter() - start
+    stats.wall_time = time.perf_counter() - began
     return FixedBdfSolution(t, x, stats)
+
+
+def bdf_step(rhs: Callable, jac: Callable | None, x: np.ndarray, t: np.ndarray, h: float,
+             n: int, order: int, stats: IntegratorStats, name: str) -> np.ndarray:
+    """x_{n+1} of one BDF``order`` step of size h from x[n], x[n-1], ... (simplified
+    Newton, see the module's docstring); DivergenceError if Newton does not converge."""
+    a, b = coefficients(order)
+    psi = -sum(a[j] * x[n + 1 - j] for j in range(1, order + 1))
+    y, t_new = extrapolated(x, n, order), t[n + 1]
+    identity = np.eye(x.shape[1])
+    for iteration in range(NEWTON_MAX_ITERATIONS):
+        f = rhs(t_new, y)
+        if iteration % JACOBIAN_REFRESH == 0:
+            df = jac(t_new, y) if jac is not None else forward_difference_jacobian(
+                rhs, t_new, y, f)
+            stats.jac_evals += 1
+            newton_inverse = np.linalg.inv(identity - h * b * df)
+        update = newton_inverse @ (psi + h * b * f - y)
+        y += update
+        stats.nonlinear_iterations += 1
+        if np.max(np.abs(update)) <= NEWTON_TOL * (1.0 + np.max(np.abs(y))):
+            return y
+    stats.nonlinear_convergence_failures += 1
+    raise DivergenceError(float(t_new), name, h, f"Newton did not converge in "
+                          f"{NEWTON_MAX_ITERATIONS} iterations")
 
 
 def extrapolated(x: np.ndarray, n: int, order: int) -> np.ndarray:

@@ -24,7 +24,7 @@ from youbot_dynamics.accuracy.sweeps import enclosing_workers
 from youbot_dynamics.accuracy.work_precision import work_precision
 from youbot_dynamics.io.text_tables import records_table
 from youbot_dynamics.scene.schema import load_scene
-from youbot_dynamics.studies import (bdf_study, elastic_pendulum, equation_figures, lagrange,
+from youbot_dynamics.studies import (bdf_figures, bdf_study, elastic_pendulum, equation_figures, lagrange,
                                      lagrange_figures, pendulum_figures, pipeline_report,
                                      planar_base_parameters, rotations, rotations_figures,
                                      squeezer, squeezer_figures, structure, uncertain_pendulum,
@@ -181,42 +181,45 @@ def work_precision_section(out: Path, full: bool) -> tuple[str, object]:
 
 
 SECTIONS: tuple[Section, ...] = (
-    Section("pendulum-tables", "Elastic pendulum: explicit Euler, CVODE statistics, energy "
-            "error (document 001 Tables 1, 5-7)", ("study", "pendulum-tables"),
-            run=pendulum_tables_section,
-            seed="The document's column of each table: verdicts (stable / accurate) of explicit "
-                 "Euler over k and N, and the document's CVODE steps and f-evals at rtol = atol = "
-                 "1e-6.",
+    Section("pendulum-tables", "Elastic pendulum: free swings, explicit Euler, CVODE "
+            "statistics, energy error (document 001 Figs 1-13, Tables 1, 5-6)",
+            ("study", "pendulum-tables"), run=pendulum_tables_section,
+            seed="The `document` column of each table: verdicts (stable / accurate) of "
+                 "explicit Euler over k and N, and document 001's CVODE steps and f-evals at "
+                 "rtol = atol = 1e-6.",
             method="Our verdict is an energy criterion (stated above the table); study bdf "
                    "judges position against a DOP853 reference instead."),
-    Section("bdf", "Fixed-step BDF1-4, stability regions, CVODE order caps (document 001 "
-            "sections 1.6-1.9, Tables 1-4)", ("study", "bdf", "--short"),
+    Section("bdf", "Fixed-step BDF1-4, stability regions of BDF1-6, CVODE order caps "
+            "(document 001 sections 1.6-1.10, Tables 1-4, Figs 14-23)", ("study", "bdf", "--short"),
             full_command=("study", "bdf"), run=bdf_section,
             seed="Tables 1-4: verdicts of explicit Euler, BDF2, BDF3, BDF4 over k and N (the "
-                 "document's column); CVODE at order 1: 38 501 steps (k = 10) and 76 856 (k = 50) "
-                 "against 536 and 1100 at order 5 (the document's steps); the rtol = atol = 0.1 "
-                 "'choppy' traces.",
+                 "`document` column); CVODE at order 1: 38 501 steps (k = 10) and 76 856 "
+                 "(k = 50) against 536 and 1100 at the default order (`document_steps`); the "
+                 "choppy traces at a 0.1 tolerance (Figs 19-23).",
             method="Accuracy is judged on position against DOP853 at 1e-12 (stated above the "
-                   "tables); the short form runs only the cells with a verdict of the document and no "
-                   "order-1 run at k = 50."),
+                   "tables), stability also by the principal root |zeta| at i h sqrt(k); the "
+                   "short form runs the document's 16 cells only and no order-1 run at k = 50."),
     Section("squeezer", "Andrew's squeezer: index 1, 2 and 3, positions, velocities, "
-            "multipliers, drift (document 001 section 2)", ("study", "squeezer"), run=squeezer_section,
-            seed="The reference end state at t = 0.03 s (Hairer-Wanner), and the document's plots "
-                 "of the index-1, -2 and -3 runs and of the index-1 drift.",
+            "multipliers, drift, step sizes (document 001 section 2)", ("study", "squeezer"),
+            run=squeezer_section,
+            seed="The reference end state at t = 0.03 s (Hairer-Wanner), and document 001's "
+                 "plots of the index-1, -2 and -3 runs, the drift and IDA's step sizes.",
             method="`rel. error q` is our end state (index 1 with projection, RK45) against "
                    "that reference; the figures below run each index."),
-    Section("squeezer-index3", "Andrew's squeezer: index-3 tolerance-by-suppression grids "
-            "(document 001 Tables 8-10)", ("study", "squeezer", "--table"), run=suppression_section,
-            seed="Tables 8 and 9: Assimulo IDA on index 3 (v' and lambda out of the error "
-                 "test: 843 steps, 1811 f-evals) and index 2 (1603 steps); the document's "
-                 "tolerance grid itself is not in benchmarks.md.",
-            method="Per tolerance, ours runs IDA with and without suppress-alg and Radau5 with "
-                   "and without the index-dependent error scaling, and gives q's error against "
-                   "the reference or why the run failed."),
-    Section("woodpecker", "Woodpecker toy: state events and impacts (document 001, Lund FMNN05 "
-            "project 3; Tables 15 and 16)", ("study", "woodpecker"), run=woodpecker_section,
+    Section("squeezer-index3", "Andrew's squeezer: tolerance and suppression settings "
+            "(document 001 Tables 8-10)", ("study", "squeezer", "--table"),
+            run=suppression_section,
+            seed="Tables 8 and 9: seven settings of the tolerances on (v, v', lambda) and the "
+                 "suppressed ones, with IDA's success on index 3 and index 2; Table 10: "
+                 "index 3 843 steps, 1811 f-evals; index 2 1603 steps.",
+            method="The document's seven settings run on our IDA as it gives them; then, per "
+                   "tolerance, IDA with and without suppress-alg and Radau5 with and without "
+                   "the index-dependent error scaling, with q's error against the reference "
+                   "or why the run failed."),
+    Section("woodpecker", "Woodpecker toy: state events and impacts (document 001 section 3, "
+            "Tables 15 and 16)", ("study", "woodpecker"), run=woodpecker_section,
             seed="22 beak hits over 2 s; Assimulo IDA 7228 steps and 224 state events, Dymola "
-                 "3239 steps and 177 events (the document's rows of the statistics table).",
+                 "3239 steps and 177 events (rows `(document)` of the statistics table).",
             method="Ours is DOP853 at rtol 1e-6 with a hybrid event loop, not a DAE solver: "
                    "step counts are not comparable one to one; beak hits and the mode "
                    "sequence are."),
@@ -311,7 +314,7 @@ SECTION_NAMES = tuple(section.name for section in SECTIONS)
 
 #: Section name -> the figure set drawn after its run.
 FIGURE_SETS: dict[str, FigureSet] = {figure_set.name: figure_set for figure_set in (
-    pendulum_figures.PENDULUM_SET, pendulum_figures.BDF_SET, squeezer_figures.SQUEEZER_SET,
+    pendulum_figures.PENDULUM_SET, bdf_figures.BDF_SET, squeezer_figures.SQUEEZER_SET,
     woodpecker_figures.WOODPECKER_SET, lagrange_figures.LAGRANGE_2D_SET,
     lagrange_figures.LAGRANGE_3D_SET, *equation_figures.STRUCTURE_SETS,
     *equation_figures.PIPELINE_SETS, rotations_figures.ROTATIONS_SET,

@@ -1,12 +1,13 @@
-"""The elastic (spring) pendulum, the seed's first study (shared/benchmarks.md section 3).
+"""The elastic (spring) pendulum, document 001's first study (its section 1).
 
 A unit point mass on a spring of unit rest length and stiffness k, unit gravity along -y.
 State x = (x, y, vx, vy) in the plane (m, m/s with all units 1):
     x' = vx, y' = vy, vx' = -x lambda, vy' = -y lambda - 1, lambda = k (r - 1) / r.
 Energy E = (vx^2 + vy^2) / 2 + y + k (r - 1)^2 / 2 is conserved.
 
-:func:`elastic_pendulum_study` reproduces the seed's tables with our integrators and puts
-the seed's figures beside ours.
+:func:`elastic_pendulum_study` reproduces the document's tables with our integrators and
+puts the document's figures beside ours. :func:`taylor_reference` is an independent
+reference: mpmath's Taylor-series integrator at 30 digits.
 """
 from __future__ import annotations
 
@@ -23,9 +24,13 @@ from youbot_dynamics.integrate.registry import FIXED_STEP, INTEGRATORS
 from youbot_dynamics.io.text_tables import cell, markdown_table
 
 STATE_NAMES = ("x", "y", "vx", "vy")
-#: The seed's initial state: spring stretched to r = 1.2 along x, at rest.
+#: Document 001's initial state of sections 1.7-1.11: spring stretched to r = 1.2 along x,
+#: at rest; its time span (s).
 SEED_STATE0 = (1.2, 0.0, 0.0, 0.0)
 SEED_T_END = 20.0
+#: Its free swings (Figs 1-9): k -> initial state. Figs 1-6 start at x = 1 unstretched
+#: (section 1.4: "all zeros except for the x which is set to 1"), Figs 7-9 at x = 1.2.
+FREE_SWINGS = {0.75: (1.0, 0.0, 0.0, 0.0), 100.0: (1.0, 0.0, 0.0, 0.0), 10.0: SEED_STATE0}
 #: "Stable": the run stays finite, inside |state| <= STABLE_BOUND, with the maximum energy
 #: error below STABLE_ENERGY_ERROR (the pendulum's potential-energy scale m g L = 1).
 #: "Accurate": maximum energy error below ACCURATE_ENERGY_ERROR.
@@ -92,7 +97,7 @@ def simulate_elastic_pendulum(k: float, state0: Sequence[float], t_end: float,
 
     Returns the solution and the energy error max |E(t) - E(0)| over the outputs. The
     implicit methods get the analytic Jacobian, or with ``jacobian="difference"`` build
-    their own by difference quotients (as the seed's Assimulo runs did). ``bounds`` bounds
+    their own by difference quotients (as document 001's Assimulo runs did). ``bounds`` bounds
     |every component|; energy growth beyond :func:`energy_growth_monitor`'s limit is a
     DivergenceError. ``max_steps`` (step budget), ``progress(t)`` and ``max_order``
     (CVODE's order cap) go to :func:`integrate`.
@@ -122,9 +127,29 @@ def simulate_elastic_pendulum(k: float, state0: Sequence[float], t_end: float,
     return solution, float(np.max(np.abs(energy - energy[0])))
 
 
+def taylor_reference(k: float, state0: Sequence[float], times: Sequence[float],
+                     digits: int = 30) -> np.ndarray:
+    """The state (x, y, vx, vy) at ``times`` (s, ascending from 0) by mpmath's Taylor-series
+    integrator (``mpmath.odefun``) at ``digits`` significant digits: an independent
+    reference for the float integrators (n, 4)."""
+    import mpmath
+    with mpmath.workdps(digits):
+        stiffness = mpmath.mpf(k)
+
+        def rhs(t, state):
+            x, y, vx, vy = state
+            r = mpmath.sqrt(x * x + y * y)
+            lam = stiffness * (r - 1) / r
+            return [vx, vy, -x * lam, -y * lam - 1]
+        solution = mpmath.odefun(rhs, 0, [mpmath.mpf(v) for v in state0],
+                                 tol=mpmath.mpf(10) ** (-digits + 5))
+        return np.array([[float(v) for v in solution(t)] for t in times])
+
+
 @dataclass
 class StudyRow:
-    """One line of a study table: our measurement and, where the seed gives it, the seed's."""
+    """One line of a study table: our measurement and, where document 001 gives it, its
+    value (``document``)."""
 
     table: str
     integrator: str
@@ -136,7 +161,8 @@ class StudyRow:
     rhs_evals: int | None
     jac_evals: int | None
     wall_time: float | None
-    seed: str
+    document: str
+    nonlinear_iterations: int | None = None
 
     def as_dict(self) -> dict:
         """The row as plain data."""
@@ -145,7 +171,7 @@ class StudyRow:
 
 def stability_verdict(k: float, n_steps: int, integrator: str = "euler"
                       ) -> tuple[str, float | None, Solution | None]:
-    """Run N fixed steps on the seed's problem; "unstable" if it diverges (non-finite or
+    """Run N fixed steps on document 001's problem; "unstable" if it diverges (non-finite or
     beyond STABLE_BOUND) or its energy error reaches STABLE_ENERGY_ERROR, "accurate" below
     ACCURATE_ENERGY_ERROR, else "stable, inaccurate"."""
     try:
@@ -161,26 +187,27 @@ def stability_verdict(k: float, n_steps: int, integrator: str = "euler"
 
 
 def study_row(table: str, integrator: str, k: float, setting: str, solution: Solution | None,
-              error: float | None, seed: str, verdict: str | None = None) -> StudyRow:
+              error: float | None, document: str, verdict: str | None = None) -> StudyRow:
     """A StudyRow from a run (solution None: the run diverged)."""
     stats = None if solution is None else solution.stats
     return StudyRow(table, integrator, k, setting, verdict, error,
                     None if stats is None else stats.steps,
                     None if stats is None else stats.rhs_evals,
                     None if stats is None else stats.jac_evals,
-                    None if stats is None else stats.wall_time, seed)
+                    None if stats is None else stats.wall_time, document,
+                    None if stats is None else stats.nonlinear_iterations)
 
 
-#: The seed's figures (benchmarks.md section 3).
+#: Document 001's Table 1 verdicts and Tables 5-6 counts.
 SEED_EULER = {(1, 1000): "stable, inaccurate", (1, 10000): "accurate", (20, 1000): "unstable",
               (20, 10000): "accurate"}
-#: The CVODE rows are run with CVODE's own difference-quotient Jacobian, as the seed's
-#: Assimulo runs were (no Jacobian given): BDF k = 10 then takes the seed's 536 steps
+#: The CVODE rows are run with CVODE's own difference-quotient Jacobian, as document 001's
+#: Assimulo runs were (no Jacobian given): BDF k = 10 then takes the document's 536 steps
 #: exactly (545 with the analytic Jacobian).
-SEED_CVODE = {("cvode_bdf", 10): "536 steps, 580 f-evals, 9 J-evals",
-              ("cvode_adams", 10): "381 steps, 455 f-evals",
-              ("cvode_bdf", 50): "1100 steps, 1177 f-evals",
-              ("cvode_adams", 50): "737 steps, 880 f-evals",
+SEED_CVODE = {("cvode_bdf", 10): "536 steps, 580 f-evals, 9 J-evals, 576 nonlinear",
+              ("cvode_adams", 10): "381 steps, 455 f-evals, 7 J-evals, 451 nonlinear",
+              ("cvode_bdf", 50): "1100 steps, 1177 f-evals, 19 J-evals, 1173 nonlinear",
+              ("cvode_adams", 50): "737 steps, 880 f-evals, 13 J-evals, 876 nonlinear",
               ("rk45", 10): "Dopri45: 201 steps, 1208 f-evals",
               ("lsoda", 10): "LSODAR: 362 steps, 747 f-evals"}
 
@@ -188,7 +215,7 @@ SEED_CVODE = {("cvode_bdf", 10): "536 steps, 580 f-evals, 9 J-evals",
 def elastic_pendulum_study(energy_k: float = 10.0,
                            fixed_steps: Sequence[int] = (1000, 10000),
                            tolerances: Sequence[float] = (1e-4, 1e-6, 1e-8)) -> list[StudyRow]:
-    """The seed's tables with our integrators, seed figures beside ours:
+    """Document 001's tables with our integrators, its figures beside ours:
 
     1. explicit Euler stable or not for k = 1, 20 with N = 1000, 10000 steps on [0, 20];
     2. CVODE BDF vs Adams (and Dormand-Prince) at rtol = atol = 1e-6, k = 10 and 50;
@@ -301,24 +328,25 @@ TABLE_TITLES = {
                        f"accurate: max|E-E0| < {ACCURATE_ENERGY_ERROR:g})",
     "cvode_statistics": "Statistics at rtol = atol = 1e-6 from x0 = 1.2 on [0, 20] (CVODE "
                         "and LSODA with their own difference-quotient Jacobians, as the "
-                        "seed's runs; scipy's LSODA beside the seed's LSODAR)",
+                        "document 001's runs; scipy's LSODA beside its LSODAR)",
     "energy_error": "Energy error max|E-E0| versus step size / tolerance",
 }
 TABLE_COLUMNS = ("integrator", "k", "setting", "verdict", "energy_error", "steps", "rhs_evals",
-                 "jac_evals", "wall_time", "seed")
-TEXT_COLUMNS = ("integrator", "setting", "verdict", "seed")
+                 "jac_evals", "nonlinear_iterations", "wall_time", "document")
+TEXT_COLUMNS = ("integrator", "setting", "verdict", "document")
 
 
 def tables_text(rows: Sequence[StudyRow]) -> str:
-    """The study's tables (Markdown) with each verdict that differs from the seed's noted."""
+    """The study's tables (Markdown) with each verdict that differs from the document's
+    noted."""
     lines = []
     for table, title in TABLE_TITLES.items():
         lines += [f"\n{title}\n", markdown_table(TABLE_COLUMNS, (
             [(getattr(row, c) or "-") if c in TEXT_COLUMNS else getattr(row, c)
              for c in TABLE_COLUMNS] for row in rows if row.table == table), digits=3)]
-        lines += [f"- k={row.k:g} {row.setting}: the seed says {row.seed!r}, our energy "
+        lines += [f"- k={row.k:g} {row.setting}: document 001 says {row.document!r}, our energy "
                   f"criterion {row.verdict!r} (max|E-E0| {cell(row.energy_error)}); "
                   f"study bdf judges position against a reference instead"
-                  for row in rows if row.table == table and row.verdict and row.seed
-                  and row.verdict != row.seed]
+                  for row in rows if row.table == table and row.verdict and row.document
+                  and row.verdict != row.document]
     return "\n".join(lines)

@@ -32,6 +32,7 @@ from youbot_dynamics.integrate.constrained import ConstrainedRun, simulate_holon
 from youbot_dynamics.integrate.errors import IntegrationError
 from youbot_dynamics.integrate.integrators import integrate_dae
 from youbot_dynamics.integrate.radau_dae import integrate_dae_form
+from youbot_dynamics.integrate.sundials import IdaStepper
 
 POSITION_NAMES = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
 #: The unknown functions of t in :func:`squeezer_equations`, in the order q, v, lambda.
@@ -66,16 +67,16 @@ Q_REFERENCE = np.array([15.81077119629904, -15.75637105984298, 0.040822240130731
 #: Baumgarte rates (1/s) used by ``index1-baumgarte``: critical damping, time constant
 #: 1 ms, short against the 30 ms run and long against the steps (about 10 us at 1e-6).
 BAUMGARTE_RATE = 1000.0
-#: Seed figures on [0, 0.03] s (benchmarks.md section 1), for tables side by side.
+#: Document 001's counts on [0, 0.03] s (Tables 10, 11, 14), for tables side by side.
 SEED_FIGURES = {
     "Assimulo IDA index 2": {"steps": 1603, "rhs_evals": 2692, "jac_evals": 227,
                              "rejected_steps": 81},
     "Assimulo IDA index 3": {"steps": 843, "rhs_evals": 1811, "jac_evals": 834,
                              "nonlinear_convergence_failures": 261},
-    "DOPRI5 index 1": {"steps": 85, "rhs_evals": 704},
+    "DOPRI5 index 1": {"steps": 85, "rhs_evals": 704, "rejected_steps": 32},
     "Dymola": {"steps": 169, "rhs_evals": 421, "jac_evals": 30},
 }
-#: Tolerances (rtol = atol, as in the seed's Assimulo runs) of the suppression grids.
+#: Tolerances (rtol = atol, as in document 001's Assimulo runs) of the suppression grids.
 SUPPRESSION_TOLERANCES = (1e-4, 1e-6, 1e-8)
 #: Columns of the suppression grids: name -> (integrator, higher-index variables out of
 #: the error test). IDA suppressed: IDASetSuppressAlg on the form's excluded components
@@ -88,14 +89,27 @@ SUPPRESSION_COLUMNS = {"ida, all in error test": ("ida", False),
 #: Steps after which a grid run is given up (an error test that cannot pass at a
 #: collapsing step size would otherwise run for minutes).
 SUPPRESSION_STEP_BUDGET = 2500
-#: What benchmarks.md gives of the seed's runs behind its Tables 8 and 9 (Assimulo IDA at
-#: its defaults, rtol = atol = 1e-6, 500 outputs); the grids themselves are not there.
+#: Document 001's runs behind its Table 10 (Assimulo IDA, rtol 1e-6, 500 outputs).
 SEED_SUPPRESSION = {
-    "index3": "seed, Assimulo IDA with v' and lambda out of the error test: ran, 843 steps, "
-              "1811 f-evals, 834 J-evals, 261 convergence failures",
-    "index2": "seed, Assimulo IDA: ran, 1603 steps, 2692 f-evals, 227 J-evals, "
-              "81 error-test failures",
+    "index3": "document 001, Assimulo IDA with v' and lambda at atol 1e5 and suppressed: ran, "
+              "843 steps, 1811 f-evals, 834 J-evals, 261 convergence failures",
+    "index2": "document 001, Assimulo IDA with lambda at atol 1e5 and suppressed: ran, 1603 "
+              "steps, 2692 f-evals, 227 J-evals, 81 error-test failures",
 }
+#: Document 001's Tables 8 (index 3) and 9 (index 2) as printed: absolute tolerances of
+#: (v, v', lambda), the suppressed ones (IDASetSuppressAlg), and the solver's success
+#: (index 3, index 2). q runs at atol 1e-6, rtol 1e-6 throughout (Assimulo's defaults).
+DOCUMENT_SETTINGS = (
+    ((1e-6, 1e-6, 1e-6), (), ("No", "No")),
+    ((1e-6, 1e-6, 1e5), (), ("No", "Yes")),
+    ((1e-6, 1e5, 1e5), (), ("Yes", "Yes")),
+    ((1e-6, 1e-6, 1e-6), ("lambda",), ("No", "No")),
+    ((1e-6, 1e-6, 1e-6), ("w", "lambda"), ("No", "No")),
+    ((1e-6, 1e-6, 1e5), ("lambda",), ("No", "Yes")),
+    ((1e-6, 1e5, 1e5), ("w", "lambda"), ("Yes", "Yes")),
+)
+#: Step budget of a DOCUMENT_SETTINGS run (the document's runs took 843 and 1603).
+DOCUMENT_SETTINGS_BUDGET = 2500
 
 
 @dataclass(frozen=True)
@@ -225,7 +239,7 @@ def simulate_squeezer(formulation: str, integrator: str | None = None, rtol: flo
                       baumgarte_rate: float = BAUMGARTE_RATE,
                       exact_jacobian: bool | None = None) -> ConstrainedRun:
     """The squeezer from the test set's consistent initial values over [0, t_end] s with
-    n_outputs equally spaced outputs (the seed's 500 by default). ``integrator`` defaults
+    n_outputs equally spaced outputs (document 001's 500 by default). ``integrator`` defaults
     to radau5 for index3 (the index-scaled error test), ida for the other DAE
     formulations and rk45 otherwise; atol defaults to rtol * 1e-3 (q is O(1) to O(10)
     rad, v up to O(1e3) rad/s). DAE forms use the exact Jacobian unless
@@ -299,13 +313,70 @@ def suppression_run(formulation: str, column: str, tol: float, n_outputs: int) -
 
 def suppression_table(formulation: str, tolerances=SUPPRESSION_TOLERANCES,
                       n_outputs: int = 500) -> dict[float, dict[str, GridCell]]:
-    """The tolerance-by-suppression grid of one formulation (index3: the seed's Table 8,
+    """The tolerance-by-suppression grid of one formulation (index3: document 001's Table 8,
     index2: its Table 9): tolerance -> column -> :class:`GridCell`."""
     if formulation not in ("index3", "index2"):
         raise UserInputError(f"suppression grids exist for index3 and index2, got "
                              f"{formulation!r}")
     return {tol: {column: suppression_run(formulation, column, tol, n_outputs)
                   for column in SUPPRESSION_COLUMNS} for tol in tolerances}
+
+
+def document_settings_run(formulation: str, row: int) -> dict:
+    """One row of Tables 8 (index3) or 9 (index2) as document 001 ran it: IDA with its own
+    difference-quotient Jacobian (as Assimulo's), rtol 1e-6, atol 1e-6 on q and the row's
+    on (v, w = v', lambda), the row's components suppressed from the error test, 500
+    outputs on [0, 0.03] s, at most DOCUMENT_SETTINGS_BUDGET steps. Returns "success"
+    ("Yes" / "No"), the document's, and our steps, evaluations, error-test and
+    convergence failures and q's error (or where and why it failed)."""
+    tolerances, suppressed, document = DOCUMENT_SETTINGS[row]
+    form = dae_form(squeezer_system(), formulation, Q0, V0, W0, LAMBDA0)
+    n, m = form.n, form.m
+    atol = np.concatenate((np.full(n, 1e-6), np.full(n, tolerances[0]),
+                           np.full(n, tolerances[1]), np.full(m, tolerances[2])))
+    marked = np.zeros(atol.size, dtype=bool)
+    marked[2 * n:3 * n] = "w" in suppressed
+    marked[3 * n:] = "lambda" in suppressed
+    result = {"document": document[0 if formulation == "index3" else 1]}
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            solution = integrate_dae(form.residual, form.y0, form.yp0,
+                                     np.linspace(0.0, T_REFERENCE, 500),
+                                     algebraic=marked if suppressed else form.algebraic,
+                                     rtol=1e-6, atol=atol,
+                                     exclude_from_error_test=marked if suppressed else None,
+                                     max_steps=DOCUMENT_SETTINGS_BUDGET)
+    except IntegrationError as error:
+        when = getattr(error, "time", None)
+        return {**result, "success": "No", "failed_at": when, "reason": str(error)}
+    stats = solution.stats
+    return {**result, "success": "Yes", "steps": stats.steps, "rhs_evals": stats.rhs_evals,
+            "error_test_failures": stats.rejected_steps,
+            "convergence_failures": stats.nonlinear_convergence_failures,
+            "q_error": float(np.max(reference_error(form.positions(solution.x[-1]))))}
+
+
+def index2_step_sizes(row: int = 6) -> tuple[np.ndarray, np.ndarray]:
+    """Document 001's Fig. 30 run: index 2 on IDA with Table 9's setting ``row`` (default
+    the seventh: v' and lambda at atol 1e5 and suppressed) and no outputs between 0 and
+    0.03 s; the end time of every step and its size (s)."""
+    tolerances, suppressed, _ = DOCUMENT_SETTINGS[row]
+    form = dae_form(squeezer_system(), "index2", Q0, V0, W0, LAMBDA0)
+    n, m = form.n, form.m
+    atol = np.concatenate((np.full(n, 1e-6), np.full(n, tolerances[0]),
+                           np.full(n, tolerances[1]), np.full(m, tolerances[2])))
+    marked = np.zeros(atol.size, dtype=bool)
+    marked[2 * n:3 * n] = "w" in suppressed
+    marked[3 * n:] = "lambda" in suppressed
+    stepper = IdaStepper(form.residual, 0.0, form.y0, form.yp0, T_REFERENCE, marked, 1e-6, atol,
+                         None, {}, (), True)
+    times = [0.0]
+    with contextlib.redirect_stdout(io.StringIO()):
+        while stepper.t < T_REFERENCE and len(times) <= DOCUMENT_SETTINGS_BUDGET:
+            stepper.advance(T_REFERENCE)
+            times.append(stepper.t)
+    t = np.unique(np.array(times))
+    return t[1:], np.diff(t)
 
 
 def reference_error(q: np.ndarray) -> np.ndarray:
@@ -320,7 +391,7 @@ INDEX3_CAVEAT = ("IDA runs index 3 with v, w and lambda under a loose absolute t
                  "at t = 0: see study squeezer --table): the velocity along the motion is not "
                  "error-controlled and q's error is 1e2 to 1e4 times rtol; prefer "
                  "--integrator radau5 (the default: Hairer's index-scaled error test)")
-#: Table numbers of the seed for each formulation's suppression grid.
+#: Document 001's table number of each formulation's suppression grid.
 SEED_TABLES = {"index3": 8, "index2": 9}
 
 
@@ -405,51 +476,72 @@ def text(result: SqueezerResult) -> str:
 
 @dataclass(frozen=True)
 class SuppressionConfig:
-    """The suppression grids: rtol = atol values and output times."""
+    """The suppression grids: rtol = atol values and output times; ``document_rows``: also
+    run the seven settings of document 001's Tables 8 and 9 as it gives them."""
 
     tolerances: tuple[float, ...] = SUPPRESSION_TOLERANCES
     outputs: int = 500
+    document_rows: bool = True
 
 
 @dataclass
 class SuppressionTables:
-    """formulation (index3, index2) -> tolerance -> column -> GridCell."""
+    """formulation (index3, index2) -> tolerance -> column -> GridCell, and per formulation
+    the document's seven settings' runs (:func:`document_settings_run`)."""
 
     config: SuppressionConfig
     tables: dict[str, dict[float, dict[str, GridCell]]]
+    document_rows: dict[str, list[dict]]
 
 
 def run_suppression(config: SuppressionConfig) -> SuppressionTables:
-    """The grids of index 3 and index 2 (the seed's Tables 8 and 9)."""
+    """The grids of index 3 and index 2 (document 001's Tables 8 and 9)."""
     if not all(tol > 0 for tol in config.tolerances):
         raise UserInputError(f"--tolerances must be positive, got {list(config.tolerances)}")
     if config.outputs < 2:
         raise UserInputError(f"--outputs must be at least 2, got {config.outputs!r}")
     return SuppressionTables(config, {
         formulation: suppression_table(formulation, config.tolerances, config.outputs)
-        for formulation in SEED_TABLES})
+        for formulation in SEED_TABLES}, {
+        formulation: ([document_settings_run(formulation, row)
+                       for row in range(len(DOCUMENT_SETTINGS))]
+                      if config.document_rows else []) for formulation in SEED_TABLES})
 
 
 def suppression_json(result: SuppressionTables) -> dict:
-    """Per formulation: the seed's table number and figures, and the grid's rows."""
+    """Per formulation: the document's table number and figures, the grid's rows and the
+    document's settings run as it gives them."""
     return {formulation: {
-        "seed_table": SEED_TABLES[formulation], "seed": SEED_SUPPRESSION[formulation],
+        "document_table": SEED_TABLES[formulation], "document": SEED_SUPPRESSION[formulation],
         "rows": [{"tol": tol, **{column: vars(cell) for column, cell in row.items()}}
-                 for tol, row in table.items()]}
+                 for tol, row in table.items()],
+        "document_settings": [{"atol_v_w_lambda": list(DOCUMENT_SETTINGS[i][0]),
+                               "suppressed": list(DOCUMENT_SETTINGS[i][1]), **run}
+                              for i, run in enumerate(result.document_rows[formulation])]}
         for formulation, table in result.tables.items()}
 
 
 def suppression_text(result: SuppressionTables) -> str:
     """Per tolerance and column, q's largest relative error at t = 0.03 s and the steps,
-    or why the run failed; the seed's figures under each table."""
+    or why the run failed; then the document's seven settings beside its verdicts."""
     width = max(len(column) for column in SUPPRESSION_COLUMNS)
     lines = []
     for formulation, table in result.tables.items():
-        lines.append(f"Seed Table {SEED_TABLES[formulation]}: Andrew's squeezer, {formulation}, "
+        lines.append(f"Table {SEED_TABLES[formulation]}: Andrew's squeezer, {formulation}, "
                      f"rtol = atol = tol, {result.config.outputs} outputs; q's largest relative "
                      f"error at t = {T_REFERENCE:g} s against the test set, or why the run failed")
         for tol, row in table.items():
             lines.append(f"  tol {tol:g}")
             lines += [f"    {column:{width}s}  {cell.verdict()}" for column, cell in row.items()]
-        lines.append(f"  {SEED_SUPPRESSION[formulation]} (its grid is not in benchmarks.md)")
+        lines.append(f"  {SEED_SUPPRESSION[formulation]}")
+        if result.document_rows[formulation]:
+            lines.append(f"  Table {SEED_TABLES[formulation]}'s settings (atol of v, v', lambda; "
+                         "suppressed) as the document gives them: its success, ours")
+        for (tolerances, suppressed, _), run in zip(DOCUMENT_SETTINGS,
+                                                    result.document_rows[formulation]):
+            ours = (f"{run['steps']} steps, q err {run['q_error']:.1e}" if run["success"] == "Yes"
+                    else f"fails at t = {run['failed_at']:.3g} s")
+            lines.append(f"    [{', '.join(f'{t:g}' for t in tolerances)}] suppressed "
+                         f"{', '.join(suppressed) or '-'}: document {run['document']}, ours "
+                         f"{run['success']} ({ours})")
     return "\n".join(lines)

@@ -1,4 +1,4 @@
-"""The woodpecker toy (seed: Lund FMNN05 project 3; benchmarks.md section 2) as a hybrid
+"""The woodpecker toy (document 001 section 3) as a hybrid
 system: a sleeve (mass mS, inertia JS) slides and tilts on a vertical bar of radius r0, the
 bird (mB, JB) hangs on it by a rotational spring cp.
 
@@ -15,19 +15,19 @@ In a blocked mode the constraints g = (rS - r0) +- hS phiS = 0 and z' + rS phiS'
 and f is affine in x, so each mode is x' = A x + b and lambda = L x + l: the matrices are
 solved once. lambda1 (N) is the corner normal force multiplier, lambda2 (N) the sticking
 friction; a compressive contact has lambda1 < 0 (the force -G^T lambda pushes the sleeve
-back into its admissible range; the seed's resting initial state has lambda1 < 0).
+back into its admissible range; the document's resting initial state has lambda1 < 0).
 
-Switches, exactly the seed's: blocking I -> II (phiS falls to the lower stop, phiB' < 0)
+Switches, exactly the document's: blocking I -> II (phiS falls to the lower stop, phiB' < 0)
 and I -> III (phiS rises to the upper stop, phiB' > 0) by a perfectly plastic impact:
 z' = phiS' = 0 and the bird's generalised momentum
 (M v)_3 = mB lG z' + mB lS lG phiS' + (JB + mB lG^2) phiB' is kept; II -> I when lambda1
 changes sign; III -> I when lambda1 changes sign with phiB' < 0; the beak hits the bar in
 III when hB phiB reaches lS + lG - lB - r0 with phiB' > 0: phiB' changes sign, the mode
 stays III. A blocking impact leaves lambda1 > 0 (tensile) for the first milliseconds of
-II and III (lambda is affine in phiB alone here): the seed's rules keep the contact until
+II and III (lambda is affine in phiB alone here): the document's rules keep the contact until
 that sign changes (II: the sleeve is then released and re-blocks; III: held by the
 phiB' < 0 condition until after the beak hit). The phiB' conditions on blocking let phiS
-pass the upper stop by about 1.5e-3 rad after a III release, as in the seed's model.
+pass the upper stop by about 1.5e-3 rad after a III release, as in the document's model.
 """
 from __future__ import annotations
 
@@ -44,24 +44,24 @@ MODES = ("I", "II", "III")
 #: Switch kinds: blocking impacts, releases and the beak hit.
 BLOCK_II, BLOCK_III, RELEASE_II, RELEASE_III, BEAK = (
     "block_II", "block_III", "release_II", "release_III", "beak")
-#: The seed's initial state, in mode II. lambda is no state here but an output of the state:
-#: (lambda1, lambda2) = (-0.69113, -0.14163) N at it, not the seed's listed initial values
-#: (-0.628993, 0.047088), which this model does not reproduce from the seed's state.
+#: Document 001's initial state, in mode II. lambda is no state here but an output of the
+#: state: (lambda1, lambda2) = (-0.69113, -0.14163) N at it, as the start values of the
+#: document's own Dymola listing (-0.6911, -0.1416), not its text's (-0.628993, 0.047088).
 SEED_INITIAL_MODE = "II"
 SEED_INITIAL_STATE = (0.0, -0.10344, -0.65, 0.0, 0.0, 0.0)
-#: The seed's published figures over [0, 2] s (benchmarks.md section 2).
+#: Document 001's counts over [0, 2] s (Tables 15 and 16).
 SEED_BEAK_HITS = 22
 SEED_FIGURES = {
-    "Assimulo IDA (seed)": {"steps": 7228, "rhs_evals": 9254, "jac_evals": 3132,
+    "Assimulo IDA (document)": {"steps": 7228, "rhs_evals": 9254, "jac_evals": 3132,
                             "events": 224, "wall_time": 1.75},
-    "Dymola (seed)": {"steps": 3239, "rhs_evals": 8332, "jac_evals": 1460,
+    "Dymola (document)": {"steps": 3239, "rhs_evals": 8332, "jac_evals": 1460,
                       "events": 177, "wall_time": 0.0343},
 }
 
 
 @dataclass(frozen=True)
 class WoodpeckerParameters:
-    """The seed's parameters (SI: kg, kg m^2, m, N m/rad, m/s^2)."""
+    """Document 001's parameters (SI: kg, kg m^2, m, N m/rad, m/s^2)."""
 
     mS: float = 3.0e-4
     JS: float = 5.0e-9
@@ -208,7 +208,7 @@ class Woodpecker:
 
 @dataclass(frozen=True)
 class WoodpeckerConfig:
-    """One run of the toy from the seed's state: ``duration`` (s), the integrator, its
+    """One run of the toy from the document's state: ``duration`` (s), the integrator, its
     tolerances, a fixed step ``dt`` (s) for fixed-step integrators, and ``n_out`` output
     samples (0: only the switches, start and end)."""
 
@@ -253,17 +253,17 @@ def as_json(result: WoodpeckerRun) -> dict:
 
 
 def seed_json() -> dict:
-    """The seed's beak hits and statistics."""
+    """Document 001's beak hits and statistics."""
     return {"beak_hits": SEED_BEAK_HITS, **SEED_FIGURES}
 
 
 def text(result: WoodpeckerRun) -> str:
-    """Beak hits beside the seed's, the switches, the final state and the statistics
-    table beside the seed's rows."""
+    """Beak hits beside the document's, the switches, the final state and the statistics
+    table beside the document's rows."""
     config, summary = result.config, as_json(result)
     lines = [f"woodpecker toy over [0, {config.duration:g}] s with {config.integrator} "
              f"(rtol {config.rtol:g}): {summary['beak_hits']} beak hits "
-             f"(seed over 2 s: {SEED_BEAK_HITS})"]
+             f"(document 001 over 2 s: {SEED_BEAK_HITS})"]
     lines += [f"  t = {switch['time']:.6f} s  {switch['kind']:<12} "
               f"{switch['from']} -> {switch['to']}" for switch in summary["switches"]]
     lines.append(f"final mode {summary['final_mode']}, state "
