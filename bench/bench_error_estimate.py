@@ -1,11 +1,8 @@
 """The error estimate against the true error: every registry integrator that runs the case,
 at three settings, on arm_swing, the elastic pendulum (k = 1000), ball_drop and gripping
-(youbot_dynamics.accuracy.estimate_check; the method is in docs/accuracy.md).
-
-Cases: arm_swing over its 2 s; the elastic pendulum from the seed's state over 2 s (about
-10 spring periods), reference DOP853 at rtol 1e-13; ball_drop over 1 s (the first impact
-and apex); gripping over 12 s (the first grasp and the drop on the table; the constraint
-steppers only). Prints a markdown table; ``--fast`` runs the test's subset.
+(the cases: youbot_dynamics.studies.estimate_table; the method: docs/accuracy.md). Prints
+a markdown table and exits 1 if a resolved row is beyond a factor 3; ``--fast`` runs the
+test's subset.
 
 Run: python bench/bench_error_estimate.py [--fast] [--case NAME ...]
 """
@@ -15,67 +12,11 @@ import argparse
 import math
 import sys
 import time
-from functools import partial
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
-from youbot_dynamics.accuracy.estimate_check import (CheckRow, markdown, ode_rows,  # noqa: E402
-                                                     reference_run, scene_rows)
-from youbot_dynamics.integrate.integrators import integrate  # noqa: E402
-from youbot_dynamics.integrate.registry import integrator_names  # noqa: E402
-from youbot_dynamics.scene.schema import load_scene  # noqa: E402
-from youbot_dynamics.studies.elastic_pendulum import (SEED_STATE0, elastic_pendulum_jacobian,  # noqa: E402
-                                                      elastic_pendulum_rhs)
-
-TOLERANCES = (1e-5, 1e-7, 1e-9)
-ADAPTIVE = integrator_names("ode", adaptive=True)
-#: Per case: (scene, duration) or None for the pendulum, and method -> its three settings.
-CASES = {
-    "arm_swing": (("arm_swing", 2.0), {"euler": (2e-4, 1e-4, 5e-5), "symplectic_euler": (2e-4, 1e-4, 5e-5),
-                                       "rk4": (4e-3, 2e-3, 1e-3), "ida": TOLERANCES,
-                                       **{m: TOLERANCES for m in ADAPTIVE}}),
-    "elastic_pendulum": (None, {"euler": (1e-5, 5e-6, 2.5e-6), "symplectic_euler": (1e-4, 5e-5, 2.5e-5),
-                                "rk4": (4e-3, 2e-3, 1e-3), **{m: TOLERANCES for m in ADAPTIVE}}),
-    "ball_drop": (("ball_drop", 1.0), {"euler": (2e-6, 1e-6, 5e-7), "symplectic_euler": (2e-6, 1e-6, 5e-7),
-                                       "rk4": (5e-5, 2.5e-5, 1.25e-5), **{m: TOLERANCES for m in ADAPTIVE}}),
-    "gripping": (("gripping", 12.0), {"pgs": (2e-3, 1e-3, 5e-4), "admm": (2e-3, 1e-3, 5e-4)}),
-}
-#: The test's subset (test/accuracy/test_estimate_check.py runs the same).
-FAST = {
-    "arm_swing": (("arm_swing", 0.5), {"rk4": (2e-3,), "dop853": (1e-7,), "cvode_bdf": (1e-7,)}),
-    "elastic_pendulum": (None, {"rk4": (2e-3,), "rk45": (1e-7,), "radau": (1e-7,)}),
-    "ball_drop": (("ball_drop", 0.6), {"rk45": (1e-7,)}),
-    "gripping": (("gripping", 0.3), {"pgs": (1e-3,)}),
-}
-PENDULUM_K, PENDULUM_T = 1000.0, 2.0
-
-
-def pendulum_rows(methods: dict[str, tuple[float, ...]]) -> list[CheckRow]:
-    """The elastic pendulum's rows: positions (x, y; m) and velocities (m/s)."""
-    rhs, jac = partial(elastic_pendulum_rhs, k=PENDULUM_K), partial(elastic_pendulum_jacobian, k=PENDULUM_K)
-    times = np.linspace(0.0, PENDULUM_T, 201)
-    refs = [integrate(rhs, SEED_STATE0, times, "dop853", rtol=rtol, atol=rtol / 100).x for rtol in (1e-13, 1e-12)]
-    own = float(np.max(np.abs(refs[0] - refs[1])))
-    groups = {"positions": (slice(0, 2), "m"), "rates": (slice(2, 4), "m/s")}
-    return [row for method, values in methods.items()
-            for row in ode_rows("elastic_pendulum", rhs, np.array(SEED_STATE0), times, method, values, refs[0], own,
-                                groups, jac)]
-
-
-def table(cases: dict) -> list[CheckRow]:
-    """Every row of ``cases`` (see CASES)."""
-    rows: list[CheckRow] = []
-    for name, (scene_case, methods) in cases.items():
-        if scene_case is None:
-            rows += pendulum_rows(methods)
-            continue
-        scene = load_scene(scene_case[0]).with_duration(scene_case[1])
-        reference = reference_run(scene)
-        for method, values in methods.items():
-            rows += scene_rows(scene, method, values, reference)
-    return rows
+from youbot_dynamics.accuracy.estimate_check import markdown  # noqa: E402
+from youbot_dynamics.studies.estimate_table import CASES, FAST, table  # noqa: E402
 
 
 def main() -> int:

@@ -21,6 +21,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from youbot_dynamics.accuracy.work_precision import spec_for
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import IntegrationError, integrate
 from youbot_dynamics.integrate.registry import integrator_entry
 from youbot_dynamics.scene.schema import IntegratorSpec, Scene
@@ -72,13 +74,6 @@ def resolved(true: float, own: float) -> bool:
     return true > 0 and true >= RESOLUTION * own
 
 
-def spec_of(method: str, value: float) -> IntegratorSpec:
-    """dt = value for a fixed step, else rtol = value, atol = value / 100; no energy check."""
-    if not integrator_entry(method).adaptive:
-        return IntegratorSpec(method, dt=value, energy_tolerance=math.inf)
-    return IntegratorSpec(method, rtol=value, atol=value / 100.0, energy_tolerance=math.inf)
-
-
 def _reference_specs(scene: Scene) -> tuple[IntegratorSpec, IntegratorSpec]:
     """(reference, the looser run that bounds its error)."""
     spec = scene.integrator
@@ -104,12 +99,12 @@ def scene_rows(scene: Scene, method: str, values: Sequence[float],
     ref, own, own_events = reference
     rows: list[CheckRow] = []
     for value in values:
-        spec = spec_of(method, value)
+        spec = spec_for(method, value)
         model = compile(scene, spec)
         setting = spec.describe()
         try:
             result = engine.run(model, error_estimate=True)
-        except IntegrationError as error:
+        except (IntegrationError, UserInputError) as error:
             rows.append(CheckRow(scene.name, method, setting, "-", "-", math.nan, math.nan, False, str(error)[:80]))
             continue
         estimate = result.error_estimate
@@ -135,12 +130,12 @@ def ode_rows(case: str, rhs: Callable, x0: np.ndarray, times: np.ndarray, method
     whose own error is ``reference_error``; ``groups``: name -> (components, unit)."""
     rows = []
     for value in values:
-        spec = spec_of(method, value)
-        companion = spec_of(method, value / 2.0 if spec.dt is not None else value / COMPANION_FACTOR)
+        spec = spec_for(method, value)
+        companion = spec_for(method, value / 2.0 if spec.dt is not None else value / COMPANION_FACTOR)
         try:
             x, x_c = (integrate(rhs, x0, times, method, dt=s.dt, rtol=s.rtol, atol=s.atol, jac=jac,
                                 n_positions=len(x0) // 2).x for s in (spec, companion))
-        except IntegrationError as error:
+        except (IntegrationError, UserInputError) as error:
             rows.append(CheckRow(case, method, spec.describe(), "-", "-", math.nan, math.nan, False, str(error)[:80]))
             continue
         factor = estimate_factor(method)

@@ -37,6 +37,7 @@ from youbot_dynamics.node.mobile_base import MobileBase
 from youbot_dynamics.node.sensors import SensorMessages
 from youbot_dynamics.node.session import Session
 from youbot_dynamics.scene.schema import Scene
+from youbot_dynamics.sim.error_estimate import CompanionStream, ErrorEstimate
 from youbot_dynamics.sim.simulator import Simulator, Snapshot
 
 NOT_REPORTED = "n/a"
@@ -75,8 +76,9 @@ class SimulationSession(Session):
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
                  mcap_path: str | Path | None = None, rrd_path: str | Path | None = None,
                  default_effort_limit: float = DEFAULT_EFFORT_LIMIT, callback_budget: float = 0.05,
-                 frame_prefix: str = "", node_name: str = "dynamics_node") -> None:
+                 frame_prefix: str = "", node_name: str = "dynamics_node", error_estimate: bool = False) -> None:
         self.simulator = Simulator(scene, scene.pinned_integrator())
+        self.companion = CompanionStream(self.simulator.model) if error_estimate else None
         if self.simulator.model.base is not None:
             self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix,
                                           self.simulator.robot.root_link)
@@ -126,6 +128,8 @@ class SimulationSession(Session):
             self.epoch_ns = self.last_reset_ns = self.stamp_ns + self.step_ns
             self.resets += 1
         self.simulator.reset()
+        if self.companion is not None:
+            self.companion.reset()
         self.commands.clear()
         if self.moving_base is not None:
             self.moving_base.reset()
@@ -183,15 +187,16 @@ class SimulationSession(Session):
             if self.moving_base is not None:
                 state = self.simulator.state
                 state.reference = dataclasses.replace(state.reference, base_twist=self.moving_base.twist(self.t))
-            start = time.perf_counter()
+            start, command = time.perf_counter(), self.commands.torque(self.t)
             try:
-                self._pending = self.simulator.advance_through(times, self.commands.torque(self.t),
-                                                               self._sensors.wanted)[::-1]
+                self._pending = self.simulator.advance_through(times, command, self._sensors.wanted)[::-1]
             except DivergenceError as error:
                 self.failure = f"diverged after t = {self.t:.6f} s: {error}"
                 return []
             finally:
                 self.wall_time += time.perf_counter() - start
+            if self.companion is not None:
+                self.companion.submit(times, command, self.simulator.state.reference, self._pending[::-1])
             self._prebuilt = self._block(self._pending[::-1])
         self.k += 1
         prebuilt = self._prebuilt.pop() if self._prebuilt else None
@@ -311,11 +316,35 @@ class SimulationSession(Session):
                   "paused": self.paused, "command": self._command_source(), "resets": self.resets,
                   "last_reset_at": "none" if self.last_reset_ns is None else self.last_reset_ns / NS_PER_S,
                   **stats, **self.counters.as_values(),
-                  **self.contact_values(), **base_values, **({} if progress is None else {"progress": progress})}
+                  **self.contact_values(), **base_values, **({} if progress is None else {"progress": progress}),
+                  **self.error_estimate_values()}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
         if (level, base_level) == ("OK", "WARN"):
             level, text = "WARN", f"base wheels slip: {base_values['base.slip']:.3g} m/s at a hub"
         return self._diagnostic_outputs(level, text, values)
+
+    def error_estimate(self, wait: bool = False) -> ErrorEstimate | None:
+        """The run's error estimate so far (None without ``error_estimate`` or before the
+        companion's first answer; ``wait``: after every chunk handed to it)."""
+        if self.companion is None:
+            return None
+        return self.companion.estimate(self.simulator.events if self.simulator.model.contact else None, wait)
+
+    def error_estimate_values(self) -> dict[str, object]:
+        """/diagnostics ``error_estimate.*`` (:meth:`ErrorEstimate.values`, the largest
+        difference per group since the last reset), ``error_estimate.lag (chunks)``;
+        nothing without ``error_estimate``."""
+        if self.companion is None:
+            return {}
+        estimate = self.error_estimate()
+        values = {"error_estimate.lag (chunks)": self.companion.lag}
+        return {**values, **({"error_estimate": "pending"} if estimate is None else estimate.values())}
+
+    def close(self) -> None:
+        """Stop the companion's worker, finalise the logs (idempotent)."""
+        if self.companion is not None:
+            self.companion.close()
+        super().close()
 
     def contact_values(self) -> dict[str, object]:
         """``free_bodies`` (names, comma-separated, in /free_bodies order) and the contact

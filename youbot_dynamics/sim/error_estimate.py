@@ -390,16 +390,20 @@ class CompanionStream:
         """Chunks handed to the worker and not yet drawn."""
         return len(self._pending)
 
-    def estimate(self, events: Sequence[ContactEvent] | None, wait: bool = False) -> ErrorEstimate | None:
-        """The estimate over the chunks answered so far (``wait``: every chunk submitted),
-        against the main run's contact ``events`` up to the companion's time (None without
-        contact); None before the first answer."""
+    def _draw(self, wait: bool) -> None:
+        """Take the worker's answers in order: those that have arrived (``wait``: all)."""
         while self._pending and (wait or self._pending[0][0].done()):
             future, views = self._pending.pop(0)
             views_c, self._events, self._stats, self._cpu, self.reached = future.result()
             for name, diff in view_differences(views, views_c).items():
                 self._largest[name] = max(self._largest.get(name, 0.0), float(np.max(diff)))
                 self._last[name] = float(diff[-1])
+
+    def estimate(self, events: Sequence[ContactEvent] | None, wait: bool = False) -> ErrorEstimate | None:
+        """The estimate over the chunks answered so far (``wait``: every chunk submitted),
+        against the main run's contact ``events`` up to the companion's time (None without
+        contact); None before the first answer."""
+        self._draw(wait)
         if self._stats is None:
             return None
         mine = None if events is None else [e for e in events if e.time <= self.reached + 1e-12]
@@ -408,5 +412,9 @@ class CompanionStream:
                              f"worker process, {self.lag} chunks behind")
 
     def close(self) -> None:
-        """Stop the worker (answers on their way are dropped)."""
-        self._pool.shutdown(wait=False, cancel_futures=True)
+        """Take every answer still owed (the estimate stays readable), stop the worker
+        (idempotent)."""
+        if self._pool is not None:
+            self._draw(wait=True)
+            self._pool.shutdown()
+            self._pool = None
