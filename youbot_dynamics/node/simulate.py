@@ -305,8 +305,9 @@ class SimulationSession(Session):
     def diagnostics(self, real_time_factor: float, progress: float | None = None) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
         energy (J), input counters, the free bodies (names in /free_bodies order) and the
-        contact events so far, a moving base's slip, and ``progress`` (percent of a run of set
-        duration) if given; level ERROR after a divergence, WARN when paused or when the base's
+        contact events so far, a moving base's slip, the error estimate (with
+        ``error_estimate``; at 100 % progress, every chunk's) and ``progress`` (percent of a
+        run of set duration) if given; level ERROR after a divergence, WARN when paused or when the base's
         wheels slip. Figures not known (counters the integrator does not report) are
         ``NOT_REPORTED``."""
         stats = {f"integrator.{key}": reported(value) for key, value in self.simulator.stats.as_dict().items()}
@@ -317,7 +318,7 @@ class SimulationSession(Session):
                   "last_reset_at": "none" if self.last_reset_ns is None else self.last_reset_ns / NS_PER_S,
                   **stats, **self.counters.as_values(),
                   **self.contact_values(), **base_values, **({} if progress is None else {"progress": progress}),
-                  **self.error_estimate_values()}
+                  **self.error_estimate_values(wait=progress is not None and progress >= 100.0)}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
         if (level, base_level) == ("OK", "WARN"):
             level, text = "WARN", f"base wheels slip: {base_values['base.slip']:.3g} m/s at a hub"
@@ -330,13 +331,13 @@ class SimulationSession(Session):
             return None
         return self.companion.estimate(self.simulator.events if self.simulator.model.contact else None, wait)
 
-    def error_estimate_values(self) -> dict[str, object]:
+    def error_estimate_values(self, wait: bool = False) -> dict[str, object]:
         """/diagnostics ``error_estimate.*`` (:meth:`ErrorEstimate.values`, the largest
         difference per group since the last reset), ``error_estimate.lag (chunks)``;
-        nothing without ``error_estimate``."""
+        nothing without ``error_estimate``. ``wait`` (a run's last report): after every chunk."""
         if self.companion is None:
             return {}
-        estimate = self.error_estimate()
+        estimate = self.error_estimate(wait)
         values = {"error_estimate.lag (chunks)": self.companion.lag}
         return {**values, **({"error_estimate": "pending"} if estimate is None else estimate.values())}
 
