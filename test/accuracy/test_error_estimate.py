@@ -13,10 +13,10 @@ import pytest
 
 from youbot_dynamics.accuracy.estimate_check import FACTOR, markdown, ode_rows
 from youbot_dynamics.scene.schema import IntegratorSpec, Scene, load_scene
-from youbot_dynamics.sim import engine
+from youbot_dynamics.sim import companion
 from youbot_dynamics.sim.build import compile
-from youbot_dynamics.sim.error_estimate import (CompanionStream, companion_spec, estimate_factor,
-                                                rotation_angle)
+from youbot_dynamics.sim.companion import CompanionStream
+from youbot_dynamics.sim.error_estimate import companion_spec, estimate_factor, rotation_angle
 from youbot_dynamics.sim.simulator import Simulator
 from youbot_dynamics.studies.estimate_table import CASES, FAST, table
 
@@ -108,7 +108,7 @@ def test_a_controller_that_cannot_travel_runs_its_companion_here() -> None:
         with lock:
             return -2.0 * v
 
-    result = engine.run(compile(scene, controller=damping, control_rate=100.0), error_estimate=True)
+    result = companion.run(compile(scene, controller=damping, control_rate=100.0), error_estimate=True)
     estimate = result.error_estimate
     assert estimate.where.startswith("this process") and "lock" in estimate.where
     assert 0 < estimate.largest["joint_angles"] < 1e-3

@@ -26,7 +26,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import IntegrationError, integrate
 from youbot_dynamics.integrate.registry import integrator_entry
 from youbot_dynamics.scene.schema import IntegratorSpec, Scene
-from youbot_dynamics.sim import engine
+from youbot_dynamics.sim import companion, engine
 from youbot_dynamics.sim.build import compile
 from youbot_dynamics.sim.error_estimate import (COMPANION_FACTOR, estimate_factor, event_time_difference,
                                                 group_differences)
@@ -103,7 +103,7 @@ def scene_rows(scene: Scene, method: str, values: Sequence[float],
         model = compile(scene, spec)
         setting = spec.describe()
         try:
-            result = engine.run(model, error_estimate=True)
+            result = companion.run(model, error_estimate=True)
         except (IntegrationError, UserInputError) as error:
             rows.append(CheckRow(scene.name, method, setting, "-", "-", math.nan, math.nan, False, str(error)[:80]))
             continue

@@ -24,8 +24,8 @@ from youbot_dynamics.integrate.registry import INTEGRATORS, REGISTRY, STEPPERS, 
 from youbot_dynamics.io.csv_table import write_csv
 from youbot_dynamics.scene.front import with_accuracy
 from youbot_dynamics.scene.schema import Scene, find_scene, load_scene
+from youbot_dynamics.sim.companion import run
 from youbot_dynamics.sim.divergence import MAX_STEPS, PROGRESS_STEPS, DivergenceLimits
-from youbot_dynamics.sim.engine import run
 from youbot_dynamics.sim.simulator import Simulator
 
 #: The commands here that run an integrator, and where their accuracy comes from (see

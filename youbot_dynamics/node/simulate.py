@@ -37,7 +37,8 @@ from youbot_dynamics.node.mobile_base import MobileBase
 from youbot_dynamics.node.sensors import SensorMessages
 from youbot_dynamics.node.session import Session
 from youbot_dynamics.scene.schema import Scene
-from youbot_dynamics.sim.error_estimate import CompanionStream, ErrorEstimate
+from youbot_dynamics.sim.companion import CompanionStream
+from youbot_dynamics.sim.error_estimate import ErrorEstimate
 from youbot_dynamics.sim.simulator import Simulator, Snapshot
 
 NOT_REPORTED = "n/a"

@@ -111,9 +111,7 @@ class SimulationResult:
     energy_dissipated: float | None = None
     attitude_events: dict[str, int] = dataclasses.field(default_factory=dict)
     quaternion_drift: float | None = None
-    error_estimate: object | None = None
-    """The run's :class:`~youbot_dynamics.sim.error_estimate.ErrorEstimate` (``run(...,
-    error_estimate=True)``), else None."""
+    error_estimate: object | None = None   # its ErrorEstimate, from sim/companion.py's run (else None)
 
     @property
     def final_state(self) -> dict[str, float]:
@@ -535,16 +533,11 @@ def _record(state: SimState, outcome: _Outcome) -> None:
 
 
 def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | None = None,
-        progress: Progress | None = None, error_estimate: bool = False) -> SimulationResult:
+        progress: Progress | None = None) -> SimulationResult:
     """The scene from ``state0`` (default: its initial state; not changed) over ``t_eval``
     (default: the scene's output times from state0's time). A fixed step larger than the
     output spacing is refused; at most ``limits.max_steps`` steps; ``progress(t)`` is told
-    the time reached (s) after each output. ``error_estimate``: with the run's error
-    estimate from a companion run in a worker process (:mod:`youbot_dynamics.sim.error_estimate`)."""
-    if error_estimate:
-        from youbot_dynamics.sim.error_estimate import run_estimated  # it calls run() itself
-
-        return run_estimated(model, state0, t_eval, progress)
+    the time reached (s) after each output."""
     scene = model.scene
     state = (initial_state(model) if state0 is None else state0).copy()
     state.events, state.deepest, state.touching = [], 0.0, frozenset()
