@@ -4,7 +4,6 @@ Its publish rate is timing, measured in bench/bench_node_error_estimate.py, not 
 from __future__ import annotations
 
 import pytest
-
 from ros_support import Collector, diagnostic_values, ros_context, spinning, wait_until
 
 pytestmark = pytest.mark.ros

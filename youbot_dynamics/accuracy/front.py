@@ -11,8 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
-from youbot_dynamics.accuracy.work_precision import (Reference, SweepPoint, block_end, replace_file,
-                                                     yaml_scalar)
+from youbot_dynamics.accuracy.work_precision import Reference, SweepPoint, block_end, replace_file, yaml_scalar
 from youbot_dynamics.integrate.registry import REGISTRY
 from youbot_dynamics.scene.reader import SceneError, read_yaml
 from youbot_dynamics.scene.schema import Scene

@@ -22,6 +22,7 @@ from typing import Any, Callable, Sequence
 import cloudpickle
 import numpy as np
 
+from youbot_dynamics.integrate.errors import IntegrationError
 from youbot_dynamics.integrate.statistics import IntegratorStats
 from youbot_dynamics.sim import engine
 from youbot_dynamics.sim.build import compile
@@ -92,7 +93,11 @@ def run_estimated(model: SimModel, state0=None, t_eval: np.ndarray | None = None
     try:
         future = None if pool is None else pool.submit(companion_from_payload, payload)
         result = engine.run(model, state0, times, progress)
-        x_c, events_c, stats_c, cpu = run_companion(*case) if future is None else future.result()
+        try:
+            x_c, events_c, stats_c, cpu = run_companion(*case) if future is None else future.result()
+        except IntegrationError as error:
+            raise IntegrationError(f"the error estimate's companion ({case[0][1].describe()}) failed where the "
+                                   f"run did not: {error}") from error
     finally:
         if pool is not None:
             pool.shutdown()

@@ -24,7 +24,6 @@ Where the companion runs and how it is fed: :mod:`youbot_dynamics.sim.companion`
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
