@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
-from youbot_dynamics.accuracy.estimate_check import markdown  # noqa: E402
+from youbot_dynamics.accuracy.estimate_check import markdown, summary_markdown  # noqa: E402
 from youbot_dynamics.studies.estimate_table import CASES, FAST, table  # noqa: E402
 
 
@@ -29,6 +29,7 @@ def main() -> int:
     start = time.process_time()
     rows = table(cases)
     print(markdown(rows))
+    print(summary_markdown(rows))
     judged = [r for r in rows if r.failure is None and r.resolved and not math.isnan(r.ratio)]
     print(f"CPU time {time.process_time() - start:.1f} s (this process; the companions ran in workers)")
     return 0 if all(r.within for r in judged) else 1

@@ -162,3 +162,19 @@ def markdown(rows: Sequence[CheckRow]) -> str:
     inside = sum(r.within for r in judged)
     lines += ["", f"{inside} of {len(judged)} resolved rows within a factor {FACTOR:g} of the true error."]
     return "\n".join(lines) + "\n"
+
+
+def summary_markdown(rows: Sequence[CheckRow]) -> str:
+    """One line per (case, integrator): its settings, the range of estimate / true over its
+    resolved rows (every group and the event times) and how many lie within FACTOR."""
+    lines = ["| case | integrator | settings | estimate / true (min - max) | within a factor 3 |", "|---|---|---|---|---|"]
+    for key in dict.fromkeys((r.case, r.integrator) for r in rows):
+        mine = [r for r in rows if (r.case, r.integrator) == key]
+        settings = ", ".join(dict.fromkeys(r.setting.split(" ", 1)[1].split(" atol")[0] for r in mine))
+        judged = [r.ratio for r in mine if r.failure is None and r.resolved]
+        failed = sum(r.failure is not None for r in mine)
+        span = f"{min(judged):.2f} - {max(judged):.2f}" if judged else "-"
+        note = f" ({failed} failed)" if failed else ""
+        lines.append(f"| {key[0]} | {key[1]} | {settings} | {span} | "
+                     f"{sum(1 / FACTOR <= x <= FACTOR for x in judged)} of {len(judged)}{note} |")
+    return "\n".join(lines) + "\n"

@@ -15,9 +15,9 @@ import multiprocessing
 import pickle
 import sys
 import time
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
-from typing import Any, Callable, Sequence
+from typing import Callable, Sequence
 
 import cloudpickle
 import numpy as np
@@ -42,12 +42,16 @@ def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | No
     return engine.run(model, state0, t_eval, progress)
 
 
-def _worker_pool() -> ProcessPoolExecutor:
-    """A one-process pool: spawned in a ROS process (rclpy loaded: forking beside its
+def _start_method() -> str:
+    """How a worker starts: spawned in a ROS process (rclpy loaded: forking beside its
     executor's threads is unsafe; a node's entry point guards its ``__main__``), else
     forked (cheap, and a script without a ``__main__`` guard works)."""
-    method = "spawn" if "rclpy" in sys.modules else "fork"
-    return ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context(method))
+    return "spawn" if "rclpy" in sys.modules else "fork"
+
+
+def _worker_pool() -> ProcessPoolExecutor:
+    """A one-process pool (:func:`_start_method`)."""
+    return ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context(_start_method()))
 
 
 def companion_arguments(model: SimModel) -> tuple:
@@ -108,51 +112,56 @@ def run_estimated(model: SimModel, state0=None, t_eval: np.ndarray | None = None
 
 
 # ---- the companion of a run made in chunks (the node) ---------------------------------------
-_STREAM: dict[str, Any] = {}
-"""Worker side: the companion's Simulator (``simulator``) and its CPU time (``cpu``)."""
-
-
-def _stream_start(arguments: bytes) -> None:
-    """Worker side: build the companion's Simulator from cloudpickled
-    :func:`companion_arguments`, at the scene's initial state."""
+def stream_worker(connection, arguments: bytes) -> None:
+    """Worker side of :class:`CompanionStream`: build the companion's Simulator from
+    cloudpickled :func:`companion_arguments`, then answer each message until ``None``:
+    ``(generation, "reset")`` restarts it; ``(generation, "advance", times, tau_command,
+    reference)`` (reference cloudpickled when it changed, else None) moves it through
+    ``times`` and answers (generation, its views there, its contact events when their
+    number changed (else None), statistics, CPU time so far, time reached); a failure
+    answers (generation, "failed: why") and ends."""
     start = time.process_time()
     scene, spec, limits, callback, rate = pickle.loads(arguments)
-    _STREAM["simulator"] = Simulator(scene, spec, limits, callback, rate)
-    _STREAM["cpu"] = time.process_time() - start
-
-
-def _stream_reset() -> None:
-    """Worker side: the companion back to the scene's initial state."""
-    _STREAM["simulator"].reset()
-
-
-def _stream_advance(reference: bytes | None, times: np.ndarray, tau_command: np.ndarray | None) -> tuple:
-    """Worker side: the companion through ``times`` with the main run's command and (when
-    it changed, cloudpickled) controller reference; (its views at ``times``, its contact
-    events so far, its statistics, its CPU time so far, its time)."""
-    start = time.process_time()
-    simulator = _STREAM["simulator"]
-    if reference is not None:
-        simulator.state.reference = pickle.loads(reference)
-    snapshots = simulator.advance_through(times, tau_command)
-    _STREAM["cpu"] += time.process_time() - start
-    return views_of_snapshots(snapshots), list(simulator.events), simulator.stats, _STREAM["cpu"], simulator.t
+    simulator, events = Simulator(scene, spec, limits, callback, rate), 0
+    while (message := connection.recv()) is not None:
+        generation, kind, *rest = message
+        try:
+            if kind == "reset":
+                simulator.reset()
+                events = 0
+                continue
+            times, tau_command, reference = rest
+            if reference is not None:
+                simulator.state.reference = pickle.loads(reference)
+            views = views_of_snapshots(simulator.advance_through(times, tau_command))
+            new = list(simulator.events) if len(simulator.events) != events else None
+            events = len(simulator.events)
+            connection.send((generation, views, new, simulator.stats, time.process_time() - start, simulator.t))
+        except Exception as error:  # noqa: BLE001 - any failure is reported, not raised in the worker
+            connection.send((generation, f"failed: {type(error).__name__}: {error}"))
+            return
 
 
 class CompanionStream:
     """The companion of a run made in chunks (a node's ``advance_through`` calls): a worker
     process keeps its own Simulator at the companion's settings (:func:`companion_spec`);
-    :meth:`submit` hands it each chunk's times, torque command and controller reference
-    with the main run's snapshots there, :meth:`estimate` draws the answers that have
-    arrived (``wait``: all of them) into the running estimate. A reset of the main run is
-    passed on with :meth:`reset`. The worker's answers never block the caller."""
+    :meth:`submit` sends it each chunk's times, torque command and controller reference
+    (over a pipe: a few tens of microseconds here) and keeps the main run's snapshots
+    there; :meth:`estimate` draws the answers that have arrived (``wait``: all of them) into
+    the running estimate. A reset of the main run is passed on with :meth:`reset`. Answers
+    are drawn at every submit too, so neither side's pipe fills."""
 
     def __init__(self, model: SimModel) -> None:
         self.model = model
-        self._pool = _worker_pool()
-        self._pool.submit(_stream_start, cloudpickle.dumps(companion_arguments(model)))
+        context = multiprocessing.get_context(_start_method())
+        self._connection, child = context.Pipe()
+        self._process = context.Process(target=stream_worker, daemon=True, name="error-estimate companion",
+                                        args=(child, cloudpickle.dumps(companion_arguments(model))))
+        self._process.start()
+        child.close()
         self._sent_reference: object = None
-        self._pending: list[tuple[Future, dict[str, np.ndarray]]] = []
+        self._generation, self.failure = 0, None
+        self._pending: list[dict[str, np.ndarray]] = []
         self._clear()
 
     def _clear(self) -> None:
@@ -166,19 +175,27 @@ class CompanionStream:
                snapshots: Sequence) -> None:
         """The chunk the main run just made: its output ``times`` (s), the ``tau_command``
         it held (None: its controller), its controller ``reference`` and its snapshots."""
+        if self.failure is not None:
+            return
+        self._draw(wait=False)
         sent = None if reference is self._sent_reference else cloudpickle.dumps(reference)
         self._sent_reference = reference
-        future = self._pool.submit(_stream_advance, sent, np.asarray(times, dtype=float), tau_command)
-        self._pending.append((future, views_of_snapshots(snapshots)))
+        self._send((self._generation, "advance", np.asarray(times, dtype=float), tau_command, sent))
+        self._pending.append(views_of_snapshots(snapshots))
 
     def reset(self) -> None:
         """The main run restarted from the scene's initial state: so does the companion;
         the estimate starts again (answers still on their way are dropped)."""
-        for future, _ in self._pending:
-            future.cancel()
-        self._pending = []
-        self._pool.submit(_stream_reset)
+        self._generation += 1
+        self._pending, self._sent_reference = [], None
+        self._send((self._generation, "reset"))
         self._clear()
+
+    def _send(self, message: tuple | None) -> None:
+        try:
+            self._connection.send(message)
+        except (OSError, ValueError) as error:   # the worker is gone
+            self.failure = self.failure or f"failed: the companion's worker stopped ({error})"
 
     @property
     def lag(self) -> int:
@@ -187,10 +204,20 @@ class CompanionStream:
 
     def _draw(self, wait: bool) -> None:
         """Take the worker's answers in order: those that have arrived (``wait``: all)."""
-        while self._pending and (wait or self._pending[0][0].done()):
-            future, views = self._pending.pop(0)
-            views_c, self._events, self._stats, self._cpu, self.reached = future.result()
-            for name, diff in view_differences(views, views_c).items():
+        while self._pending and self.failure is None and (wait or self._connection.poll()):
+            try:
+                answer = self._connection.recv()
+            except (EOFError, OSError) as error:
+                self.failure = f"failed: the companion's worker stopped ({error!r})"
+                return
+            if answer[0] != self._generation:
+                continue   # from before a reset
+            if len(answer) == 2:
+                self.failure = answer[1]
+                return
+            _, views_c, events, self._stats, self._cpu, self.reached = answer
+            self._events = self._events if events is None else events
+            for name, diff in view_differences(self._pending.pop(0), views_c).items():
                 self._largest[name] = max(self._largest.get(name, 0.0), float(np.max(diff)))
                 self._last[name] = float(diff[-1])
 
@@ -204,12 +231,17 @@ class CompanionStream:
         mine = None if events is None else [e for e in events if e.time <= self.reached + 1e-12]
         return make_estimate(self.model.integrator, self._largest, self._last, mine,
                              None if events is None else self._events, self._stats, self._cpu,
-                             f"worker process, {self.lag} chunks behind")
+                             self.failure or f"worker process, {self.lag} chunks behind")
 
     def close(self) -> None:
         """Take every answer still owed (the estimate stays readable), stop the worker
         (idempotent)."""
-        if self._pool is not None:
-            self._draw(wait=True)
-            self._pool.shutdown()
-            self._pool = None
+        if self._process is None:
+            return
+        self._draw(wait=True)
+        self._send(None)
+        self._process.join(timeout=5.0)
+        if self._process.is_alive():
+            self._process.terminate()
+        self._connection.close()
+        self._process = None
