@@ -261,14 +261,14 @@ def markdown_table(scene: Scene, reference: Reference, points: Sequence[SweepPoi
              f"{reference.state_dim}, reference "
              f"{reference.spec.describe()} (own error estimate {reference.error_estimate:.2g} {unit}). "
              f"Error: {reference.measure}.", "",
-             f"| integrator | dt or rtol | error ({unit}) | EE error (m) | energy drift (J) | wall time (s) "
-             "| rhs evals | Jacobians | work | steps | failure |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             f"| integrator | dt or rtol | error ({unit}) | EE error (m) | event times (s) | energy drift (J) "
+             "| wall time (s) | rhs evals | Jacobians | work | steps | failure |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for p in points:
         failure = "" if p.failure is None else p.failure.replace("|", "/")[:80]
         error = f"< {reference.error_estimate:.3g} (ref)" if p.below_reference else _cell(p.q_error)
         ee = _cell(p.ee_error) if reference.ee_position.size else "-"
-        lines.append(f"| {p.integrator} | {p.parameter}={p.value:g} | {error} | {ee} "
+        lines.append(f"| {p.integrator} | {p.parameter}={p.value:g} | {error} | {ee} | {_cell(p.event_error)} "
                      f"| {_cell(p.energy_drift)} | {p.wall_time:.3g} | {_cell(p.rhs_evals)} | {_cell(p.jac_evals)} "
                      f"| {_cell(p.work)} | {_cell(p.steps)} | {failure} |")
     lines += ["", "Work: rhs evaluations + Jacobians x state dimension (counted, the same on any machine)."]
