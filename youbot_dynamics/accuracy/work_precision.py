@@ -6,17 +6,19 @@
   sweep point is only as trustworthy as that figure).
 - Sweep: each integrator over a grid of step sizes (fixed-step methods) or tolerances
   (adaptive ones, atol = rtol / 100). Per point: the final-state error in joint space
-  (max_i |q_i - q_ref,i|, rad; a scene without robot joints, such as a ball on a floor:
-  of the free bodies' final positions, max_b |p_b - p_ref,b|, m) and of the end-effector
-  position (|p - p_ref|, m), whether that error is below the reference's own error estimate
+  (max_i |q_i - q_ref,i|, rad; a scene with free bodies: of their final positions,
+  max_b |p_b - p_ref,b|, m) and of the end-effector position (|p - p_ref|, m), the largest
+  difference of matching contact-event times (s), whether that error is below the reference's own error estimate
   (then it is not resolved: the table prints ``< estimate (ref)``), the
   maximum energy drift max_t |E(t) - E(0)| (J) where the scene conserves energy, the wall
   time (s), the rhs and Jacobian evaluations, the counted work (:func:`counted_work`) and
-  the failure (a DivergenceError or IntegrationError message) if the run failed. The
+  the failure (a DivergenceError, IntegrationError or UserInputError message: a method
+  that cannot run the scene) if the run failed. The
   energy-growth check is off during the sweep (a drifting run is a data point, not a
   failure); non-finite states and the velocity bound stay on.
-- Scenes with constraint-based contact (law ``constraint``) are refused in one line: only
-  the constraint steppers integrate them, at a fixed dt, against no ODE reference.
+- Scenes with constraint-based contact (law ``constraint``): only the constraint steppers
+  integrate them, so they are swept over dt (:data:`STEPPER_GRID`) against the scene's own
+  stepper at dt / STEPPER_REFINEMENT (checked at twice that step).
 - Output: CSV, markdown table and a PNG work-precision plot (matplotlib Agg).
 - ``recommend``: the point of least counted work whose joint-space error meets a target
   (ties: registry order, then the looser setting). Counts, not wall time, so that the same
@@ -24,7 +26,8 @@
 - ``integrator: auto`` is an offline choice: :func:`write_back` pins the recommendation
   into the scene file (``work-precision --write-back``), editing only its ``integrator``
   block so every comment stays; :func:`resolve_integrator` sweeps for a one-off
-  ``simulate`` of an ``auto`` scene. Nothing is cached.
+  ``simulate`` of an ``auto`` scene. Nothing is cached. The whole front is stored by
+  :mod:`youbot_dynamics.accuracy.front`.
 """
 from __future__ import annotations
 
