@@ -15,6 +15,7 @@ import pytest
 from youbot_dynamics.accuracy import work_precision as wp
 from youbot_dynamics.accuracy.front import pareto_front, write_front
 from youbot_dynamics.cli import main
+from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.front import with_accuracy
 from youbot_dynamics.scene.schema import Scene, SceneError, find_scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
@@ -94,3 +95,14 @@ def test_arm_swing_accuracy_1e6_meets_it_at_near_the_least_work(capsys) -> None:
     meeting = [w for e, w in (true_error_and_work(with_accuracy(scene, p.error).integrator)
                               for p in scene.front.points if p.error < 1e-5 and p.work < work) if e <= 1e-6]
     assert work <= 1.5 * min(meeting + [work])
+
+
+def test_the_node_runs_the_chosen_setting_and_says_why() -> None:
+    """A scene with an accuracy target in the node: the chosen front point runs (no sweep)
+    and /diagnostics carries the choice."""
+    session = SimulationSession(with_accuracy(load_scene("arm_swing"), 1e-6), 500.0)
+    try:
+        assert session.simulator.integrator.describe() == "cvode_adams rtol=1e-10 atol=1e-12"
+        assert "the cheapest stored point that meets it" in session.error_estimate_values()["accuracy"]
+    finally:
+        session.close()

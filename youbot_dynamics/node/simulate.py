@@ -333,13 +333,15 @@ class SimulationSession(Session):
         return self.companion.estimate(self.simulator.events if self.simulator.model.contact else None, wait)
 
     def error_estimate_values(self, wait: bool = False) -> dict[str, object]:
-        """/diagnostics ``error_estimate.*`` (:meth:`ErrorEstimate.values`, the largest
-        difference per group since the last reset), ``error_estimate.lag (chunks)``;
-        nothing without ``error_estimate``. ``wait`` (a run's last report): after every chunk."""
+        """/diagnostics ``accuracy`` (a scene with an ``accuracy`` target: the front point
+        chosen, and why), ``error_estimate.*`` (:meth:`ErrorEstimate.values`, the largest
+        difference per group since the last reset) and ``error_estimate.lag (chunks)``
+        (nothing without ``error_estimate``). ``wait`` (a run's last report): after every chunk."""
+        choice = {} if self.scene.accuracy_choice is None else {"accuracy": self.scene.accuracy_choice}
         if self.companion is None:
-            return {}
+            return choice
         estimate = self.error_estimate(wait)
-        values = {"error_estimate.lag (chunks)": self.companion.lag}
+        values = {**choice, "error_estimate.lag (chunks)": self.companion.lag}
         return {**values, **({"error_estimate": "pending"} if estimate is None else estimate.values())}
 
     def close(self) -> None:
