@@ -31,7 +31,8 @@ CASES = {
     "elastic_pendulum": (None, {"euler": (4e-5, 2e-5, 1e-5), "symplectic_euler": (1e-4, 5e-5, 2.5e-5),
                                 "rk4": (4e-3, 2e-3, 1e-3), **{m: TOLERANCES for m in ADAPTIVE}}),
     "ball_drop": (("ball_drop", 1.0), {"euler": (2e-5, 1e-5, 5e-6),
-                                       "rk4": (5e-5, 2.5e-5, 1.25e-5), **{m: TOLERANCES for m in ADAPTIVE}}),
+                                       "rk4": (5e-5, 2.5e-5, 1.25e-5), "ida": TOLERANCES,
+                                       **{m: TOLERANCES for m in ADAPTIVE}}),
     "gripping": (("gripping", 12.0), {"pgs": (2e-3, 1e-3, 5e-4), "admm": (2e-3, 1e-3, 5e-4)}),
 }
 #: The test's subset (test/accuracy/test_estimate_check.py runs the same).
