@@ -29,7 +29,7 @@ _PUBLIC = {
     "load_scene": "youbot_dynamics.scene.schema", "Scene": "youbot_dynamics.scene.schema",
     "compile": "youbot_dynamics.sim.build", "SimModel": "youbot_dynamics.sim.model",
     "SimState": "youbot_dynamics.sim.state", "initial_state": "youbot_dynamics.sim.engine",
-    "advance": "youbot_dynamics.sim.engine", "run": "youbot_dynamics.sim.engine",
+    "advance": "youbot_dynamics.sim.engine", "run": "youbot_dynamics.sim.companion",
     "Simulator": "youbot_dynamics.sim.simulator",
 }
 __all__ = sorted(_PUBLIC) + ["package_share", "default_urdf"]

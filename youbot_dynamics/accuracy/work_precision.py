@@ -6,17 +6,19 @@
   sweep point is only as trustworthy as that figure).
 - Sweep: each integrator over a grid of step sizes (fixed-step methods) or tolerances
   (adaptive ones, atol = rtol / 100). Per point: the final-state error in joint space
-  (max_i |q_i - q_ref,i|, rad; a scene without robot joints, such as a ball on a floor:
-  of the free bodies' final positions, max_b |p_b - p_ref,b|, m) and of the end-effector
-  position (|p - p_ref|, m), whether that error is below the reference's own error estimate
+  (max_i |q_i - q_ref,i|, rad; a scene with free bodies: of their final positions,
+  max_b |p_b - p_ref,b|, m) and of the end-effector position (|p - p_ref|, m), the largest
+  difference of matching contact-event times (s), whether that error is below the reference's own error estimate
   (then it is not resolved: the table prints ``< estimate (ref)``), the
   maximum energy drift max_t |E(t) - E(0)| (J) where the scene conserves energy, the wall
   time (s), the rhs and Jacobian evaluations, the counted work (:func:`counted_work`) and
-  the failure (a DivergenceError or IntegrationError message) if the run failed. The
+  the failure (a DivergenceError, IntegrationError or UserInputError message: a method
+  that cannot run the scene) if the run failed. The
   energy-growth check is off during the sweep (a drifting run is a data point, not a
   failure); non-finite states and the velocity bound stay on.
-- Scenes with constraint-based contact (law ``constraint``) are refused in one line: only
-  the constraint steppers integrate them, at a fixed dt, against no ODE reference.
+- Scenes with constraint-based contact (law ``constraint``): only the constraint steppers
+  integrate them, so they are swept over dt (:data:`STEPPER_GRID`) against the scene's own
+  stepper at dt / STEPPER_REFINEMENT (checked at twice that step).
 - Output: CSV, markdown table and a PNG work-precision plot (matplotlib Agg).
 - ``recommend``: the point of least counted work whose joint-space error meets a target
   (ties: registry order, then the looser setting). Counts, not wall time, so that the same
@@ -24,7 +26,8 @@
 - ``integrator: auto`` is an offline choice: :func:`write_back` pins the recommendation
   into the scene file (``work-precision --write-back``), editing only its ``integrator``
   block so every comment stays; :func:`resolve_integrator` sweeps for a one-off
-  ``simulate`` of an ``auto`` scene. Nothing is cached.
+  ``simulate`` of an ``auto`` scene. Nothing is cached. The whole front is stored by
+  :mod:`youbot_dynamics.accuracy.front`.
 """
 from __future__ import annotations
 
@@ -44,10 +47,12 @@ import numpy as np
 from youbot_dynamics.accuracy.sweeps import map_cases
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import IntegrationError
-from youbot_dynamics.integrate.registry import AUTO, FIXED_STEP, REGISTRY, integrator_names
+from youbot_dynamics.integrate.registry import AUTO, REGISTRY, STEPPERS, integrator_names, is_fixed_step
 from youbot_dynamics.scene.reader import read_yaml
 from youbot_dynamics.scene.schema import IntegratorSpec, Scene, SceneError
+from youbot_dynamics.sim.error_estimate import event_time_difference
 from youbot_dynamics.sim.simulator import SimulationResult, Simulator
+from youbot_dynamics.sim.state import ContactEvent
 
 #: Step sizes (s) of the fixed-step methods and tolerances of the adaptive ones (every
 #: adaptive ODE and DAE integrator of the registry).
@@ -59,13 +64,17 @@ DEFAULT_GRID: dict[str, tuple[float, ...]] = {
        for name in integrator_names(("ode", "dae"), adaptive=True)},
 }
 REFERENCE_RTOL = 1e-12
+#: Scenes with constraint-based contact: the steppers over their step (s); the reference is
+#: the scene's own stepper at its dt / STEPPER_REFINEMENT (no ODE integrates such contact).
+STEPPER_GRID: dict[str, tuple[float, ...]] = {name: (4e-3, 2e-3, 1e-3, 5e-4) for name in STEPPERS}
+STEPPER_REFINEMENT = 32
 ATOL_PER_RTOL = 1e-2
 
 
 def spec_for(method: str, value: float) -> IntegratorSpec:
-    """The settings of one sweep point: dt = value (fixed step) or rtol = value,
-    atol = value / 100; energy-growth check off."""
-    if method in FIXED_STEP:
+    """The settings of one sweep point: dt = value (fixed step, constraint steppers too) or
+    rtol = value, atol = value / 100; energy-growth check off."""
+    if is_fixed_step(method):
         return IntegratorSpec(method, dt=value, energy_tolerance=math.inf)
     return IntegratorSpec(method, rtol=value, atol=value * ATOL_PER_RTOL, energy_tolerance=math.inf)
 
@@ -78,9 +87,9 @@ BODY_MEASURE = "max |p - p_ref| of the free bodies' positions (m)"
 @dataclass(frozen=True)
 class Reference:
     """The reference run's final configuration ``q`` (the robot's joint positions, rad, or
-    for a scene without robot joints the free bodies' positions, m: ``measure`` says
-    which), end-effector position (m; empty without a robot), its settings and the
-    estimate of its own error: max |q_tight - q_loose| over two tolerances."""
+    for a scene with free bodies their positions, m: ``measure`` says which), end-effector
+    position (m; empty without a robot), its settings, the estimate of its own error: max
+    |q_tight - q_loose| over two tolerances (or steps), and its contact events."""
 
     spec: IntegratorSpec
     state_dim: int
@@ -88,6 +97,7 @@ class Reference:
     ee_position: np.ndarray
     error_estimate: float
     measure: str = JOINT_MEASURE
+    events: tuple[ContactEvent, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -107,6 +117,7 @@ class SweepPoint:
     steps: int | None
     failure: str | None
     below_reference: bool = False
+    event_error: float | None = None
 
     @property
     def spec(self) -> IntegratorSpec:
@@ -131,23 +142,18 @@ def counted_work(rhs_evals: int | None, jac_evals: int | None, state_dim: int) -
 
 
 def final_figures(simulator: Simulator, result: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
-    """Final configuration and end-effector position (m) of a run: the joint positions
-    (rad), or without robot joints the free bodies' positions (m, (bodies x 3) flattened)
-    and no end effector."""
+    """Final configuration and end-effector position (m) of a run: with free bodies their
+    final positions (m, (bodies x 3) flattened: a ball's landing, a box's sliding distance,
+    a handed-over sphere's resting place) and no end effector, else the joint positions
+    (rad) and the end effector."""
     q = result.x[-1, simulator.layout.slice("q")]
-    if not q.size:
+    if simulator.model.body_names:
         return simulator.model.body_motion(result.x[-1:])["position"][0].ravel(), np.zeros(0)
     return q, simulator.ee_pose_of(q)[:3, 3]
 
 
 def check_sweepable(scene: Scene) -> None:
-    """UserInputError (one line) for a scene work-precision cannot sweep: constraint-based
-    contact, or nothing that moves."""
-    constrained = [pair.name for pair in scene.contacts if pair.law.law == "constraint"]
-    if constrained:
-        raise UserInputError(f"scene {scene.name!r} has constraint-based contact "
-                             f"({', '.join(constrained)}), which only the constraint steppers integrate at a fixed "
-                             "dt, with no ODE reference to compare against; use a compliant contact law")
+    """UserInputError (one line) for a scene with nothing that moves."""
     if not (scene.robot.nv or scene.free_bodies):
         raise UserInputError(f"scene {scene.name!r} has neither robot joints nor free bodies: nothing to sweep")
 
@@ -155,25 +161,42 @@ def check_sweepable(scene: Scene) -> None:
 def reference_solution(scene: Scene) -> Reference:
     """The tight-tolerance reference and its error estimate from a 10x looser run."""
     check_sweepable(scene)
-    method = "radau" if scene.integrator.method != AUTO and REGISTRY[scene.integrator.method].stiff else "dop853"
-    finals = []
-    for rtol in (REFERENCE_RTOL, 10 * REFERENCE_RTOL):
-        simulator = Simulator(scene, spec_for(method, rtol))
-        finals.append(final_figures(simulator, simulator.run()))
+    if is_constrained(scene):   # the scene's stepper, refined
+        method, value = scene.integrator.method, scene.integrator.dt / STEPPER_REFINEMENT
+        values = (value, 2 * value)
+    else:
+        method = "radau" if scene.integrator.method != AUTO and REGISTRY[scene.integrator.method].stiff else "dop853"
+        values = (REFERENCE_RTOL, 10 * REFERENCE_RTOL)
+    finals, events = [], ()
+    for value in values:
+        simulator = Simulator(scene, spec_for(method, value))
+        result = simulator.run()
+        finals.append(final_figures(simulator, result))
+        events = events or tuple(result.contact_events)
     (q, ee), (q_loose, _) = finals
-    return Reference(spec_for(method, REFERENCE_RTOL), simulator.state_dim, q, ee,
-                     float(np.max(np.abs(q - q_loose))), JOINT_MEASURE if ee.size else BODY_MEASURE)
+    return Reference(spec_for(method, values[0]), simulator.state_dim, q, ee,
+                     float(np.max(np.abs(q - q_loose))), JOINT_MEASURE if ee.size else BODY_MEASURE, events)
+
+
+def is_constrained(scene: Scene) -> bool:
+    """Whether the scene has constraint-based contact (only the constraint steppers run it)."""
+    return any(pair.law.law == "constraint" for pair in scene.contacts)
+
+
+def default_grid(scene: Scene) -> dict[str, Sequence[float]]:
+    """:data:`STEPPER_GRID` for a scene with constraint-based contact, else :data:`DEFAULT_GRID`."""
+    return STEPPER_GRID if is_constrained(scene) else DEFAULT_GRID
 
 
 def sweep_point(scene: Scene, method: str, value: float, reference: Reference) -> SweepPoint:
     """Run one setting and compare it with the reference."""
     spec = spec_for(method, value)
-    parameter = "dt" if method in FIXED_STEP else "rtol"
-    simulator = Simulator(scene, spec)
+    parameter = "dt" if is_fixed_step(method) else "rtol"
     start = time.perf_counter()
     try:
+        simulator = Simulator(scene, spec)
         result = simulator.run()
-    except IntegrationError as error:
+    except (IntegrationError, UserInputError) as error:   # diverged, or the method cannot run the scene
         return SweepPoint(method, parameter, value, math.nan, math.nan, None,
                           time.perf_counter() - start, None, None, None, None, str(error))
     q, ee = final_figures(simulator, result)
@@ -183,7 +206,8 @@ def sweep_point(scene: Scene, method: str, value: float, reference: Reference) -
                       float(np.linalg.norm(ee - reference.ee_position)) if ee.size else math.nan, result.energy_error,
                       stats.wall_time, stats.rhs_evals, stats.jac_evals,
                       counted_work(stats.rhs_evals, stats.jac_evals, reference.state_dim), stats.steps, None,
-                      error < reference.error_estimate)
+                      error < reference.error_estimate,
+                      event_time_difference(result.contact_events, reference.events) if reference.events else None)
 
 
 def sweep(scene: Scene, reference: Reference, grid: dict[str, Sequence[float]] | None = None,
@@ -193,7 +217,7 @@ def sweep(scene: Scene, reference: Reference, grid: dict[str, Sequence[float]] |
     the points are independent cases of :func:`~youbot_dynamics.accuracy.sweeps.map_cases`
     (serial with ``workers=0``, the default; a local cluster of ``workers`` processes, or
     the Dask cluster at ``scheduler``)."""
-    grid = DEFAULT_GRID if grid is None else grid
+    grid = default_grid(scene) if grid is None else grid
     jobs = [(scene, method, value, reference) for method, values in grid.items() for value in values]
     return map_cases(sweep_point, jobs, workers=workers, scheduler=scheduler,
                      desc=f"work-precision {scene.name}", progress=progress)
@@ -240,14 +264,14 @@ def markdown_table(scene: Scene, reference: Reference, points: Sequence[SweepPoi
              f"{reference.state_dim}, reference "
              f"{reference.spec.describe()} (own error estimate {reference.error_estimate:.2g} {unit}). "
              f"Error: {reference.measure}.", "",
-             f"| integrator | dt or rtol | error ({unit}) | EE error (m) | energy drift (J) | wall time (s) "
-             "| rhs evals | Jacobians | work | steps | failure |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             f"| integrator | dt or rtol | error ({unit}) | EE error (m) | event times (s) | energy drift (J) "
+             "| wall time (s) | rhs evals | Jacobians | work | steps | failure |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for p in points:
         failure = "" if p.failure is None else p.failure.replace("|", "/")[:80]
         error = f"< {reference.error_estimate:.3g} (ref)" if p.below_reference else _cell(p.q_error)
         ee = _cell(p.ee_error) if reference.ee_position.size else "-"
-        lines.append(f"| {p.integrator} | {p.parameter}={p.value:g} | {error} | {ee} "
+        lines.append(f"| {p.integrator} | {p.parameter}={p.value:g} | {error} | {ee} | {_cell(p.event_error)} "
                      f"| {_cell(p.energy_drift)} | {p.wall_time:.3g} | {_cell(p.rhs_evals)} | {_cell(p.jac_evals)} "
                      f"| {_cell(p.work)} | {_cell(p.steps)} | {failure} |")
     lines += ["", "Work: rhs evaluations + Jacobians x state dimension (counted, the same on any machine)."]
@@ -379,7 +403,7 @@ def with_integrator_block(text: str, settings: Mapping[str, Any], note: str) -> 
     else:
         match = _TOP_KEY.match(lines[head])
         comment = f"  {match['comment']}" if match["comment"] else ""
-        end = _block_end(lines, head)
+        end = block_end(lines, head)
         flow = match["value"].strip()
         kept, indent = _unpinned_lines(_flow_lines(flow) if flow else lines[head + 1:end])
         start, indent = head, indent or "  "
@@ -388,7 +412,7 @@ def with_integrator_block(text: str, settings: Mapping[str, Any], note: str) -> 
     return "\n".join(lines[:start] + block + lines[end:]) + "\n"
 
 
-def _block_end(lines: list[str], head: int) -> int:
+def block_end(lines: list[str], head: int) -> int:
     """The index after the last indented non-blank line of the block whose key is at line
     ``head`` (blank lines and top-level comments inside it do not end it)."""
     end = head + 1
@@ -436,12 +460,18 @@ def write_back(path: str | Path, spec: IntegratorSpec, note: str) -> str:
         raise SceneError(str(path), "integrator", "the file's integrator block could not be edited safely; "
                          f"set it by hand to {settings}")
     Scene.from_dict(after, str(path), path.parent)  # still a valid scene
+    replace_file(path, edited)
+    return edited
+
+
+def replace_file(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` in one step (a temporary file beside it, renamed), keeping
+    the file's mode."""
     with tempfile.NamedTemporaryFile("w", encoding="utf-8", dir=path.parent, delete=False,
                                      prefix=f".{path.name}.") as handle:
-        handle.write(edited)
+        handle.write(text)
     try:
         os.chmod(handle.name, path.stat().st_mode)
         os.replace(handle.name, path)
     finally:
         Path(handle.name).unlink(missing_ok=True)
-    return edited

@@ -4,14 +4,15 @@
   messages on their topics with the recorded timing, X recorded seconds per wall second
   (default 1; 0: as fast as possible, driving /clock; see
   :mod:`youbot_dynamics.ros.replay_node`).
-- ``main-job [--scene NAME] [--duration S] [--out DIR] [--rate HZ] [--time-scale X]``: the
+- ``main-job [--scene NAME] [--duration S] [--out DIR] [--rate HZ] [--time-scale X] [--error-estimate]``: the
   dynamics node in simulate mode on the scene (default ``gripping``: two youBots hand a
   wooden sphere over, chosen because it runs faster than real time with logging), paced at
   X simulated seconds per wall second (default 1; 0: as fast as possible), for S simulated seconds
   (default the scene's own duration), publishing on ROS 2 topics and writing
   DIR/<scene>.mcap and DIR/<scene>.rrd; prints the real-time factor, the integrator
   statistics (n/a for a counter the integrator does not report), the energy error, the
-  free bodies and contact events (scenes with contact) and the file paths.
+  free bodies and contact events (scenes with contact), the error estimate (with
+  ``--error-estimate``: youbot_dynamics.sim.error_estimate) and the file paths.
 
 Both take ``--json`` (one JSON object instead of the text). ROS 2 (in youbot_dynamics.ros)
 is imported when a command runs, so the rest of the command line works without it.
@@ -55,6 +56,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_out_folder(job, "the logs", "out")
     add_rate(job, 500.0, "publish rate (samples per simulated second)")
     add_time_scale(job, "simulated")
+    job.add_argument("--error-estimate", action="store_true",
+                     help="estimate the run's error: the node's companion run (tol/20, or dt/2 with Richardson's "
+                     "factor) in a worker process; in the summary and /diagnostics")
     add_json(job)
     job.set_defaults(run=run_main_job)
 
@@ -88,6 +92,14 @@ def _contact_rows(values: dict[str, object]) -> list[tuple[str, str]]:
                                f"last: {values['contact.last_event']}")]
 
 
+def _estimate_rows(session) -> list[tuple[str, str]]:
+    """The error estimate's summary rows (none without it): every chunk's companion drawn."""
+    estimate = session.error_estimate(wait=True)
+    if estimate is None:
+        return []
+    return [("error estimate", line.strip()) for line in estimate.summary()]
+
+
 def run_main_job(args: argparse.Namespace) -> int:
     """Run the dynamics node on the scene with MCAP and Rerun logs; print the summary table
     (exit 1 if the simulation failed, 2 for bad parameters)."""
@@ -107,7 +119,8 @@ def run_main_job(args: argparse.Namespace) -> int:
     paths = {"mcap_path": str(out / f"{scene.name}.mcap"), "rrd_path": str(out / f"{scene.name}.rrd")}
     start = time.monotonic()
     status, node = run(args=[], overrides={"scene": args.scene, "mode": "simulate", "duration": duration,
-                                           "publish_rate": args.rate, "time_scale": args.time_scale, **paths})
+                                           "publish_rate": args.rate, "time_scale": args.time_scale,
+                                           "error_estimate": args.error_estimate, **paths})
     wall = time.monotonic() - start
     if node is None:
         return status
@@ -131,6 +144,7 @@ def _summary_rows(session, rate: float, wall: float) -> list[tuple[str, str]]:
             ("integrator", f"{session.simulator.stats.summary()} (integrator only)"),
             ("energy error", energy_error),
             *_contact_rows(session.contact_values()),
+            *_estimate_rows(session),
             ("status", session.failure or "ok"),
             *((f"log ({path.suffix[1:]})", str(path)) for path in session.recorder.paths)]
 
@@ -145,4 +159,5 @@ def _summary_record(session, rate: float, wall: float) -> dict[str, object]:
             "conservative": conservative, "energy_error": session.energy_error if conservative else None,
             "energy_start": session.energy0, "energy_end": session.snapshot.energy,
             "contact": session.contact_values(), "status": session.failure or "ok",
+            "error_estimate": None if (estimate := session.error_estimate(wait=True)) is None else estimate.as_dict(),
             "logs": [str(path) for path in session.recorder.paths]}

@@ -53,14 +53,16 @@ class OdeProblem:
 
 @dataclass(frozen=True)
 class IntegratorEntry:
-    """One integrator: its name, kind, step control, stiffness and the factory that builds
-    its :class:`~youbot_dynamics.integrate.drive.Stepper`."""
+    """One integrator: its name, kind, step control, stiffness, the factory that builds
+    its :class:`~youbot_dynamics.integrate.drive.Stepper` and, for a fixed-step method, its
+    order of convergence p (global error ~ dt^p; the error estimate's Richardson factor)."""
 
     name: str
     kind: str
     adaptive: bool
     stiff: bool
     factory: Callable[[str, OdeProblem], Stepper] | None = None
+    order: int | None = None
 
     @property
     def options(self) -> tuple[str, ...]:
@@ -89,9 +91,9 @@ def cvode_stepper(name: str, problem: OdeProblem) -> Stepper:
 
 
 REGISTRY: dict[str, IntegratorEntry] = {entry.name: entry for entry in (
-    IntegratorEntry("euler", "ode", False, False, fixed_step_stepper),  # hand-written loops
-    IntegratorEntry("symplectic_euler", "ode", False, False, fixed_step_stepper),
-    IntegratorEntry("rk4", "ode", False, False, fixed_step_stepper),
+    IntegratorEntry("euler", "ode", False, False, fixed_step_stepper, 1),  # hand-written loops
+    IntegratorEntry("symplectic_euler", "ode", False, False, fixed_step_stepper, 1),
+    IntegratorEntry("rk4", "ode", False, False, fixed_step_stepper, 4),
     IntegratorEntry("rk45", "ode", True, False, scipy_stepper),  # Dormand-Prince 5(4)
     IntegratorEntry("dop853", "ode", True, False, scipy_stepper),
     IntegratorEntry("radau", "ode", True, True, scipy_stepper),  # Radau IIA, order 5
@@ -100,8 +102,8 @@ REGISTRY: dict[str, IntegratorEntry] = {entry.name: entry for entry in (
     IntegratorEntry("cvode_bdf", "ode", True, True, cvode_stepper),  # SUNDIALS
     IntegratorEntry("cvode_adams", "ode", True, False, cvode_stepper),
     IntegratorEntry("ida", "dae", True, True),  # SUNDIALS IDA: integrate_dae
-    IntegratorEntry("pgs", "stepper", False, False),  # constraint contact: Pinocchio's PGS
-    IntegratorEntry("admm", "stepper", False, False),  # and ADMM
+    IntegratorEntry("pgs", "stepper", False, False, order=1),  # constraint contact: Pinocchio's PGS
+    IntegratorEntry("admm", "stepper", False, False, order=1),  # and ADMM (velocity level, order 1)
 )}
 
 

@@ -34,7 +34,8 @@ def session_from_parameters(p: Mapping[str, object], namespace: str,
         return SimulationSession(
             scene, p["publish_rate"], command_timeout=p["command_timeout"], on_timeout=p["on_timeout"],
             samples_per_solve=max(1, round(p["solve_horizon"] * p["publish_rate"])),
-            default_effort_limit=p["default_effort_limit"], callback_budget=p["callback_budget"], **logs)
+            default_effort_limit=p["default_effort_limit"], callback_budget=p["callback_budget"],
+            error_estimate=p["error_estimate"], **logs)
     return InverseSession(scene, filter_time_constant=p["acceleration_filter"],
                           max_gap_ns=round(p["max_sample_gap"] * NS_PER_S), callback_budget=p["callback_budget"],
                           **logs)

@@ -324,6 +324,9 @@ PARAMETERS: dict[str, Spec] = {
                                  "without a robot) has this many subscribers (or after wait_timeout); 0: at once", (0, 100)),
     "wait_timeout": Spec(10.0, "wall-clock seconds to wait for those subscribers; then start anyway, "
                          "with a warning", (0.0, 3600.0)),
+    "error_estimate": Spec(False, "simulate mode: estimate the run's error with a companion run (tol/20, or dt/2 "
+                           "with Richardson's factor) in a worker process fed the same commands; /diagnostics "
+                           "error_estimate.* per state group (rad, rad/s, m), event times and the companion's cost"),
     "diagnostics_period": Spec(1.0, "wall-clock seconds between /diagnostics messages", (0.01, 60.0)),
     "arm_joints": Spec("", "joints of arm_controller, comma-separated, in the order of its commands ('' : the "
                        "first youBot's moving arm_joint_1 .. 5)"),

@@ -37,6 +37,8 @@ from youbot_dynamics.node.mobile_base import MobileBase
 from youbot_dynamics.node.sensors import SensorMessages
 from youbot_dynamics.node.session import Session
 from youbot_dynamics.scene.schema import Scene
+from youbot_dynamics.sim.companion import CompanionStream
+from youbot_dynamics.sim.error_estimate import ErrorEstimate
 from youbot_dynamics.sim.simulator import Simulator, Snapshot
 
 NOT_REPORTED = "n/a"
@@ -75,8 +77,9 @@ class SimulationSession(Session):
                  on_timeout: str = "hold", samples_per_solve: int = 5, frame_id: str = "", ee_link: str = "",
                  mcap_path: str | Path | None = None, rrd_path: str | Path | None = None,
                  default_effort_limit: float = DEFAULT_EFFORT_LIMIT, callback_budget: float = 0.05,
-                 frame_prefix: str = "", node_name: str = "dynamics_node") -> None:
+                 frame_prefix: str = "", node_name: str = "dynamics_node", error_estimate: bool = False) -> None:
         self.simulator = Simulator(scene, scene.pinned_integrator())
+        self.companion = CompanionStream(self.simulator.model) if error_estimate else None
         if self.simulator.model.base is not None:
             self.moving_base = MobileBase(self.simulator.model.base, InputCounters(), command_timeout, frame_prefix,
                                           self.simulator.robot.root_link)
@@ -126,6 +129,8 @@ class SimulationSession(Session):
             self.epoch_ns = self.last_reset_ns = self.stamp_ns + self.step_ns
             self.resets += 1
         self.simulator.reset()
+        if self.companion is not None:
+            self.companion.reset()
         self.commands.clear()
         if self.moving_base is not None:
             self.moving_base.reset()
@@ -184,16 +189,17 @@ class SimulationSession(Session):
             if self.moving_base is not None:
                 state = self.simulator.state
                 state.reference = dataclasses.replace(state.reference, base_twist=self.moving_base.twist(self.t))
-            start = time.perf_counter()
+            start, command = time.perf_counter(), self.commands.torque(self.t)
             try:
-                self._pending = self.simulator.advance_through(times, self.commands.torque(self.t),
-                                                               self._sensors.wanted)[::-1]
+                self._pending = self.simulator.advance_through(times, command, self._sensors.wanted)[::-1]
             except DivergenceError as error:
                 self.failure = f"diverged after t = {self.t:.6f} s: {error}"
                 return []
             finally:
                 self.wall_time += time.perf_counter() - start
             pending = self._pending[::-1]
+            if self.companion is not None:
+                self.companion.submit(times, command, self.simulator.state.reference, pending)
             self._based = self._base_outputs(pending, self.k + 1)[::-1]
             self._prebuilt = self._block(pending, self._based[::-1])
         self.k += 1
@@ -314,8 +320,9 @@ class SimulationSession(Session):
     def diagnostics(self, real_time_factor: float, progress: float | None = None) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
         energy (J), input counters, the free bodies (names in /free_bodies order) and the
-        contact events so far, a moving base's slip, and ``progress`` (percent of a run of set
-        duration) if given; level ERROR after a divergence, WARN when paused or when the base's
+        contact events so far, a moving base's slip, the error estimate (with
+        ``error_estimate``; at 100 % progress, every chunk's) and ``progress`` (percent of a
+        run of set duration) if given; level ERROR after a divergence, WARN when paused or when the base's
         wheels slip. Figures not known (counters the integrator does not report) are
         ``NOT_REPORTED``."""
         stats = {f"integrator.{key}": reported(value) for key, value in self.simulator.stats.as_dict().items()}
@@ -325,11 +332,37 @@ class SimulationSession(Session):
                   "paused": self.paused, "command": self._command_source(), "resets": self.resets,
                   "last_reset_at": "none" if self.last_reset_ns is None else self.last_reset_ns / NS_PER_S,
                   **stats, **self.counters.as_values(),
-                  **self.contact_values(), **base_values, **({} if progress is None else {"progress": progress})}
+                  **self.contact_values(), **base_values, **({} if progress is None else {"progress": progress}),
+                  **self.error_estimate_values(wait=progress is not None and progress >= 100.0)}
         level, text = ("ERROR", self.failure) if self.failure else (("WARN", "paused") if self.paused else ("OK", "running"))
         if (level, base_level) == ("OK", "WARN"):
             level, text = "WARN", f"base wheels slip: {base_values['base.slip']:.3g} m/s at a hub"
         return self._diagnostic_outputs(level, text, values)
+
+    def error_estimate(self, wait: bool = False) -> ErrorEstimate | None:
+        """The run's error estimate so far (None without ``error_estimate`` or before the
+        companion's first answer; ``wait``: after every chunk handed to it)."""
+        if self.companion is None:
+            return None
+        return self.companion.estimate(self.simulator.events if self.simulator.model.contact else None, wait)
+
+    def error_estimate_values(self, wait: bool = False) -> dict[str, object]:
+        """/diagnostics ``accuracy`` (a scene with an ``accuracy`` target: the front point
+        chosen, and why), ``error_estimate.*`` (:meth:`ErrorEstimate.values`, the largest
+        difference per group since the last reset) and ``error_estimate.lag (chunks)``
+        (nothing without ``error_estimate``). ``wait`` (a run's last report): after every chunk."""
+        choice = {} if self.scene.accuracy_choice is None else {"accuracy": self.scene.accuracy_choice}
+        if self.companion is None:
+            return choice
+        estimate = self.error_estimate(wait)
+        values = {**choice, "error_estimate.lag (chunks)": self.companion.lag}
+        return {**values, **({"error_estimate": "pending"} if estimate is None else estimate.values())}
+
+    def close(self) -> None:
+        """Stop the companion's worker, finalise the logs (idempotent)."""
+        if self.companion is not None:
+            self.companion.close()
+        super().close()
 
     def contact_values(self) -> dict[str, object]:
         """``free_bodies`` (names, comma-separated, in /free_bodies order) and the contact

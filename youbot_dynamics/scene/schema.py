@@ -47,6 +47,8 @@ Keys (units SI, angles rad; joint values are mappings by joint name)::
     geometry: [...]                 # geometry on robot links
     contacts: [...]                 # pairs of geometry names, each with its contact law
     integrator: {method: pgs | admm, dt: s}   # constraint stepper (pairs with law constraint)
+    accuracy: E                     # run the cheapest point of the stored front that meets E
+    front: {...}                    # written by work-precision --write-back (scene/front.py)
 
 A number may be uncertain, ``"0.8 ± 0.2"`` or ``"0.8 +- 0.2"`` (value and one standard
 deviation, scene/reader.py): the scene runs with the value and lists the parameter in
@@ -79,6 +81,7 @@ from youbot_dynamics.model.robot import Robot, URDFDocument, keep_joints, read_u
 from youbot_dynamics.scene.base import BaseSpec, read_base
 from youbot_dynamics.scene.contacts import (ContactPairSpec, FreeBodySpec, read_composition,
                                             read_contacts, read_free_bodies, read_geometries)
+from youbot_dynamics.scene.front import Front, read_accuracy, with_accuracy
 from youbot_dynamics.scene.reader import SceneError, SceneReader, read_yaml
 
 CONTROLLERS = ("none", "pd", "computed_torque")
@@ -86,7 +89,8 @@ RECORDABLE = ("q", "v", "z", "base", "base_v", "tau", "energy", "ee_position")
 FRICTION_DEFAULTS = ("urdf", "none")
 CONTACT_SECTIONS = ("free_bodies", "world", "geometry", "contacts")
 TOP_KEYS = ("name", "description", "robot", "moving", "locked", "initial", "gravity", "friction",
-            "controller", "integrator", "duration", "outputs", "base", "wrist_sensor", *CONTACT_SECTIONS)
+            "controller", "integrator", "duration", "outputs", "base", "wrist_sensor", "accuracy", "front",
+            *CONTACT_SECTIONS)
 #: The source of a scene given as a mapping without a label.
 DICT_SOURCE = "<dict>"
 
@@ -192,6 +196,11 @@ class Scene:
     """The link whose joint to its parent holds the wrist force/torque sensor (None: none)."""
     uncertain: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
     urdf_document: URDFDocument | None = dataclasses.field(default=None, compare=False, repr=False)
+    front: Front | None = None
+    """The stored work-precision front (scene/front.py), None without one."""
+    accuracy: float | None = None
+    accuracy_choice: str | None = None
+    """With an ``accuracy`` target: the front point chosen for it, and why."""
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = DICT_SOURCE, base_dir: Path | None = None,
@@ -320,9 +329,11 @@ def _scene_from_dict(data: Mapping[str, Any], source: str, base_dir: Path | None
     except UserInputError as error:
         raise SceneError(source, "friction.joints", str(error)) from None
     bodies, geometries, contacts = _contact_sections(reader, data, robot, integrator)
+    accuracy, front = read_accuracy(reader, data)
     reader.unused_values()
-    return dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts,
-                               uncertain=MappingProxyType(dict(reader.uncertain)))
+    scene = dataclasses.replace(scene, free_bodies=bodies, geometries=geometries, contacts=contacts,
+                                uncertain=MappingProxyType(dict(reader.uncertain)), front=front)
+    return scene if accuracy is None else with_accuracy(scene, accuracy)
 
 
 WRIST_SENSOR_DEFAULT = "gripper_palm_link"

@@ -115,6 +115,7 @@ class SimulationResult:
     energy_dissipated: float | None = None
     attitude_events: dict[str, int] = dataclasses.field(default_factory=dict)
     quaternion_drift: float | None = None
+    error_estimate: object | None = None   # its ErrorEstimate, from sim/companion.py's run (else None)
 
     @property
     def final_state(self) -> dict[str, float]:
