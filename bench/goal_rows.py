@@ -1,29 +1,37 @@
-"""The summary table's rows for the issue-14 goals measured on whole scenes and sessions
-(bench/summary.py holds the per-call, batch, start-up and scaling rows):
+"""The summary table's rows for the goals measured on whole scenes and sessions
+(bench/summary.py holds the per-call, batch, start-up and growth rows). Every cost is CPU
+time (bench/timing.py: the measuring thread's for calls, the process's for runs whose
+libraries have threads of their own), the wall time beside it; ratios and verdicts come
+from CPU time, so they hold on a busy machine.
 
-- gripping through the engine: real-time factor of the integrator alone
-  (``Simulator.run`` over the first GRIP_RUN s, outputs at the scene's 50 Hz; the grasp
-  closes at 4.9 s) and the cost per step over the next GRIP_STEPS steps of 1 ms
-  (``engine.advance`` from that run's end, the sphere held in youBot 1's grasp);
 - the main job: the dynamics node's session without ROS (bench/bench_base.py) at 500 Hz
-  over gripping's first SESSION_RUN s, MCAP + Rerun logs on (and off, for the outputs'
-  cost): real-time factor = simulated / wall time;
+  over the first SESSION_RUN s of mobile_pick and of gripping, MCAP + Rerun logs on:
+  real-time factor = simulated s / CPU s of the process; beside it the integrator alone
+  (``Simulator.run`` over the same seconds, outputs at the scene's rate);
+- gripping through the engine: the cost per step over GRIP_STEPS steps of 1 ms in the
+  grasp (``engine.advance`` from the end of a GRIP_RUN s run, the sphere held in youBot 1's
+  grasp);
 - the right-hand side of arm_friction and arm_ptp against a bare pin.aba (bench/
   bench_simulation.py), best of alternating loops;
 - inverse mode: ``InverseSession.joint_states`` per sample (logs off), fed as the node feeds
   it (the samples of each 10 ms tick as one batch), with /computed_torques subscribed alone
   and with every output built, against ``inverse_dynamics_batch`` per sample on the same
   INVERSE_SAMPLES samples of arm_ptp's robot (a smooth motion at 500 Hz);
-- contact against MuJoCo at equal accuracy (bench/bench_contact_mujoco.py, --quick sweeps).
+- the free arm (arm_swing) against MuJoCo on its minimal model: rk4 at 0.25 ms both sides
+  (equal errors), and each side's cheapest setting for a 1e-6 rad final error;
+- contact against MuJoCo at matched accuracy (bench/bench_contact_mujoco.py, --quick
+  sweeps): each side's cheapest setting, then both alternating, best of N;
+- N youBots in a row (youbot_dynamics/scene/row.py): CPU time per robot-second for N = 1,
+  2, 4, 8, flat within ROW_FLAT from the cheapest to the dearest.
 
-Each row: figure, ours, peer (None: no peer), unit, ratio, goal, met (None: not measured).
+Each row: figure, ours, peer (None: no peer), unit, ratio, goal, met (None: not measured),
+and the wall times of ours and the peer.
 """
 from __future__ import annotations
 
 import math
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -32,58 +40,74 @@ import pinocchio as pin
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_base import session_wall  # noqa: E402
-from bench_simulation import rhs_pair  # noqa: E402
-from bench_contact_mujoco import TARGETS, UNITS, comparisons, equal_accuracy  # noqa: E402
-from timing import best_per_call  # noqa: E402
+from bench_base import session_cost  # noqa: E402
+from bench_contact_mujoco import TARGETS, UNITS, comparisons, matched  # noqa: E402
+from bench_simulation import fixed_step_pair, free_arm_pair, rhs_pair  # noqa: E402
+from timing import PROCESS, THREAD, Timing, best_timings, sized, timed  # noqa: E402
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch  # noqa: E402
 from youbot_dynamics.node.inverse_session import InverseSession  # noqa: E402
+from youbot_dynamics.scene.row import youbot_row_scene  # noqa: E402
 from youbot_dynamics.scene.schema import load_scene  # noqa: E402
 from youbot_dynamics.sim import engine  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
-GRIP_RUN, GRIP_STEPS = 6.0, 2000  # s simulated, then steps of the scene's 1 ms
-SESSION_RUN, SESSION_RATE = 3.0, 500.0  # s simulated, Hz
-INVERSE_SAMPLES, INVERSE_RATE = 1000, 500.0  # samples, Hz
+GRIP_RUN, GRIP_STEPS = sized((6.0, 2000), (0.05, 20))  # s simulated, then steps of the scene's 1 ms
+SESSION_RUN, SESSION_RATE = sized(3.0, 0.05), 500.0  # s simulated, Hz
+INVERSE_SAMPLES, INVERSE_RATE = sized(1000, 20), 500.0  # samples, Hz
+#: the main job's goals (issue 25): real-time factor with MCAP + Rerun, and of the integrator alone
+MAIN_JOB_GOALS = {"mobile_pick": (15.0, 40.0), "gripping": (25.0, 60.0)}
+#: the free arm: fixed-step rk4 at most 1.5x MuJoCo's; at a 1e-6 rad final error at most 0.5x
+RK4_GOAL, FREE_ARM_TARGET, FREE_ARM_GOAL = 1.5, sized(1e-6, 1e-4), 0.5
+FREE_ARM_GRID = sized({"cvode_adams": (1e-9, 1e-10, 1e-11), "dop853": (1e-8, 1e-9, 1e-10)}, {"dop853": (1e-8,)})
+ARM_DURATION = sized(None, 0.05)  # s of arm_swing (None: the scene's 2 s)
+#: N youBots: robots per scene, simulated seconds (the grasp closes at about 4.8 s), the goal
+ROW_SIZES, ROW_RUN, ROW_FLAT = sized(((1, 2, 4, 8), 6.0), ((1, 2), 0.05)) + (1.2,)
+CONTACT_GOAL = 1.0
 
 
 def row(figure: str, ours: float | None, peer: float | None, unit: str, goal: str, met: bool | None,
-        ratio: float | None = None) -> dict:
-    """A summary-table row; ratio defaults to ours / peer (None without both)."""
+        ratio: float | None = None, wall: tuple[float | None, float | None] = (None, None)) -> dict:
+    """A summary-table row; ratio defaults to ours / peer (None without both); ``wall``: the
+    wall-time figures of ours and the peer in the same unit (None where not measured)."""
     if ratio is None and ours is not None and peer is not None:
         ratio = ours / peer
     return {"figure": figure, "ours": ours, "peer": peer, "unit": unit, "ratio": ratio, "goal": goal,
-            "met": None if met is None else bool(met)}
+            "met": None if met is None else bool(met), "ours_wall": wall[0], "peer_wall": wall[1]}
+
+
+def best_of(call, repeat: int, clock=PROCESS) -> Timing:
+    """Best CPU (``clock``) and best wall time (s) of ``repeat`` calls."""
+    costs = [timed(call, clock)[1] for _ in range(repeat)]
+    return Timing(min(c.cpu for c in costs), min(c.wall for c in costs))
 
 
 def gripping_rows() -> list[dict]:
     simulator = Simulator(load_scene("gripping").with_duration(GRIP_RUN))
-    start = time.perf_counter()
     simulator.run()
-    factor = GRIP_RUN / (time.perf_counter() - start)
     state = simulator.get_state()
     steps = state.stats.steps
-    start = time.perf_counter()
-    engine.advance(simulator.model, state, [state.t + GRIP_STEPS * simulator.integrator.dt])
-    per_step = (time.perf_counter() - start) / (state.stats.steps - steps) * 1e6
-    return [
-        row(f"gripping: real-time factor of the integrator alone (Simulator.run, 0-{GRIP_RUN:g} s)", factor, None,
-            "x real time", "ours >= 6", factor >= 6.0),
-        row(f"gripping: cost per 1 ms step in the grasp ({state.stats.steps - steps} steps through the engine)",
-            per_step, None, "us", "ours <= 150 us", per_step <= 150.0),
-    ]
+    _, cost = timed(lambda: engine.advance(simulator.model, state, [state.t + GRIP_STEPS * simulator.integrator.dt]))
+    count = state.stats.steps - steps
+    per_step = cost / count / 1e-6
+    return [row(f"gripping: cost per 1 ms step in the grasp ({count} steps through the engine)",
+                per_step.cpu, None, "us", "ours <= 150 us", per_step.cpu <= 150.0, wall=(per_step.wall, None))]
 
 
 def session_rows(repeat: int) -> list[dict]:
-    """The main job's real-time factor, logs on and off: the best of ``repeat`` runs each."""
+    """The main job's real-time factor with MCAP + Rerun logs and the integrator's alone on
+    mobile_pick and gripping: the best of ``repeat`` runs each (simulated s per CPU s)."""
     rows = []
     with tempfile.TemporaryDirectory() as folder:
-        for logs in (Path(folder), None):
-            factor = SESSION_RUN / min(session_wall("gripping", logs, SESSION_RUN, SESSION_RATE) for _ in range(repeat))
-            label = "MCAP + Rerun" if logs else "logs off"
-            figure = f"main job: gripping session at {SESSION_RATE:g} Hz, {label} (no ROS, 0-{SESSION_RUN:g} s)"
-            rows.append(row(f"{figure}: real-time factor", factor, None, "x real time",
-                            "ours >= 3" if logs else "-", factor >= 3.0 if logs else None))
+        for name, (goal_logs, goal_alone) in MAIN_JOB_GOALS.items():
+            logs = best_of(lambda: session_cost(name, Path(folder), SESSION_RUN, SESSION_RATE), repeat)
+            simulator = Simulator(load_scene(name).with_duration(SESSION_RUN))
+            alone = best_of(simulator.run, repeat)
+            figure = f"main job: {name} at {SESSION_RATE:g} Hz, 0-{SESSION_RUN:g} s, no ROS"
+            for label, cost, goal in (("session with MCAP + Rerun", logs, goal_logs),
+                                      ("integrator alone (Simulator.run)", alone, goal_alone)):
+                factor = SESSION_RUN / cost.cpu
+                rows.append(row(f"{figure}, {label}: real-time factor", factor, None, "x real time",
+                                f"ours >= {goal:g}", factor >= goal, wall=(SESSION_RUN / cost.wall, None)))
     return rows
 
 
@@ -92,9 +116,9 @@ def rhs_rows(calls: int, repeat: int) -> list[dict]:
     for name in ("arm_friction", "arm_ptp"):
         ours, bare, _ = rhs_pair(name)
         ours(), bare()  # warm up
-        t_ours, t_peer = (t * 1e6 for t in best_per_call([ours, bare], calls, repeat))
-        rows.append(row(f"{name} right-hand side vs bare pin.aba", t_ours, t_peer, "us", "ratio <= 3",
-                        t_ours / t_peer <= 3.0))
+        mine, theirs = (t / 1e-6 for t in best_timings([ours, bare], calls, repeat))
+        rows.append(row(f"{name} right-hand side vs bare pin.aba", mine.cpu, theirs.cpu, "us", "ratio <= 3",
+                        mine.cpu / theirs.cpu <= 3.0, wall=(mine.wall, theirs.wall)))
     return rows
 
 
@@ -117,42 +141,83 @@ def inverse_rows(repeat: int) -> list[dict]:
              for start in range(0, INVERSE_SAMPLES, per_tick)]
     pool = pin.ModelPool(robot.model, 1)
 
-    def session_time(subscribed: set[str] | None) -> float:
+    def session_run(subscribed: set[str] | None) -> None:
         session = InverseSession(scene)
         session.consumed_by(subscribed)
-        start = time.perf_counter()
         for batch in ticks:
             session.joint_states(batch)
-        elapsed = time.perf_counter() - start
         assert session.samples == INVERSE_SAMPLES - 2, f"{session.samples} torques of {INVERSE_SAMPLES} samples"
-        return elapsed
 
-    best_torques = best_all = best_batch = math.inf
-    for _ in range(repeat + 1):  # alternating; the first round warms up
-        best_torques = min(best_torques, session_time({"/computed_torques"}))
-        best_all = min(best_all, session_time(None))
-        start = time.perf_counter()
-        inverse_dynamics_batch(robot, q, v, a, friction, pool=pool)
-        best_batch = min(best_batch, time.perf_counter() - start)
-    peer = best_batch / INVERSE_SAMPLES * 1e6
-    torques, every = (best / INVERSE_SAMPLES * 1e6 for best in (best_torques, best_all))
+    calls = [lambda: session_run({"/computed_torques"}), lambda: session_run(None),
+             lambda: inverse_dynamics_batch(robot, q, v, a, friction, pool=pool)]
+    for call in calls:
+        call()  # warm up
+    torques, every, batch = (t / INVERSE_SAMPLES / 1e-6 for t in best_timings(calls, 1, repeat, THREAD))
     where = f"arm_ptp, {INVERSE_SAMPLES} samples at {INVERSE_RATE:g} Hz, {per_tick} per tick"
     return [row(f"inverse mode, /computed_torques subscribed, vs inverse_dynamics_batch, per sample ({where})",
-                torques, peer, "us", "ratio <= 3", torques / peer <= 3.0),
+                torques.cpu, batch.cpu, "us", "ratio <= 3", torques.cpu / batch.cpu <= 3.0,
+                wall=(torques.wall, batch.wall)),
             row(f"inverse mode, every output built, vs inverse_dynamics_batch, per sample ({where})",
-                every, peer, "us", "-", None)]
+                every.cpu, batch.cpu, "us", "-", None, wall=(every.wall, batch.wall))]
+
+
+def free_arm_rows(repeat: int) -> list[dict]:
+    """arm_swing against MuJoCo's minimal model: rk4 at the same step (equal errors), and
+    each side's cheapest setting at FREE_ARM_TARGET; without MuJoCo, rows saying so."""
+    try:
+        import mujoco
+    except ImportError:
+        return [row("free arm vs MuJoCo: MuJoCo not installed", None, None, "ms", "-", None)]
+    rows = []
+    ours, theirs = fixed_step_pair(duration=ARM_DURATION)
+    mine, peer = (t / 1e-3 for t in best_timings([ours, theirs], 1, repeat, THREAD))
+    rows.append(row(f"arm_swing: rk4 at 0.25 ms both sides (equal errors) vs MuJoCo {mujoco.__version__} RK4 "
+                    "(minimal model)", mine.cpu, peer.cpu, "ms", f"ratio <= {RK4_GOAL:g}",
+                    mine.cpu / peer.cpu <= RK4_GOAL, wall=(mine.wall, peer.wall)))
+    ours, theirs, setting, peer_setting = free_arm_pair(FREE_ARM_TARGET, FREE_ARM_GRID, ARM_DURATION)
+    mine, peer = (t / 1e-3 for t in best_timings([ours, theirs], 1, repeat, THREAD))
+    rows.append(row(f"arm_swing to {FREE_ARM_TARGET:g} rad, each side's cheapest: ours {setting} vs MuJoCo "
+                    f"{peer_setting}", mine.cpu, peer.cpu, "ms", f"ratio <= {FREE_ARM_GOAL:g}",
+                    mine.cpu / peer.cpu <= FREE_ARM_GOAL, wall=(mine.wall, peer.wall)))
+    return rows
 
 
 def mujoco_rows() -> list[dict]:
-    """Both equal-accuracy ratios (--quick sweeps); without MuJoCo, rows saying so."""
+    """Both matched-accuracy ratios (--quick sweeps), the cheapest setting each side and the
+    cheapest whose finer steps all hold the target; without MuJoCo, rows saying so."""
     runs, version = comparisons(quick=True)
     rows = []
-    for scene, result in ((scene, equal_accuracy(scene, runs[scene])) for scene in runs):
-        figure = f"{scene}: wall time at equal accuracy ({TARGETS[scene]:g} {UNITS[scene]})"
-        if version is None:
-            rows.append(row(f"{figure}: MuJoCo not installed", result["ours_s"], None, "s", "ratio <= 3", None))
-            continue
-        met = result["ours_s"] is not None and (result["ratio"] is None or result["ratio"] <= 3.0)
-        rows.append(row(f"{figure} vs MuJoCo {version}", result["ours_s"], result["mujoco_s"], "s", "ratio <= 3",
-                        met, result["ratio"]))
+    for scene in runs:
+        figure = f"{scene}: CPU time at matched accuracy ({TARGETS[scene]:g} {UNITS[scene]})"
+        for robust in (False, True):
+            result = matched(runs[scene], TARGETS[scene], robust=robust)
+            ours, theirs = result["ours"], result["mujoco"]
+            cost = [None if c is None else c / 1e-3 for c in (result["ours_cost"], result["mujoco_cost"])]
+            kind = "each side's cheapest setting whose finer steps all hold it" if robust else \
+                "each side's cheapest setting"
+            settings = f"ours {'none' if ours is None else ours.setting}; MuJoCo " + \
+                ("not installed" if version is None else "none" if theirs is None else theirs.setting)
+            met = None if robust or version is None else result["ratio"] is not None and \
+                result["ratio"] <= CONTACT_GOAL
+            rows.append(row(f"{figure}, {kind} ({settings})" + ("" if version is None else f", MuJoCo {version}"),
+                            None if cost[0] is None else cost[0].cpu, None if cost[1] is None else cost[1].cpu,
+                            "ms", "-" if robust else f"ratio <= {CONTACT_GOAL:g}", met, result["ratio"],
+                            wall=tuple(None if c is None else c.wall for c in cost)))
+    return rows
+
+
+def youbot_row_rows(repeat: int) -> list[dict]:
+    """CPU ms per robot-second of N youBots in a row (scene/row.py) over ROW_RUN s, per N,
+    and the spread (dearest / cheapest) against ROW_FLAT."""
+    costs = {}
+    for n in ROW_SIZES:
+        simulator = Simulator(youbot_row_scene(n, ROW_RUN))
+        simulator.run()  # warm up
+        costs[n] = best_of(simulator.run, repeat) / (n * ROW_RUN) / 1e-3
+    rows = [row(f"{n} youBot(s) in a row (scene/row.py, 0-{ROW_RUN:g} s, PGS 1 ms): CPU per robot-second",
+                cost.cpu, None, "ms", "-", None, wall=(cost.wall, None)) for n, cost in costs.items()]
+    spread = max(c.cpu for c in costs.values()) / min(c.cpu for c in costs.values())
+    sizes = f"{ROW_SIZES[0]} to {ROW_SIZES[-1]}"
+    rows.append(row(f"N youBots: cost per robot-second, dearest / cheapest over N = {sizes}", spread, None, "",
+                    f"ours <= {ROW_FLAT:g}", spread <= ROW_FLAT))
     return rows
