@@ -30,7 +30,9 @@ How to read the table:
   peer"). Ours and the peer alternate in one process, best of N; ratios are ours / peer in
   CPU time, and the verdicts come from CPU time, so a busy machine does not flip them (the
   load average before and after the run is printed with the table). Real-time factors are
-  simulated seconds per CPU second. "-" where a row has no peer or no goal.
+  simulated seconds per CPU second. "-" where a row has no peer or no goal; "near" where the
+  figure is within 5 % of its goal's bound (the scatter of CPU-time ratios between runs on
+  a busy machine: a verdict there would flip with the load).
 - Per-call figures are on the youBot arm (5 joints; kinematics on the chain to the gripper
   palm); batches are 2000 samples; growth is fitted over generated chains of 5, 10, 20, 40
   and 60 revolute joints (`bench/bench_scaling.py`).
@@ -62,7 +64,8 @@ def markdown(rows: list[dict]) -> str:
     lines = ["| figure | ours | peer | unit | ratio | goal | met | wall ours / peer |",
              "|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        met = "-" if r["goal"] == "-" or r["met"] is None else ("yes" if r["met"] else "**no**")
+        met = "-" if r["goal"] == "-" or r["met"] is None else r["met"] if isinstance(r["met"], str) else \
+            ("yes" if r["met"] else "**no**")
         wall = f"{number(r.get('ours_wall'))} / {number(r.get('peer_wall'))}"
         lines.append(f"| {r['figure']} | {number(r['ours'])} | {number(r['peer'])} | {r['unit']} | "
                      f"{number(r['ratio'])} | {r['goal']} | {met} | {wall} |")

@@ -81,7 +81,7 @@ def test_summary_rows_in_the_smoke_form(smoke, capsys):
 
     results = summary.measure(quick=True)
     kinds = {"ours": (float, type(None)), "peer": (float, type(None)), "ratio": (float, type(None)),
-             "met": (bool, type(None)), "ours_wall": (float, type(None)), "peer_wall": (float, type(None)),
+             "met": (bool, str, type(None)), "ours_wall": (float, type(None)), "peer_wall": (float, type(None)),
              "figure": str, "unit": str, "goal": str}
     figures = [r["figure"] for r in results["rows"]]
     assert len(set(figures)) == len(figures), "two rows of one name"
@@ -124,3 +124,15 @@ def test_bench_node_inputs_in_its_smoke_form(smoke, monkeypatch):
     monkeypatch.setattr(bench_node_inputs, "FLOOD_S", 0.5)
     result = bench_node_inputs.run("burst", 173, 3.0)
     assert result["samples"] > 0 and math.isfinite(result["worst gap ms"]) and result["window rate Hz"] > 0.0
+
+
+def test_a_figure_within_the_scatter_of_its_bound_is_near_the_goal(smoke):
+    from goal_rows import NEAR, verdict
+
+    assert verdict("ratio <= 1.1", 2.0, 1.1 * (1 + 0.9 * NEAR), False) == "near"
+    assert verdict("ratio <= 1.1", 2.0, 1.1 * (1 - 0.9 * NEAR), True) == "near"
+    assert verdict("ratio <= 1.1", 2.0, 1.1 * (1 + 1.1 * NEAR), False) is False
+    assert verdict("ours >= 15", 15 * (1 - 1.1 * NEAR), None, False) is False
+    assert verdict("ours <= 150 us", 150 * (1 + 0.5 * NEAR), None, False) == "near"
+    assert verdict("ours <= max(1.1, peer + 0.1)", 1.1, 1.0, True) is True  # no plain bound: as measured
+    assert verdict("ratio <= 3", None, None, None) is None

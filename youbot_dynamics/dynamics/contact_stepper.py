@@ -365,11 +365,12 @@ class ConstraintStepper:
         report = StepReport()
         # ABA in the world convention places the joints and fills the joint Jacobians, and
         # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
+        # (only when a pair touches: the contact search reads the placements alone)
         v_free = v + h * pin.aba(model, data, q, v, tau, pin.Convention.WORLD)
-        inverse_mass = pin.computeMinverse(model, data)
         touching = self.contact.touching(data, settings.margin)
         if not touching:
             return pin.integrate(model, q, h * v_free), v_free, report
+        inverse_mass = pin.computeMinverse(model, data)
         active = self.contact_set(tuple([(k, len(points)) for k, points in touching]))
         gaps, i, joints = [], 0, self.joint_placements(data)
         for k, points in touching:
