@@ -296,9 +296,12 @@ def cheapest(runs: list[Run], target: float) -> Run | None:
 
 def robust_choice(runs: list[Run], target: float) -> Run | None:
     """The cheapest run whose error holds ``target`` and so does every finer step of its
-    family: a choice that the next smaller step cannot undo."""
-    good = [r for r in runs if holds(r, target)
-            and all(holds(o, target) for o in runs if o.family == r.family and o.step < r.step)]
+    family (at least one: the finest step swept proves nothing): a choice that the next
+    smaller step cannot undo."""
+    def finer(r: Run) -> list[Run]:
+        return [o for o in runs if o.family == r.family and o.step < r.step]
+
+    good = [r for r in runs if holds(r, target) and finer(r) and all(holds(o, target) for o in finer(r))]
     return min(good, key=lambda r: r.cost.cpu) if good else None
 
 

@@ -38,6 +38,8 @@ def test_the_robust_choice_needs_every_finer_step_to_hold():
     assert robust_choice(BUMPY + STEADY, 1.0) is STEADY[1]
     assert robust_choice(BUMPY, 1.0) is None
     assert robust_choice(BUMPY, 10.0) is BUMPY[1]  # 12 % at 5 ms misses: 2 ms and finer hold 10 %
+    # holding only at the finest step swept is no evidence: nothing finer was tried
+    assert robust_choice(runs("last", {1e-3: 3.0, 5e-4: 0.5}), 1.0) is None
 
 
 def test_diverged_runs_never_hold_a_target():
