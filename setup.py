@@ -35,6 +35,8 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(exclude=["test", "test.*"]),
+    # The source-document ledger's rows (studies/ledger.py reads them next to itself).
+    package_data={f"{PACKAGE}.studies": ["ledger_data/*.yaml"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),

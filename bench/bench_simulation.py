@@ -15,7 +15,8 @@
    MuJoCo's steps run inside ``mj_step(..., nstep=N)`` (no Python loop overhead).
 
 Run: python bench/bench_simulation.py [--calls 20000] [--repeat 5] [--target 1e-6]
-(BENCH_SMOKE=1: 50 calls, 0.05 s of arm_swing, two sweep settings). Needs ``pip install mujoco`` (requirements-bench.txt) for part 2.
+(BENCH_SMOKE=1: 50 calls, 0.05 s of arm_swing, two sweep settings). Needs ``pip install
+mujoco`` (requirements-bench.txt) for part 2.
 """
 from __future__ import annotations
 
@@ -38,7 +39,6 @@ from youbot_dynamics.scene.schema import Scene, load_scene  # noqa: E402
 from youbot_dynamics.sim.simulator import Simulator  # noqa: E402
 
 SCENES = ("arm_swing", "arm_friction", "arm_ptp")
-RK4_DT = 2.5e-4  # s: the fixed-step comparison's step (issue 25)
 SMOKE_GRID = {"rk4": (1e-3,), "dop853": (1e-8,)}
 
 
@@ -69,11 +69,10 @@ def rhs_table(calls: int, repeat: int) -> None:
               f"| {mine:.1f} | {theirs:.1f} | {mine / theirs:.1f}x |")
 
 
-def mujoco_urdf(scene: Scene, minimal: bool = False) -> str:
+def mujoco_urdf(scene: Scene, fuse: bool = False) -> str:
     """The scene's URDF as MuJoCo should load it: locked joints fixed (all locked at 0 in
-    arm_swing), no <dynamics>, no visuals, a <mujoco> compiler block keeping every body
-    (``minimal``: the bodies welded by fixed joints fused into their parents, 5 moving
-    bodies on the world for arm_swing, the same dynamics)."""
+    arm_swing), no <dynamics>, no visuals, a <mujoco> compiler block keeping every body (or,
+    ``fuse``, merging the bodies fixed to one another: the minimal model, same dynamics)."""
     root = etree.parse(scene.urdf_path).getroot()
     for joint in root.findall("joint"):
         if joint.get("type") != "fixed" and joint.get("name") not in scene.moving:
@@ -85,18 +84,18 @@ def mujoco_urdf(scene: Scene, minimal: bool = False) -> str:
         for element in link.findall("visual"):
             link.remove(element)
     extension = etree.SubElement(root, "mujoco")
-    etree.SubElement(extension, "compiler", fusestatic=str(minimal).lower(), discardvisual="true", balanceinertia="false")
+    etree.SubElement(extension, "compiler", fusestatic=str(fuse).lower(), discardvisual="true", balanceinertia="false")
     return etree.tostring(root, encoding="unicode")
 
 
 class MujocoArm:
     """arm_swing in MuJoCo: q, v mapped by joint name to our order."""
 
-    def __init__(self, scene: Scene, minimal: bool = False) -> None:
+    def __init__(self, scene: Scene, fuse: bool = False) -> None:
         import mujoco
 
         self.mj = mujoco
-        self.model = mujoco.MjModel.from_xml_string(mujoco_urdf(scene, minimal))
+        self.model = mujoco.MjModel.from_xml_string(mujoco_urdf(scene, fuse))
         self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_LIMIT
         self.model.opt.gravity[:] = scene.gravity
         self.data = mujoco.MjData(self.model)
@@ -152,49 +151,6 @@ def model_check(scene: Scene, arm: MujocoArm) -> tuple[float, float]:
     return float(np.abs(mass - ours_mass).max()), float(np.abs(bias - ours_bias).max())
 
 
-def fixed_step_pair(dt: float = RK4_DT, duration: float | None = None
-                    ) -> tuple[Callable[[], np.ndarray], Callable[[], np.ndarray]]:
-    """(ours, MuJoCo's) rk4 at step ``dt`` over ``duration`` s (default the scene's) of
-    arm_swing, MuJoCo on the minimal model (checked against Pinocchio's mass matrix and bias
-    first); each call returns the final q, and both are checked to agree to 1e-9 rad (the
-    same method on the same dynamics: equal errors)."""
-    scene = load_scene("arm_swing")
-    scene = scene if duration is None else scene.with_duration(duration)
-    arm = MujocoArm(scene, minimal=True)
-    mass, bias = model_check(scene, arm)
-    assert mass < 1e-12 and bias < 1e-10, f"MuJoCo's minimal arm differs: mass {mass:.2e}, bias {bias:.2e}"
-    simulator = Simulator(scene.with_integrator("rk4", dt=dt))
-    nv = simulator.robot.nv
-
-    def ours() -> np.ndarray:
-        return simulator.run().x[-1, :nv]
-
-    theirs = arm.stepping("mjINT_RK4", dt, scene.duration)
-    gap = float(np.abs(ours() - theirs()).max())
-    assert gap < 1e-9, f"rk4 at {dt:g} s: ours and MuJoCo's final q differ by {gap:.2e} rad"
-    return ours, theirs
-
-
-def free_arm_pair(target: float, grid: dict[str, tuple[float, ...]], duration: float | None = None
-                  ) -> tuple[Callable[[], object], Callable[[], object], str, str]:
-    """(ours, MuJoCo's, our setting, MuJoCo's setting) on arm_swing (``duration`` s, default
-    the scene's) at final joint error ``target`` (rad) against the reference (DOP853 rtol
-    1e-12): our cheapest setting of ``grid`` by counted work, MuJoCo's RK4 at the largest
-    step (halving from 2 ms) that meets it, on the minimal model."""
-    scene = load_scene("arm_swing")
-    scene = scene if duration is None else scene.with_duration(duration)
-    reference = reference_solution(scene)
-    best = recommend(sweep(scene, reference, grid, progress=False), target)
-    assert best is not None, f"no setting of {grid} reaches {target:g} rad"
-    arm = MujocoArm(scene, minimal=True)
-    dt = 2e-3
-    while float(np.abs(arm.stepping("mjINT_RK4", dt, scene.duration)() - reference.q).max()) > target:
-        dt /= 2
-        assert dt > 1e-6, f"MuJoCo's RK4 misses {target:g} rad down to 1 us"
-    return (Simulator(scene, best.spec).run, arm.stepping("mjINT_RK4", dt, scene.duration), best.spec.describe(),
-            f"RK4 dt={dt:g}")
-
-
 def mujoco_table(target: float, repeat: int) -> None:
     try:
         import mujoco
@@ -203,7 +159,7 @@ def mujoco_table(target: float, repeat: int) -> None:
         return
     scene = load_scene("arm_swing")
     scene = scene.with_duration(sized(scene.duration, 0.05))
-    arm = MujocoArm(scene, minimal=True)
+    arm = MujocoArm(scene, fuse=True)
     mass, bias = model_check(scene, arm)
     print(f"\n2. arm_swing ({scene.duration:g} s) against MuJoCo {mujoco.__version__} (its minimal model: "
           f"{arm.model.nbody} bodies with the world), target final error {target:g} rad\n")

@@ -15,10 +15,14 @@ from CPU time, so they hold on a busy machine.
   bench_simulation.py), best of alternating loops;
 - inverse mode: ``InverseSession.joint_states`` per sample (logs off), fed as the node feeds
   it (the samples of each 10 ms tick as one batch), with /computed_torques subscribed alone
-  and with every output built, against ``inverse_dynamics_batch`` per sample on the same
-  INVERSE_SAMPLES samples of arm_ptp's robot (a smooth motion at 500 Hz);
-- the free arm (arm_swing) against MuJoCo on its minimal model: rk4 at 0.25 ms both sides
-  (equal errors), and each side's cheapest setting for a 1e-6 rad final error;
+  and with every output built, against ``inverse_dynamics_batch`` and a bare ``pin.rnea``
+  per sample on the same INVERSE_SAMPLES samples of arm_ptp's robot (a smooth motion at
+  500 Hz);
+- the free arm (arm_swing) against MuJoCo's RK4 on the minimal model of the same dynamics
+  (bench_simulation.MujocoArm with fuse: the bodies fixed to one another merged, 6 bodies
+  instead of 17): the same method and step (rk4, ARM_DT), and each side at its cheapest
+  setting that reaches ARM_TARGET rad at the end (against our reference): MuJoCo's RK4 and
+  our rk4 at the largest step halving from 2 ms, our dop853 at the loosest rtol by decades;
 - contact against MuJoCo at matched accuracy (bench/bench_contact_mujoco.py, --quick
   sweeps): each side's cheapest setting, then both alternating, best of N;
 - N youBots in a row (youbot_dynamics/scene/row.py): CPU time per robot-second for N = 1,
@@ -43,8 +47,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_base import session_cost  # noqa: E402
 from bench_contact_mujoco import TARGETS, UNITS, comparisons, matched  # noqa: E402
-from bench_simulation import fixed_step_pair, free_arm_pair, rhs_pair  # noqa: E402
-from timing import PROCESS, THREAD, Timing, best_timings, sized, timed  # noqa: E402
+from bench_simulation import MujocoArm, rhs_pair  # noqa: E402
+from timing import PROCESS, THREAD, Timing, best_per_call, best_timings, load_average, sized, timed  # noqa: E402
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch  # noqa: E402
 from youbot_dynamics.node.inverse_session import InverseSession  # noqa: E402
 from youbot_dynamics.scene.row import youbot_row_scene  # noqa: E402
@@ -57,9 +61,7 @@ SESSION_RUN, SESSION_RATE = sized(3.0, 0.05), 500.0  # s simulated, Hz
 INVERSE_SAMPLES, INVERSE_RATE = sized(1000, 20), 500.0  # samples, Hz
 #: the main job's goals (issue 25): real-time factor with MCAP + Rerun, and of the integrator alone
 MAIN_JOB_GOALS = {"mobile_pick": (15.0, 40.0), "gripping": (25.0, 60.0)}
-#: the free arm: fixed-step rk4 at most 1.5x MuJoCo's; at a 1e-6 rad final error at most 0.5x
-RK4_GOAL, FREE_ARM_TARGET, FREE_ARM_GOAL = 1.5, sized(1e-6, 1e-4), 0.5
-FREE_ARM_GRID = sized({"cvode_adams": (1e-9, 1e-10, 1e-11), "dop853": (1e-8, 1e-9, 1e-10)}, {"dop853": (1e-8,)})
+ARM_DT, ARM_TARGET = 2.5e-4, 1e-6  # s, rad
 ARM_DURATION = sized(None, 0.05)  # s of arm_swing (None: the scene's 2 s)
 #: N youBots: robots per scene, simulated seconds (the grasp closes at about 4.8 s), the goal
 ROW_SIZES, ROW_RUN, ROW_FLAT = sized(((1, 2, 4, 8), 6.0), ((1, 2), 0.05)) + (1.2,)
@@ -92,6 +94,14 @@ def row(figure: str, ours: float | None, peer: float | None, unit: str, goal: st
         ratio = ours / peer
     return {"figure": figure, "ours": ours, "peer": peer, "unit": unit, "ratio": ratio, "goal": goal,
             "met": verdict(goal, ours, ratio, met), "ours_wall": wall[0], "peer_wall": wall[1]}
+
+
+def best_cpu(calls: list, repeat: int) -> list[float]:
+    """Best CPU time (s, time.thread_time) of each call, ``repeat`` alternating rounds after
+    one that warms up."""
+    for call in calls:
+        call()
+    return best_per_call(calls, 1, repeat, THREAD)
 
 
 def best_of(call, repeat: int, clock=PROCESS) -> Timing:
@@ -142,9 +152,10 @@ def rhs_rows(calls: int, repeat: int) -> list[dict]:
 
 
 def inverse_rows(repeat: int) -> list[dict]:
-    """Inverse mode against the batch function, per sample (arm_ptp's robot and friction):
-    the node's path (the samples of each INVERSE_PERIOD tick as one batch, 5 at 500 Hz) with
-    /computed_torques subscribed alone, and with every output built (the library default)."""
+    """Inverse mode per sample (arm_ptp's robot and friction) against the batch function and
+    against a bare pin.rnea per sample: the node's path (the samples of each INVERSE_PERIOD
+    tick as one batch, 5 at 500 Hz) with /computed_torques subscribed alone, and with every
+    output built (the library default)."""
     from youbot_dynamics.ros.dynamics_node import INVERSE_PERIOD
     scene = load_scene("arm_ptp")
     robot, friction = scene.robot, scene.joint_friction(scene.robot)
@@ -159,46 +170,73 @@ def inverse_rows(repeat: int) -> list[dict]:
                                                                                            INVERSE_SAMPLES))]
              for start in range(0, INVERSE_SAMPLES, per_tick)]
     pool = pin.ModelPool(robot.model, 1)
+    data = robot.model.createData()
 
-    def session_run(subscribed: set[str] | None) -> None:
+    def session(subscribed: set[str] | None) -> None:
         session = InverseSession(scene)
         session.consumed_by(subscribed)
         for batch in ticks:
             session.joint_states(batch)
         assert session.samples == INVERSE_SAMPLES - 2, f"{session.samples} torques of {INVERSE_SAMPLES} samples"
 
-    calls = [lambda: session_run({"/computed_torques"}), lambda: session_run(None),
-             lambda: inverse_dynamics_batch(robot, q, v, a, friction, pool=pool)]
-    for call in calls:
-        call()  # warm up
-    torques, every, batch = (t / INVERSE_SAMPLES / 1e-6 for t in best_timings(calls, 1, repeat, THREAD))
-    where = f"arm_ptp, {INVERSE_SAMPLES} samples at {INVERSE_RATE:g} Hz, {per_tick} per tick"
+    def rnea() -> None:
+        for k in range(INVERSE_SAMPLES):
+            pin.rnea(robot.model, data, q[k], v[k], a[k])
+
+    best = best_cpu([lambda: session({"/computed_torques"}), lambda: session(None),
+                     lambda: inverse_dynamics_batch(robot, q, v, a, friction, pool=pool), rnea], repeat)
+    torques, every, batch, bare = (b / INVERSE_SAMPLES * 1e6 for b in best)
+    where = f"arm_ptp, {INVERSE_SAMPLES} samples at {INVERSE_RATE:g} Hz, {per_tick} per tick, CPU time"
     return [row(f"inverse mode, /computed_torques subscribed, vs inverse_dynamics_batch, per sample ({where})",
-                torques.cpu, batch.cpu, "us", "ratio <= 3", torques.cpu / batch.cpu <= 3.0,
-                wall=(torques.wall, batch.wall)),
-            row(f"inverse mode, every output built, vs inverse_dynamics_batch, per sample ({where})",
-                every.cpu, batch.cpu, "us", "-", None, wall=(every.wall, batch.wall))]
+                torques, batch, "us", "ratio <= 3", torques / batch <= 3.0),
+            row(f"inverse mode, /computed_torques subscribed, vs pin.rnea, per sample ({where})",
+                torques, bare, "us", "-", None),
+            row(f"inverse mode, every output built, vs pin.rnea, per sample ({where})",
+                every, bare, "us", "ratio <= 3", every / bare <= 3.0)]
 
 
-def free_arm_rows(repeat: int) -> list[dict]:
-    """arm_swing against MuJoCo's minimal model: rk4 at the same step (equal errors), and
-    each side's cheapest setting at FREE_ARM_TARGET; without MuJoCo, rows saying so."""
-    try:
-        import mujoco
-    except ImportError:
-        return [row("free arm vs MuJoCo: MuJoCo not installed", None, None, "ms", "-", None)]
-    rows = []
-    ours, theirs = fixed_step_pair(duration=ARM_DURATION)
-    mine, peer = (t / 1e-3 for t in best_timings([ours, theirs], 1, repeat, THREAD))
-    rows.append(row(f"arm_swing: rk4 at 0.25 ms both sides (equal errors) vs MuJoCo {mujoco.__version__} RK4 "
-                    "(minimal model)", mine.cpu, peer.cpu, "ms", f"ratio <= {RK4_GOAL:g}",
-                    mine.cpu / peer.cpu <= RK4_GOAL, wall=(mine.wall, peer.wall)))
-    ours, theirs, setting, peer_setting = free_arm_pair(FREE_ARM_TARGET, FREE_ARM_GRID, ARM_DURATION)
-    mine, peer = (t / 1e-3 for t in best_timings([ours, theirs], 1, repeat, THREAD))
-    rows.append(row(f"arm_swing to {FREE_ARM_TARGET:g} rad, each side's cheapest: ours {setting} vs MuJoCo "
-                    f"{peer_setting}", mine.cpu, peer.cpu, "ms", f"ratio <= {FREE_ARM_GOAL:g}",
-                    mine.cpu / peer.cpu <= FREE_ARM_GOAL, wall=(mine.wall, peer.wall)))
-    return rows
+def arm_rows(repeat: int) -> list[dict]:
+    """The free arm against MuJoCo's RK4 on the minimal model (see the module docstring):
+    rk4 at ARM_DT both sides, and each side at its largest step that reaches ARM_TARGET."""
+    import mujoco
+    from youbot_dynamics.accuracy.work_precision import reference_solution
+    from youbot_dynamics.scene.schema import IntegratorSpec
+
+    scene = load_scene("arm_swing")
+    scene = scene if ARM_DURATION is None else scene.with_duration(ARM_DURATION)
+    arm = MujocoArm(scene, fuse=True)
+    reference = reference_solution(scene).q
+
+    def ours(dt: float, method: str = "rk4", rtol: float = 1e-6):
+        spec = IntegratorSpec(method=method, dt=dt) if method == "rk4" else \
+            IntegratorSpec(method=method, rtol=rtol, atol=rtol * 1e-2)
+        simulator = Simulator(scene, spec)
+        return lambda: simulator.run().x[-1, :5]
+
+    def theirs(dt: float):
+        return lambda: arm.run("mjINT_RK4", dt, scene.duration)[0]
+
+    def largest_step(run) -> float:
+        dt = 2e-3
+        while np.abs(run(dt)() - reference).max() > ARM_TARGET:
+            dt /= 2
+        return dt
+
+    ours_dt, mujoco_dt = largest_step(ours), largest_step(theirs)
+    rtol = 1e-6     # dop853: the loosest tolerance, by decades, that reaches the target
+    while np.abs(ours(0.0, "dop853", rtol)() - reference).max() > ARM_TARGET:
+        rtol /= 10
+    same = best_cpu([ours(ARM_DT), theirs(ARM_DT)], repeat)
+    accurate = best_cpu([ours(ours_dt), ours(0.0, "dop853", rtol), theirs(mujoco_dt)], repeat)
+    best = int(np.argmin(accurate[:2]))
+    setting = f"rk4 dt={ours_dt * 1e3:g} ms" if best == 0 else f"dop853 rtol={rtol:g}"
+    accurate = [accurate[best], accurate[2]]
+    where = f"arm_swing {scene.duration:g} s, MuJoCo {mujoco.__version__} minimal model ({arm.model.nbody} bodies)"
+    return [row(f"free arm, rk4 dt={ARM_DT * 1e3:g} ms both, vs MuJoCo RK4 ({where}), CPU time", same[0] * 1e3,
+                same[1] * 1e3, "ms", "ratio <= 1.5", same[0] / same[1] <= 1.5),
+            row(f"free arm to {ARM_TARGET:g} rad: ours {setting} (cheaper of rk4, dop853) vs MuJoCo RK4 dt="
+                f"{mujoco_dt * 1e3:g} ms ({where}), CPU time", accurate[0] * 1e3, accurate[1] * 1e3, "ms",
+                "ratio <= 0.5", accurate[0] / accurate[1] <= 0.5)]
 
 
 def mujoco_rows() -> list[dict]:
@@ -240,3 +278,9 @@ def youbot_row_rows(repeat: int) -> list[dict]:
     rows.append(row(f"N youBots: cost per robot-second, dearest / cheapest over N = {sizes}", spread, None, "",
                     f"ours <= {ROW_FLAT:g}", spread <= ROW_FLAT))
     return rows
+
+
+if __name__ == "__main__":
+    print(f"load average {load_average()}")
+    for result in inverse_rows(5) + arm_rows(5):
+        print(result)

@@ -33,7 +33,7 @@ from bench_batch import batch_calls  # noqa: E402
 from bench_dynamics import arm, dynamics_pairs  # noqa: E402
 from bench_kinematics import kinematics_pairs  # noqa: E402
 from bench_scaling import scaling  # noqa: E402
-from goal_rows import (free_arm_rows, gripping_rows, inverse_rows, mujoco_rows, rhs_rows, row,  # noqa: E402
+from goal_rows import (arm_rows, gripping_rows, inverse_rows, mujoco_rows, rhs_rows, row,  # noqa: E402
                        session_rows, youbot_row_rows)
 from benchmarks_page import markdown, write_page  # noqa: E402
 from timing import WALL, Timing, best_timings, load_average, machine, sized, smoke  # noqa: E402
@@ -143,7 +143,7 @@ def measure(quick: bool) -> dict:
         ("inverse mode", lambda: inverse_rows(sized(3 if quick else 5, 1))),
         ("gripping", gripping_rows),
         ("main job", lambda: session_rows(sized(1 if quick else 2, 1))),
-        ("free arm vs MuJoCo", lambda: free_arm_rows(sized(3 if quick else 5, 1))),
+        ("free arm vs MuJoCo", lambda: arm_rows(sized(3 if quick else 5, 1))),
         ("contact vs MuJoCo", mujoco_rows),
         ("N youBots", lambda: youbot_row_rows(sized(1 if quick else 2, 1))),
     ]

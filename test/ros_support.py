@@ -118,8 +118,8 @@ def wait_until(predicate: Callable[[], bool], timeout: float = WAIT, what: str =
 class Collector(Node):
     """Subscribes to topics and keeps every message as a rosbags object, in arrival order."""
 
-    def __init__(self, context: Context, topics: dict[str, str], name: str = "collector") -> None:
-        super().__init__(name, context=context)
+    def __init__(self, context: Context, topics: dict[str, str], name: str = "collector", namespace: str = "/") -> None:
+        super().__init__(name, context=context, namespace=namespace)
         self.received: dict[str, list] = {topic: [] for topic in topics}
         self._lock = threading.Lock()
         for topic, msgtype in topics.items():

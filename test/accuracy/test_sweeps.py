@@ -111,6 +111,22 @@ def test_both_workers_take_cases(dask_cluster):
     assert os.getpid() not in processes and len(set(processes)) == 2
 
 
+def nested_sweep(seconds: float, cases: int) -> list[int]:
+    """A sweep inside a case: the processes its own cases ran in."""
+    return map_cases(worker_process, [(seconds,)] * cases, workers=sweeps.enclosing_workers(),
+                     progress=False)
+
+
+def test_a_sweep_inside_a_case_spreads_over_the_enclosing_cluster(dask_cluster):
+    """One outer case on the two-worker cluster: its inner sweep's cases run on both workers
+    (the outer case leaves its worker's thread while they run); outside a worker the inner
+    sweep is serial."""
+    assert sweeps.enclosing_workers() == 0
+    [inner] = map_cases(nested_sweep, [(0.3, 8)], scheduler=dask_cluster, progress=False)
+    assert os.getpid() not in inner and len(set(inner)) == 2
+    assert set(nested_sweep(0.0, 3)) == {os.getpid()}
+
+
 def test_work_precision_points_on_the_cluster_equal_serial(dask_cluster):
     from youbot_dynamics.accuracy.work_precision import reference_solution, sweep
     from youbot_dynamics.scene.schema import load_scene

@@ -91,10 +91,10 @@ def test_summary_rows_in_the_smoke_form(smoke, capsys):
         for key, kind in kinds.items():
             assert isinstance(r[key], kind), (key, r)
     # every row of the table is there (MuJoCo is a test requirement)
-    for needle in ("main job: mobile_pick", "main job: gripping", "inverse mode", "rk4 at 0.25 ms",
+    for needle in ("main job: mobile_pick", "main job: gripping", "inverse mode", "free arm, rk4 dt=0.25 ms both",
                    "ball_drop: CPU time at matched accuracy", "grasp: CPU time at matched accuracy",
                    "N youBots: cost per robot-second", "PoE space Jacobian", "RNEA + URDF friction",
-                   "ABA + URDF friction", "inverse_dynamics_batch", "arm_swing to"):
+                   "ABA + URDF friction", "inverse_dynamics_batch", "free arm to", "vs pin.rnea"):
         assert any(needle in f for f in figures), needle
     # the timed rows are finite (rows without a figure are the settings a tiny sweep misses)
     assert all(math.isfinite(r[k]) for r in results["rows"] if "growth" not in r["figure"]

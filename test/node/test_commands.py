@@ -122,6 +122,14 @@ def test_trajectory_is_followed_through_its_points(simulator: Simulator) -> None
                          [(stamp_ns_of(Duration(sec=0, nanosec=1_500_000_000)), [3.0], ())], 0, q0)
     with pytest.raises(InputRejected, match="out_of_limits"):
         joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [100.0], ())], 0, q0)
+    # a joint not named holds where it is, even a hair beyond its stop (a finger resting on
+    # it at -3e-23 m in gripping): the command is not blamed for it
+    beyond = q0.copy()
+    beyond[4] = robot.lower[4] - 1e-12
+    held = joint_trajectory(robot, robot.joint_names[:1], [(NS // 2, [q0[0] + 0.1], ())], 0, beyond)
+    assert held.evaluate(1.0)[0][4] == beyond[4]
+    with pytest.raises(InputRejected, match=f"out_of_limits.*{robot.joint_names[4]}"):
+        joint_trajectory(robot, robot.joint_names[4:], [(NS // 2, [beyond[4]], ())], 0, q0)
     scene_free = Simulator(load_scene("arm_swing"))
     with pytest.raises(InputRejected, match="no_controller"):
         follow(scene_free, trajectory)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from tf_support import Tree, assert_same, pose_of, stamp_of
 
 from youbot_dynamics.io import messages
 from youbot_dynamics.node.simulate import SimulationSession
@@ -20,71 +21,6 @@ from youbot_dynamics.scene.schema import load_scene, scene_dir
 SCENES = sorted(path.stem for path in scene_dir().glob("*.yaml"))
 DRIVEN = {"base_square": 3.0, "mobile_pick": 3.0, "base_spin_arm": 3.0}
 """Simulated seconds checked: moving bases drive 3 s, the other scenes 0.5 s."""
-TOLERANCE = 1e-9
-"""m and rad."""
-
-
-def _matrix(translation, rotation) -> np.ndarray:
-    """A 4x4 pose from geometry_msgs' Vector3/Point and Quaternion."""
-    matrix = np.eye(4)
-    matrix[:3, :3] = Rotation.from_quat([rotation.x, rotation.y, rotation.z, rotation.w]).as_matrix()
-    matrix[:3, 3] = translation.x, translation.y, translation.z
-    return matrix
-
-
-def _pose(pose) -> np.ndarray:
-    return _matrix(pose.position, pose.orientation)
-
-
-def _stamp(header) -> int:
-    return header.stamp.sec * 10**9 + header.stamp.nanosec
-
-
-class Tree:
-    """tf2 BufferCore's view at one stamp: the static transforms and the dynamic ones of
-    that stamp, each child with its parent; ``pose(target, source)`` is source in target."""
-
-    def __init__(self, static, dynamic, stamp_ns: int) -> None:
-        self.parents: dict[str, list[tuple[str, np.ndarray]]] = {}
-        for transform in (*static.transforms, *dynamic.transforms):
-            if transform in dynamic.transforms:
-                assert _stamp(transform.header) == stamp_ns, transform.child_frame_id
-            self.parents.setdefault(transform.child_frame_id, []).append(
-                (transform.header.frame_id, _matrix(transform.transform.translation, transform.transform.rotation)))
-        frames = set(self.parents) | {parent for edges in self.parents.values() for parent, _ in edges}
-        self.roots = sorted(frames - set(self.parents))
-        self.frames = frames
-
-    def check(self) -> None:
-        twice = {child: [p for p, _ in edges] for child, edges in self.parents.items() if len(edges) > 1}
-        assert not twice, f"frames with several parents: {twice}"
-        assert len(self.roots) == 1, f"roots {self.roots}"
-
-    def in_root(self, frame: str) -> np.ndarray:
-        assert frame in self.frames, f"{frame} is not in the tree"
-        pose, seen = np.eye(4), set()
-        while frame != self.roots[0]:
-            assert frame not in seen, f"cycle through {frame}"
-            seen.add(frame)
-            parent, transform = self.parents[frame][0]
-            pose, frame = transform @ pose, parent
-        return pose
-
-    def pose(self, target: str, source: str) -> np.ndarray:
-        return np.linalg.solve(self.in_root(target), self.in_root(source))
-
-
-def _error(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    """(m, rad) between two poses."""
-    return (float(np.linalg.norm(a[:3, 3] - b[:3, 3])),
-            float(Rotation.from_matrix(a[:3, :3].T @ b[:3, :3]).magnitude()))
-
-
-def _assert_same(a: np.ndarray, b: np.ndarray, what: str) -> None:
-    metres, radians = _error(a, b)
-    assert metres <= TOLERANCE and radians <= TOLERANCE, f"{what}: {metres:.3g} m, {radians:.3g} rad"
-
-
 def _planar(x: float, y: float, yaw: float) -> np.ndarray:
     pose = np.eye(4)
     pose[:3, :3] = Rotation.from_euler("z", yaw).as_matrix()
@@ -102,15 +38,15 @@ def _check_sample(session: SimulationSession, latched: dict, sample: dict) -> No
         if topic not in sample:
             continue
         message = sample[topic]
-        assert _stamp(message.header) == stamp
+        assert stamp_of(message.header) == stamp
         poses = [message.pose] if topic == "/ee_pose" else message.poses
         assert len(poses) == len(names)
         for name, pose in zip(names, poses):
-            _assert_same(_pose(pose), tree.pose(message.header.frame_id, prefix + name), f"{topic} {name}")
+            assert_same(pose_of(pose), tree.pose(message.header.frame_id, prefix + name), f"{topic} {name}")
     for topic in ("/odom", "/base_pose_ground_truth"):
         if topic in sample:
             message = sample[topic]
-            _assert_same(_pose(message.pose.pose), tree.pose(message.header.frame_id, message.child_frame_id), topic)
+            assert_same(pose_of(message.pose.pose), tree.pose(message.header.frame_id, message.child_frame_id), topic)
     _check_world_things(session, tree, latched, sample)
 
 
@@ -121,11 +57,11 @@ def _check_world_things(session: SimulationSession, tree: Tree, latched: dict, s
     snapshot, base = session.snapshot, session.frames.prefix + session.robot.root_link
     world_base = np.eye(4) if snapshot.base is None else _planar(*snapshot.base[:3])
     if "/base_pose_ground_truth" in sample:
-        _assert_same(_pose(sample["/base_pose_ground_truth"].pose.pose), world_base, "/base_pose_ground_truth")
+        assert_same(pose_of(sample["/base_pose_ground_truth"].pose.pose), world_base, "/base_pose_ground_truth")
     in_base = np.linalg.inv(world_base)
     geometry = {g.name: g for g in session.scene.geometries}
     for name, world_pose in snapshot.bodies.items():
-        _assert_same(tree.pose(base, session.frames.prefix + name), in_base @ world_pose, f"/tf {name}")
+        assert_same(tree.pose(base, session.frames.prefix + name), in_base @ world_pose, f"/tf {name}")
     markers = [*(m for m in sample.get("/free_bodies_markers", messages.marker_array([])).markers),
                *(m for m in latched.get("/scene_markers", messages.marker_array([])).markers)]
     for marker in markers:
@@ -133,12 +69,12 @@ def _check_world_things(session: SimulationSession, tree: Tree, latched: dict, s
         owner = snapshot.bodies[g.name] if g.owner == "body" else np.eye(4) if g.owner == "world" else None
         local = next(m for m in messages.shape_markers(0, "", g.name, g.shape, g.placement, (1, 1, 1, 1))
                      if m.id == marker.id)
-        in_tree = tree.pose(base, marker.header.frame_id) @ _pose(marker.pose)
+        in_tree = tree.pose(base, marker.header.frame_id) @ pose_of(marker.pose)
         if owner is None:      # on a link: the link's frame
-            _assert_same(in_tree, tree.pose(base, session.frames.prefix + g.owner_name) @ _pose(local.pose),
+            assert_same(in_tree, tree.pose(base, session.frames.prefix + g.owner_name) @ pose_of(local.pose),
                          f"marker {g.name}")
         else:
-            _assert_same(in_tree, in_base @ owner @ _pose(local.pose), f"marker {g.name}")
+            assert_same(in_tree, in_base @ owner @ pose_of(local.pose), f"marker {g.name}")
 
 
 def _run(scene_name: str, seconds: float, **options) -> None:
@@ -209,3 +145,17 @@ def test_mobile_picks_robot_description_has_one_root_for_robot_state_publisher()
     links = {link.get("name") for link in root.iter("link")}
     children = {joint.find("child").get("link") for joint in root.iter("joint")}
     assert links - children == {"base_footprint"}
+
+
+@pytest.mark.parametrize("scene_name", ["arm_ptp", "mobile_pick"])
+def test_frames_of_many_samples_equal_each_samples_frames(scene_name: str) -> None:
+    """LinkFrames.at_many (one compiled pass for them all) gives each sample's frames to the
+    bit."""
+    from youbot_dynamics.node.frames import LinkFrames
+    robot = load_scene(scene_name).robot
+    links = LinkFrames(robot)
+    rng = np.random.default_rng(4)
+    q = rng.uniform(-1.0, 1.0, (6, robot.nq))
+    for many, one in zip(links.at_many(q), (links.at(row) for row in q)):
+        assert many.edges == one.edges and many.ee_index == one.ee_index and many.ee_count == one.ee_count
+        assert np.array_equal(many.link_poses, one.link_poses) and np.array_equal(many.ee, one.ee)

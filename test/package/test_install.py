@@ -182,3 +182,15 @@ def test_lock_pins_every_requirement_within_its_range() -> None:
             assert name in pins, f"{path}: {name} is not pinned in requirements-lock.txt"
             assert requirement.specifier.contains(pins[name], prereleases=True), \
                 f"{name}=={pins[name]} is outside {path}'s {requirement.specifier}"
+
+
+def test_the_installed_package_holds_the_ledger(prefix: Path) -> None:
+    """The source-document ledger's YAML ships as package data: the installed loader reads
+    every document's rows from the installed tree, not the source tree."""
+    code = ("from youbot_dynamics.studies import ledger\n"
+            "rows = ledger.load_ledger()\n"
+            "print(ledger.LEDGER_DATA); print(sorted({row.document for row in rows}))")
+    out = subprocess.run([sys.executable, "-c", code], env=installed_env(prefix), cwd=prefix,
+                         check=True, capture_output=True, text=True).stdout.splitlines()
+    assert Path(out[0]).is_relative_to(site_packages(prefix))
+    assert out[1] == "['000', '001', '002', '003']"

@@ -7,11 +7,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from wrench_support import G, hand_masses, relative_error, sphere_mass, static_load
 from youbot_dynamics.scene.reader import read_yaml
 from youbot_dynamics.scene.schema import Scene, find_scene, load_scene
 from youbot_dynamics.sim.simulator import Simulator
 
-G = 9.81
 
 
 def _plant_state(model, snapshot) -> tuple[np.ndarray, np.ndarray]:
@@ -97,13 +97,8 @@ def test_wrist_wrench_of_the_hand_at_rest_is_its_weight_moved_to_the_palm():
     pin.framesForwardKinematics(plant, data, model.configuration(sim.state.x))
     palm = data.oMf[model.sensors.wrist.frame]
     assert model.sensors.wrist.link == "yb1_gripper_palm_link"
-    up, force, torque = np.array([0.0, 0.0, G]), np.zeros(3), np.zeros(3)
-    for _, mass, com in _hand_masses(plant, data, model.scene.urdf, "yb1_"):
-        force += mass * up
-        torque += np.cross(com - palm.translation, mass * up)
-    expected = np.concatenate([palm.rotation.T @ force, palm.rotation.T @ torque])
-    measured = np.concatenate(reading)
-    assert np.linalg.norm(measured - expected) <= 0.01 * np.linalg.norm(expected), (measured, expected)
+    expected = static_load(palm, hand_masses(plant, data, model.scene.urdf, "yb1_"))
+    assert relative_error(reading, expected) <= 0.01, (reading, expected)
 
 CANDLE = {"arm_joint_1": 2.9496, "arm_joint_2": 1.1345, "arm_joint_3": -2.5482, "arm_joint_4": 1.7890,
           "arm_joint_5": 2.9234}
@@ -139,39 +134,18 @@ def test_wrist_wrench_of_the_hand_holding_a_sphere_at_rest_is_their_weight_moved
     sim = Simulator(_tray_scene(pin.rpy.matrixToRpy(palm.rotation.T), palm.rotation.T @ (centre - palm.translation),
                                 centre + [0.03, 0.01, 0.005 + SPHERE_RADIUS], pair))
     last = sim.advance_through(np.arange(1, 31) * 0.01, sensors=True)[-1]
-    sphere_mass = WOOD * 4.0 / 3.0 * np.pi * SPHERE_RADIUS ** 3
+    mass = sphere_mass(SPHERE_RADIUS, WOOD)
     position = last.bodies["sphere"][:3, 3]
     assert np.abs(last.v).max() < 1e-6 and np.linalg.norm(position - centre - [0.03, 0.01, 0.03]) < 1e-4
     model, data = sim.model, sim.state.data
     pin.framesForwardKinematics(model.plant.model, data, model.configuration(sim.state.x))
-    up, force, torque = np.array([0.0, 0.0, G]), np.zeros(3), np.zeros(3)
-    for name, mass, com in _hand_masses(model.plant.model, data, model.scene.urdf, "") + [("sphere", sphere_mass,
-                                                                                           position)]:
-        force += mass * up
-        torque += np.cross(com - palm.translation, mass * up)
-    expected = np.concatenate([palm.rotation.T @ force, palm.rotation.T @ torque])
-    measured = np.concatenate(last.sensors.wrist)
-    assert np.linalg.norm(measured - expected) <= 0.01 * np.linalg.norm(expected), (measured, expected)
-    assert np.linalg.norm(torque) > 1e-3       # an off-centre load: the torque counts
+    expected = static_load(palm, hand_masses(model.plant.model, data, model.scene.urdf, "") + [(mass, position)])
+    assert relative_error(last.sensors.wrist, expected) <= 0.01, (last.sensors.wrist, expected)
+    assert np.linalg.norm(expected[1]) > 1e-3       # an off-centre load: the torque counts
+    up = np.array([0.0, 0.0, G])
     pair_force, pair_torque = last.sensors.pairs["/".join(pair)]
     if pair[1] == "sphere":
-        np.testing.assert_allclose(last.bodies["sphere"][:3, :3] @ pair_force, sphere_mass * up, rtol=1e-6,
-                                   atol=1e-9)
+        np.testing.assert_allclose(last.bodies["sphere"][:3, :3] @ pair_force, mass * up, rtol=1e-6, atol=1e-9)
         np.testing.assert_allclose(pair_torque, 0.0, atol=1e-9)
     else:
-        np.testing.assert_allclose(palm.rotation @ pair_force, -sphere_mass * up, rtol=1e-6, atol=1e-9)
-
-
-def _hand_masses(plant: pin.Model, data: pin.Data, urdf: str, prefix: str) -> list[tuple[str, float, np.ndarray]]:
-    """(link, mass kg, centre of mass in the world m) of the palm and both fingers, from the
-    URDF's <inertial> elements and the placed frames of ``data``."""
-    from lxml import etree
-    root = etree.fromstring(urdf.encode())
-    masses = []
-    for link in ("gripper_palm_link", "gripper_finger_link_l", "gripper_finger_link_r"):
-        inertial = root.find(f"link[@name='{prefix}{link}']/inertial")
-        origin = inertial.find("origin")
-        com = np.zeros(3) if origin is None else np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
-        frame = data.oMf[plant.getFrameId(prefix + link, pin.BODY)]
-        masses.append((link, float(inertial.find("mass").get("value")), frame.act(com)))
-    return masses
+        np.testing.assert_allclose(palm.rotation @ pair_force, -mass * up, rtol=1e-6, atol=1e-9)

@@ -1,9 +1,10 @@
-"""The equation pipeline against independent references: closed-form solutions, the seed's
-published Pantelides lists and low-pass blocks (benchmarks.md section 6), a hand-written
+"""The equation pipeline against independent references: closed-form solutions, document
+000's published Pantelides lists and low-pass blocks (benchmarks.md section 6), a hand-written
 angle-form pendulum and the project's hand-written damped pendulum."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,9 +13,10 @@ import sympy as sp
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import DivergenceError, integrate
 from youbot_dynamics.studies.dummy_derivatives import full_pivot_columns
-from youbot_dynamics.studies.equations import (T, EquationModel, cartesian_pendulum, der,
-                                               first_order_lag, lowpass_filter, modia_pendulum,
-                                               unknown)
+from youbot_dynamics.studies.equations import (LAG_SECOND_RUN, T, EquationModel,
+                                               cartesian_pendulum, der, first_order_lag,
+                                               lowpass_filter, modia_pendulum,
+                                               second_order_system, unknown)
 from youbot_dynamics.studies.pipeline import run_pipeline, simulate
 from youbot_dynamics.studies.state_selection import simulate_with_reselection
 from youbot_dynamics.studies.structure import LOWPASS_INCIDENCE, structure_report
@@ -23,22 +25,45 @@ from youbot_dynamics.studies.uncertain_pendulum import pendulum_rhs
 
 @pytest.fixture(scope="module")
 def pendulum():
-    return run_pipeline(cartesian_pendulum())
+    return run_pipeline(cartesian_pendulum(angle0=0.5))
 
 
-def test_lag_default_and_override_follow_the_closed_form():
+def test_lag_document_runs_follow_the_closed_form():
+    """Document 000's two runs: defaults tau = 1 s, x(0) = 0 on [0, 5] s, then x(0) = 2,
+    tau = 5 s on [0, 10] s; x = 1 + (x(0) - 1) exp(-t / tau)."""
     lag = first_order_lag()
-    faster = lag | {"tau": 1.0}
-    assert lag.parameters["tau"] == 3.0 and faster.parameters["tau"] == 1.0
-    for model, tau in ((lag, 3.0), (faster, 1.0)):
+    merge, t_end = LAG_SECOND_RUN
+    second = replace(lag | merge, t_end=t_end)
+    assert (lag.parameters["tau"], lag.variables["x"], lag.t_end) == (1.0, 0.0, 5.0)
+    assert (second.parameters["tau"], second.variables["x"], second.t_end) == (5.0, 2.0, 10.0)
+    for model in (lag, second):
+        tau, x0 = model.parameters["tau"], model.variables["x"]
         result = run_pipeline(model)
         assert result.aliases == [("RHS", "x'", "f2")]
         solution = simulate(result, "dop853", tol=1e-10, n_outputs=51)
-        exact = 1.0 - np.exp(-solution.t / tau)
-        # measured: 5.5e-11 (tau 3 and tau 1) with dop853 at tol 1e-10; margin 18x
+        exact = 1.0 + (x0 - 1.0) * np.exp(-solution.t / tau)
+        # measured: 5.6e-11 (first run), 3.7e-10 (second) with dop853 at tol 1e-10; margin 2.7x
         assert np.max(np.abs(solution.x[:, 0] - exact)) < 1e-9
         observed = result.ode.observe(2.0, np.array([0.25]))
         assert observed["RHS"] == pytest.approx((1.0 - 0.25) / tau, rel=1e-15)
+
+
+def test_second_order_system_lowers_to_four_states_and_matches_by_hand():
+    """Document 000's ode_order_lowering example: states x, x' (xd), y, z; the generated
+    ODE against the system written by hand, both DOP853 at 1e-12 over [0, 10] s."""
+    result = run_pipeline(second_order_system())
+    assert result.ode.state_names == ["x", "xd", "y", "z"]
+    sigma, rho, beta = 10.0, 10.0, 8.0 / 3.0
+
+    def by_hand(t, s):
+        x, xd, y, z = s
+        return np.array([xd, sigma * (y - x), x * (rho - z) - y, x * y - beta * z])
+    times = np.linspace(0.0, 10.0, 101)
+    generated = simulate(result, "dop853", tol=1e-12, t_eval=times)
+    reference = integrate(by_hand, [1.0, 0.0, 0.0, 0.0], times, "dop853", rtol=1e-12,
+                          atol=1e-12)
+    # measured 4.2e-11 apart
+    assert np.max(np.abs(generated.x - reference.x)) < 1e-8
 
 
 def test_merge_overrides_start_values_and_refuses_unknown_names():
@@ -88,14 +113,14 @@ def angle_form_rhs(x: float, u: float, length: float, g: float) -> np.ndarray:
 
 def test_generated_pendulum_ode_matches_the_angle_form(pendulum):
     solution = simulate(pendulum, "dop853", tol=1e-10, n_outputs=101)
-    length, g = 1.0, 9.81
+    length, g = 1.0, pendulum.model.parameters["g"]
     for t, state in zip(solution.t, solution.x):
         generated = pendulum.ode.rhs(t, state)
-        # measured: at most 8.9e-16 apart along the 5 s trajectory (rounding only)
+        # measured: at most 1.8e-15 apart along the 10 s trajectory (rounding only)
         assert np.max(np.abs(generated - angle_form_rhs(*state, length, g))) < 1e-10
     angle = integrate(lambda t, s: np.array([s[1], -g / length * math.sin(s[0])]),
                       [0.5, 0.0], solution.t, "dop853", rtol=1e-12, atol=1e-14)
-    # measured: 4.6e-11 between the two trajectories (tol 1e-10 on the generated one)
+    # measured: 3.1e-11 between the two trajectories (tol 1e-10 on the generated one)
     assert np.max(np.abs(solution.x[:, 0] - length * np.sin(angle.x[:, 0]))) < 1e-9
 
 
@@ -158,11 +183,11 @@ def test_negative_alias_is_substituted_with_its_sign():
 def test_start_values_that_break_the_constraint_are_refused():
     # x0 = sin(0.5), y0 = -cos(0.5) hold for L = 1 only
     with pytest.raises(UserInputError, match="y = -1.33047.*start value is -0.87758"):
-        run_pipeline(cartesian_pendulum() | {"L": 2.0})
+        run_pipeline(cartesian_pendulum(angle0=0.5) | {"L": 2.0})
     with pytest.raises(UserInputError, match="is not real"):
-        run_pipeline(cartesian_pendulum() | {"L": 0.01})
-    consistent = cartesian_pendulum() | {"L": 4.0, "x": 2 * math.sin(0.5),
-                                         "y": -2 * math.cos(0.5)}
+        run_pipeline(cartesian_pendulum(angle0=0.5) | {"L": 0.01})
+    consistent = cartesian_pendulum(angle0=0.5) | {"L": 4.0, "x": 2 * math.sin(0.5),
+                                                        "y": -2 * math.cos(0.5)}
     assert run_pipeline(consistent).ode.state_names == ["x", "u"]
 
 
@@ -176,7 +201,7 @@ def test_full_pivoting_prefers_the_larger_pivot_and_refuses_a_singular_jacobian(
 def test_released_near_horizontal_the_static_selection_breaks_and_reselection_holds():
     # from 1.5 rad x' is the dummy (states y, v); at the bottom x -> 0 and x = sqrt(L - y^2)
     # has no derivative: the static selection diverges (measured: at t = 0.58 s)
-    model = cartesian_pendulum(angle0=1.5)
+    model = replace(cartesian_pendulum(angle0=1.5) | {"g": 9.81}, t_end=5.0)
     with pytest.raises(DivergenceError), np.errstate(all="ignore"):
         simulate(run_pipeline(model), "dop853", tol=1e-10, n_outputs=101)
     run = simulate_with_reselection(model, "dop853", tol=1e-10, n_outputs=101)

@@ -1,5 +1,5 @@
 """``youbot-dynamics report`` (studies/report.py over studies/catalog.py): the studies'
-tables, the seeds' figures drawn from our runs (studies/figures.py) and one page with a
+tables, the source documents' figures drawn from our runs (studies/figures.py) and one page with a
 section per study and a subsection per figure. CI runs a smoke form (a few quick studies, on a local Dask cluster
 of two processes, about 40 s on a loaded machine); the whole short form is marked slow."""
 from __future__ import annotations
@@ -39,7 +39,8 @@ def figure_subsections(page: str) -> list[str]:
 
 def assert_report(out: Path, names) -> str:
     """The page has a section titled for each named study and lists every figure of their
-    sets; every PNG the page shows is valid; every figure subsection has the seed's part,
+    sets; every PNG the page shows is valid; every figure subsection has the source
+    document's part,
     ours with its image, and the difference. Returns the page."""
     page = (out / PAGE).read_text(encoding="utf-8")
     sections = [s for s in SECTIONS if s.name in names]
@@ -59,14 +60,25 @@ def assert_report(out: Path, names) -> str:
     subsections = figure_subsections(page)
     assert len(subsections) == len(declared)
     for text, file in zip(subsections, declared):
-        assert re.search(r"\*\*Seed\.\*\* \S", text), text
+        assert re.search(r"\*\*Source document\.\*\* \S", text), text
         assert re.search(r"\*\*Ours\.\*\* \S", text), text
         assert re.search(r"\*\*Difference\.\*\* \S", text), text
         assert f"]({file})" in text
     return page
 
 
-def test_the_figure_sets_declare_the_seeds_figures():
+def test_the_catalogue_and_the_commands_say_source_document_not_seed(capsys):
+    """The report's own words (section titles, the documents' parts, methods) and the help of
+    `study` and `report` name the documents as source documents or by number."""
+    for section in SECTIONS:
+        for text in (section.title, section.seed, section.method):
+            assert not re.search(r"\bseeds?\b", text, re.I), (section.name, text)
+    for argv in (["study", "--help"], ["report", "--help"]):
+        assert main(argv) == 0
+        assert not re.search(r"\bseeds?\b", capsys.readouterr().out, re.I), argv
+
+
+def test_the_figure_sets_declare_the_documents_figures():
     specs = all_specs()
     files = [spec.file for spec in specs]
     assert len(files) >= 40 and len(set(files)) == len(files)
@@ -80,22 +92,27 @@ def test_smoke_report_on_a_local_cluster(tmp_path, capsys):
     assert all(f"{name} " in printed and "FAILED" not in printed for name in SMOKE)
     page = assert_report(tmp_path, SMOKE)
     assert "4 studies ran, 0 failed" in page
-    # the figures' own measurements reached the page: the beak hits, the seed's BLT blocks
-    assert "Seed: 22 beak hits over 2 s, ours 22." in page
-    assert "Seed blocks [[6], [1, 2, 3, 4], [5]] (an algebraic loop of four); ours the " \
-           "same." in page
-    # the studies' own figures reached the page: the seed's 22 beak hits beside ours
-    assert "beak hits (seed over 2 s: 22)" in page and "structural index 3" in page
+    # the ledger is the first page: its counts and rows before the contents and the studies
+    ledger_at = page.index("## The source-document ledger")
+    assert ledger_at < page.index("## Contents") < page.index("## Structural analysis")
+    assert "| all |" in page[ledger_at:] and "002-unicycle-parameters" in page
+    # the figures' own measurements reached the page: the beak hits, document 000's BLT blocks
+    assert "22 beak hits over 2 s, ours 22." in page
+    assert "Document blocks [6], [2, 4, 3, 1], [5] (an algebraic loop of four); ours " \
+           "[[6], [1, 2, 3, 4], [5]], the same sets (either matching)." in page
+    # the studies' own figures reached the page: the document's 22 beak hits beside ours
+    assert re.search(r"beak hits \(\w+ over 2 s: 22\)", page) and "structural index 3" in page
     assert page.index("Woodpecker") < page.index("Uncertain")  # the order of SECTIONS
 
 
-def test_verdict_agreement_counts_rows_with_both_cells():
-    text = ("| k | setting | seed | verdict |\n|---|---|---|---|\n"
+@pytest.mark.parametrize("column", ["document", "seed"])
+def test_verdict_agreement_counts_rows_with_both_cells(column):
+    text = (f"| k | setting | {column} | verdict |\n|---|---|---|---|\n"
             "| 1 | N=10 | stable | stable |\n| 20 | N=10 | accurate | stable, inaccurate |\n"
             "| 5 | N=10 | - | unstable |\n\nnot a table\n| a | b |\n|---|---|\n| 1 | 2 |\n")
     assert markdown_rows(text)[-1] == {"a": "1", "b": "2"}
-    assert verdict_agreement(text) == ("1 of 2 verdicts agree with the seed.\n"
-                                       "- k 20, setting N=10: seed 'accurate', ours "
+    assert verdict_agreement(text) == ("1 of 2 verdicts agree with the source document.\n"
+                                       "- k 20, setting N=10: document 'accurate', ours "
                                        "'stable, inaccurate'")
     assert verdict_agreement("| a |\n|---|\n| 1 |\n") is None
 

@@ -14,7 +14,9 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.studies.unicycle import (Unicycle, heading_and_speeds, simulate_unicycle,
                                               unicycle_closed_form, unicycle_rhs)
 
-MODEL = Unicycle()  # m 10 kg, I_z 0.5 kg m^2, r 0.05 m, d 0.15 m, b 5 N s/m, beta 0.5 N m s/rad
+MODEL = Unicycle()  # document 002: m 10 kg, I_z 0.5 kg m^2, r 0.05 m, d 0.15 m, b 1 N s/m, beta 0.5 N m s/rad
+#: The second, labelled run: the linear friction this study used before it took document 002's.
+STIFFER = Unicycle(linear_friction=5.0)
 RNG = np.random.default_rng(7)
 ADAPTIVE = ("dop853", "cvode_adams")  # scipy's and SUNDIALS' explicit-side adaptive methods
 
@@ -22,7 +24,7 @@ ADAPTIVE = ("dop853", "cvode_adams")  # scipy's and SUNDIALS' explicit-side adap
 def test_rhs_by_hand():
     state = np.array([1.0, 2.0, 0.3, 0.8, -0.4])
     # F = (0.7 + 0.1) / 0.05 = 16 N, M = 0.15 (0.7 - 0.1) / 0.05 = 1.8 N m.
-    expected = [0.8 * math.cos(0.3), 0.8 * math.sin(0.3), -0.4, (16.0 - 5.0 * 0.8) / 10.0, (1.8 + 0.5 * 0.4) / 0.5]
+    expected = [0.8 * math.cos(0.3), 0.8 * math.sin(0.3), -0.4, (16.0 - 1.0 * 0.8) / 10.0, (1.8 + 0.5 * 0.4) / 0.5]
     assert np.allclose(unicycle_rhs(0.0, state, MODEL, lambda t: (0.7, 0.1)), expected, rtol=1e-15, atol=0)
 
 
@@ -36,21 +38,30 @@ def test_force_and_moment_are_the_wheel_torques_virtual_power():
         assert math.isclose(tau_r * u_r + tau_l * u_l, force * v + moment * omega, rel_tol=1e-12, abs_tol=1e-12)
 
 
+def test_defaults_are_document_002s_unicycle():
+    """UnicycleDynamics(mass=10.0, inertia=0.5, wheel_radius=0.05, wheel_base=0.3),
+    friction_linear = 1.0, friction_angular = 0.5."""
+    assert (MODEL.mass, MODEL.yaw_inertia, MODEL.wheel_radius, 2 * MODEL.half_track,
+            MODEL.linear_friction, MODEL.angular_friction) == (10.0, 0.5, 0.05, 0.3, 1.0, 0.5)
+
+
 @pytest.mark.parametrize("integrator", ADAPTIVE)
-def test_equal_torques_from_rest_drive_straight(integrator):
+@pytest.mark.parametrize("model", [MODEL, STIFFER], ids=["document-b1", "second-run-b5"])
+def test_equal_torques_from_rest_drive_straight(integrator, model):
     """F = 2 tau / r: v(t) = (F/b)(1 - exp(-b t/m)), x(t) = (F/b)(t - (m/b)(1 - exp(-b t/m)))
     along the heading theta0, which stays."""
     tau, theta0 = 0.4, 0.6
     state0 = np.array([1.0, -1.0, theta0, 0.0, 0.0])
-    solution = simulate_unicycle(MODEL, tau, tau, 10.0, integrator, state0=state0, rtol=1e-11, atol=1e-13)
-    force, b, m = 2 * tau / 0.05, 5.0, 10.0
+    solution = simulate_unicycle(model, tau, tau, 10.0, integrator, state0=state0, rtol=1e-11, atol=1e-13)
+    force, b, m = 2 * tau / 0.05, model.linear_friction, 10.0
     t = solution.t
     v = force / b * (1 - np.exp(-b * t / m))
     s = force / b * (t - m / b * (1 - np.exp(-b * t / m)))
     expected = np.column_stack([1.0 + s * math.cos(theta0), -1.0 + s * math.sin(theta0), np.full_like(t, theta0),
                                 v, np.zeros_like(t)])
-    assert np.abs(solution.x - expected).max() < 1e-8  # measured 6.1e-11 (dop853), 1.3e-10 (cvode_adams)
-    assert np.allclose([unicycle_closed_form(MODEL, tau, tau, state0, ti) for ti in t], expected, rtol=0, atol=1e-12)
+    # measured b = 1: 2.7e-10 (dop853), 4.2e-11 (cvode_adams); b = 5: 6.1e-11, 1.3e-10
+    assert np.abs(solution.x - expected).max() < 1e-8
+    assert np.allclose([unicycle_closed_form(model, tau, tau, state0, ti) for ti in t], expected, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("integrator", ADAPTIVE)

@@ -7,7 +7,12 @@ results in the cases' order, whatever order they finish in. Where they run:
 - ``scheduler="tcp://HOST:PORT"``: on a running Dask cluster (``dask scheduler`` and
   ``dask worker`` processes; the workers must import youbot_dynamics);
 - otherwise an embedded local cluster of ``workers`` processes (default: one per core, at
-  most one per case), one thread each, started for the call and closed after it.
+  most one per case), one thread each, started for the call and closed after it;
+- except inside a case already running on a Dask worker (a report section, say), where
+  ``workers=None`` is the cluster that case runs on: the case leaves its worker's thread
+  while its own cases run there (``distributed.worker_client``), so a sweep inside one
+  study of the report spreads over every worker. :func:`enclosing_workers` gives a case the
+  ``workers`` to pass: None there, 0 (serial) when the outer sweep is serial.
 
 Each case runs the same code on the same inputs wherever it runs, so the results equal the
 serial run's bit for bit (test/accuracy/test_sweeps.py checks it on a scheduler with two workers).
@@ -35,6 +40,22 @@ class CaseError(RuntimeError):
     """A case of a sweep failed: names the function and the case."""
 
 
+def inside_worker() -> bool:
+    """True inside a case running on a Dask worker."""
+    try:
+        from distributed import get_worker
+        get_worker()
+    except (ImportError, ValueError):  # ValueError: no worker here
+        return False
+    return True
+
+
+def enclosing_workers() -> int | None:
+    """The ``workers`` for a sweep inside a case of another sweep: None (the cluster the
+    case runs on) on a Dask worker, 0 (serially, in this process) otherwise."""
+    return None if inside_worker() else 0
+
+
 def default_workers(n_cases: int) -> int:
     """Processes of the embedded cluster: one per core, at most one per case, at least 1."""
     return max(1, min(os.cpu_count() or 1, n_cases))
@@ -50,6 +71,11 @@ def dask_client(workers: int | None = None, scheduler: str | None = None,
         return
     if workers is not None and workers < 0:
         raise UserInputError(f"--workers must be >= 0 (0: serial), got {workers}")
+    if scheduler is None and workers is None and inside_worker():
+        from distributed import worker_client
+        with worker_client() as client:
+            yield client
+        return
     from distributed import Client, LocalCluster
     if scheduler is not None:
         try:

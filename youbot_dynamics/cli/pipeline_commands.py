@@ -1,6 +1,6 @@
 """``study pipeline``: the equation pipeline (order lowering, alias elimination, matching,
 Pantelides, dummy derivatives, BLT, tearing, code generation, simulation) on one of the
-seed's example models, each stage printed (or JSON with ``--json``;
+source documents' example models, each stage printed (or JSON with ``--json``;
 studies/pipeline_report.py)."""
 from __future__ import annotations
 

@@ -34,6 +34,11 @@ STUDIES: dict[str, tuple[str, str]] = {
             ("rotations", "Cardan angles vs adaptive Cardan vs quaternions on a torque-free "
                           "rigid body"),
             ("unicycle", "the differential drive against its closed forms"))),
+        ("document_commands", (
+            ("base-parameters", "document 002's 2-DOF planar arm: base parameters by QR, by "
+                                "sympy, and the document's list"),
+            ("ledger", "the source documents' figures, tables and claims: theirs, ours, the "
+                       "verdict and its evidence"))),
     ) for name, summary in studies}
 #: The study commands that run an integrator, and where their accuracy comes from ("--tol",
 #: or why the command takes none; see youbot_dynamics.cli).

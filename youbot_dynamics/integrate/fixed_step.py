@@ -5,10 +5,15 @@ Steps have size dt except the last before an output time, which lands on it exac
 (h = min(dt, distance to the output)). Events are located by *re-stepping*: the state at a
 time t inside the step [t_k, t_k + h] is the method's own step of size t - t_k from t_k, and
 Brent's method finds the zero of the event function on it (see integration.drive).
+
+A right-hand side may carry a compiled form of these loops as its ``compiled_steps``
+attribute (see :class:`CompiledLoop`; a robot alone under a held torque has one,
+:mod:`youbot_dynamics.sim.compiled_steps`): ``advance`` then runs its steps in one call
+(the same steps, the same checks after each).
 """
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, Protocol
 
 import numpy as np
 
@@ -49,6 +54,16 @@ FIXED_STEP_METHODS = {
 }
 
 
+class CompiledLoop(Protocol):
+    """The steps of :meth:`FixedStepStepper.advance` in one call: from (t, x) towards
+    t_target, x updated in place, ``previous`` set to the state before the last step; one
+    step when ``single``, else up to t_target or the first step whose state is not finite or
+    beyond ``bounds``. Returns (t, t before the last step, the last step's size, steps)."""
+
+    def __call__(self, method: str, t: float, x: np.ndarray, t_target: float, dt: float, single: bool,
+                 bounds: np.ndarray, previous: np.ndarray) -> tuple[float, float, float, int]: ...
+
+
 class FixedStepStepper:
     """Advances with steps of dt; one step per ``advance`` when events need watching, else
     every step up to the output time in one tight loop (checked after each step)."""
@@ -62,8 +77,21 @@ class FixedStepStepper:
         self.t_previous, self.x_previous = t0, self.x
         self.steps = self.extra_evals = 0
         self.h = 0.0
+        self.method = method
+        self.compiled: CompiledLoop | None = getattr(rhs, "compiled_steps", None)
+        self.bounds = np.full(self.x.shape, np.inf) if check.bounds is None else np.array(check.bounds, dtype=float)
 
     def advance(self, t_target: float) -> None:
+        if self.compiled is not None:
+            x, previous = self.x.copy(), np.empty_like(self.x)
+            t, t_previous, h, steps = self.compiled(self.method, self.t, x, t_target, self.dt, self.single_steps,
+                                                    self.bounds, previous)
+            if steps:
+                self.t_previous, self.x_previous = t_previous, previous
+                self.check.step(t, x, h)
+                self.t, self.x, self.h = t, x, h
+                self.steps += steps
+            return
         step, rhs, dt, n, check = self.step_function, self.rhs, self.dt, self.n, self.check
         t, x = self.t, self.x
         tolerance = 1e-9 * dt

@@ -340,7 +340,7 @@ def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[
     ``start_ns`` is the simulated time (int ns) the trajectory starts at (its stamp, or the
     receive time). Joints not named hold ``q_now``; the current position ``q_now`` is
     prepended at the start when the first point comes later, so the reference starts where
-    the robot is. Positions must lie within the joint limits; times must increase strictly
+    the robot is. The named joints' positions must lie within their limits; times must increase strictly
     (and stay distinguishable as float seconds relative to the start).
     """
     if len(points) > MAX_TRAJECTORY_POINTS:
@@ -359,9 +359,11 @@ def joint_trajectory(robot: Robot, names: Sequence[str], points: Sequence[tuple[
         row[index] = _values(positions, f"points[{k}].positions", len(names))
         if with_velocity:
             rate[index] = _values(velocities, f"points[{k}].velocities", len(names))
-        outside = ~((robot.lower <= row) & (row <= robot.upper))
+        # only the named joints: the others hold where the robot is (a finger resting at its
+        # stop may sit 1e-23 m beyond it), which no command can be blamed for
+        outside = ~((robot.lower[index] <= row[index]) & (row[index] <= robot.upper[index]))
         if outside.any():
-            joints = ", ".join(np.asarray(robot.joint_names)[outside])
+            joints = ", ".join(np.asarray(names)[outside])
             raise InputRejected("out_of_limits", f"points[{k}] outside the joint limits of {joints}")
         offsets.append(int(time_from_start_ns))
         rows.append(row)

@@ -41,6 +41,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
+from youbot_dynamics.dynamics.compiled_tree import frame_placements_of, frame_poses, tree_of, work_for
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
@@ -257,6 +258,11 @@ class LinkFrames:
         self._frames = tuple(frames)
         self._parents = np.array([frames.index(p) for p, _ in pairs], dtype=np.intp)
         self._children = np.array([frames.index(c) for _, c in pairs], dtype=np.intp)
+        self._tree = tree_of(robot.model)
+        """The compiled kinematics of :meth:`at_many` (None where the model has no compiled form)."""
+        if self._tree is not None:
+            self._placements = frame_placements_of(robot.model, self._frames)
+            self._work = work_for(self._tree[0])
 
     def at(self, q: np.ndarray) -> SampleFrames:
         """The frames at joint positions q (the robot's configuration, Pinocchio order)."""
@@ -267,3 +273,18 @@ class LinkFrames:
         _relative_pose_rows(placements, self._parents, self._children, poses)
         moving = len(self._edges)
         return SampleFrames(self._edges, poses[:moving], poses[moving:], len(self.ee_links), self._ee_index)
+
+    def at_many(self, q: np.ndarray) -> list[SampleFrames]:
+        """``at`` of every row of q (N, nq): one compiled kinematics pass for them all
+        (compiled_tree.frame_poses: Pinocchio's products in its order, so the same numbers)
+        where the model has a compiled form, else row by row."""
+        if self._tree is None:
+            return [self.at(row) for row in q]
+        q = np.ascontiguousarray(q, dtype=float)
+        placements = np.empty((len(q), len(self._frames), 4, 4))
+        frame_poses(*self._tree, q, *self._placements, self._work, placements)
+        poses = np.empty((len(q), len(self._parents), 7))
+        for rows, sample in zip(poses, placements):
+            _relative_pose_rows(sample, self._parents, self._children, rows)
+        moving, count = len(self._edges), len(self.ee_links)
+        return [SampleFrames(self._edges, rows[:moving], rows[moving:], count, self._ee_index) for rows in poses]

@@ -14,6 +14,11 @@ without ROS, on the gripper's finger joints (every joint of the ``gripper_contro
 - The goal succeeds once reached; stalled, it succeeds with ``allow_stalling`` and aborts
   otherwise (gripper_action_controller's default), and the fingers keep pressing, capped
   by max_effort.
+
+A ``position`` just inside the object keeps each finger's servo a spring below the cap, which
+centres the object; two fingers both at the cap are two equal force sources that hold it by
+friction but leave its place between them free (docs/ros.md, "Controllers: actions and
+forward commands").
 """
 from __future__ import annotations
 

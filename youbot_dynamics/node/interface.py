@@ -108,7 +108,7 @@ TOPICS: tuple[Topic, ...] = (
           "every moving link in its parent, odom -> base_footprint and odom -> world (moving base), world frame -> "
           "each free body (one tree: docs/ros.md, The frame tree)"),
     Topic("/odom", "pub", "nav_msgs/msg/Odometry", "reliable", INVERSE, "moving_base",
-          "wheel odometry of the received /joint_states' wheel speeds"),
+          "wheel odometry of the received /joint_states' wheel speeds: base_footprint in odom (on /tf too)"),
     Topic("/diagnostics", "pub", "diagnostic_msgs/msg/DiagnosticArray", "reliable", BOTH, None,
           "one status: real-time factor, integrator statistics, energy, input counters, callback overruns, "
           "contact events, base wheel slip (simulate); torques published, input counters, estimator restarts (inverse)"),

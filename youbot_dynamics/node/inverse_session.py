@@ -9,7 +9,12 @@ An implausible torque (beyond the effort-limit bound, or not finite) or a messag
 cannot be built (non-finite kinematics) is not published and restarts the estimate at its
 sample, as if the samples had come one by one: the rows after it are differenced again from
 there. A scene with a moving base also gives /odom from the wheel speeds of each sample
-taken (:class:`~youbot_dynamics.node.mobile_base.WheelOdometry`).
+taken (:class:`~youbot_dynamics.node.mobile_base.WheelOdometry`), and its tf tree is simulate
+mode's (REP 105, :func:`~youbot_dynamics.node.frames.frame_tree`): odom the root, odom ->
+base_footprint the wheel odometry at each torque's stamp (the /odom pose), odom -> world the
+identity (inverse mode has no ground truth: the world is where the odometry started, drift
+unknown), and /ee_pose(s) in odom (the odometry pose times the kinematics). A fixed base
+cannot move: no odom frame, the robot's root link is the root, as in simulate mode.
 """
 from __future__ import annotations
 
@@ -26,7 +31,7 @@ from youbot_dynamics.io import messages
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.node.commands import STAMP_LIMIT_NS, InputRejected, JointSample, joint_sample
-from youbot_dynamics.node.frames import SampleFrames
+from youbot_dynamics.node.frames import SampleFrames, composed_rows
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, Estimates,
                                           InverseDynamics, implausible_joints, plausible_limit, position_bounds)
@@ -37,8 +42,11 @@ from youbot_dynamics.scene.schema import Scene
 JointStateFields = tuple[Sequence[str], Sequence[float], Sequence[float], int, int | None]
 """One /joint_states sample as the node hands it over: (names, position, velocity,
 stamp_ns, received_ns)."""
-Built = list[tuple[Outputs, SampleFrames | None]]
-"""Each torque's messages and, when built, its sample's kinematics."""
+Built = list[tuple[Outputs, SampleFrames | None, np.ndarray | None]]
+"""Each torque's messages and, when built, its sample's kinematics; with a moving base, its
+rows (2, 7) of odom -> base_footprint and odom -> world."""
+IDENTITY_ROW = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
+"""The row (translation m, quaternion x, y, z, w) of the identity: odom -> world in inverse mode."""
 _WALL_OFFSET_NS = time.time_ns() - time.monotonic_ns()
 """The wall clock minus the monotonic clock when the process started."""
 
@@ -69,7 +77,10 @@ class InverseSession(Session):
                                           frame_prefix)
             self.wheels = np.array([robot.joint_index(name) for name in scene.base.wheels])
         super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget, frame_prefix,
-                         node_name, moving_base=self.odometry is not None)
+                         node_name, moving_base=self.odometry is not None, moving_root=self.odometry is not None)
+        self._odometry_rows: dict[int, np.ndarray] = {}
+        """odom -> base_footprint (row) of the last sample taken, by stamp (ns): a torque's
+        sample precedes the one that completes it."""
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self._torques = Refilled()
@@ -316,7 +327,10 @@ class InverseSession(Session):
         tau = self.dynamics.torques(estimates.q, estimates.v, estimates.a)
         plausible = (np.abs(tau) <= self._effort_bound).all(axis=1)     # NaN too
         count = len(tau) if plausible.all() else int(np.argmin(plausible))
-        built, failure = self._torque_messages(estimates.stamps[:count].tolist(), estimates.q, estimates.v, tau)
+        base = None
+        if self.odometry is not None and count:
+            base = self._base_rows(stamps[start:], v[start:], taken[start:], estimates.stamps[:count].tolist())
+        built, failure = self._torque_messages(estimates.stamps[:count].tolist(), estimates.q, estimates.v, tau, base)
         bad = None if failure is None and count == len(tau) else len(built)
         end = len(stamps)
         if bad is not None:     # the estimate restarts at its last sample: the rows up to it again
@@ -325,7 +339,7 @@ class InverseSession(Session):
             estimates = self.estimator.push_rows(stamps[start:end], q[start:end], v[start:end], taken[start:end])
         for error in estimates.errors:
             self.counters.reject(error)
-        torque_at = {start + int(row): k for k, row in enumerate(estimates.ends.tolist())}
+        torque_at = dict(zip((estimates.ends + start).tolist(), range(len(estimates.ends))))
         for row in range(start, end):
             if not taken[row]:
                 continue
@@ -335,8 +349,8 @@ class InverseSession(Session):
             if k is not None and k == bad:
                 outputs += self._rejected_torque(estimates, tau[k], failure, odom)
             elif k is not None:
-                outputs += odom + self._logged(estimates.stamps[k], estimates.q[k], estimates.v[k], tau[k], log_ns,
-                                               *built[k])
+                outputs += odom
+                outputs += self._logged(estimates, tau, k, log_ns, *built[k])
                 self._quiet_since_ns = max(self._quiet_since_ns or 0, stamps[row])
             else:
                 outputs += odom
@@ -347,9 +361,22 @@ class InverseSession(Session):
         none without a moving base."""
         if self.odometry is None:
             return []
-        odom = [("/odom", self.odometry.outputs(stamp, stamp / NS_PER_S, v[self.wheels])[0])]
+        message, row = self.odometry.outputs(stamp, stamp / NS_PER_S, v[self.wheels])
+        self._odometry_rows = {stamp: row}
+        odom = [("/odom", message)]
         self.recorder.write(odom, log_ns)
         return odom
+
+    def _base_rows(self, stamps: Sequence[int], v: np.ndarray, taken: Sequence[bool],
+                   torque_stamps: Sequence[int]) -> np.ndarray:
+        """Rows (N, 2, 7) at each torque's stamp (int ns) of odom -> base_footprint, the wheel
+        odometry there (of the last sample taken, or previewed through the rows ``stamps``,
+        ``v``, ``taken`` still to be published), and odom -> world, the identity."""
+        rows = dict(self._odometry_rows)
+        ahead = [k for k, good in enumerate(taken) if good]
+        rows.update(zip((stamps[k] for k in ahead), self.odometry.preview(
+            [stamps[k] / NS_PER_S for k in ahead], [v[k, self.wheels] for k in ahead])))
+        return np.array([(rows[int(stamp)], IDENTITY_ROW) for stamp in torque_stamps]).reshape(-1, 2, 7)
 
     def _rejected_torque(self, estimates: Estimates, tau: np.ndarray, failure: Exception | None,
                          odom: Outputs) -> Outputs:
@@ -368,54 +395,62 @@ class InverseSession(Session):
         self.estimator.restart("implausible" if finite else "non_finite")
         return []
 
-    def _torque_messages(self, stamps: list[int], q: np.ndarray, v: np.ndarray, tau: np.ndarray
-                         ) -> tuple[Built, Exception | None]:
-        """The messages of the first len(``stamps``) torques (rows of q, v, tau), built
-        together; when one cannot be built, those before it, one at a time, and its error."""
+    def _torque_messages(self, stamps: list[int], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+                         base: np.ndarray | None = None) -> tuple[Built, Exception | None]:
+        """The messages of the first len(``stamps``) torques (rows of q, v, tau; ``base``
+        their rows of :meth:`_base_rows`, None for a fixed base), built together; when one
+        cannot be built, those before it, one at a time, and its error."""
         try:
-            return self._torque_batch(stamps, q, v, tau), None
+            return self._torque_batch(stamps, q, v, tau, base), None
         except messages.MessageFieldError:
             pass
         built: Built = []
         for k in range(len(stamps)):
             try:
-                built += self._torque_batch(stamps[k:k + 1], q[k:k + 1], v[k:k + 1], tau[k:k + 1])
+                built += self._torque_batch(stamps[k:k + 1], q[k:k + 1], v[k:k + 1], tau[k:k + 1],
+                                            None if base is None else base[k:k + 1])
             except messages.MessageFieldError as error:
                 return built, error
         return built, None
 
-    def _torque_batch(self, stamps: list[int], q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> Built:
+    def _torque_batch(self, stamps: list[int], q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+                      base: np.ndarray | None = None) -> Built:
         """/computed_torques, /ee_pose(s) and /tf of N torques (stamps int ns; rows of q, v,
-        tau), those wanted, with each sample's kinematics (None when nothing takes it).
-        Raises MessageFieldError."""
+        tau; ``base`` (N, 2, 7) a moving base's rows of :meth:`_base_rows`), those wanted, with
+        each sample's kinematics (None when nothing takes it) and base rows. Raises
+        MessageFieldError."""
         wanted, count = self.wanted, len(stamps)
-        samples = [self.frames.links.at(row) for row in q[:count]] if self.kinematics_wanted else None
+        samples = self.frames.links.at_many(q[:count]) if self.kinematics_wanted else None
         columns: list[tuple[str, list[object]]] = []
         if "/computed_torques" in wanted:
             columns.append(("/computed_torques", self._torques.many(
                 stamps, np.concatenate((q[:count], v[:count], tau[:count]), axis=1), self._joint_state)))
         if samples is not None:
-            columns += self.frames.ee_messages(stamps, samples, wanted)
+            columns += self.frames.ee_messages(stamps, samples, wanted, base)
             if "/tf" in wanted:
-                columns.append(("/tf", self.frames.tf(stamps, samples)))
-        return [([(topic, messages_[k]) for topic, messages_ in columns], None if samples is None else samples[k])
-                for k in range(count)]
+                columns.append(("/tf", self.frames.tf(stamps, samples, None, base)))
+        return [([(topic, messages_[k]) for topic, messages_ in columns], None if samples is None else samples[k],
+                 None if base is None else base[k]) for k in range(count)]
 
     def _joint_state(self, stamp_ns: int, values: np.ndarray) -> object:
         """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
         return messages.joint_state(stamp_ns, self.robot.joint_names, *np.split(values, 3))
 
-    def _logged(self, stamp: int, q: np.ndarray, v: np.ndarray, tau: np.ndarray, log_ns: int, outputs: Outputs,
-                sample: SampleFrames | None) -> Outputs:
-        """``outputs``, the messages of the torque ``tau`` at a sample (stamp int ns, q, v),
+    def _logged(self, estimates: Estimates, torques: np.ndarray, k: int, log_ns: int, outputs: Outputs,
+                sample: SampleFrames | None, base: np.ndarray | None = None) -> Outputs:
+        """``outputs``, the messages of torque k of ``estimates`` (``torques`` their rows),
         logged at ``log_ns`` (the Rerun recording takes the sample at its stamp, its energy
-        (J) and end effector)."""
-        stamp = int(stamp)
+        (J), end effector in the root frame and a moving base's ``base`` rows)."""
+        stamp = int(estimates.stamps[k])
         self.recorder.write(outputs, log_ns)
         if self.recorder.samples:
+            q, v, tau = estimates.q[k], estimates.v[k], torques[k]
             data = self.dynamics.data
             energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)
-            self.recorder.sample(stamp, self.robot.joint_names, q, v, tau, energy, sample.ee[sample.ee_index, :3])
+            ee = sample.ee[sample.ee_index] if base is None else composed_rows(base[0], sample.ee[[sample.ee_index]])[0]
+            self.recorder.sample(stamp, self.robot.joint_names, q, v, tau, energy, ee[:3])
+            if base is not None:
+                self.recorder.base(stamp, base)
         self.stamp_ns, self.samples = stamp, self.samples + 1
         return outputs
 

@@ -32,6 +32,7 @@ recorded /odom again.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -80,14 +81,30 @@ class WheelOdometry:
         """(/odom, the row (7,) of odom -> base_footprint: translation m, quaternion x, y, z,
         w) of a sample at time t (s) with wheel speeds ``speeds``; advances the pose
         (``pose``: x, y, yaw in odom) by the previous sample's speeds."""
-        if self.last is not None:
-            self.pose = odometry_step(self.mecanum, self.pose, self.last[1], t - self.last[0])
-        self.last = (t, np.array(speeds, dtype=float))
+        self.pose, self.last = self._advanced(self.pose, self.last, t, speeds)
         x, y, yaw = self.pose
         twist = base_twist(self.mecanum, speeds)
         odom = messages.odometry(stamp_ns, self.odom_frame, self.child_frame, (x, y, 0.0), _quaternion_of_yaw(yaw),
                                  (twist[0], twist[1], 0.0, 0.0, 0.0, twist[2]), POSE_COVARIANCE, TWIST_COVARIANCE)
         return odom, planar_row(x, y, yaw)
+
+    def _advanced(self, pose: np.ndarray, last: tuple[float, np.ndarray] | None, t: float, speeds: np.ndarray
+                  ) -> tuple[np.ndarray, tuple[float, np.ndarray]]:
+        """(pose, last sample) after a sample at t (s) with wheel ``speeds``: ``pose`` (x, y,
+        yaw) moved by the ``last`` sample's speeds held since its time."""
+        if last is not None:
+            pose = odometry_step(self.mecanum, pose, last[1], t - last[0])
+        return pose, (t, np.array(speeds, dtype=float))
+
+    def preview(self, times: Sequence[float], speeds: Sequence[np.ndarray]) -> np.ndarray:
+        """Rows (k, 7) of odom -> base_footprint that :meth:`outputs` would give for the next k
+        samples (times s, wheel speeds), without advancing: the same arithmetic, so the
+        same bits."""
+        pose, last, rows = self.pose, self.last, np.empty((len(times), 7))
+        for k, (t, wheel_speeds) in enumerate(zip(times, speeds)):
+            pose, last = self._advanced(pose, last, t, wheel_speeds)
+            rows[k] = planar_row(*pose)
+        return rows
 
 
 class MobileBase:

@@ -401,6 +401,9 @@ def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None
 
         if held is None and command is None:
             rhs = model.computed_torque_derivative(data, reference, rhs) or rhs
+        loop = None if held is not None else model.compiled_steps(command)
+        if loop is not None:     # the fixed-step integrators run it (integrate/fixed_step.py)
+            rhs.compiled_steps = loop
     else:
         def rhs(t: float, x: np.ndarray) -> np.ndarray:
             return derivative(model, data, x, torque(t, x), t, reference.base_twist)

@@ -63,6 +63,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
+from youbot_dynamics.dynamics.compiled_tree import tree_of
 from youbot_dynamics.dynamics.contact_model import ContactModel
 from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper
 from youbot_dynamics.dynamics.friction import (FLOAT, JOINTS, READ_VECTOR, TABLE, WRITTEN_VECTOR,
@@ -78,6 +79,7 @@ from youbot_dynamics.model.rotations import (SEQUENCES, cardan_angle_rates, card
                                              quaternion_rate)
 from youbot_dynamics.scene.contacts import ROTATION_COORDINATES
 from youbot_dynamics.scene.schema import IntegratorSpec, Scene
+from youbot_dynamics.sim.compiled_steps import CompiledSteps
 from youbot_dynamics.sim.controllers import (ComputedTorque, Control, Reference, clip_to_limits,
                                              commanded_acceleration)
 from youbot_dynamics.sim.divergence import DivergenceLimits
@@ -231,6 +233,33 @@ class SimModel:
                 and not robot.mass_matrix_defect and slices["v"] == slice(robot.nv, 2 * robot.nv)):
             return None
         return robot.nv, 2 * robot.nv, robot.model, self.friction.table, self.friction.lugre_indices
+
+    @functools.cached_property
+    def _tree(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        """(ints, reals, friction table, LuGre joints) of :meth:`compiled_steps`: a fixed-root
+        robot alone of one-degree-of-freedom joints (compiled_tree.tree_of), regular mass
+        matrix, state [q, v, z]; None otherwise. Without friction, a table of zero damping."""
+        robot, slices = self.robot, self.slices
+        if not (self.robot_alone and robot.root == "fixed" and not robot.mimic and not robot.mass_matrix_defect
+                and slices["v"] == slice(robot.nv, 2 * robot.nv)):
+            return None
+        tree = tree_of(robot.model)
+        if tree is None:
+            return None
+        if self.friction is None:
+            table, joints = np.zeros((8, robot.nv)), np.zeros(0, dtype=np.int64)
+        else:
+            table, joints = self.friction.table, self.friction.lugre_indices
+        return (*tree, table, joints) if self.layout.size == 2 * robot.nv + len(joints) else None
+
+    def compiled_steps(self, command: np.ndarray | None) -> CompiledSteps | None:
+        """The compiled fixed-step loop (sim/compiled_steps.py) of a robot alone under the
+        held torque ``command`` (N m, joint order) or, without one, under no controller
+        (zero torque); None where it does not apply (another controller; see :attr:`_tree`)."""
+        tree = self._tree
+        if tree is None or (command is None and self.control.controller.kind != "none"):
+            return None
+        return CompiledSteps(*tree, np.zeros(self.robot.nv) if command is None else command)
 
     def robot_derivative(self, data: pin.Data, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """dx/dt of a robot alone (``robot_alone``): x = [q, v, z], one ABA with friction and

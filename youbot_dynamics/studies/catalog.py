@@ -1,14 +1,15 @@
 """The report's catalogue: one :class:`Section` per study of the page, in page order, with
 the function that runs the study and returns the text its command prints, and the figure
-set (studies/figures.py) that draws the seed's figures beside ours.
+set (studies/figures.py) that draws the source document's figures beside ours.
 
 A section runs the study through its own module (``run(config)`` and ``text(result)``,
 as ``youbot-dynamics study NAME`` does), never through the command line. The product's
 accuracy tools that the page also shows (a scene's uncertain parameters, contact at its
 extremes, work-precision) run through accuracy/. Short forms (``full`` False) keep the
-whole report to minutes on two cores; ``full`` runs the seed's sizes. Studies that sweep
-on Dask themselves run serially here (``workers=0``): each is already one case on a
-worker of the report's cluster.
+whole report to minutes on two cores; ``full`` runs the source documents' sizes. Studies that sweep
+on Dask themselves pass ``workers=enclosing_workers()``: their cases go to the cluster the
+report runs them on (every worker takes some while the section waits), or run serially
+when the report is serial (``--workers 0``).
 """
 from __future__ import annotations
 
@@ -19,22 +20,25 @@ from typing import Callable
 from youbot_dynamics.accuracy import scene_uncertainty
 from youbot_dynamics.accuracy.contact_extremes import TABLES
 from youbot_dynamics.accuracy.propagation import comparison, plot_uncertainty
+from youbot_dynamics.accuracy.sweeps import enclosing_workers
 from youbot_dynamics.accuracy.work_precision import work_precision
 from youbot_dynamics.io.text_tables import records_table
 from youbot_dynamics.scene.schema import load_scene
 from youbot_dynamics.studies import (bdf_study, elastic_pendulum, equation_figures, lagrange,
                                      lagrange_figures, pendulum_figures, pipeline_report,
-                                     rotations, rotations_figures, squeezer, squeezer_figures,
-                                     structure, uncertain_pendulum, uncertain_pendulum_figures,
-                                     woodpecker, woodpecker_figures)
+                                     planar_base_parameters, rotations, rotations_figures,
+                                     squeezer, squeezer_figures, structure, uncertain_pendulum,
+                                     uncertain_pendulum_figures, unicycle, woodpecker,
+                                     woodpecker_figures)
 from youbot_dynamics.studies.figures import FigureSet, FigureSpec
 
 
 @dataclass(frozen=True)
 class Section:
     """One section of the page: its ``name`` (anchor, ``--only``), title, the command line
-    that reproduces it (short form; ``full_command`` for the seed's sizes, None: the same),
-    the seed's figure or verdict, how ours differs in method or criterion, the PNGs its run
+    that reproduces it (short form; ``full_command`` for the document's sizes, None: the same),
+    the source document's figure or verdict (``seed``), how ours differs in method or
+    criterion, the PNGs its run
     writes into the report folder, and ``run(out_dir, full) -> (text, result)``: the text
     the command prints and the study's result, which its figure set draws from."""
 
@@ -61,7 +65,8 @@ def pendulum_tables_section(out: Path, full: bool) -> tuple[str, object]:
 
 def bdf_section(out: Path, full: bool) -> tuple[str, object]:
     """``study bdf [--short]``."""
-    result = bdf_study.run(bdf_study.BdfConfig(short=not full, workers=0, progress=False))
+    result = bdf_study.run(bdf_study.BdfConfig(short=not full, workers=enclosing_workers(),
+                                                progress=False))
     return bdf_study.text(result), result
 
 
@@ -117,8 +122,20 @@ def rotations_section(out: Path, full: bool) -> tuple[str, object]:
 def uncertainty_section(out: Path, full: bool) -> tuple[str, object]:
     """``study uncertainty`` (200 samples short, 1000 full)."""
     result = uncertain_pendulum.run(uncertain_pendulum.UncertaintyConfig(
-        samples=1000 if full else 200, workers=0))
+        samples=1000 if full else 200, workers=enclosing_workers()))
     return uncertain_pendulum.text(result), result
+
+
+def unicycle_section(out: Path, full: bool) -> tuple[str, object]:
+    """``study unicycle`` (document 002's parameters)."""
+    result = unicycle.run(unicycle.UnicycleConfig())
+    return unicycle.text(result), result
+
+
+def base_parameters_section(out: Path, full: bool) -> tuple[str, object]:
+    """``study base-parameters``."""
+    result = planar_base_parameters.run()
+    return planar_base_parameters.text(result), result
 
 
 #: The scene, output and file of the scene-uncertainty section.
@@ -129,9 +146,10 @@ def scene_uncertainty_section(out: Path, full: bool) -> tuple[str, object]:
     """``scene-uncertainty uncertain_pendulum --output q[pivot]`` with its band plot (40
     samples over 3 s short; 1000 over the scene's 10 s full)."""
     samples, duration = (1000, None) if full else (40, 3.0)
-    linear, _ = scene_uncertainty.linear_propagation(SCENE, SCENE_OUTPUT, duration, workers=0)
+    linear, _ = scene_uncertainty.linear_propagation(SCENE, SCENE_OUTPUT, duration,
+                                                   workers=enclosing_workers())
     sampled, keys, _, traces = scene_uncertainty.monte_carlo(SCENE, SCENE_OUTPUT, samples, 0,
-                                                             duration, workers=0)
+                                                             duration, workers=enclosing_workers())
     figures = comparison(linear, sampled)
     plot_uncertainty(linear, sampled, traces, str(out / SCENE_PLOT), f"{SCENE}: {SCENE_OUTPUT}",
                      SCENE_OUTPUT)
@@ -156,48 +174,49 @@ def work_precision_section(out: Path, full: bool) -> tuple[str, object]:
     scene = load_scene(WORK_SCENE)
     if not full:
         scene = scene.with_duration(0.2)
-    study = work_precision(scene, out / WORK_FOLDER, progress=False, workers=0)
+    study = work_precision(scene, out / WORK_FOLDER, progress=False,
+                           workers=enclosing_workers())
     return (study.files[1].read_text(encoding="utf-8") + "\n"
             + "written: " + ", ".join(str(f) for f in study.files)), study
 
 
 SECTIONS: tuple[Section, ...] = (
     Section("pendulum-tables", "Elastic pendulum: explicit Euler, CVODE statistics, energy "
-            "error (seed 001 Tables 1, 5-7)", ("study", "pendulum-tables"),
+            "error (document 001 Tables 1, 5-7)", ("study", "pendulum-tables"),
             run=pendulum_tables_section,
-            seed="The `seed` column of each table: verdicts (stable / accurate) of explicit "
-                 "Euler over k and N, and the seed's CVODE steps and f-evals at rtol = atol = "
+            seed="The document's column of each table: verdicts (stable / accurate) of explicit "
+                 "Euler over k and N, and the document's CVODE steps and f-evals at rtol = atol = "
                  "1e-6.",
             method="Our verdict is an energy criterion (stated above the table); study bdf "
                    "judges position against a DOP853 reference instead."),
-    Section("bdf", "Fixed-step BDF1-4, stability regions, CVODE order caps (seed 001 "
+    Section("bdf", "Fixed-step BDF1-4, stability regions, CVODE order caps (document 001 "
             "sections 1.6-1.9, Tables 1-4)", ("study", "bdf", "--short"),
             full_command=("study", "bdf"), run=bdf_section,
             seed="Tables 1-4: verdicts of explicit Euler, BDF2, BDF3, BDF4 over k and N (the "
-                 "`seed` column); CVODE at order 1: 38 501 steps (k = 10) and 76 856 (k = 50) "
-                 "against 536 and 1100 at order 5 (`seed_steps`); the rtol = atol = 0.1 "
+                 "document's column); CVODE at order 1: 38 501 steps (k = 10) and 76 856 (k = 50) "
+                 "against 536 and 1100 at order 5 (the document's steps); the rtol = atol = 0.1 "
                  "'choppy' traces.",
             method="Accuracy is judged on position against DOP853 at 1e-12 (stated above the "
-                   "tables); the short form runs only the cells with a seed verdict and no "
+                   "tables); the short form runs only the cells with a verdict of the document and no "
                    "order-1 run at k = 50."),
     Section("squeezer", "Andrew's squeezer: index 1, 2 and 3, positions, velocities, "
-            "multipliers, drift (seed 001 section 2)", ("study", "squeezer"), run=squeezer_section,
-            seed="The reference end state at t = 0.03 s (Hairer-Wanner), and the seed's plots "
+            "multipliers, drift (document 001 section 2)", ("study", "squeezer"), run=squeezer_section,
+            seed="The reference end state at t = 0.03 s (Hairer-Wanner), and the document's plots "
                  "of the index-1, -2 and -3 runs and of the index-1 drift.",
             method="`rel. error q` is our end state (index 1 with projection, RK45) against "
                    "that reference; the figures below run each index."),
     Section("squeezer-index3", "Andrew's squeezer: index-3 tolerance-by-suppression grids "
-            "(seed 001 Tables 8-10)", ("study", "squeezer", "--table"), run=suppression_section,
+            "(document 001 Tables 8-10)", ("study", "squeezer", "--table"), run=suppression_section,
             seed="Tables 8 and 9: Assimulo IDA on index 3 (v' and lambda out of the error "
-                 "test: 843 steps, 1811 f-evals) and index 2 (1603 steps); the seed's "
+                 "test: 843 steps, 1811 f-evals) and index 2 (1603 steps); the document's "
                  "tolerance grid itself is not in benchmarks.md.",
             method="Per tolerance, ours runs IDA with and without suppress-alg and Radau5 with "
                    "and without the index-dependent error scaling, and gives q's error against "
                    "the reference or why the run failed."),
-    Section("woodpecker", "Woodpecker toy: state events and impacts (seed 001, Lund FMNN05 "
+    Section("woodpecker", "Woodpecker toy: state events and impacts (document 001, Lund FMNN05 "
             "project 3; Tables 15 and 16)", ("study", "woodpecker"), run=woodpecker_section,
             seed="22 beak hits over 2 s; Assimulo IDA 7228 steps and 224 state events, Dymola "
-                 "3239 steps and 177 events (rows `(seed)` of the statistics table).",
+                 "3239 steps and 177 events (the document's rows of the statistics table).",
             method="Ours is DOP853 at rtol 1e-6 with a hybrid event loop, not a DAE solver: "
                    "step counts are not comparable one to one; beak hits and the mode "
                    "sequence are."),
@@ -209,28 +228,28 @@ SECTIONS: tuple[Section, ...] = (
                    "without friction) is our figure of merit."),
     Section("lagrange-3d", "Lagrange by sympy: 3D pendulum (the KTH Lagrange report)",
             ("study", "lagrange", "3d"), run=lagrange_section("3d"),
-            seed="The equations of motion from the seed's Lagrangian (whose potential omits "
+            seed="The equations of motion from the document's Lagrangian (whose potential omits "
                  "q3); the conservative run, the run with joint friction decaying to the "
                  "potential minimum, and the chaos plot of q2.",
-            method="Energy drift is our figure of merit; our parameters are chosen (see the "
-                   "figures)."),
-    Section("structure-lowpass", "Structural analysis: the low-pass filter (seed 000 item 4)",
+            method="Energy drift is our figure of merit; the document's parameters and start "
+                   "by default, our earlier set drawn second and labelled."),
+    Section("structure-lowpass", "Structural analysis: the low-pass filter (document 000 item 4)",
             ("study", "structure", "lowpass"), run=structure_section("lowpass"),
-            seed="The seed's matching `assign` list and BLT blocks (benchmarks.md section 6)."),
-    Section("structure-pendulum", "Structural analysis: Cartesian pendulum, Pantelides (seed "
+            seed="The document's matching `assign` list and BLT blocks (benchmarks.md section 6)."),
+    Section("structure-pendulum", "Structural analysis: Cartesian pendulum, Pantelides (document "
             "000 item 4)", ("study", "structure", "pendulum"), run=structure_section("pendulum"),
             seed="Structural index 3; the constraint differentiated twice (vmap/eqmap lists)."),
-    Section("structure-squeezer", "Structural analysis: Andrew's squeezer (seed 000 item 4)",
+    Section("structure-squeezer", "Structural analysis: Andrew's squeezer (document 000 item 4)",
             ("study", "structure", "squeezer"), run=structure_section("squeezer"),
             seed="Index 3: the six constraints differentiated twice."),
-    *(Section(f"pipeline-{example}", f"Equation pipeline: {example} (seed 000 items 4-5, "
+    *(Section(f"pipeline-{example}", f"Equation pipeline: {example} (document 000 items 4-5, "
               f"ModiaBase / ModelingToolkit)", ("study", "pipeline", example),
               run=pipeline_section(example),
-              seed="Each stage as the seed's tools print it (alias elimination, matching, BLT, "
+              seed="Each stage as the document's tools print it (alias elimination, matching, BLT, "
                    "Pantelides, dummy derivatives, tearing) and, for modia-pendulum, its "
                    "statistics log.")
       for example in ("lag", "pendulum", "lowpass", "modia-pendulum")),
-    Section("rotations", "Rotations: Cardan vs adaptive Cardan vs quaternion (seed 000 item 1)",
+    Section("rotations", "Rotations: Cardan vs adaptive Cardan vs quaternion (document 000 item 1)",
             ("study", "rotations", "--runs", "tumble", "top"), full_command=("study", "rotations"),
             run=rotations_section,
             seed="Qualitative: Cardan angles take larger steps on a body spinning about one "
@@ -240,15 +259,27 @@ SECTIONS: tuple[Section, ...] = (
                    "short form's table leaves out the spin run and its wobble sweep: the "
                    "figures below run them (the pure spin beside the spin run; five "
                    "wobbles with --full)."),
+    Section("unicycle", "The differential drive (document 002's UnicycleDynamics)",
+            ("study", "unicycle"), run=unicycle_section,
+            seed="m 10 kg, I 0.5 kg m^2, r 0.05 m, wheel base 0.3 m, linear friction 1 N s/m, "
+                 "angular 0.5 N m s/rad, and its equations (no run, no figure).",
+            method="Ours runs the document's parameters from rest and compares with the closed "
+                   "forms; the ledger's rows 002-unicycle-* set its equations beside ours."),
+    Section("base-parameters", "Base parameters of the 2-DOF planar arm (document 002)",
+            ("study", "base-parameters"), run=base_parameters_section,
+            seed="Theta_base = [I1 + m1 c1^2 + m2 (l1^2 + 2 l1 c2 cos q2 + c2^2), I2 + m2 c2^2, "
+                 "m2 c2 cos q2, ...] and '6+6+5n' base parameters for a planar arm.",
+            method="Ours by QR of Pinocchio's regressor and by a sympy derivation (our "
+                   "parameters: the document gives none)."),
     Section("uncertainty", "Uncertain damped pendulum: linear propagation vs Monte Carlo "
-            "(seed 000 item 5)", ("study", "uncertainty", "--samples", "200", "--workers", "0"),
+            "(document 000 item 5)", ("study", "uncertainty", "--samples", "200", "--workers", "0"),
             full_command=("study", "uncertainty", "--samples", "1000", "--workers", "0"),
             run=uncertainty_section,
             seed="Measurements.jl's band of phi(t) (linear propagation only, a figure).",
             method="We add Monte Carlo (200 samples in the short form, 1000 with --full) and "
                    "say where linearisation fails."),
     Section("scene-uncertainty", "Uncertain scene parameters: the same pendulum as a scene "
-            "with 'value ± sigma' mass and damping (seed 000 item 5)",
+            "with 'value ± sigma' mass and damping (document 000 item 5)",
             ("scene-uncertainty", SCENE, "--output", SCENE_OUTPUT, "--samples", "40",
              "--duration", "3", "--workers", "0", "--plot", SCENE_PLOT),
             full_command=("scene-uncertainty", SCENE, "--output", SCENE_OUTPUT, "--samples",
@@ -263,16 +294,16 @@ SECTIONS: tuple[Section, ...] = (
             "friction cone)", ("contact-extremes", "--table", "light_on_heavy", "--table",
                                "tunnelling", "--table", "grasp"),
             full_command=("contact-extremes",), run=contact_extremes_section,
-            seed="No seed table: our own measurements (benchmarks.md, contact).",
+            seed="No source-document table: our own measurements (benchmarks.md, contact).",
             method="The short form leaves out the stiffness sweep (2.5 minutes on two busy "
                    "cores); --full runs it."),
-    Section("work-precision", "Work-precision on the youBot arm swing (seed 001 Table 6 "
+    Section("work-precision", "Work-precision on the youBot arm swing (document 001 Table 6 "
             "style)", ("work-precision", "--scene", WORK_SCENE, "--duration", "0.2",
                        "--workers", "0", "--out", WORK_FOLDER),
             full_command=("work-precision", "--scene", WORK_SCENE, "--workers", "0", "--out",
                           WORK_FOLDER),
             run=work_precision_section, files=(f"{WORK_FOLDER}/work_precision_{WORK_SCENE}.png",),
-            seed="No seed figure for the youBot; the seed's Table 6 compares integrators on "
+            seed="No source-document figure for the youBot; document 001's Table 6 compares integrators on "
                  "the elastic pendulum the same way (steps, f-evals, CPU time).",
             method="The short form simulates 0.2 s of the scene."),
 )

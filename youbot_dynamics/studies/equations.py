@@ -1,5 +1,5 @@
-"""A small equation-based model form (ModiaLang / ModelingToolkit style) and the seed's
-example models written in it.
+"""A small equation-based model form (ModiaLang / ModelingToolkit style) and document
+000's example models written in it, with the document's parameters and start values.
 
 An :class:`EquationModel` holds unknown functions of time with start values (None: no
 start value, an algebraic unknown to be computed), parameters with defaults, and the
@@ -82,34 +82,57 @@ class EquationModel:
 
 
 def first_order_lag() -> EquationModel:
-    """ModelingToolkit's first tutorial model (the seed's lag): x' = RHS,
-    RHS = (1 - x) / tau, x(0) = 0, tau = 3 s by default; x(t) = 1 - exp(-t / tau).
-    RHS is an alias of x' that alias elimination removes."""
+    """ModelingToolkit's first-order lag as document 000 writes it (unitstep_fol_factory):
+    x' = RHS, RHS = (1 - x) / tau, defaults x(0) = 0, tau = 1 s, on [0, 5] s;
+    x(t) = 1 + (x(0) - 1) exp(-t / tau). RHS is an alias of x' that alias elimination
+    removes. The document's second run is :data:`LAG_SECOND_RUN` on [0, 10] s."""
     x, rhs = unknown("x"), unknown("RHS")
     tau = sp.Symbol("tau")
-    return EquationModel("lag", {"x": 0.0, "RHS": None}, {"tau": 3.0},
-                         (rhs - (1 - x) / tau, der(x) - rhs), t_end=10.0)
+    return EquationModel("lag", {"x": 0.0, "RHS": None}, {"tau": 1.0},
+                         (rhs - (1 - x) / tau, der(x) - rhs), t_end=5.0)
 
 
-def cartesian_pendulum(angle0: float = 0.5) -> EquationModel:
-    """The seed's Cartesian pendulum in ModelingToolkit's second-order form (m = 1,
+#: Document 000's second lag run: ``ODEProblem(fol, [:x => 2.0], (0.0, 10.0), [:tau => 5.0])``
+#: (merge, t_end in s).
+LAG_SECOND_RUN = ({"x": 2.0, "tau": 5.0}, 10.0)
+
+
+def cartesian_pendulum(angle0: float = math.pi / 2) -> EquationModel:
+    """Document 000's Cartesian pendulum in ModelingToolkit's second-order form (m = 1,
     L = l^2, lambda = -T / l): x'' = lambda x, y'' = lambda y - g, x^2 + y^2 = L; order
-    lowering names x' u and y' v, giving the seed's f1..f5 (benchmarks.md section 6).
-    Starts at rest at ``angle0`` (rad) from hanging straight down (y < 0)."""
+    lowering names x' u and y' v, giving the document's f1..f5 (benchmarks.md section 6).
+    Starts at rest at ``angle0`` (rad) from hanging straight down (y < 0); the default is
+    the document's ModelingToolkit run: x = 1, y = 0 (horizontal), g = 9.8 m/s^2, L = 1,
+    on [0, 10] s."""
     x, y, lam = unknown("x"), unknown("y"), unknown("lambda")
     length_squared, gravity = sp.symbols("L g")
-    parameters = {"L": 1.0, "g": 9.81}
+    parameters = {"L": 1.0, "g": 9.8}
     length = math.sqrt(parameters["L"])
-    starts = {"x": length * math.sin(angle0), "y": -length * math.cos(angle0),
+    starts = {"x": length * math.sin(angle0), "y": 0.0 if angle0 == math.pi / 2 else
+              -length * math.cos(angle0),
               "u": 0.0, "v": 0.0, "lambda": None}
     return EquationModel("pendulum", starts, parameters,
                          (der(x, 2) - lam * x, der(y, 2) - lam * y + gravity,
                           x**2 + y**2 - length_squared),
-                         derivative_names={"x": "u", "y": "v"}, t_end=5.0)
+                         derivative_names={"x": "u", "y": "v"}, t_end=10.0)
+
+
+def second_order_system() -> EquationModel:
+    """Document 000's ModelingToolkit second-order system (its ode_order_lowering example):
+    x'' = sigma (y - x), y' = x (rho - z) - y, z' = x y - beta z with sigma = 10,
+    rho = 10, beta = 8/3, x(0) = 1, x'(0) = y(0) = z(0) = 0, on [0, 100] s; lowering names
+    x' xd."""
+    x, y, z = unknown("x"), unknown("y"), unknown("z")
+    sigma, rho, beta = sp.symbols("sigma rho beta")
+    return EquationModel(
+        "second-order", {"x": 1.0, "xd": 0.0, "y": 0.0, "z": 0.0},
+        {"sigma": 10.0, "rho": 10.0, "beta": 8.0 / 3.0},
+        (der(x, 2) - sigma * (y - x), der(y) - (x * (rho - z) - y), der(z) - (x * y - beta * z)),
+        derivative_names={"x": "xd"}, t_end=100.0)
 
 
 def lowpass_filter() -> EquationModel:
-    """An RC low-pass filter whose incidence is the seed's graph (benchmarks.md section 6,
+    """An RC low-pass filter whose incidence is document 000's graph (benchmarks.md section 6,
     variables numbered as there): a source u0 = U0 (V) drives R1 and R2 in series into C;
     1 uR1 (V across R1), 2 u0, 3 uR2, 4 vn (node between R1 and R2), 5 vC (the state),
     6 vC', 7 i (A). f1 u0 = uR1 + vn, f2 uR1 = R1 i, f3 vn = uR2 + vC, f4 uR2 = R2 i,
@@ -124,7 +147,7 @@ def lowpass_filter() -> EquationModel:
 
 
 def modia_pendulum() -> EquationModel:
-    """The seed's ModiaLang damped pendulum: L = 0.8 m, m = 1 kg, d = 0.5 N m s/rad,
+    """Document 000's ModiaLang damped pendulum: L = 0.8 m, m = 1 kg, d = 0.5 N m s/rad,
     g = 9.81 m/s^2, phi(0) = 1.57 rad, w(0) = 0;
     w = der(phi), 0 = m L^2 der(w) + d w + m g L sin(phi), r = (L cos phi, -L sin phi)."""
     phi, w, rx, ry = (unknown(n) for n in ("phi", "w", "rx", "ry"))
@@ -138,9 +161,9 @@ def modia_pendulum() -> EquationModel:
         t_end=10.0)
 
 
-#: The seed's parameter merge for the ModiaLang pendulum (``Pendulum | Map(L = 0.5)``).
+#: Document 000's parameter merge for the ModiaLang pendulum (``Pendulum | Map(L = 0.5)``).
 MODIA_MERGE = {"L": 0.5}
 #: Example name -> its model builder, for the command line.
 EXAMPLE_MODELS: Mapping[str, Callable[[], EquationModel]] = MappingProxyType({
     "lag": first_order_lag, "pendulum": cartesian_pendulum, "lowpass": lowpass_filter,
-    "modia-pendulum": modia_pendulum})
+    "modia-pendulum": modia_pendulum, "second-order": second_order_system})

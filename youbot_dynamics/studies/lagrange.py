@@ -1,35 +1,36 @@
-"""Lagrange's equations by computer algebra (seed: KTH report; benchmarks.md section 4):
-sympy.physics.mechanics derives M(q) q'' = f(q, q') from the Lagrangian T - V, joint
-friction enters as the generalised force Q_i = -c q_i', and lambdify turns M, f and the
-energy T + V into numpy functions (derivations and code are cached per model).
+"""Lagrange's equations by computer algebra (document 003, the KTH report; benchmarks.md
+section 4): sympy.physics.mechanics derives M(q) q'' = f(q, q') from the Lagrangian T - V,
+joint friction enters as the generalised force Q_i = -c q_i', and lambdify turns M, f, the
+energy T + V and the particle's position into numpy functions (cached per model).
 
 Models (angles in rad, lengths in m, masses in kg; z up, gravity -g z):
 
 - ``2d``: a uniform rod (m1, l) pivoted at O swings in the vertical x-z plane (q1 from
   the downward vertical); at its end A a light rod is hinged (q2, relative to the first);
   a bead m2 slides on it at distance l0 + q3 from A, held by a spring (k, rest length l0).
-- ``3d``: a uniform rod OA (m1, l) turns about the horizontal axis x through O (q1 from
-  the downward vertical); a massless rod AB (length l2) hangs from a ball joint at A,
-  oriented by q2 about the rod's y axis (out of the rod's swing plane) then q3 about the
-  new x axis; a particle m2 at B.
+- ``3d``: the document's double cylindrical-spherical pendulum, with its kinematics
+  (appendix B): a uniform rod OA (m1, l) turns about the horizontal axis x through O (q1
+  from the downward vertical); the frame A' is turned by q1 + q2 about x; the massless
+  rod AB (length l2) lies in A' at angle q3 from A's downward axis, B = A + l2 (-sin q3
+  x' - cos q3 z'), and carries a particle m2 at B.
 - ``arm``: a planar 2-link arm (uniform links m1, l1 and m2, l2, revolute joints about z,
   q from the x axis, gravity -g y), for the cross-check against Pinocchio's RNEA.
 
-Parameter values (DEFAULTS; any can be overridden, ``study lagrange --param NAME=VALUE``):
+Parameter values (DEFAULTS, the document's appendix B; any can be overridden, ``study
+lagrange --param NAME=VALUE``):
 
-- ``2d``: the seed appendix's, m1 = 1 kg, m2 = 0.5 kg, k = 50 N/m, l0 = 0.25 m,
-  l = 0.5 m, g = 9.82 m/s^2.
-- ``3d``: the rod as in 2d (m1 = 1 kg, l = 0.5 m) but g = 9.81 m/s^2 and a light particle
-  on a long arm (m2 = 0.1 kg, l2 = 1 m): chosen, not the seed's, so that the seed's chaos
-  test shows. From (0.5, 0.1, 0.5) at rest versus q1 = 0.6 the q2 curves agree to 0.01 rad
-  up to t = 0.82 s and differ by 0.1 rad at 0.94 s, by 0.5 rad at 1.03 s.
+- ``2d``: m1 = 1 kg, m2 = 0.5 kg, k = 50 N/m, l0 = 0.25 m, l = 0.5 m, g = 9.82 m/s^2.
+- ``3d``: m = 0.5 kg for rod and particle, l = 0.5 m for both rods, g = 9.82 m/s^2.
+  OUR_3D is the second, labelled parameter set (m1 = 1 kg, m2 = 0.1 kg, l2 = 1 m,
+  g = 9.81 m/s^2: a light particle on a long arm) that earlier versions used by default.
 
-The seed's 3D potential omits q3. With the ball joint's two angles both tilting AB, the
-particle's height depends on q3: here z_B = -l cos q1 - l2 (cos q1 cos q2 cos q3 -
-sin q1 sin q3), so V = -m1 g l cos q1 / 2 + m2 g z_B and dV/dq3 = m2 g l2 (sin q1 cos q3 +
-cos q1 cos q2 sin q3), 0.82 N m at the seed's initial state (0.5, 0.1, 0.5). A potential
-without q3 drops that gravity torque: right only while q1 = q3 = 0 (hanging in the rod's
-plane), and the energy it defines is not conserved by the true motion. Ours keeps q3.
+Document 003's 3D potential (its eq. 2.22) omits q3: by its own position vector rB the
+particle's height is z_B = -l cos q1 - l2 cos q3 cos(q1 + q2), so V = -m1 g l cos q1 / 2 +
+m2 g z_B and dV/dq3 = m2 g l2 sin q3 cos(q1 + q2): -0.860 N m at the document's state
+(3.2), q = (1, 1, 1) rad. A potential without q3 drops that gravity torque: right only
+while q3 = 0 or q1 + q2 = pi/2, and the energy it defines is not conserved by the true
+motion. Ours keeps q3. (The document's friction run takes gravity as generalised forces
+from the true rB, so its equations there do keep the q3 term.)
 """
 from __future__ import annotations
 
@@ -48,12 +49,16 @@ from youbot_dynamics.studies.stats_table import stats_table
 #: Parameter values used unless given (SI). c is the joint friction coefficient.
 DEFAULTS = {
     "2d": {"m1": 1.0, "l": 0.5, "m2": 0.5, "l0": 0.25, "k": 50.0, "g": 9.82, "c": 0.0},
-    "3d": {"m1": 1.0, "l": 0.5, "m2": 0.1, "l2": 1.0, "g": 9.81, "c": 0.0},
+    "3d": {"m1": 0.5, "l": 0.5, "m2": 0.5, "l2": 0.5, "g": 9.82, "c": 0.0},
+    "3d-document": {"m1": 0.5, "l": 0.5, "m2": 0.5, "l2": 0.5, "g": 9.82, "c": 0.0},
     "arm": {"m1": 1.3, "l1": 0.7, "m2": 0.9, "l2": 0.5, "g": 9.81, "c": 0.0},
 }
-#: The seed's initial states (q, q').
-SEED_INITIAL = {"2d": ((0.8, 0.0, 0.0), (0.0, 0.0, 0.0)),
-                "3d": ((0.5, 0.1, 0.5), (0.0, 0.0, 0.0))}
+#: Our second, labelled parameter set of the 3D pendulum (overrides of DEFAULTS["3d"]).
+OUR_3D = {"m1": 1.0, "m2": 0.1, "l2": 1.0, "g": 9.81}
+#: The document's initial states (q, q'): 2D appendix B; 3D eq. (3.2), every angle 1 rad
+#: at rest (Figs 10-12, 15, 17-21).
+DOCUMENT_INITIAL = {"2d": ((0.8, 0.0, 0.0), (0.0, 0.0, 0.0)),
+                    "3d": ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0))}
 
 
 @dataclass(frozen=True)
@@ -68,6 +73,7 @@ class LagrangeModel:
     mass_matrix: sp.Matrix
     forcing: sp.Matrix
     energy: sp.Expr
+    particle: sp.ImmutableMatrix = sp.ImmutableMatrix.zeros(3, 1)
 
     @cached_property
     def numeric(self) -> tuple[Callable, Callable, Callable]:
@@ -76,6 +82,13 @@ class LagrangeModel:
         return (sp.lambdify(args, self.mass_matrix, "numpy", cse=True),
                 sp.lambdify(args, self.forcing, "numpy", cse=True),
                 sp.lambdify(args, self.energy, "numpy", cse=True))
+
+    def particle_path(self, x: np.ndarray, p: tuple[float, ...]) -> np.ndarray:
+        """The particle's position (m; N frame x, y, z, z up) at states x ((m, 2n)): the
+        bead of ``2d``, B of ``3d``; shape (m, 3)."""
+        n = len(self.q)
+        position = sp.lambdify((self.q, self.parameters), self.particle, "numpy")
+        return np.array([np.ravel(position(row[:n], p)) for row in np.atleast_2d(x)])
 
     def parameter_values(self, overrides: dict[str, float] | None = None) -> tuple[float, ...]:
         """The DEFAULTS for this model with ``overrides`` (name -> value) applied."""
@@ -129,10 +142,12 @@ def readable(expression: sp.Expr) -> sp.Expr:
 
 def lagranges_method(frame: me.ReferenceFrame, q: list, bodies: list,
                      extra_potential: sp.Expr, parameters: tuple[sp.Symbol, ...],
-                     friction: sp.Symbol, name: str) -> LagrangeModel:
+                     friction: sp.Symbol, name: str,
+                     particle: me.Vector | None = None) -> LagrangeModel:
     """Lagrange's equations for ``bodies`` (each with ``potential_energy`` set) in
     ``frame`` plus ``extra_potential``, with Q_i = -friction q_i'; returns the model in
-    plain symbols (q'(t) -> u, q(t) -> q)."""
+    plain symbols (q'(t) -> u, q(t) -> q), with ``particle`` (position from the origin)
+    as its x, y, z in ``frame``."""
     lagrangian = me.Lagrangian(frame, *bodies) - extra_potential
     method = me.LagrangesMethod(lagrangian, q, frame=frame)
     method.form_lagranges_equations()
@@ -147,9 +162,11 @@ def lagranges_method(frame: me.ReferenceFrame, q: list, bodies: list,
         return me.msubs(expression, plain)
 
     forcing = method.forcing - friction * sp.Matrix(qd)
+    where = sp.zeros(3, 1) if particle is None else particle.to_matrix(frame)
+    where = sp.ImmutableMatrix(where)
     return LagrangeModel(name, tuple(q_plain), tuple(u_plain), parameters,
                          to_plain(method.mass_matrix), to_plain(forcing),
-                         to_plain(kinetic + potential))
+                         to_plain(kinetic + potential), to_plain(where))
 
 
 def rod(name: str, frame: me.ReferenceFrame, center: me.Point, mass: sp.Symbol,
@@ -185,13 +202,13 @@ def model(name: str) -> LagrangeModel:
         body = rod("rod", A_frame, center, p["m1"], p["l"], A_frame.z)
         particle = me.Particle("bead", bead, p["m2"])
         spring = p["k"] * q3 ** 2 / 2
-    elif name == "3d":
+    elif name in ("3d", "3d-document"):
         q1, q2, q3 = q = list(me.dynamicsymbols("q1 q2 q3"))
         A_frame = N.orientnew("A", "Axis", (q1, N.x))
-        B_frame = A_frame.orientnew("B", "Body", (q2, q3, 0), "YXZ")
+        B_frame = N.orientnew("B", "Axis", (q1 + q2, N.x))
         center = O.locatenew("Ac", -p["l"] / 2 * A_frame.z)
         A = O.locatenew("A", -p["l"] * A_frame.z)
-        tip = A.locatenew("B", -p["l2"] * B_frame.z)
+        tip = A.locatenew("B", p["l2"] * (-sp.sin(q3) * B_frame.x - sp.cos(q3) * B_frame.z))
         for point in (center, A, tip):
             point.set_vel(N, point.pos_from(O).dt(N))
         body = rod("rod", A_frame, center, p["m1"], p["l"], A_frame.z)
@@ -213,7 +230,12 @@ def model(name: str) -> LagrangeModel:
         return lagranges_method(N, q, [link1, link2], sp.S.Zero, tuple(symbols), c, name)
     body.potential_energy = p["m1"] * g * center.pos_from(O).dot(N.z)
     particle.potential_energy = p["m2"] * g * particle.point.pos_from(O).dot(N.z)
-    return lagranges_method(N, q, [body, particle], spring, tuple(symbols), c, name)
+    if name == "3d-document":
+        # the document's eq. (2.22): the particle's height without its cos q3 factor
+        particle.potential_energy = -p["m2"] * g * (p["l"] * sp.cos(q1)
+                                                    + p["l2"] * sp.cos(q1 + q2))
+    return lagranges_method(N, q, [body, particle], spring, tuple(symbols), c, name,
+                            particle.point.pos_from(O))
 
 
 def equilibrium(name: str, p: tuple[float, ...]) -> np.ndarray:
@@ -234,7 +256,7 @@ OUTPUTS = 201
 
 @dataclass(frozen=True)
 class LagrangeConfig:
-    """One run from the seed's initial state: the problem ('2d' or '3d'), joint friction
+    """One run from the document's initial state: the problem ('2d' or '3d'), joint friction
     c (generalised force -c q_i'), parameter overrides (SI), the simulated ``duration``
     (s), the integrator and its tolerances (atol None: rtol; a number or one per state
     component)."""
@@ -258,8 +280,8 @@ class LagrangeRun:
 
 
 def initial_state(problem: str) -> np.ndarray:
-    """The seed's initial (q, u) of the problem."""
-    q0, u0 = SEED_INITIAL[problem]
+    """The document's initial (q, u) of the problem."""
+    q0, u0 = DOCUMENT_INITIAL[problem]
     return np.r_[q0, u0]
 
 

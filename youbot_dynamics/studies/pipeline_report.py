@@ -1,9 +1,10 @@
-"""The equation pipeline's stages as plain data and as text, printed the way the seed's
-tools print them: the model as ModelingToolkit shows a system (Equations / Unknowns with
+"""The equation pipeline's stages as plain data and as text, printed the way document
+000's tools print them: the model as ModelingToolkit shows a system (Equations / Unknowns with
 defaults / Parameters), Pantelides' lists as ModiaBase names them (vmap, eqmap, assign),
 the sorted equations as "[variable]: equation", and the simulation statistics in Modia's
-``simulate!(..., logStatistics = true)`` form (key names as Modia.jl prints them; the seed's
-own log is not in benchmarks.md, so its column says so).
+``simulate!(..., logStatistics = true)`` form (key names as Modia.jl prints them), with
+the document's own log beside the run it printed it for (the ModiaLang pendulum with
+L = 0.5 m; studies/modia_log.py runs it as the document does).
 """
 from __future__ import annotations
 
@@ -15,12 +16,24 @@ import sympy as sp
 
 from youbot_dynamics.integrate.integrators import IntegratorStats
 from youbot_dynamics.studies.equations import EXAMPLE_MODELS, MODIA_MERGE, EquationModel
+from youbot_dynamics.studies.modia_log import DOCUMENT_LOG
 from youbot_dynamics.studies.pipeline import PipelineResult, pretty_expression
 from youbot_dynamics.studies.state_selection import ReselectedRun, simulate_with_reselection
 from youbot_dynamics.studies.structure import variable_name
 
-#: What benchmarks.md gives of the seed's statistics log.
-SEED_LOG = "not given (benchmarks.md has no statistics log of the seed)"
+
+
+def document_log(model: EquationModel) -> str:
+    """Document 000's statistics log of this run, if it prints one (the ModiaLang pendulum
+    with L = 0.5 m only)."""
+    if model.name != "modia-pendulum" or model.parameters["L"] != MODIA_MERGE["L"]:
+        return "none printed for this run"
+    log = DOCUMENT_LOG
+    return (f"{log['algorithm']}, tolerance {log['tolerance']:g}: {log['nAcceptedSteps']} "
+            f"accepted, {log['nRejectedSteps']} rejected steps, {log['nf (integrator)']} "
+            f"getDerivatives! calls from the integrator ({log['nGetDerivatives']} in all), "
+            f"{log['nResults']} results every {log['interval']:g} s; the nearest run here: "
+            "--integrator rk45 --outputs 501 (studies/modia_log.py)")
 
 
 def residual_text(expression: sp.Expr) -> str:
@@ -152,7 +165,7 @@ def simulation_record(label: str, run: ReselectedRun, tol: float) -> dict:
             "observed_at_end": {k: float(np.real(v)) for k, v in observed.items()},
             "statistics": modia_log(run.stats, times, len(ode.state_names), tol,
                                     len(run.segments) - 1),
-            "seed_statistics": SEED_LOG}
+            "document_statistics": document_log(last.result.model)}
 
 
 def report_lines(report: dict) -> list[str]:
@@ -277,14 +290,14 @@ def simulation_lines(report: dict) -> list[str]:
             f"{k} = {v:.6g}" for k, v in {**run["final_state"], **run["observed_at_end"]}.items()))
         lines.append("  statistics (Modia's log form):")
         lines += [f"        {k:<15s} = {v}" for k, v in run["statistics"].items()]
-        lines.append(f"  seed's log: {run['seed_statistics']}")
+        lines.append(f"  document 000's log: {run['document_statistics']}")
     return lines
 
 
 @dataclass(frozen=True)
 class PipelineConfig:
     """The pipeline on one of EXAMPLE_MODELS: a parameter ``merge`` (model | {name:
-    value}; empty: the defaults, and for modia-pendulum also the seed's merge L = 0.5),
+    value}; empty: the defaults, and for modia-pendulum also the document's merge L = 0.5),
     the integrator, its accuracy ``tol`` (rtol = tol, atol_i = tol max(|x0_i|, 1e-3)), the
     output times, a fixed step ``dt`` (s), the step budget of a fixed-step run, and
     whether to keep the start's state selection (``static_selection``)."""
@@ -301,7 +314,7 @@ class PipelineConfig:
 
 def pipeline_models(config: PipelineConfig) -> list[tuple[str, EquationModel]]:
     """(label, model) of each simulation: the example with the merge, or its defaults
-    (and the seed's merge for modia-pendulum)."""
+    (and the document's merge for modia-pendulum)."""
     model = EXAMPLE_MODELS[config.example]()
     merges = [dict(config.merge)] if config.merge else [{}]
     if config.example == "modia-pendulum" and not config.merge:

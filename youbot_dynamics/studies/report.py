@@ -1,10 +1,12 @@
-"""Every study in one report: the seed's figures or verdicts, ours, and the difference.
+"""Every study in one report: the source documents' figures or verdicts, ours, and the
+difference, after the ledger (studies/ledger.py) as the first page.
 
-The page is a loop over the catalogue (studies/catalog.py): each :class:`Section` runs its
+The page opens with the ledger: the row counts per document and verdict, then every row,
+its figure linked to the figure's subsection where the report drew it. Then it is a loop over the catalogue (studies/catalog.py): each :class:`Section` runs its
 study through the study's own module (``run(config)``) and returns the text ``youbot-dynamics
 study NAME`` prints with the study's result; then its figure set (studies/figures.py: the
-seed's figures from our runs, each declared with its caption and the seed's figure or
-verdict) draws from that result into the report folder.
+document's figures from our runs, each declared with its caption and the document's figure
+or verdict) draws from that result into the report folder.
 The sections are independent cases of :func:`youbot_dynamics.accuracy.sweeps.map_cases` (a
 local Dask cluster by default, ``scheduler`` for a real one, serial with ``workers=0``);
 the page (``report.md``) is assembled in the order of the catalogue, whatever order they
@@ -22,6 +24,7 @@ from typing import Sequence
 
 from youbot_dynamics.accuracy.sweeps import map_cases
 from youbot_dynamics.errors import UserInputError
+from youbot_dynamics.studies import ledger
 from youbot_dynamics.studies.catalog import FIGURE_SETS, SECTION_NAMES, SECTIONS, Section
 from youbot_dynamics.studies.figures import Figure, FigureSpec, draw_set
 
@@ -93,19 +96,27 @@ def markdown_rows(text: str) -> list[dict[str, str]]:
     return rows
 
 
+#: The column names a study's table gives the source document's verdict under.
+DOCUMENT_COLUMNS = ("document", "seed")
+
+
 def verdict_agreement(text: str) -> str | None:
-    """Agreement of our verdicts with the seed's over every table row that has both a
-    ``seed`` and a ``verdict`` cell (None if no table has both)."""
-    pairs = [(row["seed"], row["verdict"], row) for row in markdown_rows(text)
-             if row.get("seed", "-") != "-" and row.get("verdict", "-") != "-"]
+    """Agreement of our verdicts with the source document's over every table row that has
+    both a document cell (a column of :data:`DOCUMENT_COLUMNS`) and a ``verdict`` cell (None
+    if no table has both)."""
+    pairs = []
+    for row in markdown_rows(text):
+        theirs = next((row[key] for key in DOCUMENT_COLUMNS if row.get(key, "-") != "-"), None)
+        if theirs is not None and row.get("verdict", "-") != "-":
+            pairs.append((theirs, row["verdict"], row))
     if not pairs:
         return None
-    differ = [(seed, ours, row) for seed, ours, row in pairs if seed != ours]
-    lines = [f"{len(pairs) - len(differ)} of {len(pairs)} verdicts agree with the seed."]
-    for seed, ours, row in differ:
+    differ = [(theirs, ours, row) for theirs, ours, row in pairs if theirs != ours]
+    lines = [f"{len(pairs) - len(differ)} of {len(pairs)} verdicts agree with the source document."]
+    for theirs, ours, row in differ:
         where = ", ".join(f"{key} {row[key]}" for key in ("integrator", "k", "setting",
                                                           "n_steps") if key in row)
-        lines.append(f"- {where}: seed {seed!r}, ours {ours!r}")
+        lines.append(f"- {where}: document {theirs!r}, ours {ours!r}")
     return "\n".join(lines)
 
 
@@ -128,21 +139,22 @@ def alt_text(caption: str) -> str:
 
 
 def figure_section(number: int, figure: Figure) -> str:
-    """One figure's subsection: caption, the seed's figure or verdict, ours (what the run
-    measured, and the PNG), the difference."""
+    """One figure's subsection: caption, the source document's figure or verdict, ours (what
+    the run measured, and the PNG), the difference."""
     spec = figure.spec
     return "\n".join([f'<a id="{figure_anchor(spec)}"></a>', "",
                       f"### Figure {number}: {spec.caption}", "",
-                      f"**Seed.** {spec.seed}", "", f"**Ours.** {figure.ours}", "",
+                      f"**Source document.** {spec.seed}", "", f"**Ours.** {figure.ours}", "",
                       f"![{alt_text(spec.caption)}]({spec.file})", "",
                       f"**Difference.** {figure.difference}", ""])
 
 
 def section_text(section: Section, result: SectionResult, first_figure: int = 1) -> str:
-    """One section of the page: title, command, seed, ours, the difference, the files
+    """One section of the page: title, command, the source document's part, ours, the
+    difference, the files
     its run wrote, then the study's figure subsections numbered from ``first_figure``."""
     lines = [f"## {section.title}", "", f"`{result.command}`", "",
-             f"**Seed.** {section.seed}", ""]
+             f"**Source document.** {section.seed}", ""]
     if not result.ok:
         lines += ["**Ours.** FAILED:", "", output_block(result.errors), ""]
     else:
@@ -150,7 +162,7 @@ def section_text(section: Section, result: SectionResult, first_figure: int = 1)
         agreement = verdict_agreement(result.output)
         difference = "\n".join(part for part in (agreement, section.method) if part)
         lines += [f"**Difference.** "
-                  f"{difference or 'Not computed: read ours against the seed line above.'}", ""]
+                  f"{difference or 'Not computed: read ours against the source document line above.'}", ""]
         lines += [f"![{name}]({name})" for name in section.files]
     if result.figure_error is not None:
         lines += ["", "**Figures.** FAILED:", "", f"```\n{result.figure_error.strip()}\n```"]
@@ -169,19 +181,42 @@ def page_figures(sections: Sequence[Section], results: Sequence[SectionResult]) 
     return files
 
 
+#: The anchor of the ledger's page.
+LEDGER_ANCHOR = "ledger"
+
+
+def ledger_page(results: Sequence[SectionResult]) -> list[str]:
+    """The ledger as the page's first part: what it is, the counts per document and verdict,
+    every row; a row's figure links to its subsection where this report drew it."""
+    anchors = {Path(figure.spec.file).stem: figure_anchor(figure.spec)
+               for result in results for figure in result.figures}
+
+    def link(name: str) -> str | None:
+        return f"[{name}](#{anchors[name]})" if name in anchors else None
+    rows = ledger.load_ledger()
+    return [f'<a id="{LEDGER_ANCHOR}"></a>', "", "## The source-document ledger", "",
+            f"Every figure, table and checkable claim of the four source documents ({len(rows)} "
+            "rows): the document's value, ours, and the verdict (agree; differs-explained, with "
+            "the reason; tool-specific, nothing of ours to compare), with the test that asserts "
+            "our value (`youbot-dynamics study ledger`).", "",
+            ledger.text(rows, link), ""]
+
+
 def page_head(sections: Sequence[Section], results: Sequence[SectionResult], full: bool,
               total_time: float) -> list[str]:
     """The page's title, summary line, contents and list of figures."""
     failed = [r.name for r in results if r.failed]
     figures = [figure for result in results for figure in result.figures]
-    return ["# youbot_dynamics: the seed studies side by side", "",
-            f"{'Full (the seed sizes)' if full else 'Short'} form; "
+    form = "Full (the source documents' sizes)" if full else "Short"
+    return ["# youbot_dynamics: the source documents' studies side by side", "",
+            f"{form} form; "
             f"{sum(r.ok for r in results)} studies ran, "
             f"{len(failed)} failed{' (' + ', '.join(failed) + ')' if failed else ''}; "
             f"{len(page_figures(sections, results))} figures; wall time "
             f"{total_time:.0f} s against "
             f"{sum(r.wall_time + r.figure_time for r in results):.0f} s of the studies' own "
-            f"run times added up.", "", "## Contents", "",
+            f"run times added up.", "", *ledger_page(results), "## Contents", "",
+            f"- [The source-document ledger](#{LEDGER_ANCHOR})",
             *(f"- [{s.title}](#{s.name})" for s in sections), "", "## Figures", "",
             *(f"{k}. [{figure.spec.file}](#{figure_anchor(figure.spec)}): "
               f"{figure.spec.caption}" for k, figure in enumerate(figures, start=1)),

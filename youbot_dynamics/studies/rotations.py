@@ -1,4 +1,4 @@
-"""Rotations study (seed 000, item 1; benchmarks.md section 7): three orientation states of
+"""Rotations study (document 000, section 1; benchmarks.md section 7): three orientation states of
 a torque-free rigid body, compared on the same Euler equations.
 
 The body: principal inertia J = diag(J1, J2, J3) (kg m^2), body angular velocity w (rad/s,
@@ -247,7 +247,7 @@ SPIN_WOBBLES = (0.0, 1e-3, 1e-2, 0.2, 1.0)
 
 def spin_wobble_sweep(integrator: str = "rk45", tol: float = 1e-8,
                       wobbles: tuple[float, ...] = SPIN_WOBBLES) -> list[dict]:
-    """The seed's claim that Cardan angles take larger steps when the body turns mostly
+    """Document 000's claim that Cardan angles take larger steps when the body turns mostly
     about one axis, measured: the ``spin`` run with each wobble, fixed Cardan against the
     quaternion (steps, evaluations, attitude error)."""
     spin = RUNS["spin"]

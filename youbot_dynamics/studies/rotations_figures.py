@@ -1,4 +1,4 @@
-"""Figures of the rotations study (seed 000 item 1; studies/rotations.py): one PNG per
+"""Figures of the rotations study (document 000 section 1; studies/rotations.py): one PNG per
 rotation run (attitude error against the closed-form top in rad, middle Cardan angle in
 rad, |q| drift), and Cardan's steps against the quaternion's as the spin loses its wobble.
 """
@@ -20,15 +20,17 @@ ROTATION_RUNS = ("spin", "tumble", "top")
 
 def plot_rotations(results: list[RotationResult], path: str) -> None:
     """PNG (matplotlib, Agg): per run, the attitude error against the closed form (log
-    scale) of each formulation, and the middle angle of the Cardan formulations."""
+    scale) of each formulation, and the middle angle of the Cardan formulations; legends
+    beside the axes, clear of the curves."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     runs = list(dict.fromkeys(result.run for result in results))
-    figure, axes = plt.subplots(2, len(runs), figsize=(5 * len(runs), 7), squeeze=False)
+    figure, axes = plt.subplots(2, len(runs), figsize=(7.5 * len(runs), 7), squeeze=False)
     for column, name in enumerate(runs):
         top, bottom = axes[0, column], axes[1, column]
+        extra = []
         for result in (r for r in results if r.run == name):
             run = RUNS[name]
             inertia = np.array(run.inertia, dtype=float)
@@ -43,10 +45,9 @@ def plot_rotations(results: list[RotationResult], path: str) -> None:
                             linewidth=0.9)
             if result.quaternion_norm is not None:
                 drift = bottom.twinx()
-                drift.plot(result.t, result.quaternion_norm - 1.0, color="tab:green",
-                           label="quaternion |q| - 1 (right)", linewidth=0.9)
-                drift.set_ylabel("|q| - 1")
-                drift.legend(fontsize=7, loc="lower right")
+                extra += drift.plot(result.t, result.quaternion_norm - 1.0, color="tab:green",
+                                    label="quaternion |q| - 1 (right axis)", linewidth=0.9)
+                drift.set_ylabel("|q| - 1 (dimensionless)")
         for level in (SWITCH_ANGLE, -SWITCH_ANGLE, math.pi / 2, -math.pi / 2):
             bottom.axhline(level, color="grey", linewidth=0.5,
                            linestyle=":" if abs(level) == SWITCH_ANGLE else "--")
@@ -54,11 +55,14 @@ def plot_rotations(results: list[RotationResult], path: str) -> None:
         top.set_ylabel("attitude error vs closed form (rad)")
         bottom.set_ylabel("middle Cardan angle a2 (rad)")
         bottom.set_xlabel("t (s)")
-        for axis in (top, bottom):
+        for axis, more in ((top, []), (bottom, extra)):
             axis.grid(True, alpha=0.3)
-            axis.legend(fontsize=7, loc="upper left")
+            handles, labels = axis.get_legend_handles_labels()
+            handles += more
+            axis.legend(handles, labels + [h.get_label() for h in more], fontsize=7,
+                        loc="upper left", bbox_to_anchor=(1.12, 1.0), borderaxespad=0.0)
     figure.tight_layout()
-    figure.savefig(path, dpi=110)
+    figure.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(figure)
 
 
@@ -101,7 +105,7 @@ def draw_rotations(result: RotationsStudy | None, out: Path,
         "steps cardan / quaternion: " + ", ".join(
             f"wobble {row['wobble']:g}: {row['cardan_steps']} / {row['quaternion_steps']}"
             for row in sweep),
-        "Seed: Cardan angles take larger steps when the body turns mostly about one axis. "
+        "Document 000: Cardan angles take larger steps when the body turns mostly about one axis. "
         + ("Ours confirms it for the pure spin" if pure["cardan_steps"] < pure["quaternion_steps"]
            else "Ours does not show it even for the pure spin")
         + f" ({pure['cardan_steps']} against {pure['quaternion_steps']} steps); the ratio "
@@ -113,7 +117,7 @@ def draw_rotations(result: RotationsStudy | None, out: Path,
 
 def _spin_difference(results) -> str:
     by = {r.formulation: r for r in results}
-    return ("Seed: Cardan is nearly linear here, so it should step larger. Ours: "
+    return ("Document 000: Cardan is nearly linear here, so it should step larger. Ours: "
             f"{by['cardan'].stats.steps} Cardan steps against {by['quaternion'].stats.steps} "
             "quaternion steps at this wobble (see the sweep figure).")
 
@@ -124,7 +128,7 @@ def _tumble_difference(results) -> str:
     verdict = (f"failed ({fixed.failure})" if fixed.failure else
                f"crawled: {fixed.stats.steps} steps against {by['quaternion'].stats.steps} "
                f"for the quaternion, attitude error {fixed.errors['attitude']:.2g} rad")
-    return (f"Seed: the fixed sequence fails at gimbal lock, the adaptive switch and the "
+    return (f"Document 000: the fixed sequence fails at gimbal lock, the adaptive switch and the "
             f"quaternion do not. Ours: fixed x-y-z {verdict}; adaptive "
             f"{by['cardan_adaptive'].switches} switches, {by['cardan_adaptive'].stats.steps} "
             "steps.")
@@ -132,7 +136,7 @@ def _tumble_difference(results) -> str:
 
 def _top_difference(results) -> str:
     worst = max(r.errors["attitude"] for r in results)
-    return (f"No seed figure: all three formulations against the closed form, worst "
+    return (f"No document figure: all three formulations against the closed form, worst "
             f"attitude error {worst:.2g} rad.")
 
 
@@ -142,12 +146,12 @@ ROTATION_DIFFERENCE = {"spin": _spin_difference, "tumble": _tumble_difference,
 
 ROTATIONS_SET = FigureSet("rotations", specs(
     ("rotations_spin.png", "Spin about one axis: attitude error and middle angle of Cardan, "
-     "adaptive Cardan, quaternion", "Seed: Cardan takes larger steps here."),
+     "adaptive Cardan, quaternion", "Document 000: Cardan takes larger steps here."),
     ("rotations_tumble.png", "Tumbling through gimbal lock: attitude error and middle angle",
-     "Seed: the fixed sequence fails at gimbal lock; adaptive and quaternion do not."),
+     "Document 000: the fixed sequence fails at gimbal lock; adaptive and quaternion do not."),
     ("rotations_top.png", "Nutating top against its closed form: attitude error, middle "
-     "angle, |q| drift", "Not a seed figure: the closed-form check."),
+     "angle, |q| drift", "Not a document figure: the closed-form check."),
     ("rotations_spin_steps.png", "Spin with less and less wobble: Cardan steps against "
-     "quaternion steps", "The seed's claim about step sizes, as a curve."),
+     "quaternion steps", "Document 000's claim about step sizes, as a curve."),
 ), draw_rotations)
 

@@ -4,7 +4,7 @@ matching, block lower triangular (BLT) sorting and Pantelides' index reduction.
 An equation system is a list of residuals (sympy expressions = 0) in unknown functions of
 time x(t) and their derivatives; symbols that are not functions of t are parameters. A
 *variable* is one function at one derivative order (x, x', x'', ...). Numbering: equations
-and variables are 0-based in the code; everything printed (and the seed's lists in
+and variables are 0-based in the code; everything printed (and document 000's lists in
 benchmarks.md section 6) counts from 1, equations named f1, f2, ... in their given order.
 
 - :func:`incidence` / :func:`incidence_graph`: which variables each equation contains, and
@@ -103,6 +103,42 @@ def maximum_matching(equation_vars: Sequence[Iterable[int]],
     graph.add_edges_from((i, m + j) for i, vs in enumerate(restricted) for j in vs)
     matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=range(m))
     return {node - m: partner for node, partner in matching.items() if node >= m}
+
+
+def augmenting_path_matching(equation_vars: Sequence[Sequence[int]], unknowns: Iterable[int],
+                             last_first: bool = False) -> dict[int, int]:
+    """A maximum matching variable -> equation by Pantelides' AUGMENTPATH (depth first):
+    equations in order, each first taking a free variable, else re-routing an assigned one;
+    each equation's variables scanned first to last, or last to first if ``last_first``.
+    The order decides which of several perfect matchings comes out."""
+    allowed = set(unknowns)
+    assign: dict[int, int] = {}
+
+    def augment(i: int, visited: set[int]) -> bool:
+        variables = [j for j in equation_vars[i] if j in allowed]
+        ordered = variables[::-1] if last_first else variables
+        for j in ordered:
+            if j not in assign:
+                assign[j] = i
+                return True
+        for j in ordered:
+            if j not in visited:
+                visited.add(j)
+                if augment(assign[j], visited):
+                    assign[j] = i
+                    return True
+        return False
+    for i in range(len(equation_vars)):
+        augment(i, set())
+    return assign
+
+
+def is_perfect_matching(equation_vars: Sequence[Iterable[int]], assign: Sequence[int]) -> bool:
+    """Whether an ``assign`` list (variable j -> 1-based equation, 0 = none) matches every
+    equation once, each to a variable it contains."""
+    pairs = [(j, i - 1) for j, i in enumerate(assign) if i]
+    return (sorted(i for _, i in pairs) == list(range(len(equation_vars)))
+            and all(j in equation_vars[i] for j, i in pairs))
 
 
 def block_lower_triangular(equation_vars: Sequence[Iterable[int]],
@@ -276,17 +312,20 @@ def pantelides(equations: Sequence[sp.Expr], t: sp.Symbol,
     return PantelidesResult(equations, eq_names, variables, eq_vars, A, B, assign, steps)
 
 
-#: The seed's low-pass filter as a bipartite graph: equation i lists its variables (1-based,
-#: as in benchmarks.md section 6); variable 5 (the capacitor voltage, a state) is known.
+#: Document 000's low-pass filter as a bipartite graph: equation i lists its variables
+#: (1-based, as in benchmarks.md section 6); variable 5 (the capacitor voltage, a state) is
+#: known. Its ModiaBase.matching result and BLT blocks as it prints them.
 LOWPASS_INCIDENCE = ((1, 2, 4), (1, 7), (3, 4), (3, 7), (6, 7), (2,))
 LOWPASS_KNOWN = (5,)
+LOWPASS_DOCUMENT_ASSIGN = (2, 6, 3, 1, 0, 5, 4)
+LOWPASS_DOCUMENT_BLOCKS = ((6,), (2, 4, 3, 1), (5,))
 
 
 PENDULUM_FUNCTIONS = ("x", "y", "u", "v", "lambda")
 
 
 def cartesian_pendulum_equations(t: sp.Symbol) -> tuple[list[sp.Expr], list[str]]:
-    """The seed's pendulum in Cartesian coordinates (m = 1, L = l^2): residuals
+    """Document 000's pendulum in Cartesian coordinates (m = 1, L = l^2): residuals
     x' - u, y' - v, u' - lambda x, v' - lambda y + g, x^2 + y^2 - L (f1..f5), in the
     unknown functions PENDULUM_FUNCTIONS of t."""
     x, y, u, v, lam = (sp.Function(name)(t) for name in PENDULUM_FUNCTIONS)
@@ -344,9 +383,36 @@ def structure_report(example: str) -> dict:
     return pantelides_report(example)
 
 
+def assign_list(matching: dict[int, int], n_variables: int) -> list[int]:
+    """A matching variable -> equation as ModiaBase's assign list (1-based, 0 = none)."""
+    return [matching[j] + 1 if j in matching else 0 for j in range(n_variables)]
+
+
+def document_assign_report(equation_vars: list[set[int]], unknowns: list[int],
+                           n_variables: int) -> dict:
+    """Document 000's low-pass assign list checked (a perfect matching? its blocks) and the
+    lists AUGMENTPATH gives in either variable order."""
+    document = {j: i - 1 for j, i in enumerate(LOWPASS_DOCUMENT_ASSIGN) if i}
+    orders = {"first to last": False, "last to first": True}
+    return {
+        "document_assign": list(LOWPASS_DOCUMENT_ASSIGN),
+        "document_assign_is_perfect_matching": is_perfect_matching(equation_vars,
+                                                                   LOWPASS_DOCUMENT_ASSIGN),
+        "document_assign_blocks": [[i + 1 for i in block]
+                                   for block in block_lower_triangular(equation_vars, document)],
+        "augmenting_path_assign": {
+            order: assign_list(augmenting_path_matching(equation_vars, unknowns, last_first),
+                               n_variables) for order, last_first in orders.items()},
+    }
+
+
 def lowpass_report() -> dict:
-    """The low-pass filter's incidence (seed 000 item 4): the matching as the seed's
-    ``assign`` list (variable -> equation, 0 = known) and the BLT blocks."""
+    """The low-pass filter's incidence (document 000 section 3): our matching as ModiaBase's
+    ``assign`` list (variable -> equation, 0 = known), the BLT blocks, and the document's
+    assign list checked: a perfect matching too, with the same blocks. The loop f1-f4 in
+    variables 1, 3, 4, 7 is one 8-cycle of the bipartite graph, which has exactly two
+    perfect matchings; AUGMENTPATH scanning each equation's variables first to last gives
+    ours, last to first the document's."""
     example = "lowpass"
     equation_vars = [{j - 1 for j in vs} for vs in LOWPASS_INCIDENCE]
     n_variables = max(max(vs) for vs in LOWPASS_INCIDENCE)
@@ -360,8 +426,9 @@ def lowpass_report() -> dict:
         "known": list(LOWPASS_KNOWN),
         "equations": [f"f{i + 1}" for i in range(len(equation_vars))],
         "incidence": incidence_rows(equation_vars, n_variables),
-        "assign": [matching[j] + 1 if j in matching else 0 for j in range(n_variables)],
+        "assign": assign_list(matching, n_variables),
         "perfect_matching": len(matching) == len(equation_vars),
+        **document_assign_report(equation_vars, unknowns, n_variables),
         "blocks": [[i + 1 for i in block] for block in blocks],
         "blt": blt_view(equation_vars, matching, blocks, names,
                         [str(j + 1) for j in range(n_variables)]),
@@ -447,10 +514,17 @@ def structure_text(report: dict) -> str:
 
 
 def matching_lines(report: dict) -> list[str]:
-    """The matching: the seed's assign list, or the highest derivatives' matching and the
-    equations it leaves unmatched."""
+    """The matching as ModiaBase's assign list with the document's beside it, or the
+    highest derivatives' matching and the equations it leaves unmatched."""
     if "assign" in report:
-        return [f"matching (variable -> equation, 0 = known): assign = {report['assign']}"]
+        orders = report["augmenting_path_assign"]
+        return [f"matching (variable -> equation, 0 = known): assign = {report['assign']}",
+                f"document 000's assign = {report['document_assign']}: perfect matching "
+                f"{report['document_assign_is_perfect_matching']}, blocks "
+                f"{report['document_assign_blocks']}",
+                "both are perfect matchings of the loop f1-f4 (an 8-cycle has two); "
+                + "; ".join(f"AUGMENTPATH scanning variables {order}: {found}"
+                            for order, found in orders.items())]
     return ["matching of the highest derivatives: " + ", ".join(
                 f"{v} -> {e}" for v, e in report["initial_matching"].items()),
             f"unmatched equations: {', '.join(report['unmatched_equations']) or 'none'}"]

@@ -1,4 +1,4 @@
-"""The uncertainty study (seed 000, item 5): the damped pendulum with uncertain parameters,
+"""The uncertainty study (document 000, section 3): the damped pendulum with uncertain parameters,
 L = 0.8 +- 0.2 m, m = 1.0 +- 0.2 kg, d = 0.5 +- 0.2 N m s/rad (independent, one standard
 deviation), g = 9.81 m/s^2, phi(0) = 1.57 rad, w(0) = 0:
 
@@ -14,7 +14,7 @@ Two propagations of the same fixed-step RK4 map (h = STEP):
   spins, which no physical pendulum does), integrated side by side as arrays.
 
 Where the two standard deviations part (accuracy/propagation.py's FAILURE_RATIO and
-FAILURE_FLOOR), linearisation has failed. Measured (N = 1000, seed 0): they agree to the first swing's end and part at
+FAILURE_FLOOR), linearisation has failed. Measured (N = 1000, random seed 0): they agree to the first swing's end and part at
 t = 0.85 s; then the samples dephase (the period depends on L) and the linear sigma
 oscillates with the nominal swing, up to 2.0x the Monte Carlo's near t = 5 s, down to
 0.35x at t = 10 s (0.049 rad against 0.142 rad). Relative to each other they differ from
@@ -182,7 +182,7 @@ def run(config: UncertaintyConfig) -> UncertaintyResult:
 
 
 def as_json(result: UncertaintyResult) -> dict:
-    """The comparison's figures with the samples and their seed."""
+    """The comparison's figures with the samples and their random seed."""
     return {**result.figures, "samples": result.config.samples, "seed": result.config.seed}
 
 

@@ -1,4 +1,4 @@
-"""Figures of the uncertainty study (seed 000 item 5; studies/uncertain_pendulum.py): the
+"""Figures of the uncertainty study (document 000 section 3; studies/uncertain_pendulum.py): the
 uncertain pendulum's phi (rad) with both +-sigma bands, the sample histogram at the end
 and the ratio of the two standard deviations over time (s).
 """
@@ -28,7 +28,7 @@ def plot_band(result: UncertaintyResult, path: str) -> None:
 def draw_uncertainty(result: UncertaintyResult | None, out: Path,
                      full: bool) -> dict[str, tuple[str, str]]:
     """The figures of UNCERTAINTY_SET, from ``result`` when it is the study at the
-    report's size (SAMPLES_SHORT, or SAMPLES_FULL when ``full``, seed 0 over T_END), else
+    report's size (SAMPLES_SHORT, or SAMPLES_FULL when ``full``, random seed 0 over T_END), else
     from a run of that size."""
     config = UncertaintyConfig(samples=SAMPLES_FULL if full else SAMPLES_SHORT, workers=0)
     if result is None or (result.config.samples, result.config.seed, result.config.duration) \
@@ -43,7 +43,7 @@ def draw_uncertainty(result: UncertaintyResult | None, out: Path,
         f"at t = {figures['t_end']:g} s the 2-sigma band is {figures['band_width_linear_end']:.3g}"
         f" rad wide by linear propagation, {figures['band_width_monte_carlo_end']:.3g} rad by "
         f"{samples} Monte Carlo samples",
-        "The seed draws the linear band only (Measurements.jl); the Monte Carlo shows where it "
+        "Document 000 draws the linear band only (Measurements.jl); the Monte Carlo shows where it "
         + ("holds throughout." if fails is None else f"fails: first at t = {fails:g} s."))}
     figure, axis = panels(size=(6.5, 3.8))
     end = phi[-1]
@@ -60,7 +60,7 @@ def draw_uncertainty(result: UncertaintyResult | None, out: Path,
     drawn["uncertainty_histogram.png"] = (
         f"samples: mean {end.mean():.3g} rad, sigma {end.std(ddof=1):.3g} rad; linear: mean "
         f"{mean:.3g} rad, sigma {sigma:.3g} rad",
-        "No seed figure: the samples' spread at the end is not the linear normal.")
+        "No document figure: the samples' spread at the end is not the linear normal.")
     figure, axis = panels(size=(7.0, 3.4))
     ratio = np.divide(linear.sigma, sampled.sigma, out=np.ones_like(linear.sigma),
                       where=sampled.sigma > 0)
@@ -82,10 +82,10 @@ def draw_uncertainty(result: UncertaintyResult | None, out: Path,
 
 UNCERTAINTY_SET = FigureSet("uncertainty", specs(
     ("uncertainty.png", "Uncertain damped pendulum: phi with the linear and Monte Carlo "
-     "+-sigma bands (two panels, as the seed's band plus the sigmas)",
+     "+-sigma bands (two panels, as the document's band plus the sigmas)",
      "Measurements.jl's band of phi(t)."),
     ("uncertainty_histogram.png", "Uncertain damped pendulum: phi at t = 10 s, samples "
-     "against the linear normal", "No seed figure."),
+     "against the linear normal", "No document figure."),
     ("uncertainty_sigma_ratio.png", "Uncertain damped pendulum: sigma linear / sigma Monte "
-     "Carlo over time", "No seed figure."),
+     "Carlo over time", "No document figure."),
 ), draw_uncertainty)

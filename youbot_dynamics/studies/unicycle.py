@@ -1,4 +1,4 @@
-"""The differential drive (unicycle), the seed's mobile-robot system, as equations.
+"""The differential drive (unicycle), document 002's mobile-robot system, as equations.
 
 Two driven wheels of radius r on one axle, a distance 2 d apart; a body of mass m and yaw
 inertia I_z about the axle's midpoint, which is also its centre of mass. The wheels roll
@@ -22,9 +22,11 @@ exp(-b t / m), so from rest v(t) = (F/b)(1 - exp(-b t / m)); likewise omega(t) w
 and I_z. Equal torques from rest with omega0 = 0 drive a straight line along theta0; opposite
 torques from rest (F = 0, v0 = 0) spin the robot in place: x and y stay constant.
 
-Parameters (:class:`Unicycle`): the seed sheet names the model but gives no figures, so the
-defaults are a stated small robot: m = 10 kg, I_z = 0.5 kg m^2, r = 0.05 m, d = 0.15 m,
-b = 5 N s/m, beta = 0.5 N m s/rad.
+Parameters (:class:`Unicycle`): the defaults are document 002's ``UnicycleDynamics``: m = 10 kg,
+I_z = 0.5 kg m^2, r = 0.05 m, wheel base L = 0.3 m (d = L / 2 = 0.15 m), b = 1 N s/m
+(``friction_linear``), beta = 0.5 N m s/rad (``friction_angular``). Its equations are these
+with M = (tau_r - tau_l) L / (2 r). Other parameters (the tests' second run, b = 5 N s/m)
+are given explicitly.
 """
 from __future__ import annotations
 
@@ -59,7 +61,7 @@ class Unicycle:
     yaw_inertia: float = 0.5
     wheel_radius: float = 0.05
     half_track: float = 0.15
-    linear_friction: float = 5.0
+    linear_friction: float = 1.0
     angular_friction: float = 0.5
 
     def __post_init__(self) -> None:
