@@ -46,8 +46,9 @@ test-all: PYTEST_ARGS =
 test-all: export HYPOTHESIS_PROFILE = thorough
 test-all: test
 
-# The summary table of the speed figures (bench/results.json, MuJoCo's rows included);
-# bench-all runs every script.
+# The summary table of the speed figures (bench/results.json, MuJoCo's rows included): CPU
+# time, ratios and verdicts from it, the load average printed with the table. bench-all runs
+# every script; `BENCH_SMOKE=1 make bench-all` runs each in its tiny form (as test/bench does).
 bench: $(STAMP)
 	$(PY) -m pip install --quiet -r requirements-bench.txt -c $(LOCK)
 	$(PY) bench/summary.py

@@ -7,34 +7,32 @@
    best of REPEATS over CALLS calls, and a cvode_bdf run over 10 s with each (steps,
    right-hand-side evaluations, wall time).
 
-Run: python bench/bench_pipeline.py      (about 15 s)
+Times are CPU time (bench/timing.py); the cvode_bdf runs report their own wall time.
+Run: python bench/bench_pipeline.py      (about 15 s; BENCH_SMOKE=1: one repeat, 20 calls, 0.1 s)
 """
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from youbot_dynamics.integrate.integrators import integrate, tolerances_from_tol
-from youbot_dynamics.studies.equations import EXAMPLE_MODELS, modia_pendulum
-from youbot_dynamics.studies.pipeline import run_pipeline
-from youbot_dynamics.studies.uncertain_pendulum import pendulum_rhs
+from timing import best_per_call, sized  # noqa: E402
+from youbot_dynamics.integrate.integrators import integrate, tolerances_from_tol  # noqa: E402
+from youbot_dynamics.studies.equations import EXAMPLE_MODELS, modia_pendulum  # noqa: E402
+from youbot_dynamics.studies.pipeline import run_pipeline  # noqa: E402
+from youbot_dynamics.studies.uncertain_pendulum import pendulum_rhs  # noqa: E402
 
-REPEATS, CALLS = 3, 20000
+REPEATS, CALLS = sized((3, 20000), (1, 20))
+SPAN = sized(10.0, 0.1)  # s of the cvode_bdf runs
 
 
 def best_time(function, repeats: int = REPEATS) -> float:
-    """The shortest wall time (s) of ``repeats`` calls of ``function()``."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return min(times)
+    """The least CPU time (s, the measuring thread's) of ``repeats`` calls of ``function()``."""
+    return best_per_call([function], 1, repeats)[0]
 
 
 def main() -> None:
@@ -53,8 +51,8 @@ def main() -> None:
     for label, rhs in (("generated", generated.rhs), ("hand-written", hand_written)):
         seconds = best_time(lambda: [rhs(0.0, state) for _ in range(CALLS)])
         print(f"  {label:<13s} {seconds / CALLS * 1e6:6.2f} us")
-    print("cvode_bdf over 10 s at tol 1e-6")
-    t_eval = np.linspace(0.0, 10.0, 201)
+    print(f"cvode_bdf over {SPAN:g} s at tol 1e-6")
+    t_eval = np.linspace(0.0, SPAN, 201)
     rtol, atol = tolerances_from_tol(1e-6, state)
     for label, rhs in (("generated", generated.rhs), ("hand-written", hand_written)):
         stats = integrate(rhs, state, t_eval, "cvode_bdf", rtol=rtol, atol=atol).stats

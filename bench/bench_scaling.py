@@ -120,7 +120,7 @@ def scaling(dofs: tuple[int, ...] = DOFS, calls: int = 300, repeat: int = 15) ->
                 t_ours, t_pin = best_per_call([ours, theirs], 1, min(repeat, 5))
             else:  # loops as short as with 5 joints (fewer preemptions on a busy machine), more of them
                 short = max(10, calls * DOFS[0] // n)
-                t_ours, t_pin = best_per_call([ours, theirs], short, min(200, repeat * calls // short))
+                t_ours, t_pin = best_per_call([ours, theirs], short, max(1, min(200, repeat * calls // short)))
             results[name]["ours_us"].append(t_ours * 1e6)
             results[name]["pinocchio_us"].append(t_pin * 1e6)
     for figure in results.values():

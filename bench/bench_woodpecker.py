@@ -3,6 +3,7 @@ integrator, side by side with the seed's Assimulo (IDA) and Dymola figures.
 
 Run: python bench/bench_woodpecker.py [--rtol 1e-6] [--repeat 3]. Prints the best of
 ``repeat`` runs (CPU time by time.process_time around the whole hybrid run). Goal: < 0.1 s.
+BENCH_SMOKE=1: rk45 and ida, one run each.
 """
 from __future__ import annotations
 
@@ -12,17 +13,19 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a source checkout
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import sized  # noqa: E402
 
 from youbot_dynamics.studies.stats_table import stats_table  # noqa: E402
 from youbot_dynamics.studies.woodpecker import BEAK, SEED_FIGURES, Woodpecker  # noqa: E402
 
-ADAPTIVE = ("rk45", "dop853", "radau", "bdf", "cvode_bdf", "cvode_adams", "ida")
+ADAPTIVE = sized(("rk45", "dop853", "radau", "bdf", "cvode_bdf", "cvode_adams", "ida"), ("rk45", "ida"))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rtol", type=float, default=1e-6)
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--repeat", type=int, default=sized(3, 1))
     args = parser.parse_args()
     woodpecker = Woodpecker()
     rows, hits = {}, {}

@@ -1,6 +1,6 @@
-"""The equal-accuracy helpers of bench/bench_contact_mujoco.py (no MuJoCo needed): the wall
-time at a target error on log-log lines with a known answer, and the two error measures
-against closed forms."""
+"""The matched-accuracy helpers of bench/bench_contact_mujoco.py (no MuJoCo needed): each
+side's cheapest setting that holds a target, the robust choice (every finer step holds it
+too), the stability line, and the two error measures against closed forms."""
 from __future__ import annotations
 
 import math
@@ -12,34 +12,46 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 
-from bench_contact_mujoco import G, Run, rising_apex, slip, wall_at_error  # noqa: E402
+from bench_contact_mujoco import G, Run, cheapest, rising_apex, robust_choice, slip, stability  # noqa: E402
+from timing import Timing  # noqa: E402
 
 
-def first_order(method: str, steps: list[float], c: float = 2.0, k: float = 1e-3) -> list[Run]:
-    """A method with error c h and wall time k / h: at error e the wall time is k c / e."""
-    return [Run("x", method, f"h={h:g}", c * h, k / h) for h in steps]
+def runs(family: str, errors: dict[float, float], k: float = 1e-3) -> list[Run]:
+    """A family whose cost is k / step (s) and whose errors are given per step."""
+    return [Run("x", family, step, error, Timing(k / step, k / step)) for step, error in errors.items()]
 
 
-def test_wall_at_error_interpolates_on_the_log_log_line():
-    runs = first_order("a", [1e-2, 1e-3, 1e-4])
-    # target 5e-4 lies between h = 1e-3 (error 2e-3) and 1e-4 (2e-4): wall k c / e = 4 s
-    assert wall_at_error(runs, 5e-4) == pytest.approx(4.0, rel=1e-12)
-    # the cheapest run already meets it: its own wall time, nothing to interpolate against
-    assert wall_at_error(runs, 0.1) == pytest.approx(0.1, rel=1e-12)
-    assert wall_at_error(runs, 1e-5) is None
+#: not monotone in the step, as MuJoCo's apex error: 2 ms holds 1 %, 1 ms does not
+BUMPY = runs("bumpy", {5e-3: 12.0, 2e-3: -0.2, 1e-3: 5.7, 5e-4: 2.4})
+#: monotone: holds 1 % from 2.5 ms down
+STEADY = runs("steady", {5e-3: 1.4, 2.5e-3: 0.9, 1e-3: 0.3, 5e-4: 0.2}, k=2e-3)
 
 
-def test_wall_at_error_takes_the_cheapest_method_and_skips_sign_changes():
-    cheap = first_order("cheap", [1e-2, 1e-3, 1e-4], k=1e-4)
-    # the run meeting 1e-3 follows a miss of the other sign: its wall time, not interpolated
-    crossing = [Run("x", "crossing", "1", -5e-3, 1e-3), Run("x", "crossing", "2", 5e-4, 2e-3)]
-    assert wall_at_error(first_order("dear", [1e-2, 1e-3, 1e-4]) + cheap, 5e-4) == pytest.approx(0.4, rel=1e-12)
-    assert wall_at_error(crossing, 1e-3) == 2e-3
-    assert wall_at_error(cheap + crossing, 1e-3) == 2e-3  # cheap would need k c / e = 0.2 s
-    # a diverged run (infinite error, no wall time) never meets a target nor bounds one
-    diverged = Run("x", "cheap", "h=0.05", math.inf, math.nan)
-    assert wall_at_error([diverged], 1.0) is None
-    assert wall_at_error([diverged, *cheap], 5e-4) == pytest.approx(0.4, rel=1e-12)
+def test_cheapest_takes_the_least_cpu_time_that_holds_the_target():
+    # bumpy at 2 ms costs 0.5 s, steady at 2.5 ms 0.8 s: bumpy's lucky step wins
+    assert cheapest(BUMPY + STEADY, 1.0) is BUMPY[1]
+    assert cheapest(STEADY, 1.0) is STEADY[1]
+    assert cheapest(BUMPY, 0.1) is None
+
+
+def test_the_robust_choice_needs_every_finer_step_to_hold():
+    assert robust_choice(BUMPY + STEADY, 1.0) is STEADY[1]
+    assert robust_choice(BUMPY, 1.0) is None
+    assert robust_choice(BUMPY, 10.0) is BUMPY[1]  # 12 % at 5 ms misses: 2 ms and finer hold 10 %
+    # holding only at the finest step swept is no evidence: nothing finer was tried
+    assert robust_choice(runs("last", {1e-3: 3.0, 5e-4: 0.5}), 1.0) is None
+
+
+def test_diverged_runs_never_hold_a_target():
+    diverged = Run("x", "steady", 1e-2, math.inf, Timing(math.nan, math.nan))
+    assert cheapest([diverged], 1e9) is None
+    assert robust_choice([diverged, *STEADY], 1.0) is STEADY[1]
+
+
+def test_stability_names_the_neighbouring_steps():
+    line = stability(BUMPY, BUMPY[1], 1.0)
+    assert "dt=0.002: -0.2" in line and "dt=0.001: +5.7" in line and "dt=0.005: +12" in line
+    assert line.endswith("(0 of 2 hold)")
 
 
 def test_rising_apex_of_a_sampled_throw():

@@ -134,3 +134,40 @@ def test_delassus_drift_and_velocity_kernels_against_numpy():
     impulses, v_next = rng.normal(size=9), np.empty(nv)
     contact_stepper._velocity_after(v_free, mass_jt, impulses, v_next)
     np.testing.assert_allclose(v_next, v_free + inverse_mass @ jacobian.T @ impulses, rtol=1e-13)
+
+
+def test_delassus_kernel_on_a_sparse_jacobian_equals_the_dense_sums_to_the_bit():
+    """Points that touch a few dofs each (J mostly zero, as for N robots with a contact
+    each): the kernel sums over J's non-zero columns only; the dense sums over every column
+    in the same order (a plain Python loop here) give the same bits, since a zero column
+    adds +-0 to a partial sum."""
+    rng = np.random.default_rng(5)
+    nv, h = 24, 1e-3
+    root = rng.normal(size=(nv, nv))
+    upper = np.triu(root @ root.T + nv * np.eye(nv))
+    jacobian = np.zeros((6, nv))
+    jacobian[:3, 2:8] = rng.normal(size=(3, 6))  # point 0 moves dofs 2-7
+    jacobian[3:, 15:21] = rng.normal(size=(3, 6))  # point 1 moves dofs 15-20
+    jacobian[4, 17] = 0.0  # a zero inside a row's support
+    v_free, v = rng.normal(size=nv), rng.normal(size=nv)
+    gaps, restitutions = np.array([1e-4, -2e-4]), np.array([0.5, 0.9])
+    mass_jt, delassus, drift = np.empty((nv, 6)), np.empty((6, 6)), np.empty(6)
+    contact_stepper._delassus_and_drift(upper, jacobian, v_free, v, gaps, restitutions, h, -0.05, 0.2,
+                                        mass_jt, delassus, drift)
+    full = np.triu(upper) + np.triu(upper, 1).T
+    dense_mass_jt = np.array([[sum_in_order(full[a, b] * jacobian[i, b] for b in range(nv)) for i in range(6)]
+                              for a in range(nv)])
+    dense_delassus = np.array([[sum_in_order(jacobian[i, a] * dense_mass_jt[a, j] for a in range(nv))
+                                for j in range(6)] for i in range(6)])
+    dense_drift = np.array([sum_in_order(jacobian[i, a] * v_free[a] for a in range(nv)) for i in range(6)])
+    assert np.array_equal(mass_jt, dense_mass_jt)
+    assert np.array_equal(delassus, np.triu(dense_delassus) + np.triu(dense_delassus, 1).T)
+    assert np.array_equal(drift[[0, 1, 3, 4]], dense_drift[[0, 1, 3, 4]])
+
+
+def sum_in_order(terms) -> float:
+    """Left-to-right float sum from +0.0 (the kernels' order)."""
+    total = 0.0
+    for term in terms:
+        total += term
+    return total
