@@ -24,6 +24,8 @@ ARGV = {
     "bench_dynamics.py": ["--calls", "5", "--repeat", "1"],
     "bench_kinematics.py": ["--calls", "5", "--repeat", "1"],
     "bench_scaling.py": ["--calls", "5", "--repeat", "1", "--dofs", "5,10"],
+    "bench_error_estimate.py": ["--fast", "--case", "elastic_pendulum"],
+    "bench_node_error_estimate.py": ["--seconds", "0.05"],
 }
 #: the scripts whose smoke form is a test of its own below
 OWN_TEST = ("bench_node.py", "bench_node_inputs.py")
