@@ -22,7 +22,7 @@ Formulations (names as on the command line):
   integrator restarted from there.
 
 Error test. Higher-index variables must be kept out of IDA's local error test: lambda,
-w (and mu) for index 2 and GGL, and also v for index 3 (Hairer's choice; the seed's
+w (and mu) for index 2 and GGL, and also v for index 3 (Hairer's choice; document 001's
 Assimulo run excluded only w and lambda, but then IDA's first step, sized from
 |y0'| = |w0| ~ 1.4e4 in v's weights, collapses at t = 0). Radau IIA (integrate/radau_dae.py,
 ``radau5``) realises the exclusion as Hairer does, by index-dependent weights. On IDA,

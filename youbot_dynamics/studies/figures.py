@@ -2,12 +2,12 @@
 
 A *figure set* belongs to one study of the report (studies/report.py, whose catalogue lists
 the sets of every study): it declares its
-figures up front (:class:`FigureSpec`: PNG file name, caption, what the seed shows or
+figures up front (:class:`FigureSpec`: PNG file name, caption, what the document shows or
 says), and its function ``draw(result, out_dir, full) -> {file: (ours, difference)}``
 draws from the study's ``result`` (what its ``run(config)`` returned in the report; None:
 not run) where that holds what the figures need, runs the cases it lacks, writes every
 declared PNG into ``out_dir`` and says for each what our run measured and how that
-differs from the seed. ``full`` runs the seed's sizes; the default
+differs from the document. ``full`` runs the document's sizes; the default
 (short) form keeps every set to seconds. The declared list is what the report's page and
 its test enumerate, so a set that does not write one of its files is an error here, not a
 missing image on the page.
