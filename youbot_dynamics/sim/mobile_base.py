@@ -41,7 +41,6 @@ from youbot_dynamics.dynamics.mobile.mecanum import (MecanumBase, mecanum_base_f
                                                      wheel_speeds)
 from youbot_dynamics.dynamics.mobile.ramp import DEFAULT_A_MAX, TwistRamp
 from youbot_dynamics.dynamics.mobile.floor_kernel import roller_floor_force
-from youbot_dynamics.dynamics.mobile.wheel_floor import wheel_normal_forces
 from youbot_dynamics.dynamics.rigid_body import symmetrised
 from youbot_dynamics.model.robot import Robot, URDFDocument, keep_joints, robot_from_urdf
 from youbot_dynamics.scene.base import BaseSpec
@@ -162,7 +161,8 @@ class BaseModel:
         """Normal force (N) on each wheel: the static weight distribution of the robot's
         centre of mass (the root joint's subtree: free bodies left out) at configuration q."""
         pin.centerOfMass(plant, data, q, True)  # subtree centres of mass, each in its joint's frame
-        return wheel_normal_forces(self.mecanum, float(data.mass[1]), data.com[1], gravity=self.gravity)
+        # wheel_normal_forces without a load transfer (its checks hold by construction here)
+        return self.mecanum.support.loads(data.com[1][:2], float(data.mass[1]) * self.gravity)
 
     def floor_force(self, plant: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Generalised force (plant nv; N, N m) of the roller friction at the four contacts

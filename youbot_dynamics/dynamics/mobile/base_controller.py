@@ -61,7 +61,7 @@ class WheelSpeedPI:
         measured wheel speeds (rad/s) and the integral terms I (N m)."""
         error = wheel_speeds(self.base, twist_command) - np.asarray(speeds, dtype=float)
         raw = self.kp * error + np.asarray(integral, dtype=float)
-        tau = np.clip(raw, -self.torque_limit, self.torque_limit)
+        tau = np.minimum(np.maximum(raw, -self.torque_limit), self.torque_limit)  # np.clip's values, faster
         return tau, self.ki * error + (tau - raw) / self.tracking_time
 
     def step(self, twist_command: np.ndarray, speeds: np.ndarray, integral: np.ndarray,
