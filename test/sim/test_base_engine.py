@@ -231,3 +231,20 @@ def test_a_tipping_base_is_divergence_with_its_time():
     with pytest.raises(DivergenceError, match="tips over") as error:
         run(tipping)
     assert error.value.time == 0.0
+
+
+def test_wheel_torques_kept_result_answers_only_the_same_arguments():
+    """BaseModel.wheel_torques keeps its last result for the step's second ask (same t,
+    speeds, integral and twist command); another t, speed or integral gets the PI law afresh,
+    equal to WheelSpeedPI.torques on the commanded twist."""
+    base = compile(load_scene("mobile_pick")).base
+    reference = wheel_speeds(base.mecanum, base.command(0.5)[1])  # rad/s: small errors, below the limits
+    speeds, integral = reference + [0.01, -0.02, 0.005, 0.03], np.array([0.1, 0.0, -0.2, 0.3])
+    first = base.wheel_torques(0.5, speeds, integral)
+    assert base.wheel_torques(0.5, speeds.copy(), integral.copy()) is first
+    for t, s, i in ((0.6, speeds, integral), (0.5, speeds + 0.01, integral), (0.5, speeds, integral + 0.01)):
+        got = base.wheel_torques(t, s, i)
+        expected = base.pi.torques(base.command(t)[1], s, i)
+        assert got is not first and all(np.array_equal(a, b) for a, b in zip(got, expected))
+        # another speed or integral: another torque (kp 0.01 or 0.01 N m), not the kept one
+        assert t != 0.5 or not np.array_equal(got[0], first[0])

@@ -189,6 +189,7 @@ class ConstraintStepping:
         self._robot_q, self._q_block, self._v_block = slice(root, root + model.robot.nq), model.block("q"), \
             model.velocity_block
         self._bodies = (model.block("pose"), model.block("chart"), model.body_offset) if model.body_names else None
+        self._base_block = model.block("base")
 
     def _pack(self) -> np.ndarray:
         """``x`` with the stepper's q and v written in, in place: :meth:`advance` steps its own
@@ -196,8 +197,8 @@ class ConstraintStepping:
         model, x = self.model, self.x
         x[self._q_block] = self.q[self._robot_q]
         if model.base is not None:
-            root = self._robot_q.start
-            x[model.block("base")] = model.base.unwrapped_pose(self.q[:root], x[model.block("base")][2])
+            pose = self._base_block
+            x[pose] = model.base.unwrapped_pose(self.q[:self._robot_q.start], x[pose.stop - 1])
         x[self._v_block] = self.v
         if self._bodies is not None:
             pose, chart, offset = self._bodies
@@ -212,22 +213,22 @@ class ConstraintStepping:
         self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
         joints, friction, stepper, nv, moving = model.joint_velocities, model.friction, model.stepper, \
             model.plant.nv, model.nv > 0
+        base, integral, plant = model.base, model.block("wheel_i"), model.plant.model
+        wheels = None if base is None else np.arange(nv)[joints][base.wheels]  # the wheels' rates in v
         for i in range(1, count + 1):
             tau = np.zeros(nv)
             if moving:
                 tau[joints] = self.torque(self.t, self._pack())
                 if friction is not None:
                     friction.add_torque(tau[joints], self.v[joints], None, -1.0)
-            if model.base is not None:  # dynamic (a kinematic base refuses the stepper)
+            if base is not None:  # dynamic (a kinematic base refuses the stepper)
                 try:
-                    tau += model.base.floor_force(model.plant.model, self.data, self.q, self.v)
+                    tau += base.floor_force(plant, self.data, self.q, self.v)
                 except TipOverError as error:
                     raise DivergenceError(self.t, model.integrator.method, h, f"the base tips over: {error}") from None
-                integral = model.block("wheel_i")
                 if integral.stop > integral.start:  # the PI's integral terms, explicit Euler
-                    base = model.base
-                    self.x[integral] += h * base.wheel_torques(self.t, self.v[model.joint_velocities][base.wheels],
-                                                               self.x[integral], self.twist)[1]
+                    self.x[integral] += h * base.wheel_torques(self.t, self.v[wheels], self.x[integral],
+                                                               self.twist)[1]
             v_before = self.v
             self.q, self.v, report = stepper.step(self.data, self.q, self.v, tau, h)
             self.t = t_target if i == count else start + i * h

@@ -21,8 +21,8 @@ The dynamic base: each wheel's floor contact carries the normal load of the stat
 distribution of the robot's centre of mass (it moves with the arm;
 :func:`~youbot_dynamics.dynamics.mobile.wheel_floor.wheel_normal_forces`, the carried free
 bodies not counted, the acceleration's load transfer neglected), and the roller law
-(:func:`~youbot_dynamics.dynamics.mobile.wheel_floor.roller_forces`) acts on the contact
-point's slip: a force (Fx, Fy) at wheel i (hub at (x_i, y_i), base frame) is the
+(:func:`~youbot_dynamics.dynamics.mobile.wheel_floor.roller_forces`; in the step one compiled
+loop, :mod:`~youbot_dynamics.dynamics.mobile.floor_kernel`) acts on the contact point's slip: a force (Fx, Fy) at wheel i (hub at (x_i, y_i), base frame) is the
 generalised force (Fx, Fy, x_i Fy - y_i Fx) on the root and -r F . d_i on the wheel. The wheel
 torques come from the PI wheel-speed loop (:class:`~youbot_dynamics.dynamics.mobile
 .base_controller.WheelSpeedPI`), its integral terms part of the state.
@@ -30,7 +30,7 @@ torques come from the PI wheel-speed loop (:class:`~youbot_dynamics.dynamics.mob
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -40,8 +40,7 @@ from youbot_dynamics.dynamics.mobile.base_controller import WheelSpeedPI
 from youbot_dynamics.dynamics.mobile.mecanum import (MecanumBase, mecanum_base_from_robot,
                                                      wheel_speeds)
 from youbot_dynamics.dynamics.mobile.ramp import DEFAULT_A_MAX, TwistRamp
-from youbot_dynamics.dynamics.mobile.wheel_floor import (contact_slip_velocities, roller_forces,
-                                                         wheel_normal_forces, wheel_spin_torques)
+from youbot_dynamics.dynamics.mobile.floor_kernel import roller_floor_force
 from youbot_dynamics.dynamics.rigid_body import symmetrised
 from youbot_dynamics.model.robot import Robot, URDFDocument, keep_joints, robot_from_urdf
 from youbot_dynamics.scene.base import BaseSpec
@@ -89,6 +88,8 @@ class BaseModel:
     release: float
     gravity: float
     a_max: np.ndarray
+    #: (twist, (t, speeds, integral), result) of the last :meth:`wheel_torques` call
+    _last_wheel_torques: list = field(default_factory=list, init=False, repr=False)
 
     @classmethod
     def compile(cls, spec: BaseSpec, robot: Robot, plant_nv: int, gravity: np.ndarray) -> BaseModel:
@@ -160,7 +161,8 @@ class BaseModel:
         """Normal force (N) on each wheel: the static weight distribution of the robot's
         centre of mass (the root joint's subtree: free bodies left out) at configuration q."""
         pin.centerOfMass(plant, data, q, True)  # subtree centres of mass, each in its joint's frame
-        return wheel_normal_forces(self.mecanum, float(data.mass[1]), data.com[1], gravity=self.gravity)
+        # wheel_normal_forces without a load transfer (its checks hold by construction here)
+        return self.mecanum.support.loads(data.com[1][:2], float(data.mass[1]) * self.gravity)
 
     def floor_force(self, plant: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Generalised force (plant nv; N, N m) of the roller friction at the four contacts
@@ -168,23 +170,28 @@ class BaseModel:
         generalised = np.zeros(plant.nv)
         if self.mu == 0.0:
             return generalised
-        speeds = v[3 + self.wheels]
-        slips = contact_slip_velocities(self.mecanum, v[:3], speeds)
-        forces = roller_forces(self.mecanum, slips, self.wheel_loads(plant, data, q), self.mu, self.velocity_scale)
-        positions = self.mecanum.positions
-        generalised[:3] = [forces[:, 0].sum(), forces[:, 1].sum(),
-                           float(np.sum(positions[:, 0] * forces[:, 1] - positions[:, 1] * forces[:, 0]))]
-        generalised[3 + self.wheels] = wheel_spin_torques(self.mecanum, forces)
+        mecanum = self.mecanum
+        roller_floor_force(v, self.wheel_loads(plant, data, q), mecanum.hub_velocities(v[:3]), mecanum.positions,
+                           mecanum.drive_directions, mecanum.across, mecanum.radius, self.mu, self.velocity_scale,
+                           self.wheels, generalised)
         return generalised
 
     def wheel_torques(self, t: float, speeds: np.ndarray, integral: np.ndarray,
                       twist: TwistRamp | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(torque N m, d integral/dt N m/s) of the PI loop per wheel (``mecanum.names``
         order) toward the commanded twist at t (s) (``twist`` if given, else the path's);
-        zero once released or without a loop."""
+        zero once released or without a loop. The last call's result is kept: a step asks
+        twice with the same arguments (the torque, then the integral's rate); callers do not
+        write into the arrays returned."""
         if self.pi is None or t >= self.release:
             return np.zeros(len(self.wheels)), np.zeros(len(self.wheels))
-        return self.pi.torques(self.command(t, twist)[1], speeds, integral)
+        key = (t, tuple(speeds.tolist()), tuple(integral.tolist()))
+        last = self._last_wheel_torques
+        if last and last[0] is twist and last[1] == key:
+            return last[2]
+        result = self.pi.torques(self.command(t, twist)[1], speeds, integral)
+        last[:] = twist, key, result
+        return result
 
     def prescribed_accelerations(self, plant: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray,
                                  generalised: np.ndarray, imposed: np.ndarray) -> np.ndarray:

@@ -14,6 +14,8 @@ near the limit, instead of winding up. kp in N m s/rad, ki in N m/rad.
 
 The integral term I (one per wheel) is state: the engine carries it and integrates dI/dt
 (:meth:`WheelSpeedPI.torques`), a sampled controller steps it (:meth:`WheelSpeedPI.step`).
+The law after u_ref runs compiled (:func:`pi_law`, numba: numpy's operations per wheel in
+their order, so the same bits).
 """
 from __future__ import annotations
 
@@ -22,10 +24,33 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
+from numba import njit, types
 
 from youbot_dynamics.dynamics.mobile.mecanum import WHEEL_JOINTS, MecanumBase, wheel_speeds
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
+
+
+_READ = types.Array(types.float64, 1, "A", readonly=True)
+_OUT = types.Array(types.float64, 1, "C")
+
+
+@njit(types.void(_READ, _READ, _READ, types.float64, types.float64, _READ, types.float64, _OUT, _OUT), cache=True)
+def pi_law(reference: np.ndarray, speeds: np.ndarray, integral: np.ndarray, kp: float, ki: float,
+           limit: np.ndarray, tracking_time: float, tau: np.ndarray, rate: np.ndarray) -> None:
+    """The module docstring's law per wheel: tau (N m) and dI/dt (N m/s) from the set points
+    u_ref and speeds u (rad/s), the integral terms I (N m) and the limits tau_max (N m); the
+    clip as numpy's maximum then minimum (a NaN passes through)."""
+    n = reference.shape[0]
+    if speeds.shape[0] != n or integral.shape[0] != n or limit.shape[0] != n or tau.shape[0] != n \
+            or rate.shape[0] != n:
+        raise ValueError("wheel speed PI: one set point, speed, integral term, limit and output per wheel")
+    for i in range(n):
+        error = reference[i] - speeds[i]
+        raw = kp * error + integral[i]
+        low = raw if raw >= -limit[i] or raw != raw else -limit[i]
+        tau[i] = low if low <= limit[i] or low != low else limit[i]
+        rate[i] = ki * error + (tau[i] - raw) / tracking_time
 
 
 @dataclass(frozen=True)
@@ -59,10 +84,11 @@ class WheelSpeedPI:
                 integral: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(tau (N m), dI/dt (N m/s)) per wheel for the commanded base twist (vx, vy, wz), the
         measured wheel speeds (rad/s) and the integral terms I (N m)."""
-        error = wheel_speeds(self.base, twist_command) - np.asarray(speeds, dtype=float)
-        raw = self.kp * error + np.asarray(integral, dtype=float)
-        tau = np.clip(raw, -self.torque_limit, self.torque_limit)
-        return tau, self.ki * error + (tau - raw) / self.tracking_time
+        n = len(self.base.names)
+        tau, rate = np.empty(n), np.empty(n)
+        pi_law(wheel_speeds(self.base, twist_command), np.asarray(speeds, dtype=float),
+               np.asarray(integral, dtype=float), self.kp, self.ki, self.torque_limit, self.tracking_time, tau, rate)
+        return tau, rate
 
     def step(self, twist_command: np.ndarray, speeds: np.ndarray, integral: np.ndarray,
              dt: float) -> tuple[np.ndarray, np.ndarray]:

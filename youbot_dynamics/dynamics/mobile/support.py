@@ -11,7 +11,9 @@ load is positive that is the distribution of a rigid body on equally stiff suppo
 supports leave one free direction f (the null space of A): when the least-norm loads hold a
 negative one, move along f by the least step that makes every load non-negative (a wheel
 lifts, the others carry the statically determinate loads). No step does it when (x_c, y_c)
-lies outside the supports' polygon: :class:`TipOverError`.
+lies outside the supports' polygon: :class:`TipOverError`. The step along f and the checks run
+compiled (:func:`shift_to_non_negative`, numba, the same operations in the same order as the
+Python form it replaced); A^+ b stays numpy's product, whose rounding a loop does not reproduce.
 """
 from __future__ import annotations
 
@@ -19,13 +21,38 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit, types
 
 from youbot_dynamics.errors import UserInputError
+
+_VECTOR = types.Array(types.float64, 1, "C", readonly=True)
 
 
 class TipOverError(ValueError):
     """The centre of mass (shifted by the acceleration) lies outside the wheels' support
     polygon: no non-negative wheel loads balance the robot."""
+
+
+@njit(types.boolean(_VECTOR, _VECTOR, types.float64, types.Array(types.float64, 1, "C")), cache=True)
+def shift_to_non_negative(loads: np.ndarray, free: np.ndarray, weight: float, out: np.ndarray) -> bool:
+    """out = max(loads + s free, 0) (N) with s the least step >= 0 along the free direction
+    ``free`` ((n,), empty: none) that makes every load non-negative; False when none does
+    (the loads of ``weight`` N, rounding aside, cannot all be >= 0: the base tips over)."""
+    low, high, scale = -math.inf, math.inf, 0.0
+    if free.shape[0]:
+        for i in range(loads.shape[0]):  # keep load + s step >= 0
+            if free[i] > 0.0:
+                low = max(low, -loads[i] / free[i])
+            elif free[i] < 0.0:
+                high = min(high, -loads[i] / free[i])
+        scale = min(max(0.0, low), high)
+    tolerance = 1e-12 * max(abs(weight), 1.0)
+    fits = not low > high + 1e-15
+    for i in range(loads.shape[0]):
+        load = loads[i] + scale * free[i] if free.shape[0] else loads[i]
+        fits = fits and not load < -tolerance
+        out[i] = max(load, 0.0)
+    return fits
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,7 +68,7 @@ class SupportRule:
     positions: np.ndarray
     pseudo_inverse: np.ndarray = field(init=False, repr=False)
     free: np.ndarray | None = field(init=False, repr=False)
-    _free_steps: tuple[float, ...] = field(init=False, repr=False)  # free as Python floats (fast scalar loop)
+    _free: np.ndarray = field(init=False, repr=False)  # free, or empty with three supports
 
     def __post_init__(self) -> None:
         points = np.array(self.positions, dtype=float)
@@ -59,24 +86,15 @@ class SupportRule:
         object.__setattr__(self, "positions", points)
         object.__setattr__(self, "pseudo_inverse", pseudo_inverse)
         object.__setattr__(self, "free", free[0] if len(free) else None)
-        object.__setattr__(self, "_free_steps", tuple(free[0].tolist()) if len(free) else ())
+        object.__setattr__(self, "_free", free[0] if len(free) else np.empty(0))
 
     def loads(self, centre: np.ndarray, weight: float) -> np.ndarray:
         """Vertical loads (N, ``positions`` order) carrying ``weight`` (N) applied at
         ``centre`` (x, y) (m). Raises :class:`TipOverError` outside the support polygon."""
-        target = weight * np.array([1.0, *np.asarray(centre, dtype=float).ravel().tolist()])
-        loads = self.pseudo_inverse @ target
-        low, high = -math.inf, math.inf
-        if self.free is not None:  # Python floats: the same arithmetic as numpy's scalars, faster
-            for load, step in zip(loads.tolist(), self._free_steps):  # keep load + s step >= 0
-                if step > 0.0:
-                    low = max(low, -load / step)
-                elif step < 0.0:
-                    high = min(high, -load / step)
-            scale = min(max(0.0, low), high)
-            loads = loads + scale * self.free
-        tolerance = 1e-12 * max(abs(weight), 1.0)
-        if low > high + 1e-15 or any(load < -tolerance for load in loads.tolist()):
-            raise TipOverError(f"centre of mass at ({centre[0]:.4g}, {centre[1]:.4g}) m lies outside the support "
+        x, y = np.asarray(centre, dtype=float).ravel().tolist()
+        loads = np.empty(len(self.positions))
+        if not shift_to_non_negative(self.pseudo_inverse @ np.array([weight, weight * x, weight * y]), self._free,
+                                     weight, loads):
+            raise TipOverError(f"centre of mass at ({x:.4g}, {y:.4g}) m lies outside the support "
                                f"polygon of the wheels at {np.round(self.positions, 4).tolist()} m: the base tips over")
-        return np.maximum(loads, 0.0)
+        return loads
