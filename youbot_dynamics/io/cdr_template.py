@@ -145,7 +145,7 @@ _BYTES, _STAMPS = types.Array(types.uint8, 1, "C", readonly=True), types.Array(t
 
 @njit(types.void(_BYTES, _OFFSETS, types.Array(types.uint8, 2, "C", readonly=True), _OFFSETS, _STAMPS,
                  types.Array(types.uint8, 2, "C")), cache=True)
-def _refill(template: np.ndarray, float_offsets: np.ndarray, value_bytes: np.ndarray, stamp_offsets: np.ndarray,
+def refill_bytes(template: np.ndarray, float_offsets: np.ndarray, value_bytes: np.ndarray, stamp_offsets: np.ndarray,
             stamps_ns: np.ndarray, out: np.ndarray) -> None:
     """out[n] = the ``template`` bytes with value k of message n (its 8 little-endian bytes:
     value_bytes[n, 8k:8k + 8]) at byte float_offsets[k], and stamps_ns[n] (ns >= 0) as a
@@ -165,7 +165,7 @@ def _refill(template: np.ndarray, float_offsets: np.ndarray, value_bytes: np.nda
 
 @njit(types.boolean(types.Array(types.float64, 2, "C", readonly=True), types.Array(types.intp, 2, "C", readonly=True),
                     types.float64, types.float64), cache=True)
-def _plausible(values: np.ndarray, quaternions: np.ndarray, least_square: float, largest_square: float) -> bool:
+def plausible_values(values: np.ndarray, quaternions: np.ndarray, least_square: float, largest_square: float) -> bool:
     """True if every value (N, fields) is finite and every quaternion (rows of four field
     indices) has a squared norm within [least_square, largest_square]."""
     for n in range(values.shape[0]):
@@ -233,7 +233,7 @@ class CdrTemplate:
         """Raise ``MessageFieldError`` for the first value (N, len(paths)) that is not finite
         or the first quaternion that is not of unit norm (a compiled pass says whether all
         pass; numpy finds the one that does not)."""
-        if _plausible(values, self._quaternions, *self._unit_squares):
+        if plausible_values(values, self._quaternions, *self._unit_squares):
             return
         if not math.isfinite(np.add.reduce(values, axis=None)):   # one pass; an overflowing sum is looked at below
             finite = np.isfinite(values)
@@ -262,7 +262,7 @@ class CdrTemplate:
         self._check(values)
         stamps = np.ascontiguousarray(stamps_ns_checked(stamps_ns) if len(self._stamps) else np.zeros(count, np.int64))
         data = np.empty((count, len(self._bytes)), dtype=np.uint8)
-        _refill(self._bytes, self._floats, values.view(np.uint8), self._stamps, stamps, data)
+        refill_bytes(self._bytes, self._floats, values.view(np.uint8), self._stamps, stamps, data)
         return [Serialized(self.msgtype, row.tobytes()) for row in data]
 
 
