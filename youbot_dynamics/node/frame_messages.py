@@ -47,8 +47,8 @@ from youbot_dynamics.io.cdr_group import Entry
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.frames import (LinkFrames, LinkTransform, SampleFrames, composed_rows, frame_tree,
-                                         pose_rows)
+from youbot_dynamics.node.frames import (FramesBatch, LinkFrames, LinkTransform, SampleFrames, composed_rows, ee_rows,
+                                         frame_tree, pose_rows)
 
 FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)
 """Colour (r, g, b, a in 0..1) of the free bodies' markers (light wood)."""
@@ -134,7 +134,8 @@ class FrameMessages:
         (its values and the builder of its first message), for :class:`~youbot_dynamics.io.cdr_group.TopicBatches`."""
         blocks = [] if base is None else [np.reshape(base, (count, -1))]
         if samples is not None:
-            blocks.append(np.array([sample.link_poses.reshape(-1) for sample in samples]))
+            blocks.append(samples.poses[:, :samples.moving].reshape(count, -1) if isinstance(samples, FramesBatch)
+                          else np.array([sample.link_poses.reshape(-1) for sample in samples]))
         if bodies is not None and len(self.body_shapes):
             blocks.append(np.reshape(bodies, (count, -1)))
         values = np.hstack(blocks) if blocks else np.zeros((count, 0))
@@ -198,15 +199,12 @@ class FrameMessages:
         """The topics of :meth:`ee_messages` as :data:`~youbot_dynamics.io.cdr_group.Entry`
         (values and the builder of the first message)."""
         topics: list[Entry] = []
-        ee = [sample.ee if base is None else composed_rows(rows[0], sample.ee) for sample, rows in
-              zip(samples, samples if base is None else base)]
+        ee, first = ee_rows(samples, base), samples[0]
         if wanted is None or "/ee_pose" in wanted:
-            topics.append(("/ee_pose", self._refilled["/ee_pose"],
-                           np.array([rows[sample.ee_index] for rows, sample in zip(ee, samples)]),
+            topics.append(("/ee_pose", self._refilled["/ee_pose"], ee[:, first.ee_index],
                            lambda stamp_ns, row: messages.pose_stamped(stamp_ns, self.root_frame, row[:3], row[3:])))
         if len(self.links.ee_links) > 1 and (wanted is None or "/ee_poses" in wanted):
-            topics.append(("/ee_poses", self._refilled["/ee_poses"],
-                           np.array([rows[:sample.ee_count].reshape(-1) for rows, sample in zip(ee, samples)]),
+            topics.append(("/ee_poses", self._refilled["/ee_poses"], ee[:, :first.ee_count].reshape(len(ee), -1),
                            lambda stamp_ns, values: messages.pose_array(
                                stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)])))
         return topics

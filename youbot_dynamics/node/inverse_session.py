@@ -422,6 +422,8 @@ class InverseSession(Session):
         each sample's kinematics (None when nothing takes it) and base rows. Raises
         MessageFieldError."""
         wanted, count = self.wanted, len(stamps)
+        if not count:
+            return []
         samples = self.frames.links.at_many(q[:count]) if self.kinematics_wanted else None
         entries: list[Entry] = []
         if "/computed_torques" in wanted:
