@@ -91,20 +91,21 @@ class TopicBatches:
     of templates, made once."""
 
     def __init__(self) -> None:
-        self._groups: dict[tuple[int, ...], TemplateGroup] = {}
+        self._groups: dict[tuple[CdrTemplate, ...], TemplateGroup] = {}
 
     def fill(self, stamps_ns: Sequence[int], entries: Sequence[Entry]) -> list[tuple[str, list[object]]]:
         """(topic, its N messages) of each entry at ``stamps_ns``: together when every topic
         has its template and every value passes, else each topic's ``Refilled.many``."""
-        templates = [refilled.template for _, refilled, _, _ in entries]
-        if len(stamps_ns) and entries and all(t is not None for t in templates):
-            key = tuple(id(t) for t in templates)
-            group = self._groups.get(key)
+        templates = tuple(refilled.template for _, refilled, _, _ in entries)
+        if len(stamps_ns) and templates and None not in templates:
+            group = self._groups.get(templates)
             if group is None:
-                group = self._groups[key] = TemplateGroup(templates)
-            values = np.concatenate([np.reshape(v, (len(stamps_ns), -1)) for _, _, v, _ in entries], axis=1)
+                group = self._groups[templates] = TemplateGroup(templates)
+            count = len(stamps_ns)
+            values = np.reshape(entries[0][2], (count, -1)) if len(entries) == 1 else np.concatenate(
+                [np.reshape(v, (count, -1)) for _, _, v, _ in entries], axis=1)
             if values.shape[1] == group.fields:
                 filled = group.fill_many(np.asarray(stamps_ns, dtype=np.int64), values)
                 if filled is not None:
-                    return [(topic, list(messages)) for (topic, *_), messages in zip(entries, filled)]
+                    return [(entry[0], messages) for entry, messages in zip(entries, filled)]
         return [(topic, refilled.many(stamps_ns, values, build)) for topic, refilled, values, build in entries]
