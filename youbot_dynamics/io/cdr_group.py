@@ -6,8 +6,8 @@ lays their templates end to end (bytes, refilled fields, stamps, quaternions) an
 batch of all of them at once: one plausibility pass over every value, one refill pass into
 one byte array, then each message cut from its row. The bytes are those of each template's
 own ``fill_many``: the same template bytes, the same values at the same offsets. When a value
-or a stamp does not pass, :func:`fill_topics` falls back to the topics one by one, whose
-``fill_many`` raises ``MessageFieldError`` naming the field.
+or a stamp does not pass, :meth:`TopicBatches.fill` falls back to the topics one by one,
+whose ``fill_many`` raises ``MessageFieldError`` naming the field.
 """
 from __future__ import annotations
 
@@ -87,7 +87,7 @@ class TemplateGroup:
 
 
 class TopicBatches:
-    """Fills the topics of a batch (:func:`fill_topics`), one :class:`TemplateGroup` per set
+    """Fills the topics of a batch (:meth:`fill`), one :class:`TemplateGroup` per set
     of templates, made once."""
 
     def __init__(self) -> None:

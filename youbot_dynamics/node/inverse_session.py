@@ -342,11 +342,12 @@ class InverseSession(Session):
         for error in estimates.errors:
             self.counters.reject(error)
         torque_at = dict(zip((estimates.ends + start).tolist(), range(len(estimates.ends))))
+        log_ns_of, moving = log_times.tolist(), self.odometry is not None
         for row in range(start, end):
             if not taken[row]:
                 continue
-            log_ns = int(log_times[row])
-            odom = self._odometry(stamps[row], v[row], log_ns)
+            log_ns = log_ns_of[row]
+            odom = self._odometry(stamps[row], v[row], log_ns) if moving else []
             k = torque_at.get(row)
             if k is not None and k == bad:
                 outputs += self._rejected_torque(estimates, tau[k], failure, odom)
