@@ -58,18 +58,20 @@ class TemplateGroup:
 
     def __init__(self, templates: Sequence[CdrTemplate]) -> None:
         self.msgtypes = tuple(t.msgtype for t in templates)
-        sizes = np.array([len(t._bytes) for t in templates], dtype=np.intp)
+        sizes = np.array([len(t.template_bytes) for t in templates], dtype=np.intp)
         fields = np.array([len(t.paths) for t in templates], dtype=np.intp)
         self.cuts = np.concatenate(([0], np.cumsum(sizes))).tolist()
         """Byte offsets of each message in a row of the filled bytes."""
         self.fields = int(fields.sum())
         byte_starts, field_starts = self.cuts[:-1], np.concatenate(([0], np.cumsum(fields)[:-1]))
-        self._bytes = np.concatenate([t._bytes for t in templates])
-        self._floats = np.concatenate([t._floats + s for t, s in zip(templates, byte_starts)]).astype(np.intp)
-        self._stamps = np.concatenate([t._stamps + s for t, s in zip(templates, byte_starts)]).astype(np.intp)
-        self._quaternions = np.concatenate([t._quaternions + s for t, s in zip(templates, field_starts)]
+        self.template_bytes = np.concatenate([t.template_bytes for t in templates])
+        self.float_offsets = np.concatenate([t.float_offsets + s for t, s in zip(templates, byte_starts)]
+                                            ).astype(np.intp)
+        self.stamp_offsets = np.concatenate([t.stamp_offsets + s for t, s in zip(templates, byte_starts)]
+                                            ).astype(np.intp)
+        self.quaternions = np.concatenate([t.quaternions + s for t, s in zip(templates, field_starts)]
                                            ).reshape(-1, 4).astype(np.intp)
-        self._unit_squares = templates[0]._unit_squares
+        self.unit_squares = templates[0].unit_squares
 
     def fill_many(self, stamps_ns: np.ndarray, values: np.ndarray) -> list[list[Serialized]] | None:
         """Each template's N messages at ``stamps_ns`` (int64 (N,)) with ``values`` (N,
@@ -77,9 +79,9 @@ class TemplateGroup:
         quaternion not of unit norm or a stamp not a valid builtin_interfaces/Time."""
         stamps = np.ascontiguousarray(stamps_ns, dtype=np.int64)
         values = np.ascontiguousarray(values, dtype=np.float64)
-        data = np.empty((len(stamps), len(self._bytes)), dtype=np.uint8)
-        if not _checked_refill_unchecked(self._bytes, self._floats, values, values.view(np.uint8), self._stamps,
-                                         stamps, self._quaternions, *self._unit_squares, data):
+        data = np.empty((len(stamps), len(self.template_bytes)), dtype=np.uint8)
+        if not _checked_refill_unchecked(self.template_bytes, self.float_offsets, values, values.view(np.uint8),
+                                         self.stamp_offsets, stamps, self.quaternions, *self.unit_squares, data):
             return None
         rows = [row.tobytes() for row in data]
         return [[Serialized(msgtype, row[start:end]) for row in rows]
