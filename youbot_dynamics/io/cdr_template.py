@@ -145,7 +145,7 @@ _BYTES, _STAMPS = types.Array(types.uint8, 1, "C", readonly=True), types.Array(t
 
 @njit(types.void(_BYTES, _OFFSETS, types.Array(types.uint8, 2, "C", readonly=True), _OFFSETS, _STAMPS,
                  types.Array(types.uint8, 2, "C")), cache=True)
-def _refill(template: np.ndarray, float_offsets: np.ndarray, value_bytes: np.ndarray, stamp_offsets: np.ndarray,
+def refill_bytes(template: np.ndarray, float_offsets: np.ndarray, value_bytes: np.ndarray, stamp_offsets: np.ndarray,
             stamps_ns: np.ndarray, out: np.ndarray) -> None:
     """out[n] = the ``template`` bytes with value k of message n (its 8 little-endian bytes:
     value_bytes[n, 8k:8k + 8]) at byte float_offsets[k], and stamps_ns[n] (ns >= 0) as a
@@ -165,7 +165,7 @@ def _refill(template: np.ndarray, float_offsets: np.ndarray, value_bytes: np.nda
 
 @njit(types.boolean(types.Array(types.float64, 2, "C", readonly=True), types.Array(types.intp, 2, "C", readonly=True),
                     types.float64, types.float64), cache=True)
-def _plausible(values: np.ndarray, quaternions: np.ndarray, least_square: float, largest_square: float) -> bool:
+def plausible_values(values: np.ndarray, quaternions: np.ndarray, least_square: float, largest_square: float) -> bool:
     """True if every value (N, fields) is finite and every quaternion (rows of four field
     indices) has a squared norm within [least_square, largest_square]."""
     for n in range(values.shape[0]):
@@ -185,7 +185,11 @@ class CdrTemplate:
     """The CDR bytes of ``prototype`` (a rosbags message) with its float64 leaves whose path
     ``refilled(path)`` accepts and the stamps whose path ``stamped(path)`` accepts
     (builtin_interfaces/Time fields) rewritten by :meth:`fill`. ``paths`` lists the refilled
-    leaves in order (field order of the message)."""
+    leaves in order (field order of the message). ``template_bytes`` are the prototype's
+    bytes, ``float_offsets`` and ``stamp_offsets`` where the refilled floats and the stamps
+    sit in them, ``quaternions`` the indices (k, 4) of the refilled quaternions' fields and
+    ``unit_squares`` the bounds of their squared norms (what :mod:`~youbot_dynamics.io.cdr_group`
+    lays end to end)."""
 
     def __init__(self, prototype: Any, refilled: Callable[[str], bool],
                  stamped: Callable[[str], bool] = lambda path: path.endswith("header.stamp")) -> None:
@@ -210,14 +214,14 @@ class CdrTemplate:
             _set(owner, key, value)
         for (_, stamp), (sec, nanosec) in zip(stamps, saved_stamps):
             stamp.sec, stamp.nanosec = sec, nanosec
-        self._bytes = _serialized(prototype).copy()
-        self._floats = np.array(float_offsets, dtype=np.intp)
-        self._stamps = np.array(stamp_offsets, dtype=np.intp)
+        self.template_bytes = _serialized(prototype).copy()
+        self.float_offsets = np.array(float_offsets, dtype=np.intp)
+        self.stamp_offsets = np.array(stamp_offsets, dtype=np.intp)
         quaternion_fields = [k for k, (*_, owner_type) in enumerate(leaves) if owner_type == _QUATERNION]
         if len(quaternion_fields) % 4:
             raise RuntimeError(f"{self.msgtype}: a quaternion is refilled in part; refill all four fields or none")
-        self._quaternions = np.array(quaternion_fields, dtype=np.intp).reshape(-1, 4)
-        self._unit_squares = ((1.0 - UNIT_QUATERNION_TOLERANCE) ** 2, (1.0 + UNIT_QUATERNION_TOLERANCE) ** 2)
+        self.quaternions = np.array(quaternion_fields, dtype=np.intp).reshape(-1, 4)
+        self.unit_squares = ((1.0 - UNIT_QUATERNION_TOLERANCE) ** 2, (1.0 + UNIT_QUATERNION_TOLERANCE) ** 2)
         """Bounds of |q|^2 for | |q| - 1 | <= the tolerance of io.messages."""
 
     def fill(self, stamp_ns: int, values: np.ndarray) -> Serialized:
@@ -233,20 +237,20 @@ class CdrTemplate:
         """Raise ``MessageFieldError`` for the first value (N, len(paths)) that is not finite
         or the first quaternion that is not of unit norm (a compiled pass says whether all
         pass; numpy finds the one that does not)."""
-        if _plausible(values, self._quaternions, *self._unit_squares):
+        if plausible_values(values, self.quaternions, *self.unit_squares):
             return
         if not math.isfinite(np.add.reduce(values, axis=None)):   # one pass; an overflowing sum is looked at below
             finite = np.isfinite(values)
             if not finite.all():
                 row, index = (int(i[0]) for i in np.nonzero(~finite))
                 raise MessageFieldError(self.paths[index], f"is {values[row, index]}, not finite")
-        if len(self._quaternions):
-            quaternions = values[:, self._quaternions]
+        if len(self.quaternions):
+            quaternions = values[:, self.quaternions]
             squares = np.einsum("nij,nij->ni", quaternions, quaternions)
-            if not (self._unit_squares[0] <= squares.min() and squares.max() <= self._unit_squares[1]):
+            if not (self.unit_squares[0] <= squares.min() and squares.max() <= self.unit_squares[1]):
                 norms = np.sqrt(squares)
                 row, bad = np.unravel_index(int(np.argmax(np.abs(norms - 1.0))), norms.shape)
-                field = self.paths[self._quaternions[bad, 0]].rsplit(".", 1)[0]
+                field = self.paths[self.quaternions[bad, 0]].rsplit(".", 1)[0]
                 raise MessageFieldError(field, f"has norm {norms[row, bad]}, expected a unit quaternion")
 
     def fill_many(self, stamps_ns: Sequence[int], values: np.ndarray) -> list[Serialized]:
@@ -260,9 +264,10 @@ class CdrTemplate:
                                     f"{len(self.paths)} refilled fields")
         values = np.ascontiguousarray(values, dtype="<f8")
         self._check(values)
-        stamps = np.ascontiguousarray(stamps_ns_checked(stamps_ns) if len(self._stamps) else np.zeros(count, np.int64))
-        data = np.empty((count, len(self._bytes)), dtype=np.uint8)
-        _refill(self._bytes, self._floats, values.view(np.uint8), self._stamps, stamps, data)
+        stamps = np.ascontiguousarray(stamps_ns_checked(stamps_ns) if len(self.stamp_offsets)
+                                      else np.zeros(count, np.int64))
+        data = np.empty((count, len(self.template_bytes)), dtype=np.uint8)
+        refill_bytes(self.template_bytes, self.float_offsets, values.view(np.uint8), self.stamp_offsets, stamps, data)
         return [Serialized(self.msgtype, row.tobytes()) for row in data]
 
 

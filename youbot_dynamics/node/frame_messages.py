@@ -43,11 +43,12 @@ import numpy as np
 from youbot_dynamics.dynamics.collision import Geometry
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_group import Entry
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.frames import (LinkFrames, LinkTransform, SampleFrames, composed_rows, frame_tree,
-                                         pose_rows)
+from youbot_dynamics.node.frames import (FramesBatch, LinkFrames, LinkTransform, SampleFrames, composed_rows, ee_rows,
+                                         frame_tree, pose_rows)
 
 FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)
 """Colour (r, g, b, a in 0..1) of the free bodies' markers (light wood)."""
@@ -124,12 +125,20 @@ class FrameMessages:
         odom -> base_footprint and odom -> world (``tree.moving``), the moving links of each
         sample's kinematics (none without a robot), then the free bodies (rows of
         :meth:`body_poses`, in the world frame)."""
-        blocks = [] if base is None else [np.reshape(base, (len(stamps), -1))]
+        _, refilled, values, build = self.tf_entry(len(stamps), samples, bodies, base)
+        return refilled.many(stamps, values, build)
+
+    def tf_entry(self, count: int, samples: Sequence[SampleFrames] | None, bodies: Sequence[np.ndarray] | None = None,
+                 base: np.ndarray | None = None) -> Entry:
+        """/tf of :meth:`tf` for ``count`` samples as an :data:`~youbot_dynamics.io.cdr_group.Entry`
+        (its values and the builder of its first message), for :class:`~youbot_dynamics.io.cdr_group.TopicBatches`."""
+        blocks = [] if base is None else [np.reshape(base, (count, -1))]
         if samples is not None:
-            blocks.append(np.array([sample.link_poses.reshape(-1) for sample in samples]))
+            blocks.append(samples.poses[:, :samples.moving].reshape(count, -1) if isinstance(samples, FramesBatch)
+                          else np.array([sample.link_poses.reshape(-1) for sample in samples]))
         if bodies is not None and len(self.body_shapes):
-            blocks.append(np.reshape(bodies, (len(stamps), -1)))
-        values = np.hstack(blocks) if blocks else np.zeros((len(stamps), 0))
+            blocks.append(np.reshape(bodies, (count, -1)))
+        values = np.hstack(blocks) if blocks else np.zeros((count, 0))
 
         def build(stamp_ns: int, values: np.ndarray) -> object:
             edges = [] if base is None else list(self.tree.moving)
@@ -139,7 +148,7 @@ class FrameMessages:
             return messages.tf_message(messages.transform_stamped(stamp_ns, *edge, row[:3], row[3:])
                                        for edge, row in zip(edges, values.reshape(-1, 7)))
 
-        return self._refilled["/tf"].many(stamps, values, build)
+        return "/tf", self._refilled["/tf"], values, build
 
     def free_bodies(self, stamps: Sequence[int], bodies: Sequence[np.ndarray]) -> list[object]:
         """/free_bodies of N samples: the bodies' poses in the world frame, in order."""
@@ -182,17 +191,21 @@ class FrameMessages:
         from N samples' kinematics at ``stamps`` (ns), in the root frame (``base``: the rows
         (N, 2, 7) of :meth:`tf`; the odometry pose composed with the kinematics); only those
         in ``wanted`` if given."""
-        topics: list[tuple[str, list[object]]] = []
-        ee = [sample.ee if base is None else composed_rows(rows[0], sample.ee) for sample, rows in
-              zip(samples, samples if base is None else base)]
+        return [(topic, refilled.many(stamps, values, build))
+                for topic, refilled, values, build in self.ee_entries(samples, wanted, base)]
+
+    def ee_entries(self, samples: Sequence[SampleFrames], wanted: frozenset[str] | None = None,
+                   base: np.ndarray | None = None) -> list[Entry]:
+        """The topics of :meth:`ee_messages` as :data:`~youbot_dynamics.io.cdr_group.Entry`
+        (values and the builder of the first message)."""
+        topics: list[Entry] = []
+        ee, first = ee_rows(samples, base), samples[0]
         if wanted is None or "/ee_pose" in wanted:
-            topics.append(("/ee_pose", self._refilled["/ee_pose"].many(
-                stamps, np.array([rows[sample.ee_index] for rows, sample in zip(ee, samples)]),
-                lambda stamp_ns, row: messages.pose_stamped(stamp_ns, self.root_frame, row[:3], row[3:]))))
+            topics.append(("/ee_pose", self._refilled["/ee_pose"], ee[:, first.ee_index],
+                           lambda stamp_ns, row: messages.pose_stamped(stamp_ns, self.root_frame, row[:3], row[3:])))
         if len(self.links.ee_links) > 1 and (wanted is None or "/ee_poses" in wanted):
-            topics.append(("/ee_poses", self._refilled["/ee_poses"].many(
-                stamps, np.array([rows[:sample.ee_count].reshape(-1) for rows, sample in zip(ee, samples)]),
-                lambda stamp_ns, values: messages.pose_array(stamp_ns, self.root_frame,
-                                                             [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))))
+            topics.append(("/ee_poses", self._refilled["/ee_poses"], ee[:, :first.ee_count].reshape(len(ee), -1),
+                           lambda stamp_ns, values: messages.pose_array(
+                               stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)])))
         return topics
 

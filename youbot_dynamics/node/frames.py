@@ -194,6 +194,14 @@ def _relative_pose_rows(poses: np.ndarray, parents: np.ndarray, children: np.nda
         _quaternion_xyzw(rotation, out[e, 3:])
 
 
+@njit(types.void(types.Array(types.float64, 4, "C", readonly=True), _INDICES, _INDICES,
+                 types.Array(types.float64, 3, "C")), cache=True)
+def _relative_pose_batch(poses: np.ndarray, parents: np.ndarray, children: np.ndarray, out: np.ndarray) -> None:
+    """``_relative_pose_rows`` of each sample: poses (N, frames, 4, 4) into out (N, edges, 7)."""
+    for n in range(poses.shape[0]):
+        _relative_pose_rows(poses[n], parents, children, out[n])
+
+
 def pose_rows(poses: Sequence[np.ndarray]) -> np.ndarray:
     """(k, 7) rows of translation (m) and quaternion (x, y, z, w), w >= 0, of k poses (4x4, m)."""
     stacked = np.ascontiguousarray(np.reshape(poses, (-1, 4, 4)), dtype=np.float64)
@@ -232,6 +240,26 @@ def composed_rows(first: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """Rows (k, 7) of ``first`` (one row: the pose of frame B in A) composed with ``rows``
     (k, 7: poses in B): the poses in A."""
     return pose_rows(pose_matrices(first) @ pose_matrices(rows))
+
+
+class FramesBatch(list):
+    """The samples of :meth:`LinkFrames.at_many` (a list of :class:`SampleFrames`) and their
+    rows as one array: ``poses`` (N, moving + end effectors, 7), each sample's
+    ``link_poses`` then its ``ee``; ``moving`` the number of moving links."""
+
+    def __init__(self, samples: list[SampleFrames], poses: np.ndarray, moving: int) -> None:
+        super().__init__(samples)
+        self.poses, self.moving = poses, moving
+
+
+def ee_rows(samples: Sequence[SampleFrames], base: np.ndarray | None = None) -> np.ndarray:
+    """(N, k, 7) the ``ee`` rows of N samples in the root frame, or with ``base`` (N, 2, 7;
+    a moving base's odom -> base_footprint first) composed with the odometry pose."""
+    if base is None and isinstance(samples, FramesBatch):
+        return samples.poses[:, samples.moving:]
+    if base is None:
+        return np.array([sample.ee for sample in samples])
+    return np.array([composed_rows(rows[0], sample.ee) for sample, rows in zip(samples, base)])
 
 
 def planar_row(x: float, y: float, yaw: float) -> np.ndarray:
@@ -299,7 +327,7 @@ class LinkFrames:
         placements = np.empty((len(q), len(self._frames), 4, 4))
         frame_poses(*self._tree, q, *self._placements, self._work, placements)
         poses = np.empty((len(q), len(self._parents), 7))
-        for rows, sample in zip(poses, placements):
-            _relative_pose_rows(sample, self._parents, self._children, rows)
+        _relative_pose_batch(placements, self._parents, self._children, poses)
         moving, count = len(self._edges), len(self.ee_links)
-        return [SampleFrames(self._edges, rows[:moving], rows[moving:], count, self._ee_index) for rows in poses]
+        return FramesBatch([SampleFrames(self._edges, rows[:moving], rows[moving:], count, self._ee_index)
+                            for rows in poses], poses, moving)

@@ -28,6 +28,7 @@ from youbot_dynamics.dynamics.mobile.mecanum import mecanum_base_from_robot
 from youbot_dynamics.dynamics.rigid_body import kinetic_energy, potential_energy
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_group import Entry, TopicBatches
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.node.commands import STAMP_LIMIT_NS, InputRejected, JointSample, joint_sample
@@ -84,6 +85,7 @@ class InverseSession(Session):
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
         self.dynamics = InverseDynamics(self.robot, scene.joint_friction(self.robot))
         self._torques = Refilled()
+        self._batches = TopicBatches()
         self._names_key: tuple[str, ...] | None = None
         """The names of the last sample accepted through ``joint_sample`` (see
         ``_remember_names``)."""
@@ -340,11 +342,12 @@ class InverseSession(Session):
         for error in estimates.errors:
             self.counters.reject(error)
         torque_at = dict(zip((estimates.ends + start).tolist(), range(len(estimates.ends))))
+        log_ns_of, moving = log_times.tolist(), self.odometry is not None
         for row in range(start, end):
             if not taken[row]:
                 continue
-            log_ns = int(log_times[row])
-            odom = self._odometry(stamps[row], v[row], log_ns)
+            log_ns = log_ns_of[row]
+            odom = self._odometry(stamps[row], v[row], log_ns) if moving else []
             k = torque_at.get(row)
             if k is not None and k == bad:
                 outputs += self._rejected_torque(estimates, tau[k], failure, odom)
@@ -420,15 +423,18 @@ class InverseSession(Session):
         each sample's kinematics (None when nothing takes it) and base rows. Raises
         MessageFieldError."""
         wanted, count = self.wanted, len(stamps)
+        if not count:
+            return []
         samples = self.frames.links.at_many(q[:count]) if self.kinematics_wanted else None
-        columns: list[tuple[str, list[object]]] = []
+        entries: list[Entry] = []
         if "/computed_torques" in wanted:
-            columns.append(("/computed_torques", self._torques.many(
-                stamps, np.concatenate((q[:count], v[:count], tau[:count]), axis=1), self._joint_state)))
+            entries.append(("/computed_torques", self._torques,
+                            np.concatenate((q[:count], v[:count], tau[:count]), axis=1), self._joint_state))
         if samples is not None:
-            columns += self.frames.ee_messages(stamps, samples, wanted, base)
+            entries += self.frames.ee_entries(samples, wanted, base)
             if "/tf" in wanted:
-                columns.append(("/tf", self.frames.tf(stamps, samples, None, base)))
+                entries.append(self.frames.tf_entry(count, samples, None, base))
+        columns = self._batches.fill(stamps, entries)
         return [([(topic, messages_[k]) for topic, messages_ in columns], None if samples is None else samples[k],
                  None if base is None else base[k]) for k in range(count)]
 
