@@ -102,8 +102,10 @@ class WheelOdometry:
     def _advanced(self, pose: np.ndarray, last: tuple[float, np.ndarray] | None, t: float, speeds: np.ndarray
                   ) -> tuple[np.ndarray, tuple[float, np.ndarray]]:
         """(pose, last sample) after a sample at t (s) with wheel ``speeds``: ``pose`` (x, y,
-        yaw) moved by the ``last`` sample's speeds held since its time."""
-        if last is not None:
+        yaw) moved by the ``last`` sample's speeds held since its time. A sample stamped
+        before the last one (a replay restarting its time base) holds the pose: nothing is
+        integrated backwards, and the odometry goes on from that sample."""
+        if last is not None and t >= last[0]:
             pose = odometry_step(self.mecanum, pose, last[1], t - last[0])
         return pose, (t, np.array(speeds, dtype=float))
 
