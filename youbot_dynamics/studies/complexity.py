@@ -143,10 +143,9 @@ def pseudo_inertia(link: Link) -> np.ndarray:
     return j
 
 
-def lagrange_euler_counted(links: list[Link], q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
-                           counter: Counter) -> np.ndarray:
-    """Joint torques (N m) by the Lagrange-Euler equations (module docstring), 0-based:
-    T[a][b] = the transform from frame a to frame b (a <= b, frame 0 the world)."""
+def chain_transforms(links: list[Link], q: np.ndarray, counter: Counter) -> list[list[np.ndarray]]:
+    """T[a][b]: the 4x4 transform from frame a to frame b (a < b; frame 0 the world, frame j
+    the link of joint j, 1-based), each built from the one before by a product."""
     n = len(links)
     steps = [counter.dot(homogeneous(link.rotation, link.translation), homogeneous(rotation_z(q[j]), np.zeros(3)))
              for j, link in enumerate(links)]
@@ -154,38 +153,52 @@ def lagrange_euler_counted(links: list[Link], q: np.ndarray, qd: np.ndarray, qdd
     for a in range(n + 1):
         for b in range(a + 1, n + 1):
             T[a][b] = counter.dot(T[a][b - 1], steps[b - 1])
-    # U[j][i] = d T_0^(j+1) / d q_i (i <= j): T_0^(i+1) Q T_(i+1)^(j+1)
-    U = [[counter.dot(counter.dot(T[0][i + 1], Q), T[i + 1][j + 1]) if i <= j else None for i in range(n)]
-         for j in range(n)]
+    return T
 
-    def second(j: int, i: int, k: int) -> np.ndarray | None:
-        """d U[j][i] / d q_k (None when zero)."""
-        lo, hi = min(i, k), max(i, k)
-        if hi > j:
-            return None
-        return counter.dot(counter.dot(counter.dot(counter.dot(T[0][lo + 1], Q), T[lo + 1][hi + 1]), Q),
-                           T[hi + 1][j + 1])
 
-    def trace_product(a: np.ndarray, b: np.ndarray) -> float:
-        """tr(a b^T): 16 multiplications."""
-        counter.multiplications += a.size
-        return float(np.sum(a * b))
+def first_partials(T: list[list[np.ndarray]], n: int, counter: Counter) -> dict[tuple[int, int], np.ndarray]:
+    """U[(j, i)] = d T_0^(j+1) / d q_i = T_0^(i+1) Q T_(i+1)^(j+1) for i <= j (0-based)."""
+    return {(j, i): counter.dot(counter.dot(T[0][i + 1], Q), T[i + 1][j + 1]) for j in range(n) for i in range(j + 1)}
 
+
+def second_partials(T: list[list[np.ndarray]], n: int, counter: Counter) -> dict[tuple[int, int, int], np.ndarray]:
+    """U[(j, i, k)] = d U[(j, i)] / d q_k for i, k <= j (zero otherwise: not stored)."""
+    second = {}
+    for j in range(n):
+        for i in range(j + 1):
+            for k in range(j + 1):
+                lo, hi = min(i, k), max(i, k)
+                left = counter.dot(counter.dot(counter.dot(T[0][lo + 1], Q), T[lo + 1][hi + 1]), Q)
+                second[(j, i, k)] = counter.dot(left, T[hi + 1][j + 1])
+    return second
+
+
+def trace_product(a: np.ndarray, b: np.ndarray, counter: Counter) -> float:
+    """tr(a b^T): one multiplication per entry."""
+    counter.multiplications += a.size
+    return float(np.sum(a * b))
+
+
+def lagrange_euler_counted(links: list[Link], q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                           counter: Counter) -> np.ndarray:
+    """Joint torques (N m) by the Lagrange-Euler equations (module docstring), 0-based."""
+    n = len(links)
+    T = chain_transforms(links, q, counter)
+    U = first_partials(T, n, counter)
     J = [pseudo_inertia(link) for link in links]
-    UJ = [[counter.dot(U[j][k], J[j]) if k <= j else None for k in range(n)] for j in range(n)]
-    M = np.array([[sum(trace_product(UJ[j][k], U[j][i]) for j in range(max(i, k), n)) for k in range(n)]
-                  for i in range(n)])
-    second_UJ = {(j, k, m): counter.dot(u, J[j]) for j in range(n) for k in range(n) for m in range(n)
-                 if (u := second(j, k, m)) is not None}
+    UJ = {(j, k): counter.dot(u, J[j]) for (j, k), u in U.items()}
+    M = np.array([[sum(trace_product(UJ[(j, k)], U[(j, i)], counter) for j in range(max(i, k), n))
+                   for k in range(n)] for i in range(n)])
+    second_UJ = {key: counter.dot(u, J[key[0]]) for key, u in second_partials(T, n, counter).items()}
     h = np.zeros(n)
     for i in range(n):
         for k in range(n):
             for m in range(n):
-                h_ikm = sum(trace_product(second_UJ[(j, k, m)], U[j][i]) for j in range(max(i, k, m), n))
+                h_ikm = sum(trace_product(second_UJ[(j, k, m)], U[(j, i)], counter) for j in range(max(i, k, m), n))
                 counter.multiplications += 2
                 h[i] += h_ikm * qd[k] * qd[m]
     g = np.append(GRAVITY, 0.0)
-    c = np.array([-sum(links[j].mass * counter.dot(g, counter.dot(U[j][i], np.append(links[j].com, 1.0)))
+    c = np.array([-sum(links[j].mass * counter.dot(g, counter.dot(U[(j, i)], np.append(links[j].com, 1.0)))
                        for j in range(i, n)) for i in range(n)])
     return counter.dot(M, qdd) + h + c
 
