@@ -1,7 +1,9 @@
 """The apex of a bouncing sphere: the error measure of ``ball_drop``-like scenes.
 
 A sphere in flight moves on a parabola (gravity only: no drag in the scenes), so at any
-sample in flight its apex is h + (v . up)^2 / (2 g), exactly, whatever the output rate:
+sample in flight its apex is h + (v . up)^2 / (2 g), exactly, whatever the output rate (to
+the integrator's error: a first-order stepper's flight is no exact parabola, and its later
+samples read a lower apex):
 h is the height of its lowest point above the plane through the world origin normal to
 gravity (the floor of ``ball_drop``), up = -gravity / g, v its velocity (m/s). The apex of
 the bounce after the first impact is the largest such value over the samples at least
