@@ -17,9 +17,9 @@ from ros_support import domain_id
 BENCH = Path(__file__).resolve().parents[2] / "bench"
 #: script -> its command line in the smoke form (the others read BENCH_SMOKE alone)
 ARGV = {
-    "bench_base.py": [], "bench_complexity.py": [], "bench_contact.py": [], "bench_contact_mujoco.py": [], "bench_identification.py": [],
+    "bench_base.py": [], "bench_contact.py": [], "bench_contact_mujoco.py": [], "bench_identification.py": [],
     "bench_pipeline.py": [], "bench_simulation.py": [], "bench_squeezer.py": [], "bench_sweeps.py": [],
-    "bench_woodpecker.py": [],
+    "bench_woodpecker.py": [], "bench_complexity.py": [],
     "bench_batch.py": ["--samples", "20", "--repeat", "1"],
     "bench_dynamics.py": ["--calls", "5", "--repeat", "1"],
     "bench_kinematics.py": ["--calls", "5", "--repeat", "1"],
