@@ -19,9 +19,11 @@ import pytest
 import yaml
 
 from youbot_dynamics.accuracy import work_precision as wp
+from youbot_dynamics.accuracy.bounce import bounce_apex
 from youbot_dynamics.cli import main
 from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import SceneError, load_scene
+from youbot_dynamics.sim.simulator import Simulator
 
 GRID = {"rk4": (1e-2, 2e-3, 4e-4),
         **{name: (1e-4, 1e-6, 1e-8) for name in ("rk45", "dop853", "radau", "cvode_adams", "cvode_bdf")}}
@@ -217,7 +219,7 @@ def test_contact_scenes_are_swept_on_body_positions(tmp_path, capsys, monkeypatc
     # fall, restitution 0.8, 0.148 s of flight up again; the compliant contact lasts a few ms:
     # measured 2.6 mm apart)
     reference = wp.reference_solution(load_scene("ball_drop").with_duration(0.6))
-    assert reference.measure == wp.BODY_MEASURE and reference.q.shape == (3,)
+    assert reference.measure == wp.APEX_MEASURE and reference.q.shape == (3,)
     g, landing = 9.81, math.sqrt(2.0 / 9.81)
     up = 0.6 - landing
     np.testing.assert_allclose(reference.q, [0.0, 0.0, 0.025 + 0.8 * g * landing * up - 0.5 * g * up ** 2], atol=5e-3)
@@ -232,3 +234,23 @@ def test_contact_scenes_are_swept_on_body_positions(tmp_path, capsys, monkeypatc
     # first order in dt: a 4x smaller step, about a 4x smaller error (measured 1.69e-3 m and 4.96e-4 m: 3.4x)
     assert by_setting[("pgs", 1e-3)]["q_error"] < by_setting[("pgs", 4e-3)]["q_error"] / 2
 
+
+
+def test_ball_drop_is_swept_on_the_apex_of_its_bounce_too():
+    """ball_drop's apex after the first impact (m above the floor): the reference's lies at
+    e^2 H0 = 0.64 m for the 1 m drop and restitution 0.8 (compliant Hunt-Crossley contact
+    with exact damping: measured -0.09 %, bound 0.2 %), resolved far below the sweep's
+    errors (its estimate measured 1e-9 m); a sweep point's apex error is its own apex's
+    distance from the reference's, and shrinks with the tolerance (rk45 at rtol 1e-4 and
+    1e-8). A scene with a robot has no apex."""
+    scene = load_scene("ball_drop").with_duration(1.1)   # one impact, the apex at about 0.84 s
+    reference = wp.reference_solution(scene)
+    assert reference.apex == pytest.approx(0.8 ** 2 * 1.0, rel=2e-3)
+    assert reference.apex_estimate < 1e-7
+    loose, tight = (wp.sweep_point(scene, "rk45", rtol, reference) for rtol in (1e-4, 1e-8))
+    simulator = Simulator(scene, wp.spec_for("rk45", 1e-4))
+    assert loose.apex_error == pytest.approx(abs(bounce_apex(simulator, simulator.run()) - reference.apex), abs=1e-15)
+    assert tight.apex_error < loose.apex_error / 10
+    text = wp.markdown_table(scene, reference, [loose, tight])
+    assert "Apex after the first impact" in text and f"| {loose.apex_error:.3g} |" in text
+    assert wp.reference_solution(load_scene("arm_swing").with_duration(0.05)).apex is None

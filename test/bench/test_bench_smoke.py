@@ -19,7 +19,7 @@ BENCH = Path(__file__).resolve().parents[2] / "bench"
 ARGV = {
     "bench_base.py": [], "bench_contact.py": [], "bench_contact_mujoco.py": [], "bench_identification.py": [],
     "bench_pipeline.py": [], "bench_simulation.py": [], "bench_squeezer.py": [], "bench_sweeps.py": [],
-    "bench_woodpecker.py": [],
+    "bench_woodpecker.py": [], "bench_complexity.py": [],
     "bench_batch.py": ["--samples", "20", "--repeat", "1"],
     "bench_dynamics.py": ["--calls", "5", "--repeat", "1"],
     "bench_kinematics.py": ["--calls", "5", "--repeat", "1"],

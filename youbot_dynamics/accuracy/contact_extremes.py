@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from youbot_dynamics.accuracy.bounce import bounce_apex, height_and_apex
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.errors import IntegrationError
 from youbot_dynamics.integrate.registry import STEPPERS
@@ -52,18 +53,14 @@ def ball_drop_data(law: dict[str, Any], integrator: dict[str, Any], duration: fl
 
 
 def first_bounce(simulator: Simulator, result: SimulationResult, restitution: float) -> dict[str, float]:
-    """Apex after the first impact (m above the floor) and the energy gained at the impact
-    beyond the law's e^2 (J): E_after - e^2 E_before, gravity potential from the floor
-    (the ball's radius and g are the scene's)."""
-    radius = simulator.scene.free_bodies[0].shape.radius
+    """Apex after the first impact (m above the floor, :func:`bounce_apex`) and the energy
+    gained at the impact beyond the law's e^2 (J): E_after - e^2 E_before, gravity
+    potential from the floor (the ball's radius and g are the scene's)."""
+    after = bounce_apex(simulator, result)
+    drop = height_and_apex(simulator, result)[1][0]
     g = float(np.linalg.norm(simulator.scene.gravity))
-    motion = simulator.model.body_motion(result.x)
-    z, vz = motion["position"][:, 0, 2] - radius, motion["velocity"][:, 0, 2]
-    ballistic = z + vz ** 2 / (2 * g)
-    low = int(np.argmin(z))
-    after = float(np.max(ballistic[low:][z[low:] > 0.05])) if np.any(z[low:] > 0.05) else math.nan
     mass = simulator.scene.free_bodies[0].body.mass
-    return {"apex_m": after, "energy_gain_J": mass * g * (after - restitution ** 2 * ballistic[0])}
+    return {"apex_m": after, "energy_gain_J": mass * g * (after - restitution ** 2 * drop)}
 
 
 def stiffness_sweep() -> list[dict[str, Any]]:

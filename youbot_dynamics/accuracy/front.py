@@ -36,8 +36,10 @@ def pareto_front(points: Sequence[SweepPoint]) -> list[SweepPoint]:
 def front_lines(reference: Reference, front: Sequence[SweepPoint]) -> list[str]:
     """The scene file's ``front`` block (scene/front.py's form)."""
     unit = "rad" if reference.ee_position.size else "m"
+    measure = reference.measure.replace(' (rad)', '').replace(' (m)', '')
+    measure = measure if "at the end" in measure else f"{measure} at the end"
     lines = [f"front:   # {FRONT_NOTE}",
-             f"  measure: \"{reference.measure.replace(' (rad)', '').replace(' (m)', '')} at the end ({unit})\"",
+             f"  measure: \"{measure} ({unit})\"",
              f"  reference: \"{reference.spec.describe()}\"",
              "  points:"]
     for p in front:

@@ -8,7 +8,11 @@
   (adaptive ones, atol = rtol / 100). Per point: the final-state error in joint space
   (max_i |q_i - q_ref,i|, rad; a scene with free bodies: of their final positions,
   max_b |p_b - p_ref,b|, m) and of the end-effector position (|p - p_ref|, m), the largest
-  difference of matching contact-event times (s), whether that error is below the reference's own error estimate
+  difference of matching contact-event times (s), for a single bouncing sphere
+  (``ball_drop``) the error of the apex after its first impact (m,
+  :func:`~youbot_dynamics.accuracy.bounce.bounce_apex`; the error column is then the larger
+  of it and the final-position error, :data:`APEX_MEASURE`; a run with no bounce errs
+  infinitely), whether that error is below the reference's own error estimate
   (then it is not resolved: the table prints ``< estimate (ref)``), the
   maximum energy drift max_t |E(t) - E(0)| (J) where the scene conserves energy, the wall
   time (s), the rhs and Jacobian evaluations, the counted work (:func:`counted_work`) and
@@ -44,6 +48,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from youbot_dynamics.accuracy.bounce import bounce_apex, is_single_sphere
 from youbot_dynamics.accuracy.sweeps import map_cases
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import IntegrationError
@@ -82,6 +87,8 @@ def spec_for(method: str, value: float) -> IntegratorSpec:
 #: What the error column measures: a robot's joint positions, else the free bodies' positions.
 JOINT_MEASURE = "max |q - q_ref| (rad)"
 BODY_MEASURE = "max |p - p_ref| of the free bodies' positions (m)"
+#: A single bouncing sphere: the larger of its final-position error and its apex error.
+APEX_MEASURE = "max(|p - p_ref| at the end, |apex - apex_ref| of the first bounce) (m)"
 
 
 @dataclass(frozen=True)
@@ -89,7 +96,9 @@ class Reference:
     """The reference run's final configuration ``q`` (the robot's joint positions, rad, or
     for a scene with free bodies their positions, m: ``measure`` says which), end-effector
     position (m; empty without a robot), its settings, the estimate of its own error: max
-    |q_tight - q_loose| over two tolerances (or steps), and its contact events."""
+    |q_tight - q_loose| over two tolerances (or steps), its contact events and, for a
+    single free sphere, the apex after its first impact (m; None otherwise) with its own
+    error estimate (the same two runs' difference)."""
 
     spec: IntegratorSpec
     state_dim: int
@@ -98,6 +107,8 @@ class Reference:
     error_estimate: float
     measure: str = JOINT_MEASURE
     events: tuple[ContactEvent, ...] = ()
+    apex: float | None = None
+    apex_estimate: float | None = None
 
 
 @dataclass(frozen=True)
@@ -118,6 +129,7 @@ class SweepPoint:
     failure: str | None
     below_reference: bool = False
     event_error: float | None = None
+    apex_error: float | None = None
 
     @property
     def spec(self) -> IntegratorSpec:
@@ -167,15 +179,21 @@ def reference_solution(scene: Scene) -> Reference:
     else:
         method = "radau" if scene.integrator.method != AUTO and REGISTRY[scene.integrator.method].stiff else "dop853"
         values = (REFERENCE_RTOL, 10 * REFERENCE_RTOL)
-    finals, events = [], ()
+    finals, events, apexes = [], (), []
     for value in values:
         simulator = Simulator(scene, spec_for(method, value))
         result = simulator.run()
         finals.append(final_figures(simulator, result))
         events = events or tuple(result.contact_events)
+        apexes.append(bounce_apex(simulator, result) if is_single_sphere(simulator) else None)
     (q, ee), (q_loose, _) = finals
+    apex, apex_loose = apexes
+    estimate = float(np.max(np.abs(q - q_loose)))
+    if apex is not None:
+        return Reference(spec_for(method, values[0]), simulator.state_dim, q, ee,
+                         max(estimate, abs(apex - apex_loose)), APEX_MEASURE, events, apex, abs(apex - apex_loose))
     return Reference(spec_for(method, values[0]), simulator.state_dim, q, ee,
-                     float(np.max(np.abs(q - q_loose))), JOINT_MEASURE if ee.size else BODY_MEASURE, events)
+                     estimate, JOINT_MEASURE if ee.size else BODY_MEASURE, events)
 
 
 def is_constrained(scene: Scene) -> bool:
@@ -202,12 +220,18 @@ def sweep_point(scene: Scene, method: str, value: float, reference: Reference) -
     q, ee = final_figures(simulator, result)
     stats = result.stats
     error = float(np.max(np.abs(q - reference.q)))
+    apex_error = None
+    if reference.apex is not None:
+        apex_error = abs(bounce_apex(simulator, result) - reference.apex)
+        apex_error = math.inf if math.isnan(apex_error) else apex_error   # it never bounced
+        error = max(error, apex_error)
     return SweepPoint(method, parameter, value, error,
                       float(np.linalg.norm(ee - reference.ee_position)) if ee.size else math.nan, result.energy_error,
                       stats.wall_time, stats.rhs_evals, stats.jac_evals,
                       counted_work(stats.rhs_evals, stats.jac_evals, reference.state_dim), stats.steps, None,
                       error < reference.error_estimate,
-                      event_time_difference(result.contact_events, reference.events) if reference.events else None)
+                      event_time_difference(result.contact_events, reference.events) if reference.events else None,
+                      apex_error)
 
 
 def sweep(scene: Scene, reference: Reference, grid: dict[str, Sequence[float]] | None = None,
@@ -264,15 +288,16 @@ def markdown_table(scene: Scene, reference: Reference, points: Sequence[SweepPoi
              f"{reference.state_dim}, reference "
              f"{reference.spec.describe()} (own error estimate {reference.error_estimate:.2g} {unit}). "
              f"Error: {reference.measure}.", "",
-             f"| integrator | dt or rtol | error ({unit}) | EE error (m) | event times (s) | energy drift (J) "
-             "| wall time (s) | rhs evals | Jacobians | work | steps | failure |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             *apex_note(reference),
+             f"| integrator | dt or rtol | error ({unit}) | EE error (m) | event times (s) | apex (m) "
+             "| energy drift (J) | wall time (s) | rhs evals | Jacobians | work | steps | failure |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for p in points:
         failure = "" if p.failure is None else p.failure.replace("|", "/")[:80]
         error = f"< {reference.error_estimate:.3g} (ref)" if p.below_reference else _cell(p.q_error)
         ee = _cell(p.ee_error) if reference.ee_position.size else "-"
         lines.append(f"| {p.integrator} | {p.parameter}={p.value:g} | {error} | {ee} | {_cell(p.event_error)} "
-                     f"| {_cell(p.energy_drift)} | {p.wall_time:.3g} | {_cell(p.rhs_evals)} | {_cell(p.jac_evals)} "
+                     f"| {_cell(p.apex_error)} | {_cell(p.energy_drift)} | {p.wall_time:.3g} | {_cell(p.rhs_evals)} | {_cell(p.jac_evals)} "
                      f"| {_cell(p.work)} | {_cell(p.steps)} | {failure} |")
     lines += ["", "Work: rhs evaluations + Jacobians x state dimension (counted, the same on any machine)."]
     if any(p.below_reference for p in points):
@@ -284,6 +309,15 @@ def markdown_table(scene: Scene, reference: Reference, points: Sequence[SweepPoi
                    f"cheapest is **{best.spec.describe()}** (work {best.work:.4g}, {best.wall_time:.3g} s, "
                    f"error {best.q_error:.2g} {unit}).")]
     return "\n".join(lines) + "\n"
+
+
+def apex_note(reference: Reference) -> list[str]:
+    """The markdown lines naming the reference's apex after the first impact (none
+    without one)."""
+    if reference.apex is None:
+        return []
+    return [f"Apex after the first impact: {reference.apex:.9g} m in the reference (own error estimate "
+            f"{reference.apex_estimate:.2g} m); the apex column is |apex - apex_ref|.", ""]
 
 
 def plot(scene: Scene, points: Sequence[SweepPoint], path: Path, measure: str = JOINT_MEASURE) -> None:
