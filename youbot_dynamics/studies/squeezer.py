@@ -322,6 +322,20 @@ def suppression_table(formulation: str, tolerances=SUPPRESSION_TOLERANCES,
                   for column in SUPPRESSION_COLUMNS} for tol in tolerances}
 
 
+def document_setting_weights(form, tolerances: tuple[float, float, float], suppressed: str
+                             ) -> tuple[np.ndarray, np.ndarray]:
+    """(atol, suppressed mask) of a Table 8/9 setting on ``form``'s (q, v, w, lambda): atol
+    1e-6 on q and ``tolerances`` on (v, w = v', lambda); the mask marks w and lambda where
+    ``suppressed`` names them."""
+    n, m = form.n, form.m
+    atol = np.concatenate((np.full(n, 1e-6), np.full(n, tolerances[0]),
+                           np.full(n, tolerances[1]), np.full(m, tolerances[2])))
+    marked = np.zeros(atol.size, dtype=bool)
+    marked[2 * n:3 * n] = "w" in suppressed
+    marked[3 * n:] = "lambda" in suppressed
+    return atol, marked
+
+
 def document_settings_run(formulation: str, row: int) -> dict:
     """One row of Tables 8 (index3) or 9 (index2) as document 001 ran it: IDA with its own
     difference-quotient Jacobian (as Assimulo's), rtol 1e-6, atol 1e-6 on q and the row's
@@ -331,12 +345,7 @@ def document_settings_run(formulation: str, row: int) -> dict:
     convergence failures and q's error (or where and why it failed)."""
     tolerances, suppressed, document = DOCUMENT_SETTINGS[row]
     form = dae_form(squeezer_system(), formulation, Q0, V0, W0, LAMBDA0)
-    n, m = form.n, form.m
-    atol = np.concatenate((np.full(n, 1e-6), np.full(n, tolerances[0]),
-                           np.full(n, tolerances[1]), np.full(m, tolerances[2])))
-    marked = np.zeros(atol.size, dtype=bool)
-    marked[2 * n:3 * n] = "w" in suppressed
-    marked[3 * n:] = "lambda" in suppressed
+    atol, marked = document_setting_weights(form, tolerances, suppressed)
     result = {"document": document[0 if formulation == "index3" else 1]}
     try:
         with contextlib.redirect_stdout(io.StringIO()):
@@ -362,12 +371,7 @@ def index2_step_sizes(row: int = 6) -> tuple[np.ndarray, np.ndarray]:
     0.03 s; the end time of every step and its size (s)."""
     tolerances, suppressed, _ = DOCUMENT_SETTINGS[row]
     form = dae_form(squeezer_system(), "index2", Q0, V0, W0, LAMBDA0)
-    n, m = form.n, form.m
-    atol = np.concatenate((np.full(n, 1e-6), np.full(n, tolerances[0]),
-                           np.full(n, tolerances[1]), np.full(m, tolerances[2])))
-    marked = np.zeros(atol.size, dtype=bool)
-    marked[2 * n:3 * n] = "w" in suppressed
-    marked[3 * n:] = "lambda" in suppressed
+    atol, marked = document_setting_weights(form, tolerances, suppressed)
     stepper = IdaStepper(form.residual, 0.0, form.y0, form.yp0, T_REFERENCE, marked, 1e-6, atol,
                          None, {}, (), True)
     times = [0.0]
