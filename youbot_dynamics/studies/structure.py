@@ -22,7 +22,7 @@ benchmarks.md section 6) counts from 1, equations named f1, f2, ... in their giv
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable, Sequence
+from typing import Callable, Iterable, Sequence
 
 import networkx as nx
 import sympy as sp
@@ -114,23 +114,33 @@ def augmenting_path_matching(equation_vars: Sequence[Sequence[int]], unknowns: I
     allowed = set(unknowns)
     assign: dict[int, int] = {}
 
-    def augment(i: int, visited: set[int]) -> bool:
+    def candidates(i: int) -> list[int]:
         variables = [j for j in equation_vars[i] if j in allowed]
-        ordered = variables[::-1] if last_first else variables
-        for j in ordered:
-            if j not in assign:
+        return variables[::-1] if last_first else variables
+    for i in range(len(equation_vars)):
+        augmenting_path(i, candidates, assign, [], [])
+    return assign
+
+
+def augmenting_path(i: int, candidates: Callable[[int], Sequence[int]], assign: dict[int, int],
+                    colored_eqs: list[int], colored_vars: list[int]) -> bool:
+    """Pantelides' AUGMENTPATH from equation i: a free variable of ``candidates(i)`` (in that
+    order), else one re-routed along a path, ``assign`` (variable -> equation) updated;
+    the equations and variables the search visited are appended to ``colored_eqs`` and
+    ``colored_vars``. True if the path was found."""
+    colored_eqs.append(i)
+    options = candidates(i)
+    for j in options:
+        if j not in assign:
+            assign[j] = i
+            return True
+    for j in options:
+        if j not in colored_vars:
+            colored_vars.append(j)
+            if augmenting_path(assign[j], candidates, assign, colored_eqs, colored_vars):
                 assign[j] = i
                 return True
-        for j in ordered:
-            if j not in visited:
-                visited.add(j)
-                if augment(assign[j], visited):
-                    assign[j] = i
-                    return True
-        return False
-    for i in range(len(equation_vars)):
-        augment(i, set())
-    return assign
+    return False
 
 
 def is_perfect_matching(equation_vars: Sequence[Iterable[int]], assign: Sequence[int]) -> bool:
@@ -249,20 +259,8 @@ def pantelides(equations: Sequence[sp.Expr], t: sp.Symbol,
     assign: dict[int, int] = {}
     steps: list[str] = []
 
-    def augment(i: int, colored_eqs: list[int], colored_vars: list[int]) -> bool:
-        colored_eqs.append(i)
-        candidates = sorted(j for j in eq_vars[i] if A[j] is None)
-        for j in candidates:
-            if j not in assign:
-                assign[j] = i
-                return True
-        for j in candidates:
-            if j not in colored_vars:
-                colored_vars.append(j)
-                if augment(assign[j], colored_eqs, colored_vars):
-                    assign[j] = i
-                    return True
-        return False
+    def highest_derivatives(i: int) -> list[int]:
+        return sorted(j for j in eq_vars[i] if A[j] is None)
 
     def add_variable(variable: Variable) -> int:
         index[variable] = len(variables)
@@ -275,7 +273,7 @@ def pantelides(equations: Sequence[sp.Expr], t: sp.Symbol,
         for _ in range(max_steps):
             colored_eqs: list[int] = []
             colored_vars: list[int] = []
-            if augment(i, colored_eqs, colored_vars):
+            if augmenting_path(i, highest_derivatives, assign, colored_eqs, colored_vars):
                 break
             for j in colored_vars:
                 name, order = variables[j]
