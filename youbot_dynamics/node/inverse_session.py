@@ -75,7 +75,7 @@ class InverseSession(Session):
             raise UserInputError(f"{scene.source}: inverse mode needs a robot; the scene has none")
         if scene.base.mode != "fixed":  # /odom from the wheel speeds of the joint states
             self.odometry = WheelOdometry(mecanum_base_from_robot(robot, scene.base.wheels), scene.base.pose0,
-                                          frame_prefix)
+                                          frame_prefix, max_gap=max_gap_ns / NS_PER_S)
             self.wheels = np.array([robot.joint_index(name) for name in scene.base.wheels])
         super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget, frame_prefix,
                          node_name, moving_base=self.odometry is not None, moving_root=self.odometry is not None)

@@ -73,10 +73,14 @@ def odometry_values(row: np.ndarray, twist: tuple[float, float, float]) -> np.nd
 
 class WheelOdometry:
     """Wheel odometry of a mecanum base from ``pose0`` (x, y, yaw in odom): each sample's
-    wheel speeds (rad/s, ``mecanum.names`` order) held over the increment to the next."""
+    wheel speeds (rad/s, ``mecanum.names`` order) held over the increment to the next, if
+    that increment is a step of one stream: later than the last sample and at most
+    ``max_gap`` (s) after it. Across a break (a stamp back in time, a pause, a one-off
+    wall-clock stamp) the pose holds and the odometry goes on from the new sample."""
 
-    def __init__(self, mecanum: MecanumBase, pose0, prefix: str = "", base_link: str = "base_footprint") -> None:
-        self.mecanum, self.pose0 = mecanum, np.array(pose0, dtype=float)
+    def __init__(self, mecanum: MecanumBase, pose0, prefix: str = "", base_link: str = "base_footprint",
+                 max_gap: float = math.inf) -> None:
+        self.mecanum, self.pose0, self.max_gap = mecanum, np.array(pose0, dtype=float), float(max_gap)
         self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + base_link
         self._odom = Refilled(_not_covariance)
         self.reset()
@@ -102,10 +106,9 @@ class WheelOdometry:
     def _advanced(self, pose: np.ndarray, last: tuple[float, np.ndarray] | None, t: float, speeds: np.ndarray
                   ) -> tuple[np.ndarray, tuple[float, np.ndarray]]:
         """(pose, last sample) after a sample at t (s) with wheel ``speeds``: ``pose`` (x, y,
-        yaw) moved by the ``last`` sample's speeds held since its time. A sample stamped
-        before the last one (a replay restarting its time base) holds the pose: nothing is
-        integrated backwards, and the odometry goes on from that sample."""
-        if last is not None and t >= last[0]:
+        yaw) moved by the ``last`` sample's speeds held since its time, unless the stream
+        broke between them (see the class)."""
+        if last is not None and 0.0 <= t - last[0] <= self.max_gap:
             pose = odometry_step(self.mecanum, pose, last[1], t - last[0])
         return pose, (t, np.array(speeds, dtype=float))
 
