@@ -99,7 +99,7 @@ def test_table11_dopri5_on_index1():
                            np.concatenate((squeezer.Q0, squeezer.V0)), 0.03, 1e-6, 1e-6)
     assert (hairer["accepted"], hairer["rejected"], hairer["rhs_evals"]) == (102, 19, 728)
     assert hairer["rhs_evals"] == 6 * hairer["steps"] + 2
-    assert 704 == 6 * (85 + 32) + 2
+    # the document's 704 f-evals fit the same rule: 6 * (85 + 32) + 2
     stats = squeezer.simulate_squeezer("index1", "rk45").stats
     assert (stats.steps, stats.rejected_steps, stats.rhs_evals) == (109, 28, 824)
 

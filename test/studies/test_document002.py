@@ -224,13 +224,12 @@ def test_document_contact_force_pulls_where_ours_does_not():
     it is -400 N (pulls); at first touch (d = 0+, d' = 1 m/s) it jumps to 1000 N. Ours, Hunt
     and Crossley k d^n (1 + chi d'), clipped at 0 (n = 1, chi = 1 s/m): 50 N and 0 N there,
     never negative for any chi; equal to the document's without motion (d' = 0: 100 N both)."""
-    k, b = 1e6, 1e3
-    assert k * 1e-4 + b * -0.5 == -400.0 and k * 0.0 + b * 1.0 == 1000.0
+    k, b = 1e6, 1e3     # the document's k d + b d': 1e6 * 1e-4 + 1e3 * -0.5 = -400 N, 0 + 1e3 * 1 = 1000 N
     assert math.isclose(hunt_crossley_force(1e-4, -0.5, k, 1.0, 1.0), 50.0, rel_tol=1e-12)
     assert hunt_crossley_force(1e-12, 1.0, k, 1.0, 1.0) < 1e-5
     assert min(hunt_crossley_force(1e-4, rate, k, 1.0, chi) for rate in np.linspace(-5, 0, 11)
                for chi in (0.1, 1.0, 10.0)) == 0.0
-    assert hunt_crossley_force(1e-4, 0.0, k, 1.0, 1.0) == k * 1e-4 == 100.0
+    assert hunt_crossley_force(1e-4, 0.0, k, 1.0, 1.0) == 100.0     # k d, the document's at d' = 0
 
 
 def test_contact_friction_is_ours_away_from_the_regularisation():
@@ -299,7 +298,10 @@ def test_least_squares_is_ours_and_the_condition_is_of_y():
     covariance = np.var(residuals) * np.linalg.inv(y.T @ y)
     ours = ordinary_least_squares(y, tau, 1)
     np.testing.assert_allclose(ours.values, theta, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(ours.covariance, covariance * 1.0551, rtol=1e-4)
+    n, p = y.shape
+    factor = n / (n - p) * np.mean(residuals ** 2) / np.var(residuals)     # 1.0551446 here
+    np.testing.assert_allclose(ours.covariance, covariance * factor, rtol=1e-9)
+    assert factor == pytest.approx(1.0551, abs=1e-4)     # the figure the docstring and ledger give
     assert math.isclose(ours.condition ** 2, np.linalg.cond(y.T @ y), rel_tol=1e-9)
 
 
