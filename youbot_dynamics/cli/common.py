@@ -35,7 +35,6 @@ import numpy as np
 
 from youbot_dynamics import default_urdf
 from youbot_dynamics.errors import UserInputError
-from youbot_dynamics.io.text_tables import cell, markdown_table  # noqa: F401 (the commands use them)
 from youbot_dynamics.model import lie, limits
 
 if TYPE_CHECKING:  # the robot loader (lxml, Pinocchio) only for commands that load one

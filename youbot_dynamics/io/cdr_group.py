@@ -18,13 +18,12 @@ from numba import njit, types
 
 from youbot_dynamics.dynamics.friction import unchecked
 from youbot_dynamics.io.cdr_template import CdrTemplate, Refilled, Serialized, plausible_values, refill_bytes
-from youbot_dynamics.io.stamps import NS_PER_S
+from youbot_dynamics.io.stamps import STAMP_LIMIT_NS
 
 Entry = tuple[str, Refilled, np.ndarray, Callable[[int, np.ndarray], object]]
 """One topic of a batch: (topic, its Refilled, values (N, fields), the builder of its first message)."""
 
 
-_STAMP_LIMIT_NS = 2**31 * NS_PER_S
 """The first stamp (ns) a builtin_interfaces/Time cannot hold."""
 _INDICES = types.Array(types.intp, 1, "C")
 
@@ -40,7 +39,7 @@ def _checked_refill(template: np.ndarray, float_offsets: np.ndarray, values: np.
     into ``out`` when every stamp is a valid builtin_interfaces/Time and ``plausible_values``
     holds; False (``out`` untouched) otherwise."""
     for n in range(stamps_ns.shape[0]):
-        if not 0 <= stamps_ns[n] < _STAMP_LIMIT_NS:
+        if not 0 <= stamps_ns[n] < STAMP_LIMIT_NS:
             return False
     if not plausible_values(values, quaternions, least_square, largest_square):
         return False

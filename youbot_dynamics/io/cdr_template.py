@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit, types
 
 from youbot_dynamics.io.messages import TYPESTORE, UNIT_QUATERNION_TOLERANCE, MessageFieldError, time
-from youbot_dynamics.io.stamps import NS_PER_S
+from youbot_dynamics.io.stamps import NS_PER_S, STAMP_LIMIT_NS
 
 _PATTERNS = (struct.unpack("<d", b"\x11" * 8)[0], struct.unpack("<d", b"\x22" * 8)[0])
 """Two finite float64 values whose bytes differ everywhere (3.8e-226, 3.6e-145)."""
@@ -132,7 +132,7 @@ def stamps_ns_checked(stamps: Sequence[int]) -> np.ndarray:
     """``stamps`` (integer ns) as int64, each a valid builtin_interfaces/Time (the checks of
     :func:`youbot_dynamics.io.messages.time`, which names what is wrong)."""
     array = np.asarray(stamps)
-    if array.dtype != np.int64 or array.min() < 0 or array.max() >= 2**31 * NS_PER_S:
+    if array.dtype != np.int64 or array.min() < 0 or array.max() >= STAMP_LIMIT_NS:
         for stamp in stamps:
             time(stamp)                     # raises MessageFieldError for the first bad one
         array = array.astype(np.int64)
@@ -269,6 +269,12 @@ class CdrTemplate:
         data = np.empty((count, len(self.template_bytes)), dtype=np.uint8)
         refill_bytes(self.template_bytes, self.float_offsets, values.view(np.uint8), self.stamp_offsets, stamps, data)
         return [Serialized(self.msgtype, row.tobytes()) for row in data]
+
+
+def not_covariance(path: str) -> bool:
+    """A :class:`Refilled` path filter: every float field but the covariances (those stay the
+    first message's)."""
+    return "covariance" not in path
 
 
 class Refilled:

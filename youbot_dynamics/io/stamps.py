@@ -6,6 +6,9 @@ from __future__ import annotations
 NS_PER_S = 1_000_000_000
 """Nanoseconds per second: sample stamps and trajectory times are integer nanoseconds."""
 
+STAMP_LIMIT_NS = 2**31 * NS_PER_S
+"""Stamps (ns) must lie in [0, STAMP_LIMIT_NS): the range of builtin_interfaces/Time."""
+
 
 MALFORMED_STAMP_NS = -(2**63)
 """What :func:`stamp_ns_of` gives for a nanosec of 1e9 or more: negative, so that every stamp

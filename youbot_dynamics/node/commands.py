@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from youbot_dynamics.io.stamps import MALFORMED_STAMP_NS, NS_PER_S
+from youbot_dynamics.io.stamps import MALFORMED_STAMP_NS, NS_PER_S, STAMP_LIMIT_NS
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.node.interface import TIMEOUT_ACTIONS
 from youbot_dynamics.sim.controllers import Reference
@@ -65,8 +65,6 @@ REJECTION_KINDS = ("non_finite", "length_mismatch", "unknown_joint", "duplicate_
                    "too_large", "implausible_torque", "duplicate")
 """Kinds of rejected input, as counted in /diagnostics."""
 
-STAMP_LIMIT_NS = 2**31 * NS_PER_S
-"""Stamps (ns) must lie in [0, STAMP_LIMIT_NS): the range of builtin_interfaces/Time."""
 
 MAX_NAMES = 256
 """Most joint names one message may carry (the youBot has 13 joints; a composed scene a few

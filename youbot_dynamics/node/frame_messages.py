@@ -47,7 +47,7 @@ from youbot_dynamics.io.cdr_group import Entry
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.frames import (FramesBatch, LinkFrames, LinkTransform, SampleFrames, composed_rows, ee_rows,
+from youbot_dynamics.node.frames import (FramesBatch, LinkFrames, LinkTransform, SampleFrames, ee_rows,
                                          frame_tree, pose_rows)
 
 FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)

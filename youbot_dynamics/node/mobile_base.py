@@ -41,7 +41,7 @@ from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase, base_twist
 from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.io import messages
-from youbot_dynamics.io.cdr_template import Refilled
+from youbot_dynamics.io.cdr_template import Refilled, not_covariance
 from youbot_dynamics.node.commands import InputCounters, InputRejected
 from youbot_dynamics.node.frames import ODOM_FRAME, WORLD_FRAME, planar_row
 from youbot_dynamics.sim.engine import Snapshot
@@ -58,10 +58,6 @@ SLIP_WARN = 0.05
 #: of ros2_controllers' diff_drive_controller defaults.
 POSE_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
 TWIST_COVARIANCE = np.diag([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-2]).ravel()
-
-
-def _not_covariance(path: str) -> bool:
-    return "covariance" not in path
 
 
 def odometry_values(row: np.ndarray, twist: tuple[float, float, float]) -> np.ndarray:
@@ -82,7 +78,7 @@ class WheelOdometry:
                  max_gap: float = math.inf) -> None:
         self.mecanum, self.pose0, self.max_gap = mecanum, np.array(pose0, dtype=float), float(max_gap)
         self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + base_link
-        self._odom = Refilled(_not_covariance)
+        self._odom = Refilled(not_covariance)
         self.reset()
 
     def reset(self) -> None:
@@ -132,7 +128,7 @@ class MobileBase:
         self.base, self.counters, self.timeout = base, counters, float(timeout)
         self.odometry = WheelOdometry(base.mecanum, base.pose0, prefix, base_link)
         self.world_frame = prefix + WORLD_FRAME
-        self._truth = Refilled(_not_covariance)
+        self._truth = Refilled(not_covariance)
         self.reset()
 
     def reset(self) -> None:

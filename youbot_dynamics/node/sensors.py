@@ -11,7 +11,7 @@ from collections.abc import Collection, Sequence
 import numpy as np
 
 from youbot_dynamics.io import messages
-from youbot_dynamics.io.cdr_template import Refilled
+from youbot_dynamics.io.cdr_template import Refilled, not_covariance
 from youbot_dynamics.node.interface import pair_topic
 from youbot_dynamics.sim.engine import Snapshot
 from youbot_dynamics.sim.model import SimModel
@@ -61,7 +61,7 @@ class SensorMessages:
     def _refilled(self, topic: str) -> Refilled:
         """The topic's refilled messages (the covariances stay the first message's)."""
         if topic not in self._templates:
-            self._templates[topic] = Refilled(lambda path: "covariance" not in path)
+            self._templates[topic] = Refilled(not_covariance)
         return self._templates[topic]
 
     def _wrenches(self, topic: str, frame: str, stamps: Sequence[int],

@@ -20,7 +20,7 @@ from youbot_dynamics.studies import modia3d_pendulums
 from youbot_dynamics.studies.equations import (LAG_SECOND_RUN, MODIA_MERGE, cartesian_pendulum,
                                                first_order_lag, lowpass_filter, modia_pendulum,
                                                second_order_system)
-from youbot_dynamics.studies.modia_log import DOCUMENT_LOG, run_as_document, statistics_rows
+from youbot_dynamics.studies.modia_log import DOCUMENT_LOG, statistics_rows
 from youbot_dynamics.studies.figures import FigureSet, heading, panels, save, specs
 from youbot_dynamics.studies.state_selection import simulate_with_reselection
 from youbot_dynamics.studies.structure import LOWPASS_INCIDENCE, LOWPASS_KNOWN, structure_report

@@ -14,7 +14,6 @@ import math
 import numpy as np
 from numba import njit, types
 
-from youbot_dynamics.dynamics.friction import unchecked
 
 _READ2 = types.Array(types.float64, 2, "C", readonly=True)
 _VECTOR = types.Array(types.float64, 1, "A", readonly=True)
@@ -61,7 +60,3 @@ def roller_floor_force(v: np.ndarray, loads: np.ndarray, hubs: np.ndarray, posit
     out[0] = _numpy_sum(fx)
     out[1] = _numpy_sum(fy)
     out[2] = _numpy_sum(moment)
-
-
-#: :func:`roller_floor_force` without numba's type dispatch (callers pass float64 C arrays).
-roller_floor_force_unchecked = unchecked(roller_floor_force)
