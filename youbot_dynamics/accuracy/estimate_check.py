@@ -21,20 +21,18 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from youbot_dynamics.accuracy.work_precision import spec_for
+from youbot_dynamics.accuracy.work_precision import REFERENCE_RTOL, STEPPER_REFINEMENT, spec_for
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import IntegrationError, integrate
 from youbot_dynamics.integrate.registry import integrator_entry
 from youbot_dynamics.scene.schema import IntegratorSpec, Scene
 from youbot_dynamics.sim import companion, engine
 from youbot_dynamics.sim.build import compile
-from youbot_dynamics.sim.error_estimate import (COMPANION_FACTOR, estimate_factor, event_time_difference,
+from youbot_dynamics.sim.error_estimate import (companion_spec, estimate_factor, event_time_difference,
                                                 group_differences)
 
 #: The reference of an ODE scene.
-REFERENCE = IntegratorSpec("dop853", rtol=1e-12, atol=1e-14, energy_tolerance=math.inf)
-#: A constraint scene's reference: its stepper at dt / STEPPER_REFINEMENT.
-STEPPER_REFINEMENT = 32
+REFERENCE = IntegratorSpec("dop853", rtol=REFERENCE_RTOL, atol=1e-2 * REFERENCE_RTOL, energy_tolerance=math.inf)
 #: Acceptance: the estimate within this factor of the true error.
 FACTOR = 3.0
 #: A true error below RESOLUTION x the reference's own error is not resolved.
@@ -131,7 +129,7 @@ def ode_rows(case: str, rhs: Callable, x0: np.ndarray, times: np.ndarray, method
     rows = []
     for value in values:
         spec = spec_for(method, value)
-        companion = spec_for(method, value / 2.0 if spec.dt is not None else value / COMPANION_FACTOR)
+        companion = companion_spec(spec)
         try:
             x, x_c = (integrate(rhs, x0, times, method, dt=s.dt, rtol=s.rtol, atol=s.atol, jac=jac,
                                 n_positions=len(x0) // 2).x for s in (spec, companion))
