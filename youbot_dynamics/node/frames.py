@@ -262,6 +262,13 @@ def ee_rows(samples: Sequence[SampleFrames], base: np.ndarray | None = None) -> 
     return np.array([composed_rows(rows[0], sample.ee) for sample, rows in zip(samples, base)])
 
 
+def end_effector_row(sample: SampleFrames, base: np.ndarray | None = None) -> np.ndarray:
+    """The row (7,) of the sample's end effector (``ee_index``) in the root frame, or with
+    ``base`` (2, 7; a moving base's odom -> base_footprint first) in odom."""
+    row = sample.ee[sample.ee_index]
+    return row if base is None else composed_rows(base[0], row[None])[0]
+
+
 def planar_row(x: float, y: float, yaw: float) -> np.ndarray:
     """The row (7,) of a planar pose: translation (x, y, 0) m and the quaternion of ``yaw``
     (rad) about z."""

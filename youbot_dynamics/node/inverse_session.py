@@ -32,7 +32,7 @@ from youbot_dynamics.io.cdr_group import Entry, TopicBatches
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.node.commands import STAMP_LIMIT_NS, InputRejected, JointSample, joint_sample
-from youbot_dynamics.node.frames import SampleFrames, composed_rows
+from youbot_dynamics.node.frames import SampleFrames, end_effector_row
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, Estimates,
                                           InverseDynamics, implausible_joints, plausible_limit, position_bounds)
@@ -453,7 +453,7 @@ class InverseSession(Session):
             q, v, tau = estimates.q[k], estimates.v[k], torques[k]
             data = self.dynamics.data
             energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)
-            ee = sample.ee[sample.ee_index] if base is None else composed_rows(base[0], sample.ee[[sample.ee_index]])[0]
+            ee = end_effector_row(sample, base)
             self.recorder.sample(stamp, self.robot.joint_names, q, v, tau, energy, ee[:3])
             if base is not None:
                 self.recorder.base(stamp, base)

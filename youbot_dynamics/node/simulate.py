@@ -31,7 +31,7 @@ from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.node.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                            follow, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.node.frames import SampleFrames, composed_rows
+from youbot_dynamics.node.frames import SampleFrames, end_effector_row
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.mobile_base import MobileBase
 from youbot_dynamics.node.sensors import SensorMessages
@@ -299,7 +299,7 @@ class SimulationSession(Session):
         if base is not None:
             self.recorder.base(stamp, base)
         if sample is not None:
-            ee = sample.ee[sample.ee_index] if base is None else composed_rows(base[0], sample.ee[[sample.ee_index]])[0]
+            ee = end_effector_row(sample, base)
             self.recorder.sample(stamp, snapshot.joint_names, snapshot.q, snapshot.v, snapshot.tau, snapshot.energy,
                                  ee[:3])
         if bodies is not None:
