@@ -79,7 +79,7 @@ class InverseSession(Session):
             self.wheels = np.array([robot.joint_index(name) for name in scene.base.wheels])
         super().__init__(scene, robot, frame_id, ee_link, mcap_path, rrd_path, callback_budget, frame_prefix,
                          node_name, moving_base=self.odometry is not None, moving_root=self.odometry is not None)
-        self._odometry_rows: dict[int, np.ndarray] = {}
+        self._odometry_row: np.ndarray | None = None     # odom -> base_footprint of the last sample taken
         """odom -> base_footprint (row) of the last sample taken, by stamp (ns): a torque's
         sample precedes the one that completes it."""
         self.known = tuple(j.name for j in self.robot.tree) + self.robot.joint_names
@@ -331,7 +331,7 @@ class InverseSession(Session):
         count = len(tau) if plausible.all() else int(np.argmin(plausible))
         base = None
         if self.odometry is not None and count:
-            base = self._base_rows(stamps[start:], v[start:], taken[start:], estimates.stamps[:count].tolist())
+            base = self._base_rows(stamps[start:], v[start:], taken[start:], estimates.ends[:count])
         built, failure = self._torque_messages(estimates.stamps[:count].tolist(), estimates.q, estimates.v, tau, base)
         bad = None if failure is None and count == len(tau) else len(built)
         end = len(stamps)
@@ -365,21 +365,23 @@ class InverseSession(Session):
         if self.odometry is None:
             return []
         message, row = self.odometry.outputs(stamp, stamp / NS_PER_S, v[self.wheels])
-        self._odometry_rows = {stamp: row}
+        self._odometry_row = row
         odom = [("/odom", message)]
         self.recorder.write(odom, log_ns)
         return odom
 
     def _base_rows(self, stamps: Sequence[int], v: np.ndarray, taken: Sequence[bool],
-                   torque_stamps: Sequence[int]) -> np.ndarray:
-        """Rows (N, 2, 7) at each torque's stamp (int ns) of odom -> base_footprint, the wheel
-        odometry there (of the last sample taken, or previewed through the rows ``stamps``,
-        ``v``, ``taken`` still to be published), and odom -> world, the identity."""
-        rows = dict(self._odometry_rows)
+                   ends: Sequence[int]) -> np.ndarray:
+        """Rows (N, 2, 7) of odom -> base_footprint and odom -> world (the identity) at each
+        torque's sample: the taken row before the row ``ends[i]`` that completes torque i
+        (the stencil's middle), its wheel odometry previewed through the rows ``stamps``,
+        ``v``, ``taken`` still to be published, or, before the first of them, the last
+        sample's. Matched by row, not by stamp: a replay may repeat stamps in one batch."""
         ahead = [k for k, good in enumerate(taken) if good]
-        rows.update(zip((stamps[k] for k in ahead), self.odometry.preview(
-            [stamps[k] / NS_PER_S for k in ahead], [v[k, self.wheels] for k in ahead])))
-        return np.array([(rows[int(stamp)], IDENTITY_ROW) for stamp in torque_stamps]).reshape(-1, 2, 7)
+        previewed = self.odometry.preview([stamps[k] / NS_PER_S for k in ahead], [v[k, self.wheels] for k in ahead])
+        middles = np.searchsorted(ahead, ends) - 1
+        return np.array([(previewed[m] if m >= 0 else self._odometry_row, IDENTITY_ROW)
+                         for m in middles]).reshape(-1, 2, 7)
 
     def _rejected_torque(self, estimates: Estimates, tau: np.ndarray, failure: Exception | None,
                          odom: Outputs) -> Outputs:
