@@ -57,7 +57,7 @@ from numba import njit, types
 
 from youbot_dynamics.dynamics.friction import JointFriction, unchecked
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch
-from youbot_dynamics.io.stamps import NS_PER_S
+from youbot_dynamics.io.stamps import NS_PER_S, STAMP_LIMIT_NS
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.node.commands import DEFAULT_EFFORT_LIMIT, InputRejected, JointSample
 
@@ -147,6 +147,56 @@ def _central_differences(stamps: np.ndarray, taken: np.ndarray, v: np.ndarray, h
 
 
 _central_differences_unchecked = unchecked(_central_differences)
+"""The same without numba's type dispatch (callers pass exactly the signature's types)."""
+
+
+@njit(types.int64(types.Array(types.float64, 2, "C", readonly=True), types.Array(types.float64, 1, "C", readonly=True)),
+      cache=True)
+def _plausible_rows(torques: np.ndarray, bound: np.ndarray) -> int:
+    """The number of leading rows of ``torques`` (N, nv; N m, N) with |tau_i| <= bound_i on
+    every joint (a NaN is not)."""
+    for row in range(torques.shape[0]):
+        for j in range(torques.shape[1]):
+            if not abs(torques[row, j]) <= bound[j]:
+                return row
+    return torques.shape[0]
+
+
+_plausible_rows_unchecked = unchecked(_plausible_rows)
+"""The same without numba's type dispatch (callers pass exactly the signature's types)."""
+
+
+def plausible_rows(torques: np.ndarray, bound: np.ndarray) -> int:
+    """The number of leading rows of ``torques`` (N, nv; N m, N: a C-ordered float array)
+    whose every |tau_i| is within ``bound`` (nv,; :func:`plausible_limit`); N when all are."""
+    if not (torques.dtype == bound.dtype == np.float64 and torques.ndim == 2 and torques.flags.c_contiguous
+            and bound.shape == torques.shape[1:] and bound.flags.c_contiguous):
+        raise ValueError(f"plausible_rows: float64 torques (N, n) and bound (n,); got {torques.dtype} "
+                         f"{torques.shape}, {bound.dtype} {bound.shape}")
+    return _plausible_rows_unchecked(torques, bound)
+
+
+@njit(types.boolean(types.Array(types.int64, 1, "C", readonly=True), types.Array(types.float64, 2, "C", readonly=True),
+                    types.Array(types.float64, 4, "C", readonly=True), types.int64), cache=True)
+def clean_rows(stamps: np.ndarray, values: np.ndarray, bounds: np.ndarray, previous: int) -> bool:
+    """True if N samples can all be taken as they are: every stamp (int ns, (N,)) in (0,
+    ``STAMP_LIMIT_NS``) and unlike the one before it (``previous`` for the first), every
+    position (``values`` rows 0 to N - 1) and velocity (rows N to 2N - 1) within ``bounds``
+    (2, 2, 1, columns: lowest then highest; position then velocity) of its column."""
+    count = stamps.shape[0]
+    for k in range(count):
+        if not 0 < stamps[k] < STAMP_LIMIT_NS or stamps[k] == previous:
+            return False
+        previous = stamps[k]
+        for quantity in range(2):
+            for j in range(values.shape[1]):
+                value = values[quantity * count + k, j]
+                if not bounds[0, quantity, 0, j] <= value <= bounds[1, quantity, 0, j]:
+                    return False
+    return True
+
+
+clean_rows_unchecked = unchecked(clean_rows)
 """The same without numba's type dispatch (callers pass exactly the signature's types)."""
 
 
