@@ -78,12 +78,13 @@ class TemplateGroup:
         quaternion not of unit norm or a stamp not a valid builtin_interfaces/Time."""
         stamps = np.ascontiguousarray(stamps_ns, dtype=np.int64)
         values = np.ascontiguousarray(values, dtype=np.float64)
-        data = np.empty((len(stamps), len(self.template_bytes)), dtype=np.uint8)
+        width = len(self.template_bytes)
+        data = np.empty((len(stamps), width), dtype=np.uint8)
         if not _checked_refill_unchecked(self.template_bytes, self.float_offsets, values, values.view(np.uint8),
                                          self.stamp_offsets, stamps, self.quaternions, *self.unit_squares, data):
             return None
-        rows = [row.tobytes() for row in data]
-        return [[Serialized(msgtype, row[start:end]) for row in rows]
+        filled, rows = data.tobytes(), range(0, len(stamps) * width, width)
+        return [[Serialized(msgtype, filled[row + start:row + end]) for row in rows]
                 for msgtype, start, end in zip(self.msgtypes, self.cuts[:-1], self.cuts[1:])]
 
 
@@ -103,10 +104,9 @@ class TopicBatches:
             if group is None:
                 group = self._groups[templates] = TemplateGroup(templates)
             count = len(stamps_ns)
-            values = np.reshape(entries[0][2], (count, -1)) if len(entries) == 1 else np.concatenate(
-                [np.reshape(v, (count, -1)) for _, _, v, _ in entries], axis=1)
+            values = np.concatenate([np.asarray(v).reshape(count, -1) for _, _, v, _ in entries], axis=1)
             if values.shape[1] == group.fields:
-                filled = group.fill_many(np.asarray(stamps_ns, dtype=np.int64), values)
+                filled = group.fill_many(stamps_ns, values)
                 if filled is not None:
                     return [(entry[0], messages) for entry, messages in zip(entries, filled)]
         return [(topic, refilled.many(stamps_ns, values, build)) for topic, refilled, values, build in entries]

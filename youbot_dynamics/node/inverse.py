@@ -226,6 +226,8 @@ class AccelerationEstimator:
         if not max_gap_ns > 0:
             raise ValueError(f"largest sample gap must be > 0 ns, got {max_gap_ns}")
         self.time_constant, self.max_gap_ns = float(time_constant), int(max_gap_ns)
+        self._gap_bound = min(self.max_gap_ns, _LARGEST_INT64)
+        """``max_gap_ns`` as the compiled loop takes it (an int64)."""
         self.restarts = dict.fromkeys(RESTART_CAUSES, 0)
         self.clear()
 
@@ -270,11 +272,11 @@ class AccelerationEstimator:
         all_q, all_v = ((np.concatenate((self._q, q)), np.concatenate((self._v, v))) if held
                         else (q, np.asarray(v, dtype=float)))
         filtered, known = (np.empty(all_v.shape[1]), False) if self.filtered is None else (self.filtered.copy(), True)
-        ends, failed = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
+        ends, failed = np.empty((2, count), dtype=np.int64)
         estimates = np.empty((count, all_v.shape[1]))
         kept, bad, run, backwards, gaps, known = _central_differences_unchecked(     # the types it was compiled for
-            all_stamps, np.array(taken, dtype=bool), all_v, held, min(self.max_gap_ns, _LARGEST_INT64),
-            self.time_constant, filtered, known, ends, estimates, failed)
+            all_stamps, np.array(taken, dtype=bool), all_v, held, self._gap_bound, self.time_constant, filtered,
+            known, ends, estimates, failed)
         if backwards or gaps or bad:
             self.restarts["backwards"] += backwards
             self.restarts["gap"] += gaps
@@ -283,10 +285,8 @@ class AccelerationEstimator:
         keep = min(run, 3)
         self._stamps, self._q, self._v = ((all_stamps[-keep:].tolist(), all_q[-keep:], all_v[-keep:]) if keep
                                           else ([], _NO_ROWS, _NO_ROWS))
-        if kept and ends[kept - 1] - ends[0] == kept - 1:     # one stream: slices
-            middle = slice(int(ends[0]) - 1, int(ends[0]) - 1 + kept)
-        else:
-            middle = ends[:kept] - 1
+        first, last = (int(ends[0]), int(ends[kept - 1])) if kept else (0, -1)
+        middle = slice(first - 1, last) if last - first == kept - 1 else ends[:kept] - 1    # one stream: a slice
         errors = [InputRejected("non_finite", f"acceleration estimate at {all_stamps[k - 1]} ns is not finite "
                                 "(velocities too large to difference)") for k in failed[:bad].tolist()] if bad else []
         return Estimates(all_stamps[middle], all_q[middle], all_v[middle], estimates[:kept], errors,

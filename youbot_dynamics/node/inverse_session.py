@@ -150,11 +150,11 @@ class InverseSession(Session):
         stamps, q, v, taken, rejected = self._checked(samples)
         kept = self._without_duplicates(stamps, taken, rejected)
         if kept is not None:
-            stamps, taken, log_times = [stamps[k] for k in kept], [taken[k] for k in kept], log_times[kept]
+            stamps, taken, log_times = [stamps[k] for k in kept], [taken[k] for k in kept], [log_times[k] for k in kept]
             q, v = q[kept], v[kept]
         return self._torques_of_rows(stamps, q, v, log_times, taken), rejected
 
-    def _torques_of_rows(self, stamps: list[int], q: np.ndarray, v: np.ndarray, log_times: np.ndarray,
+    def _torques_of_rows(self, stamps: list[int], q: np.ndarray, v: np.ndarray, log_times: list[int],
                          taken: list[bool]) -> Outputs:
         """The outputs of checked rows (stamps int ns, q and v rows in joint order, which were
         ``taken``, logged at ``log_times``): ``_torques_from`` until every row is done."""
@@ -165,7 +165,7 @@ class InverseSession(Session):
         return outputs
 
     def _clean_rows(self, samples: Sequence[JointStateFields]
-                    ) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray] | None:
+                    ) -> tuple[list[int], np.ndarray, np.ndarray, list[int]] | None:
         """(stamps, q, v, log times) of a clean batch, counted and observed as ``joint_states``
         would (every sample accepted: stamped with an int in (0, ``STAMP_LIMIT_NS``), none
         stamped as the one taken before it, received at an int time or None, naming the
@@ -194,17 +194,17 @@ class InverseSession(Session):
         self._last_taken_ns = stamps[-1]
         return stamps, values[:count, self._columns], values[count:, self._columns], log_times
 
-    def _log_times(self, samples: Sequence[JointStateFields]) -> np.ndarray:
-        """The log time (int64 ns) of each sample: its receive time (now on the receive clock
+    def _log_times(self, samples: Sequence[JointStateFields]) -> list[int]:
+        """The log time (int ns) of each sample: its receive time (now on the receive clock
         when not given), never before the one logged last."""
-        now = None
-        times = np.empty(len(samples), dtype=np.int64)
-        for k, sample in enumerate(samples):
+        now, times = None, []
+        for sample in samples:
             received = sample[4]
             if received is None:
                 now = receive_time_ns() if now is None else now
                 received = now
-            self.log_ns = times[k] = max(self.log_ns, int(received))
+            self.log_ns = max(self.log_ns, int(received))
+            times.append(self.log_ns)
         return times
 
     def _observe_input(self, samples: Sequence[JointStateFields]) -> None:
@@ -357,7 +357,7 @@ class InverseSession(Session):
         self._names_key, self._columns, self._row_bounds = key, slice(None) if in_order else index, bounds
 
     def _torques_from(self, stamps: list[int], q: np.ndarray, v: np.ndarray, taken: list[bool],
-                      log_times: np.ndarray, start: int, outputs: Outputs) -> int:
+                      log_times: list[int], start: int, outputs: Outputs) -> int:
         """Difference the checked rows from ``start`` on (stamps int ns, q and v rows in joint
         order, which were ``taken``, logged at ``log_times``), compute their torques and append
         (and log, a torque at the log time of the row that completes it) the outputs
@@ -381,20 +381,20 @@ class InverseSession(Session):
             estimates = self.estimator.push_rows(stamps[start:end], q[start:end], v[start:end], taken[start:end])
         for error in estimates.errors:
             self.counters.reject(error)
-        torque_rows = (estimates.ends + start).tolist()
+        torque_rows, torque_stamps = (estimates.ends + start).tolist(), estimates.stamps.tolist()
         torque_at = dict(zip(torque_rows, range(len(torque_rows))))
-        log_ns_of, moving, rerun = log_times.tolist(), self.odometry is not None, self.recorder.samples
+        moving, rerun = self.odometry is not None, self.recorder.samples
         for row in range(start, end) if moving else torque_rows:    # a fixed base: only the torques' rows give outputs
             if not taken[row]:
                 continue
-            log_ns = log_ns_of[row]
+            log_ns = log_times[row]
             odom = self._odometry(stamps[row], v[row], log_ns) if moving else []
             k = torque_at.get(row)
             if k is not None and k == bad:
                 outputs += self._rejected_torque(estimates, tau[k], failure, odom)
             elif k is not None:
                 outputs += odom
-                outputs += self._logged(estimates, tau, k, log_ns, rerun, *built[k])
+                outputs += self._logged(torque_stamps[k], log_ns, (estimates, tau, k) if rerun else None, *built[k])
                 self._quiet_since_ns = max(self._quiet_since_ns or 0, stamps[row])
             else:
                 outputs += odom
@@ -485,15 +485,15 @@ class InverseSession(Session):
         """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
         return messages.joint_state(stamp_ns, self.robot.joint_names, *np.split(values, 3))
 
-    def _logged(self, estimates: Estimates, torques: np.ndarray, k: int, log_ns: int, rerun: bool, outputs: Outputs,
+    def _logged(self, stamp: int, log_ns: int, rerun: tuple[Estimates, np.ndarray, int] | None, outputs: Outputs,
                 sample: SampleFrames | None, base: np.ndarray | None = None) -> Outputs:
-        """``outputs``, the messages of torque k of ``estimates`` (``torques`` their rows),
-        logged at ``log_ns`` (with ``rerun``, the Rerun recording takes the sample at its
-        stamp, its energy (J), end effector in the root frame and a moving base's ``base``
-        rows)."""
-        stamp = int(estimates.stamps[k])
+        """``outputs``, the messages of a torque stamped ``stamp`` (int ns), logged at
+        ``log_ns``; with ``rerun`` (the estimates, their torques' rows and the torque's index
+        k), the Rerun recording takes the sample at its stamp, its energy (J), end effector
+        in the root frame and a moving base's ``base`` rows."""
         self.recorder.write(outputs, log_ns)
-        if rerun:
+        if rerun is not None:
+            estimates, torques, k = rerun
             q, v, tau = estimates.q[k], estimates.v[k], torques[k]
             data = self.dynamics.data
             energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)
