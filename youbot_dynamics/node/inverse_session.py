@@ -477,9 +477,9 @@ class InverseSession(Session):
             entries += self.frames.ee_entries(samples, wanted, base)
             if "/tf" in wanted:
                 entries.append(self.frames.tf_entry(count, samples, None, base))
-        columns = self._batches.fill(stamps, entries)
-        return [([(topic, messages_[k]) for topic, messages_ in columns], None if samples is None else samples[k],
-                 None if base is None else base[k]) for k in range(count)]
+        filled = self._batches.fill(stamps, entries)
+        return [(filled[k], None if samples is None else samples[k], None if base is None else base[k])
+                for k in range(count)]
 
     def _joint_state(self, stamp_ns: int, values: np.ndarray) -> object:
         """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
