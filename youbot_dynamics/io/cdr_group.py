@@ -107,7 +107,8 @@ class TopicBatches:
             if group is None:
                 group = self._groups[templates] = TemplateGroup(templates)
             count = len(stamps_ns)
-            values = np.concatenate([np.asarray(v).reshape(count, -1) for _, _, v, _ in entries], axis=1)
+            blocks = [np.asarray(v).reshape(count, -1) for _, _, v, _ in entries]
+            values = blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=1)
             if values.shape[1] == group.fields:
                 filled = group.fill_many(stamps_ns, values, [entry[0] for entry in entries])
                 if filled is not None:
