@@ -1,6 +1,7 @@
 """The inverse-mode session: torques from measured joint states, taken in batches (a single
 sample is a batch of one). Each batch is checked (:mod:`youbot_dynamics.node.commands`; the
-samples that name the joints as the last accepted one did as arrays), differenced
+samples that name the joints as the last accepted one did as arrays, and a batch whose every
+sample passes in one compiled pass, :func:`~youbot_dynamics.node.inverse.clean_rows`), differenced
 (:class:`~youbot_dynamics.node.inverse.AccelerationEstimator`), its torques computed at once
 (Pinocchio's batch RNEA and the friction model, :class:`~youbot_dynamics.node.inverse.InverseDynamics`)
 and its messages built together; what is built and logged: :mod:`youbot_dynamics.node.session`.
