@@ -12,7 +12,12 @@ import pytest
 from test_inverse_batch import SCENE, batched, driver_stream, stream
 
 from youbot_dynamics.io.stamps import STAMP_LIMIT_NS
-from youbot_dynamics.node.inverse import clean_rows, plausible_limit, plausible_rows, position_bounds
+from youbot_dynamics.node.inverse import (
+    clean_rows,
+    plausible_limit,
+    plausible_rows,
+    position_bounds,
+)
 from youbot_dynamics.node.inverse_session import InverseSession
 from youbot_dynamics.ros.conversions import to_cdr
 
