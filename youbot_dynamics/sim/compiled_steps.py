@@ -193,9 +193,11 @@ class CompiledSteps:
     def dop853(self, t: float, x: np.ndarray, f: np.ndarray, h_abs: float, t_target: float, t_end: float,
                limits: np.ndarray, atol: np.ndarray, single: bool, bounds: np.ndarray, budget: int,
                x_old: np.ndarray, K: np.ndarray, x_new: np.ndarray) -> tuple[int, float, float, float, int, int]:
+        """DOP853 steps towards t_target (s): :func:`dop853_steps`."""
         return dop853_steps(*self.system, float(t), x, f, float(h_abs), float(t_target), float(t_end), limits, atol,
                             bool(single), bounds, int(budget), x_old, K, x_new, *self.scratch)
 
     def dop853_dense(self, K: np.ndarray, h: float, x_old: np.ndarray, x: np.ndarray, F: np.ndarray,
                      scratch: np.ndarray) -> None:
+        """The last step's dense output coefficients: :func:`dop853_dense`."""
         dop853_dense(*self.system, K, float(h), x_old, x, F, scratch, *self.scratch)
