@@ -134,20 +134,21 @@ _NO_JOINTS.setflags(write=False)
 
 
 @register_jitable
-def accumulate_friction_torque(v: Vector, z: Vector, table: np.ndarray, sign: float, out: Vector) -> None:
-    """out += sign tau_friction(v, z), one joint at a time: the viscous term b v plus the
-    joint's law (``table`` rows: law code, b, then the law's parameters in LAW_ARGUMENTS
-    order); z holds the LuGre joints' bristle states in joint order. A v or out that is not
-    one value per joint, or a z that is not one state per LuGre joint, is a ValueError
-    raised before anything is written (so callers need no checks of their own)."""
-    n, lugre_joints = table.shape[1], 0
-    for i in range(n):
+def lugre_joint_count(table: np.ndarray) -> int:
+    """Number of LuGre joints (bristle states) of a friction table."""
+    count = 0
+    for i in range(table.shape[1]):
         if table[0, i] == _LUGRE:
-            lugre_joints += 1
-    if v.shape[0] != n or out.shape[0] != n or z.shape[0] != lugre_joints:
-        raise ValueError("friction: v and out need one value per joint, z one per LuGre joint")
+            count += 1
+    return count
+
+
+@register_jitable
+def _accumulate_unchecked(v: Vector, z: Vector, table: np.ndarray, sign: float, out: Vector) -> None:
+    """out += sign tau_friction(v, z) for sizes already checked (see
+    :func:`accumulate_friction_torque`)."""
     k = 0
-    for i in range(n):
+    for i in range(table.shape[1]):
         law, vi = table[0, i], v[i]
         tau = viscous(vi, table[1, i])
         if law == _COULOMB:
@@ -158,6 +159,19 @@ def accumulate_friction_torque(v: Vector, z: Vector, table: np.ndarray, sign: fl
             tau += lugre(vi, z[k], table[2, i], table[3, i], table[4, i], table[5, i], table[6, i], table[7, i])
             k += 1
         out[i] += sign * tau
+
+
+@register_jitable
+def accumulate_friction_torque(v: Vector, z: Vector, table: np.ndarray, sign: float, out: Vector) -> None:
+    """out += sign tau_friction(v, z), one joint at a time: the viscous term b v plus the
+    joint's law (``table`` rows: law code, b, then the law's parameters in LAW_ARGUMENTS
+    order); z holds the LuGre joints' bristle states in joint order. A v or out that is not
+    one value per joint, or a z that is not one state per LuGre joint, is a ValueError
+    raised before anything is written (so callers need no checks of their own)."""
+    n = table.shape[1]
+    if v.shape[0] != n or out.shape[0] != n or z.shape[0] != lugre_joint_count(table):
+        raise ValueError("friction: v and out need one value per joint, z one per LuGre joint")
+    _accumulate_unchecked(v, z, table, sign, out)
 
 
 # The compiled entry points, one per sign, compiled once for float64 vectors of any stride,
@@ -194,9 +208,14 @@ READ_VECTOR, WRITTEN_VECTOR = _READ, _WRITTEN
 
 @njit(**BORROWED)
 def _accumulate_rows(v: np.ndarray, z: np.ndarray, table: np.ndarray, sign: float, out: np.ndarray) -> None:
-    """:func:`accumulate_friction_torque` on each row of v (N, n), z (N, n_states) and out (N, n)."""
-    for row in range(v.shape[0]):
-        accumulate_friction_torque(v[row], z[row], table, sign, out[row])
+    """:func:`accumulate_friction_torque` on each row of v (N, n), z (N, n_states) and out
+    (N, n), the sizes checked once (ValueError)."""
+    rows, n = v.shape[0], table.shape[1]
+    if v.shape[1] != n or out.shape[0] != rows or out.shape[1] != n or z.shape[0] != rows \
+            or z.shape[1] != lugre_joint_count(table):
+        raise ValueError("friction: v and out need one row of values per joint, z one of states per LuGre joint")
+    for row in range(rows):
+        _accumulate_unchecked(v[row], z[row], table, sign, out[row])
 
 
 @register_jitable
