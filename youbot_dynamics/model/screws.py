@@ -35,8 +35,8 @@ loop over its rows, so the cost grows linearly with the number of joints and of
 configurations. The loops hold T_i as three rows of four numbers (registers, no array), so
 they allocate nothing and run without numba's reference counting; one float64 configuration
 of a fixed-root chain without mimic joints calls them through their entry points
-(:mod:`youbot_dynamics.compiled`) after a dtype and size check in line: about 0.7 us for
-the youBot's Jacobians, 0.5 us of it Pinocchio's frame Jacobian would take
+(:mod:`youbot_dynamics.compiled`) after a dtype and size check in line: about 0.7 us per
+Jacobian of the youBot arm, where Pinocchio's frame Jacobian takes 0.5 us
 (bench/bench_kinematics.py).
 """
 from __future__ import annotations
