@@ -38,8 +38,9 @@ import pinocchio as pin
 from numba import njit, types
 from numba.extending import register_jitable
 
+from youbot_dynamics.dynamics.collision import ContactPoint
 from youbot_dynamics.dynamics.contact_model import ContactModel
-from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR
+from youbot_dynamics.dynamics.friction import FLOAT, READ_VECTOR, WRITTEN_VECTOR, unchecked
 
 #: PGS stops when a sweep moves no impulse by more than this fraction of the largest (see
 #: :class:`ContactSet`); ``tolerance`` is ADMM's.
@@ -256,6 +257,14 @@ def _velocity_after(v_free: np.ndarray, mass_jt: np.ndarray, impulses: np.ndarra
         out[a] = v_free[a] + total
 
 
+#: The three kernels of a step without numba's type dispatch (about 1 us of a step): the step
+#: hands them float64 arrays only (coal's points and normals, Pinocchio's matrices and the
+#: stepper's own scratch; v checked by :meth:`ConstraintStepper.step`), the kernels check sizes.
+_contact_placements_unchecked = unchecked(_contact_placements)
+_delassus_and_drift_unchecked = unchecked(_delassus_and_drift)
+_velocity_after_unchecked = unchecked(_velocity_after)
+
+
 class ContactSet:
     """What the solve of one contact set needs, built once and updated in place: a
     ``PointContactConstraintModel`` per point (pair k's owners' joints, its friction), their
@@ -294,6 +303,8 @@ class ContactSet:
         self.pairs = list(zip(self.constraints, self.datas))
         size = 3 * len(self.points)
         self.restitutions = np.array(restitutions, dtype=float)
+        #: per point its gap (m, < 0 overlapping), written by :meth:`place`
+        self.gaps = np.empty(len(self.points))
         #: scratch for M^-1 J^T, the Delassus matrix and the drift (see :func:`_delassus_and_drift`)
         self.mass_jt, self.delassus, self.drift = np.empty((model.nv, size)), np.empty((size, size)), np.empty(size)
         if settings.solver == "pgs":
@@ -318,6 +329,33 @@ class ContactSet:
         else:
             self.options.absolute_feasibility_tol = settings.tolerance
             self.options.absolute_complementarity_tol = settings.tolerance
+
+    def place(self, touching: list[tuple[int, list[ContactPoint]]],
+              joints: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]) -> tuple[list[ContactPoint], float]:
+        """Move every point's contact frame to its ``touching`` point (pair k's points, in the
+        set's order) in its joints' frames (per pair the world rotations and translations of
+        its owner joints, :meth:`ConstraintStepper.joint_placements`) and write its gap:
+        (the points in order, the deepest overlap (m, >= 0))."""
+        placements, gaps, placed, deepest, i = self.placements, self.gaps, [], 0.0, 0
+        for k, points in touching:
+            rotation1, translation1, rotation2, translation2 = joints[k]
+            placed += points
+            for c in points:
+                placed1, at1, placed2, at2 = placements[i]
+                _contact_placements_unchecked(c.normal, c.point1, c.point2, rotation1, translation1, rotation2,
+                                              translation2, placed1, at1, placed2, at2)
+                gaps[i] = -c.depth
+                deepest = max(deepest, c.depth)
+                i += 1
+        return placed, deepest
+
+    def normal_impulses(self, impulses: np.ndarray) -> dict[str, float]:
+        """Per pair name the sum of its points' normal impulses (N s; rows 3i + 2), added in
+        point order from 0."""
+        totals: dict[str, float] = {}
+        for name, impulse in zip(self.names, impulses[2::3].tolist()):
+            totals[name] = totals.get(name, 0.0) + impulse
+        return totals
 
     def solve(self, delassus: np.ndarray, drift: np.ndarray) -> tuple[np.ndarray, int]:
         """Impulses (N s, 3 per point: tangential x, y and normal along the contact frames)
@@ -360,39 +398,31 @@ class ConstraintStepper:
     def step(self, data: pin.Data, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
              h: float) -> tuple[np.ndarray, np.ndarray, StepReport]:
         """(q+, v+, report) after one step of h seconds under generalised forces tau (nv,);
-        ``data`` is a Data of the model (scratch)."""
+        ``data`` is a Data of the model (scratch); v a float64 vector (ValueError otherwise:
+        the compiled kernels read it unchecked)."""
         model, settings = self.model, self.settings
-        report = StepReport()
+        if type(v) is not np.ndarray or v.dtype is not FLOAT or v.ndim != 1:
+            raise ValueError(f"contact step: v must be a float64 vector, got {np.asarray(v).dtype} "
+                             f"of shape {np.shape(v)}")
         # ABA in the world convention places the joints and fills the joint Jacobians, and
         # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
         # (only when a pair touches: the contact search reads the placements alone)
         v_free = v + h * pin.aba(model, data, q, v, tau, pin.Convention.WORLD)
         touching = self.contact.touching(data, settings.margin)
         if not touching:
-            return pin.integrate(model, q, h * v_free), v_free, report
+            return pin.integrate(model, q, h * v_free), v_free, StepReport()
         inverse_mass = pin.computeMinverse(model, data)
         active = self.contact_set(tuple([(k, len(points)) for k, points in touching]))
-        gaps, i, joints = [], 0, self.joint_placements(data)
-        for k, points in touching:
-            rotation1, translation1, rotation2, translation2 = joints[k]
-            report.points += points
-            for c in points:
-                placed1, at1, placed2, at2 = active.placements[i]
-                _contact_placements(c.normal, c.point1, c.point2, rotation1, translation1, rotation2, translation2,
-                                    placed1, at1, placed2, at2)
-                gaps.append(-c.depth)
-                report.penetration = max(report.penetration, c.depth)
-                i += 1
+        points, deepest = active.place(touching, self.joint_placements(data))
+        report = StepReport(penetration=deepest, names=active.names, points=points)
         for constraint, cdata in active.pairs:
             constraint.calc(model, data, cdata)
         jacobian = pin.getConstraintsJacobian(model, data, active.constraints, active.datas)
-        _delassus_and_drift(inverse_mass, jacobian, v_free, v, np.array(gaps), active.restitutions, h,
-                            -settings.restitution_threshold, settings.baumgarte, active.mass_jt, active.delassus,
-                            active.drift)
-        impulses, report.iterations = active.solve(active.delassus, active.drift)
-        report.names, report.impulses = active.names, impulses
-        v_next = np.empty_like(v_free)
-        _velocity_after(v_free, active.mass_jt, impulses, v_next)
-        for name, impulse in zip(active.names, impulses[2::3].tolist()):
-            report.normal_impulse[name] = report.normal_impulse.get(name, 0.0) + impulse
+        _delassus_and_drift_unchecked(inverse_mass, jacobian, v_free, v, active.gaps, active.restitutions, h,
+                                      -settings.restitution_threshold, settings.baumgarte, active.mass_jt,
+                                      active.delassus, active.drift)
+        report.impulses, report.iterations = active.solve(active.delassus, active.drift)
+        v_next = np.empty(v_free.shape[0])
+        _velocity_after_unchecked(v_free, active.mass_jt, report.impulses, v_next)
+        report.normal_impulse = active.normal_impulses(report.impulses)
         return pin.integrate(model, q, h * v_next), v_next, report
