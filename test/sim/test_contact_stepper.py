@@ -133,9 +133,13 @@ def test_delassus_drift_and_velocity_kernels_against_numpy():
     np.testing.assert_allclose(delassus, jacobian @ inverse_mass @ jacobian.T, rtol=1e-13)
     assert np.array_equal(delassus, delassus.T)
     np.testing.assert_allclose(drift, expected_drift, rtol=1e-13)
-    impulses, v_next = rng.normal(size=9), np.empty(nv)
-    contact_stepper._velocity_after(v_free, mass_jt, impulses, v_next)
+    impulses, v_next, displacement = rng.normal(size=9), np.empty(nv), np.empty(nv)
+    contact_stepper._velocity_after(v_free, mass_jt, impulses, h, v_next, displacement)
     np.testing.assert_allclose(v_next, v_free + inverse_mass @ jacobian.T @ impulses, rtol=1e-13)
+    assert np.array_equal(displacement, h * v_next)
+    a, free = rng.normal(size=nv), np.empty(nv)
+    contact_stepper._free_velocity(v, a, h, free)
+    assert np.array_equal(free, v + h * a)  # numpy's two operations, no fused multiply-add
 
 
 def test_delassus_kernel_on_a_sparse_jacobian_equals_the_dense_sums_to_the_bit():

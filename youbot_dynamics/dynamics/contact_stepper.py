@@ -289,24 +289,39 @@ def _delassus_and_drift(upper: np.ndarray, jacobian: np.ndarray, trees: np.ndarr
     _add_gap_drift(jacobian, v, gaps, restitutions, h, threshold, baumgarte, columns, counts, drift)
 
 
-@njit(types.void(READ_VECTOR, _READ_MATRIX, READ_VECTOR, WRITTEN_VECTOR), cache=True)
-def _velocity_after(v_free: np.ndarray, mass_jt: np.ndarray, impulses: np.ndarray, out: np.ndarray) -> None:
-    """out = v_free + M^-1 J^T lambda (m/s, rad/s) from mass_jt = M^-1 J^T and the impulses."""
+@njit(types.void(READ_VECTOR, READ_VECTOR, types.float64, WRITTEN_VECTOR), cache=True)
+def _free_velocity(v: np.ndarray, a: np.ndarray, h: float, out: np.ndarray) -> None:
+    """out = v + h a (m/s, rad/s): step 1's free velocity from the accelerations a and the
+    step h (s), numpy's two operations per entry."""
+    if a.shape[0] != v.shape[0] or out.shape[0] != v.shape[0]:
+        raise ValueError("contact step: v, a and out (nv,)")
+    for i in range(v.shape[0]):
+        out[i] = v[i] + h * a[i]
+
+
+@njit(types.void(READ_VECTOR, _READ_MATRIX, READ_VECTOR, types.float64, WRITTEN_VECTOR, WRITTEN_VECTOR),
+      cache=True)
+def _velocity_after(v_free: np.ndarray, mass_jt: np.ndarray, impulses: np.ndarray, h: float, out: np.ndarray,
+                    displacement: np.ndarray) -> None:
+    """out = v_free + M^-1 J^T lambda (m/s, rad/s) from mass_jt = M^-1 J^T and the impulses,
+    and displacement = h out (what ``pin.integrate`` moves q by over the step h, s)."""
     nv, rows = mass_jt.shape
-    if v_free.shape[0] != nv or impulses.shape[0] != rows or out.shape[0] != nv:
-        raise ValueError("contact step: v_free (nv,), M^-1 J^T (nv x 3p), impulses (3p,), out (nv,)")
+    if v_free.shape[0] != nv or impulses.shape[0] != rows or out.shape[0] != nv or displacement.shape[0] != nv:
+        raise ValueError("contact step: v_free (nv,), M^-1 J^T (nv x 3p), impulses (3p,), outputs (nv,)")
     for a in range(nv):
         total = 0.0
         for i in range(rows):
             total += mass_jt[a, i] * impulses[i]
         out[a] = v_free[a] + total
+        displacement[a] = h * out[a]
 
 
-#: The three kernels of a step without numba's type dispatch (about 1 us of a step): the step
-#: hands them float64 arrays only (coal's points and normals, Pinocchio's matrices and the
+#: The step's kernels without numba's type dispatch (about 1.5 us of a step): the step hands
+#: them float64 arrays only (coal's points and normals, Pinocchio's matrices and vectors, the
 #: stepper's own scratch; v checked by :meth:`ConstraintStepper.step`), the kernels check sizes.
 _contact_placements_unchecked = unchecked(_contact_placements)
 _delassus_and_drift_unchecked = unchecked(_delassus_and_drift)
+_free_velocity_unchecked = unchecked(_free_velocity)
 _velocity_after_unchecked = unchecked(_velocity_after)
 
 
@@ -467,7 +482,8 @@ class ConstraintStepper:
         # ABA in the world convention places the joints and fills the joint Jacobians, and
         # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
         # (only when a pair touches: the contact search reads the placements alone)
-        v_free = v + h * pin.aba(model, data, q, v, tau, pin.Convention.WORLD)
+        v_free = np.empty(v.shape[0])
+        _free_velocity_unchecked(v, pin.aba(model, data, q, v, tau, pin.Convention.WORLD), h, v_free)
         touching = self.contact.touching(data, settings.margin)
         if not touching:
             return pin.integrate(model, q, h * v_free), v_free, StepReport()
@@ -482,7 +498,7 @@ class ConstraintStepper:
                                       active.restitutions, h, -settings.restitution_threshold, settings.baumgarte,
                                       active.mass_jt, active.delassus, active.drift)
         report.impulses, report.iterations = active.solve(active.delassus, active.drift)
-        v_next = np.empty(v_free.shape[0])
-        _velocity_after_unchecked(v_free, active.mass_jt, report.impulses, v_next)
+        v_next, displacement = np.empty(v_free.shape[0]), np.empty(v_free.shape[0])
+        _velocity_after_unchecked(v_free, active.mass_jt, report.impulses, h, v_next, displacement)
         report.normal_impulse = active.normal_impulses(report.impulses)
-        return pin.integrate(model, q, h * v_next), v_next, report
+        return pin.integrate(model, q, displacement), v_next, report

@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
-from youbot_dynamics.dynamics.friction import unchecked
+from youbot_dynamics.dynamics.friction import FLOAT, unchecked
 from youbot_dynamics.dynamics.mobile.base_controller import WheelSpeedPI
 from youbot_dynamics.dynamics.mobile.mecanum import (MecanumBase, mecanum_base_from_robot,
                                                      wheel_speeds)
@@ -71,6 +71,8 @@ def _path_command(points: np.ndarray, timing: np.ndarray, t: float, motion: np.n
 
 #: :func:`_path_command` without numba's type dispatch (a path's ``compiled`` arrays, a float t).
 _path_command_unchecked = unchecked(_path_command)
+#: the roller law without numba's type dispatch (float64 arrays: :meth:`BaseModel.floor_force`)
+_roller_floor_force_unchecked = unchecked(roller_floor_force)
 
 #: Labels of the base's state blocks: the pose (world frame) and the body-frame twist.
 POSE_LABELS = ("base.x", "base.y", "base.yaw")
@@ -122,7 +124,7 @@ class BaseModel:
         """The base of ``spec`` for the scene's reduced fixed-root ``robot`` (its wheel
         geometry) on a plant of ``plant_nv`` velocities with a planar root."""
         mecanum = mecanum_base_from_robot(robot, spec.wheels)
-        wheels = np.array([robot.joint_index(name) for name in spec.wheels])
+        wheels = np.array([robot.joint_index(name) for name in spec.wheels], dtype=np.int64)
         prescribed = np.concatenate([np.arange(3), 3 + wheels])
         free = np.setdiff1d(np.arange(plant_nv), prescribed)
         path = None if spec.path is None else PointToPointTrajectory.through(
@@ -187,7 +189,8 @@ class BaseModel:
         centre of mass (the root joint's subtree: free bodies left out) at configuration q."""
         pin.centerOfMass(plant, data, q, True)  # subtree centres of mass, each in its joint's frame
         # wheel_normal_forces without a load transfer (its checks hold by construction here)
-        return self.mecanum.support.loads(data.com[1][:2], float(data.mass[1]) * self.gravity)
+        x, y, _ = data.com[1].tolist()
+        return self.mecanum.support.loads_at(x, y, data.mass[1] * self.gravity)
 
     def floor_force(self, plant: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Generalised force (plant nv; N, N m) of the roller friction at the four contacts
@@ -196,9 +199,13 @@ class BaseModel:
         if self.mu == 0.0:
             return generalised
         mecanum = self.mecanum
-        roller_floor_force(v, self.wheel_loads(plant, data, q), mecanum.hub_velocities(v[:3]), mecanum.positions,
-                           mecanum.drive_directions, mecanum.across, mecanum.radius, self.mu, self.velocity_scale,
-                           self.wheels, generalised)
+        if type(v) is not np.ndarray or v.dtype is not FLOAT or v.ndim != 1:
+            raise ValueError(f"floor force: v must be a float64 vector, got {np.asarray(v).dtype} of shape "
+                             f"{np.shape(v)}")
+        # the loads, hub velocities (numpy's product) and the base's tables are float64 too
+        _roller_floor_force_unchecked(v, self.wheel_loads(plant, data, q), mecanum.hub_velocities(v[:3]),
+                                      mecanum.positions, mecanum.drive_directions, mecanum.across, mecanum.radius,
+                                      self.mu, self.velocity_scale, self.wheels, generalised)
         return generalised
 
     def wheel_torques(self, t: float, speeds: np.ndarray, integral: np.ndarray,
