@@ -426,9 +426,9 @@ class ContactSet:
     def normal_impulses(self, impulses: np.ndarray) -> dict[str, float]:
         """Per pair name the sum of its points' normal impulses (N s; rows 3i + 2), added in
         point order from 0."""
-        totals: dict[str, float] = {}
+        totals = dict.fromkeys(self.names, 0.0)
         for name, impulse in zip(self.names, impulses[2::3].tolist()):
-            totals[name] = totals.get(name, 0.0) + impulse
+            totals[name] += impulse
         return totals
 
     def solve(self, delassus: np.ndarray, drift: np.ndarray) -> tuple[np.ndarray, int]:
