@@ -40,7 +40,7 @@ from numba.extending import register_jitable
 
 from youbot_dynamics.dynamics.collision import ContactPoint
 from youbot_dynamics.dynamics.contact_model import ContactModel
-from youbot_dynamics.dynamics.friction import FLOAT, READ_VECTOR, WRITTEN_VECTOR, unchecked
+from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR, unchecked
 
 #: PGS stops when a sweep moves no impulse by more than this fraction of the largest (see
 #: :class:`ContactSet`); ``tolerance`` is ADMM's.
@@ -473,12 +473,12 @@ class ConstraintStepper:
     def step(self, data: pin.Data, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
              h: float) -> tuple[np.ndarray, np.ndarray, StepReport]:
         """(q+, v+, report) after one step of h seconds under generalised forces tau (nv,);
-        ``data`` is a Data of the model (scratch); v a float64 vector (ValueError otherwise:
-        the compiled kernels read it unchecked)."""
+        ``data`` is a Data of the model (scratch); v a vector (ValueError otherwise: the
+        compiled kernels read it as float64 unchecked)."""
         model, settings = self.model, self.settings
-        if type(v) is not np.ndarray or v.dtype is not FLOAT or v.ndim != 1:
-            raise ValueError(f"contact step: v must be a float64 vector, got {np.asarray(v).dtype} "
-                             f"of shape {np.shape(v)}")
+        v = np.asarray(v, dtype=float)
+        if v.ndim != 1:
+            raise ValueError(f"contact step: v must be a vector, got shape {v.shape}")
         # ABA in the world convention places the joints and fills the joint Jacobians, and
         # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
         # (only when a pair touches: the contact search reads the placements alone)

@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
-from youbot_dynamics.dynamics.friction import FLOAT, unchecked
+from youbot_dynamics.dynamics.friction import unchecked
 from youbot_dynamics.dynamics.mobile.base_controller import WheelSpeedPI
 from youbot_dynamics.dynamics.mobile.mecanum import (MecanumBase, mecanum_base_from_robot,
                                                      wheel_speeds)
@@ -47,6 +47,7 @@ from youbot_dynamics.dynamics.rigid_body import symmetrised
 from youbot_dynamics.model.robot import Robot, URDFDocument, keep_joints, robot_from_urdf
 from youbot_dynamics.scene.base import BaseSpec
 from youbot_dynamics.sim.trajectory import POINTS, TIMING, PointToPointTrajectory, desired_motion
+
 
 @njit(types.void(POINTS, TIMING, types.float64, types.Array(types.float64, 2, "C"),
                  types.Array(types.float64, 2, "C")), cache=True)
@@ -199,9 +200,9 @@ class BaseModel:
         if self.mu == 0.0:
             return generalised
         mecanum = self.mecanum
-        if type(v) is not np.ndarray or v.dtype is not FLOAT or v.ndim != 1:
-            raise ValueError(f"floor force: v must be a float64 vector, got {np.asarray(v).dtype} of shape "
-                             f"{np.shape(v)}")
+        v = np.asarray(v, dtype=float)
+        if v.ndim != 1:
+            raise ValueError(f"floor force: v must be a vector, got shape {v.shape}")
         # the loads, hub velocities (numpy's product) and the base's tables are float64 too
         _roller_floor_force_unchecked(v, self.wheel_loads(plant, data, q), mecanum.hub_velocities(v[:3]),
                                       mecanum.positions, mecanum.drive_directions, mecanum.across, mecanum.radius,
