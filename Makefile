@@ -16,7 +16,7 @@ LOCK_CONSTRAINTS ?=
 # the thorough fuzzing profile.
 PYTEST_ARGS ?= -m "not slow"
 
-.PHONY: run test test-all bench bench-all install lock clean
+.PHONY: run test test-all bench bench-all install lock clean numba-cache
 
 # The message packages without a PyPI wheel (interfaces/*: tf2_msgs, control_msgs) built into
 # the venv once, one stamp per package; skipped where a ROS 2 Jazzy provides them. Needs cmake
@@ -39,7 +39,15 @@ install: $(STAMP)
 run: install
 	AMENT_PREFIX_PATH=$(abspath $(VENV)) $(PY) -m youbot_dynamics main-job
 
-test: $(STAMP)
+# numba's on-disk cache (cache=True) is keyed by each cached function's own file, so a change
+# in a module whose compiled functions it calls goes unseen: a source newer than the oldest
+# cache file clears the tree's whole cache (it is rebuilt on first use).
+numba-cache:
+	@oldest=$$(find youbot_dynamics -name '*.nbi' -printf '%T@ %p\n' | sort -n | head -1 | cut -d' ' -f2); \
+	if [ -n "$$oldest" ] && [ -n "$$(find youbot_dynamics -name '*.py' -newer "$$oldest" | head -1)" ]; then \
+		find youbot_dynamics \( -name '*.nbi' -o -name '*.nbc' \) -delete; echo "numba cache cleared: sources changed"; fi
+
+test: $(STAMP) numba-cache
 	$(PY) -m pytest -q -n 2 --timeout 900 $(PYTEST_ARGS) test
 
 test-all: PYTEST_ARGS =
@@ -49,11 +57,11 @@ test-all: test
 # The summary table of the speed figures (bench/results.json, MuJoCo's rows included): CPU
 # time, ratios and verdicts from it, the load average printed with the table. bench-all runs
 # every script; `BENCH_SMOKE=1 make bench-all` runs each in its tiny form (as test/bench does).
-bench: $(STAMP)
+bench: $(STAMP) numba-cache
 	$(PY) -m pip install --quiet -r requirements-bench.txt -c $(LOCK)
 	$(PY) bench/summary.py
 
-bench-all: $(STAMP)
+bench-all: $(STAMP) numba-cache
 	$(PY) -m pip install --quiet -r requirements-bench.txt -c $(LOCK)
 	for b in bench/bench_*.py bench/summary.py; do echo "== $$b"; $(PY) $$b || exit 1; done
 

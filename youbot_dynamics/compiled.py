@@ -7,8 +7,8 @@ wrapped in a counted memory record, about 20 ns). A small loop such as the frict
 joints costs less than either (0.05 us). So the loops the hot paths call are:
 
 - compiled for ONE explicit signature and called through :func:`unchecked` (the compiled
-  code's entry point, no type dispatch): the caller checks dtype and ndim in Python, the
-  loop its own sizes;
+  code's entry point, no type dispatch): the caller checks in Python dtype, ndim, C order
+  where the signature says ``"C"``, and the sizes unless the loop checks them itself;
 - compiled with :data:`BORROWED` when they only read and write the arrays they are given
   (no array allocated, none returned): numba then skips its reference counting (a call with
   four array arguments 0.04 us instead of 0.12). Such a loop cannot allocate an array
@@ -35,7 +35,8 @@ BORROWED: dict[str, bool] = {"cache": True, "_nrt": False}
 def unchecked(compiled: Any) -> Any:
     """The compiled code of a numba function compiled for ONE explicit signature, callable
     without numba's type dispatch (its entry point): about 0.3 us less per call, and no
-    check that the arguments are of the signature's types (callers check dtype and ndim:
-    an array of another dtype or ndim would be read as if it were of the signature's)."""
+    check that the arguments are of the signature's types (callers check dtype, ndim, C
+    order and sizes as the module docstring says: another array would be read as if it
+    were of the signature's)."""
     (result,) = compiled.overloads.values()
     return result.entry_point

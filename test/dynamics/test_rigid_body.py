@@ -95,6 +95,9 @@ def test_the_unchecked_friction_path_equals_the_checked_one_and_refuses_bad_stat
                                       pin.aba(arm.model, data, q, v, tau.astype(np.float32) - friction.torque(v, z)))
         np.testing.assert_array_equal(inverse_dynamics(arm, data, q, v, a, friction, list(z)), tau)
         np.testing.assert_array_equal(inverse_dynamics(arm, data, q, v, a, friction, np.repeat(z, 2)[::2]), tau)
+        for z_other in (z.astype(np.float32), z.astype(">f8")):    # converted, not read as float64 bits
+            np.testing.assert_array_equal(inverse_dynamics(arm, data, q, v, a, friction, z_other),
+                                          pin.rnea(arm.model, data, q, v, a) + friction.torque(v, z_other.astype(float)))
         v32 = v.astype(np.float32)
         np.testing.assert_array_equal(forward_dynamics(arm, data, q, v32, tau, friction, z),
                                       pin.aba(arm.model, data, q, v32, tau - friction.torque(v32.astype(float), z)))

@@ -428,3 +428,27 @@ def test_mimic_chains_and_movable_roots_keep_the_general_path() -> None:
             q[3:7] = (0.1, -0.2, 0.3, 0.9) / np.linalg.norm((0.1, -0.2, 0.3, 0.9))
         for f in FUNCTIONS:
             np.testing.assert_array_equal(f(chain, q), f(chain, q[None])[0])
+
+
+def test_hand_built_chain_takes_integer_and_float32_axes_and_refuses_bad_shapes():
+    """A ScrewChain built by hand from integer or float32 axes gives the float64 chain's
+    Jacobians and pose (the compiled loops read float64: an int64 S was once read as float
+    bits and gave zero columns); wrong shapes and joint indices outside q are named."""
+    axes = np.array([[0, 0, 1, 0, 0, 0], [1, 0, 0, 0, 1, 0], [1, 0, 0, 0, 3, 0]]).T
+    home = np.eye(4)
+    home[2, 3] = 4.0
+    q = np.array([0.3, -0.2, 0.5])
+    reference = ScrewChain("tip", ("a", "b", "c"), np.arange(3), 3, axes.astype(float), home)
+    # the second column by hand: S_2 = (1, 0, 0, 0, 1, 0) carried by a turn of 0.3 rad about z
+    c, s = math.cos(0.3), math.sin(0.3)
+    assert np.allclose(jacobian_space(reference, q)[:, 1], [c, s, 0, -s, c, 0], rtol=0, atol=1e-15)
+    for dtype in (np.int64, np.int32, np.float32):
+        chain = ScrewChain("tip", ("a", "b", "c"), np.arange(3).astype(dtype), 3, axes.astype(dtype), home)
+        for function in (jacobian_space, jacobian_body, fkin_space, fkin_body):
+            assert np.array_equal(function(chain, q), function(reference, q)), (dtype, function.__name__)
+    with pytest.raises(UserInputError, match=r"S must be \(6, n\).*got S \(5, 3\)"):
+        ScrewChain("tip", ("a", "b", "c"), np.arange(3), 3, np.zeros((5, 3)), home)
+    with pytest.raises(UserInputError, match=r"M \(4, 4\).*M \(3, 3\)"):
+        ScrewChain("tip", ("a", "b", "c"), np.arange(3), 3, axes, np.eye(3))
+    with pytest.raises(UserInputError, match=r"joints \[0, 1, 3\] must index q of nq = 3"):
+        ScrewChain("tip", ("a", "b", "c"), np.array([0, 1, 3]), 3, axes, home)

@@ -7,6 +7,8 @@ back, unstamped samples, NaN, unknown or missing joints, velocity jumps that giv
 implausible torques)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -149,3 +151,33 @@ def test_a_batch_of_a_driver_stream_gives_what_one_by_one_gives(size: int) -> No
     assert session.estimator.restarts == reference.estimator.restarts
     assert reference.counters.rejected["non_finite"] > 0 and reference.counters.rejected["out_of_limits"] > 0
     assert reference.samples == session.samples > 100
+
+
+@pytest.mark.parametrize("size", [1, 3])
+def test_a_position_beyond_a_double_is_rejected_and_a_nan_receive_time_is_now(size: int) -> None:
+    """Odd input through the Python API (a topic carries doubles): an int position beyond the
+    largest double is a non_finite rejection, as a NaN there is (the same torques after it),
+    and a NaN receive time is taken as "received now" (the torques of
+    the sample without a receive time); nothing raises."""
+    names = list(SCENE.robot.joint_names)
+    samples = [s for s in stream(np.random.default_rng(0), 20) if s[0] == names and s[3]
+               and np.isfinite(s[1]).all()][:6]
+    huge, nan, late, unreceived = (list(samples[4]) for _ in range(4))
+    huge[1], nan[1] = [10 ** 400, *huge[1][1:]], [math.nan, *nan[1][1:]]
+    late[4], unreceived[4] = float("nan"), None
+
+    def torques(fed: list[tuple]) -> tuple[list[bytes], list[str]]:
+        session = InverseSession(SCENE, filter_time_constant=0.0)
+        session.consumed_by({"/computed_torques"})
+        session.joint_states(samples[:3])
+        out, rejected = [], []
+        for k in range(0, len(fed), size):
+            messages, errors = session.joint_states(fed[k:k + size])
+            out += [to_cdr(m[1]) for m in messages if m[0] == "/computed_torques"]
+            rejected += [e.kind for e in errors]
+        return out, rejected
+
+    assert torques([samples[3], tuple(huge), samples[5]]) == torques([samples[3], tuple(nan), samples[5]])
+    assert torques([samples[3], tuple(huge), samples[5]])[1] == ["non_finite"]
+    assert torques([samples[3], tuple(late), samples[5]]) == (torques([samples[3], tuple(unreceived), samples[5]])[0],
+                                                             [])

@@ -14,6 +14,7 @@ from scipy.special import ellipk
 from test_simulator import G, IYY, LENGTH, MASS, pendulum_scene
 
 from youbot_dynamics.accuracy.work_precision import reference_solution
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.adaptive import ScipyStepper
 from youbot_dynamics.integrate.dop853 import CompiledDop853Stepper
 from youbot_dynamics.integrate.drive import StateCheck
@@ -154,3 +155,42 @@ def test_a_scene_without_a_compiled_loop_runs_scipy_dop853() -> None:
             for method in ("dop853_compiled", "dop853")]
     assert np.array_equal(runs[0].x, runs[1].x)
     assert runs[0].stats.rhs_evals == runs[1].stats.rhs_evals
+
+
+def test_tolerances_per_component_and_wrong_sizes() -> None:
+    """atol per state component runs compiled and equals a scalar atol of the same value
+    bit for bit; rtol per component falls back to scipy's DOP853 (the loop takes one rtol)
+    and gives scipy's run; an atol of the wrong size and a state of the wrong size are named."""
+    compiled, _, x0 = engine_rhs("arm_friction")
+    n = x0.size
+    scalar, array = (integrate(compiled, x0, [0.0, 0.2], "dop853_compiled", rtol=1e-8, atol=atol)
+                     for atol in (1e-10, np.full(n, 1e-10)))
+    assert np.array_equal(scalar.x, array.x)
+    per_component = integrate(compiled, x0, [0.0, 0.2], "dop853_compiled", rtol=np.full(n, 1e-8), atol=1e-10)
+    theirs = integrate(compiled, x0, [0.0, 0.2], "dop853", rtol=np.full(n, 1e-8), atol=1e-10)
+    assert np.array_equal(per_component.x, theirs.x)
+    with pytest.raises(UserInputError, match=rf"dop853_compiled: atol must be one number or {n} .*\({n - 1},\)"):
+        integrate(compiled, x0, [0.0, 0.2], "dop853_compiled", rtol=1e-8, atol=np.full(n - 1, 1e-10))
+    for method in ("dop853_compiled", "rk4"):
+        with pytest.raises(UserInputError, match=rf"needs {n} float64 values; got shape \({n - 1},\)"):
+            integrate(compiled, x0[:-1], [0.0, 0.01], method, dt=1e-3)
+
+
+def test_a_non_finite_derivative_is_a_divergence_as_in_scipy() -> None:
+    """A right-hand side that turns NaN away from the initial state (here: once |q_1| moves
+    off its start) fails with scipy's reason, not with a NaN state."""
+    compiled, _, x0 = engine_rhs("arm_swing")
+    loop = compiled.compiled_steps
+
+    class Poisoned:
+        """The compiled loop's derivative, NaN once the state leaves x0."""
+
+        def derivative(self, x: np.ndarray) -> np.ndarray:
+            dx = loop.derivative(x)
+            return dx if np.array_equal(x, x0) else np.full_like(dx, np.nan)
+
+    with pytest.raises(DivergenceError, match="non-finite derivative inside a step"):
+        CompiledDop853Stepper("dop853_compiled", Poisoned(), 0.0, x0, 1.0, 1e-8, 1e-10, np.inf, None, False,
+                              None, None)
+    with pytest.raises(DivergenceError, match="non-finite derivative inside a step"):
+        integrate(lambda t, x: Poisoned().derivative(x), x0, [0.0, 0.2], "dop853", rtol=1e-8, atol=1e-10)

@@ -40,7 +40,8 @@ from numba.extending import register_jitable
 
 from youbot_dynamics.dynamics.collision import ContactPoint
 from youbot_dynamics.dynamics.contact_model import ContactModel
-from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR, unchecked
+from youbot_dynamics.compiled import unchecked
+from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR
 
 #: PGS stops when a sweep moves no impulse by more than this fraction of the largest (see
 #: :class:`ContactSet`); ``tolerance`` is ADMM's.

@@ -44,7 +44,8 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
-from youbot_dynamics.dynamics.friction import (FLOAT, NO_BRISTLES, JointFriction, add_friction_torque_unchecked,
+from youbot_dynamics.compiled import FLOAT
+from youbot_dynamics.dynamics.friction import (NO_BRISTLES, JointFriction, add_friction_torque_unchecked,
                                                subtract_friction_torque_unchecked)
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.configuration import sized

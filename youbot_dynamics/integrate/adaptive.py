@@ -36,12 +36,13 @@ class ScipyStepper:
 
     def __init__(self, method: str, rhs: Callable[[float, np.ndarray], np.ndarray],
                  t0: float, x0: np.ndarray, t_end: float, rtol: float, atol,
-                 jac, max_step: float, min_step: float | None) -> None:
-        self.method, self.min_step = method, min_step
-        options = {} if method in EXPLICIT or jac is None else {"jac": jac}
-        self.solver = SCIPY_SOLVERS[method](rhs, t0, np.array(x0, dtype=float), t_end,
-                                            rtol=rtol, atol=atol, max_step=max_step,
-                                            **options)
+                 jac, max_step: float, min_step: float | None, solver: str | None = None) -> None:
+        """``method`` names the integrator in messages; ``solver`` is the scipy method run
+        (default: ``method``)."""
+        self.method, self.solver_name, self.min_step = method, solver or method, min_step
+        options = {} if self.solver_name in EXPLICIT or jac is None else {"jac": jac}
+        self.solver = SCIPY_SOLVERS[self.solver_name](rhs, t0, np.array(x0, dtype=float), t_end, rtol=rtol,
+                                                      atol=atol, max_step=max_step, **options)
         self.t, self.x = t0, self.solver.y
         self.steps = self.rejected = 0
         self.h = 0.0
@@ -65,7 +66,7 @@ class ScipyStepper:
                                       "step size collapsed")
             raise IntegrationError(f"{self.method} failed at t={solver.t:.6g} s: {reason}")
         self.steps += 1
-        if self.method in EXPLICIT:
+        if self.solver_name in EXPLICIT:
             self.rejected += (solver.nfev - evals_before) // solver.n_stages - 1
         if self.min_step is not None and solver.step_size < self.min_step \
                 and solver.status == "running":
@@ -83,7 +84,7 @@ class ScipyStepper:
         solver = self.solver
         # int(): LSODA's counters are numpy integers from its Fortran work array
         stats.steps, stats.rhs_evals, stats.jac_evals = self.steps, int(solver.nfev), int(solver.njev)
-        if self.method in EXPLICIT:
+        if self.solver_name in EXPLICIT:
             stats.rejected_steps = self.rejected
             stats.nonlinear_iterations = stats.nonlinear_convergence_failures = 0
         else:

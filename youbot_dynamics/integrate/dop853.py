@@ -31,6 +31,7 @@ import numpy as np
 from numba import njit
 from scipy.integrate import DOP853
 
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.errors import DivergenceError
 from youbot_dynamics.integrate.statistics import IntegratorStats
 
@@ -153,12 +154,14 @@ def rms(values: np.ndarray) -> float:
 
 
 def initial_step(derivative: Callable[[np.ndarray], np.ndarray], t0: float, x0: np.ndarray, f0: np.ndarray,
-                 t_end: float, max_step: float, rtol: float, atol: np.ndarray) -> float:
+                 t_end: float, max_step: float, rtol: float, atol: np.ndarray,
+                 name: str = "dop853_compiled") -> float:
     """The first step size (s), Hairer's II.4 estimate for an error of order 8 as scipy's
     ``select_initial_step`` makes it: h0 = 0.01 |x0| / |f0| (norms scaled by atol + rtol
     |x0|; 1e-6 s if either is below 1e-5), one Euler step of h0 to estimate |f'|, then
     h = min(100 h0, (0.01 / max(|f0|, |f'|))^(1/8), t_end - t0, max_step). ``derivative``
-    gives f(x) (the system is autonomous: a held torque); one evaluation."""
+    gives f(x) (the system is autonomous: a held torque); one evaluation. A non-finite f
+    there is a DivergenceError naming ``name``."""
     length = abs(t_end - t0)
     if length == 0.0:
         return 0.0
@@ -166,6 +169,8 @@ def initial_step(derivative: Callable[[np.ndarray], np.ndarray], t0: float, x0: 
     d0, d1 = rms(x0 / scale), rms(f0 / scale)
     h0 = min(1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1, length)
     d2 = rms((derivative(x0 + h0 * f0) - f0) / scale) / h0
+    if not math.isfinite(d2):
+        raise DivergenceError(t0 + h0, name, h0, "non-finite derivative inside a step")
     h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** (1.0 / 8.0)
     return min(100 * h0, h1, length, max_step)
 
@@ -204,20 +209,25 @@ class CompiledDop853Stepper:
     output or an event falls."""
 
     def __init__(self, name: str, loop: CompiledDop853, t0: float, x0: np.ndarray, t_end: float, rtol: float,
-                 atol, max_step: float, min_step: float | None, single_steps: bool, bounds: np.ndarray | None,
-                 max_steps: int | None) -> None:
+                 atol: float | np.ndarray, max_step: float, min_step: float | None, single_steps: bool,
+                 bounds: np.ndarray | None, max_steps: int | None) -> None:
         self.name, self.loop, self.t_end, self.single = name, loop, t_end, single_steps
         self.t, self.x = t0, np.array(x0, dtype=float)
         n = self.x.size
         rtol = max(float(rtol), RTOL_FLOOR)
-        self.atol = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, dtype=float), (n,)))
+        atol = np.asarray(atol, dtype=float)
+        if atol.ndim > 1 or atol.size not in (1, n):
+            raise UserInputError(f"{name}: atol must be one number or {n} (one per state component); got shape "
+                                 f"{atol.shape}")
+        self.atol = np.ascontiguousarray(np.broadcast_to(atol, (n,)))
         self.limits = np.array([max_step, 0.0 if min_step is None else min_step, rtol])
         self.bounds = np.full(n, np.inf) if bounds is None else np.array(bounds, dtype=float)
         self.max_steps = NO_BUDGET if max_steps is None else max_steps
         self.f = self.loop.derivative(self.x)
         if not math.isfinite(self.f.sum()):
             raise DivergenceError(t0, name, 0.0, "non-finite derivative at the initial state")
-        self.h_abs = initial_step(self.loop.derivative, t0, self.x, self.f, t_end, max_step, rtol, self.atol)
+        self.h_abs = initial_step(self.loop.derivative, t0, self.x, self.f, t_end, max_step, rtol, self.atol,
+                                  name)
         self.K, self.F = np.empty((STAGES_DENSE, n)), np.empty((7, n))
         self.x_old, self.x_new = self.x.copy(), np.empty(n)
         self.t_old, self.h = t0, 0.0

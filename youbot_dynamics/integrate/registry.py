@@ -9,8 +9,8 @@ ones ``tol`` or ``rtol``/``atol``. ``stiff`` methods are implicit (they use a Ja
 ``dop853_compiled`` is scipy's DOP853 (the same step-size control: steps and states equal
 to rounding) run in compiled code (integrate/dop853.py) where the right-hand side carries a compiled loop for it
 (``rhs.compiled_steps``: a robot alone under a held torque or no controller,
-sim/compiled_steps.py); any other right-hand side falls back to scipy's DOP853 itself, the
-same method in Python, so the name is valid in every scene and only the speed differs.
+sim/compiled_steps.py) and rtol is one number; any other right-hand side (or an rtol per
+state component) falls back to scipy's DOP853 itself, the same method in Python, so the name is valid in every scene and only the speed differs.
 
 Every other module asks this table: the scene validator (names and options), ``integrate``
 (the factory), the engine's dispatch (:func:`integrator_kind`), the command line (choices)
@@ -86,19 +86,20 @@ def fixed_step_stepper(name: str, problem: OdeProblem) -> Stepper:
                             problem.n_positions, bool(problem.events), problem.check)
 
 
-def scipy_stepper(name: str, problem: OdeProblem) -> Stepper:
-    """A scipy.integrate OdeSolver stepped one step at a time (integrate/adaptive.py)."""
+def scipy_stepper(name: str, problem: OdeProblem, solver: str | None = None) -> Stepper:
+    """A scipy.integrate OdeSolver (``solver``, default ``name``) stepped one step at a time
+    (integrate/adaptive.py); messages name ``name``."""
     return ScipyStepper(name, finite_rhs(problem.rhs, name), problem.t0, problem.x0,
                         problem.t_end, problem.rtol, problem.atol, problem.jac,
-                        problem.max_step, problem.min_step)
+                        problem.max_step, problem.min_step, solver)
 
 
 def compiled_dop853_stepper(name: str, problem: OdeProblem) -> Stepper:
     """DOP853 in compiled code (integrate/dop853.py) through the right-hand side's compiled
     loop (``rhs.compiled_steps``); scipy's DOP853 where the right-hand side has none."""
     loop = getattr(problem.rhs, "compiled_steps", None)
-    if loop is None:
-        return scipy_stepper("dop853", problem)
+    if loop is None or np.ndim(problem.rtol) != 0:     # the compiled loop takes one rtol
+        return scipy_stepper(name, problem, "dop853")
     return CompiledDop853Stepper(name, loop, problem.t0, problem.x0, problem.t_end, problem.rtol, problem.atol,
                                  problem.max_step, problem.min_step, bool(problem.events), problem.check.bounds,
                                  problem.max_steps)

@@ -16,15 +16,14 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numba import njit, types
 
-from youbot_dynamics.dynamics.friction import unchecked
+from youbot_dynamics.compiled import unchecked
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.io.cdr_template import CdrTemplate, Refilled, Serialized, plausible_values, refill_bytes
 from youbot_dynamics.io.stamps import STAMP_LIMIT_NS
 
 Entry = tuple[str, Refilled, np.ndarray, Callable[[int, np.ndarray], object]]
 """One topic of a batch: (topic, its Refilled, values (N, fields), the builder of its first message)."""
 
-
-"""The first stamp (ns) a builtin_interfaces/Time cannot hold."""
 _INDICES = types.Array(types.intp, 1, "C")
 
 
@@ -77,9 +76,14 @@ class TemplateGroup:
         """Each of N samples' messages, (topic, message) of each template in turn (``topics``
         name them), at ``stamps_ns`` (int64 (N,)) with ``values`` (N, fields: each template's
         refilled fields in turn); None when a value is not finite, a quaternion not of unit
-        norm or a stamp not a valid builtin_interfaces/Time."""
+        norm or a stamp not a valid builtin_interfaces/Time; a UserInputError when the shapes
+        do not match (the compiled fill reads them unchecked)."""
         stamps = np.ascontiguousarray(stamps_ns, dtype=np.int64)
         values = np.ascontiguousarray(values, dtype=np.float64)
+        if stamps.ndim != 1 or values.shape != (len(stamps), self.fields) or len(topics) != len(self.msgtypes):
+            raise UserInputError(f"messages of {', '.join(self.msgtypes)}: need stamps (N,), values (N, "
+                                 f"{self.fields}) and {len(self.msgtypes)} topics; got {stamps.shape}, "
+                                 f"{values.shape} and {len(topics)}")
         width = len(self.template_bytes)
         data = np.empty((len(stamps), width), dtype=np.uint8)
         if not _checked_refill_unchecked(self.template_bytes, self.float_offsets, values, values.view(np.uint8),

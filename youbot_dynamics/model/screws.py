@@ -96,6 +96,7 @@ class ScrewChain:
     _columns_shape: tuple[int, int] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
+        self._check_arrays()
         body = adjoint(inverse_transform(self.M)) @ self.S
         space_terms, body_terms = exponential_terms(self.S), exponential_terms(body)
         # M folded into the last space exponential (exp([S_n] q_n) M) and the first body one
@@ -119,6 +120,22 @@ class ScrewChain:
         derived = {"B": body, **loops, "_direct": self.root == "fixed" and self.coupling is None and self.n > 0,
                    "_columns_shape": (6, self.n)}
         for name, value in derived.items():
+            object.__setattr__(self, name, value)
+
+    def _check_arrays(self) -> None:
+        """S as float64 (6, n), M as float64 (4, 4) and ``joints`` as int64 indices below
+        ``nq``, each C-ordered (the compiled loops read them unchecked); a UserInputError naming
+        the field otherwise."""
+        arrays = {"S": np.ascontiguousarray(self.S, dtype=float), "M": np.ascontiguousarray(self.M, dtype=float),
+                  "joints": np.ascontiguousarray(self.joints, dtype=np.int64)}
+        S, M, joints = arrays["S"], arrays["M"], arrays["joints"]
+        if S.ndim != 2 or S.shape[0] != 6 or M.shape != (4, 4) or joints.ndim != 1:
+            raise UserInputError(f"chain to '{self.link}': S must be (6, n), M (4, 4) and joints 1-D; got S "
+                                 f"{S.shape}, M {M.shape}, joints {joints.shape}")
+        if joints.size and (joints.min() < 0 or joints.max() >= self.nq):
+            raise UserInputError(f"chain to '{self.link}': joints {joints.tolist()} must index q of nq = {self.nq} "
+                                 "values")
+        for name, value in arrays.items():
             object.__setattr__(self, name, value)
 
     @property

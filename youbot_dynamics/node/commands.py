@@ -149,7 +149,10 @@ def _names(names: Sequence[str], known: Sequence[str], moving: Sequence[str]) ->
 
 
 def _values(values: Sequence[float], label: str, count: int) -> np.ndarray:
-    array = np.asarray(values, dtype=float).reshape(-1)
+    try:
+        array = np.asarray(values, dtype=float).reshape(-1)
+    except OverflowError:       # an int beyond the largest double
+        raise InputRejected("non_finite", f"{label} holds a value beyond the largest double") from None
     if array.size != count:
         raise InputRejected("length_mismatch", f"{label} has {array.size} entries for {count} joint names")
     if not np.isfinite(array).all():

@@ -55,7 +55,8 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
-from youbot_dynamics.dynamics.friction import JointFriction, unchecked
+from youbot_dynamics.compiled import unchecked
+from youbot_dynamics.dynamics.friction import JointFriction
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch
 from youbot_dynamics.io.stamps import NS_PER_S, STAMP_LIMIT_NS
 from youbot_dynamics.model.robot import Robot

@@ -19,6 +19,7 @@ cannot move: no odom frame, the robot's root link is the root, as in simulate mo
 """
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -197,11 +198,11 @@ class InverseSession(Session):
 
     def _log_times(self, samples: Sequence[JointStateFields]) -> list[int]:
         """The log time (int ns) of each sample: its receive time (now on the receive clock
-        when not given), never before the one logged last."""
+        when not given or not finite), never before the one logged last."""
         now, times = None, []
         for sample in samples:
             received = sample[4]
-            if received is None:
+            if received is None or (isinstance(received, float) and not math.isfinite(received)):
                 now = receive_time_ns() if now is None else now
                 received = now
             self.log_ns = max(self.log_ns, int(received))
@@ -309,7 +310,7 @@ class InverseSession(Session):
             return None
         try:
             values = np.array([sample[1] for sample in samples] + [sample[2] for sample in samples], dtype=float)
-        except (ValueError, TypeError):
+        except (ValueError, TypeError, OverflowError):     # OverflowError: an int beyond a double
             return None
         if values.shape != (2 * count, len(key)):
             return None

@@ -28,6 +28,7 @@ from numba import njit
 
 from youbot_dynamics.dynamics.compiled_tree import aba, work_for
 from youbot_dynamics.dynamics.friction import left_torque_and_rates
+from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.dop853 import (BAD_STATE, BELOW_MIN_STEP, COLLAPSED, NON_FINITE, REACHED, STAGES,
                                               STAGES_DENSE, dense_coefficients, error_norm, finite_within,
                                               minimum_step, stage_state, step_factor)
@@ -177,24 +178,33 @@ class CompiledSteps:
                  tau: np.ndarray) -> None:
         self.system = (ints, reals, table, joints, np.array(tau, dtype=float))
         n = ints.shape[0]
-        self.stages, self.scratch = np.empty((5, 2 * n + joints.shape[0])), (work_for(ints), np.empty(n))
+        self.size = 2 * n + joints.shape[0]
+        self.stages, self.scratch = np.empty((5, self.size)), (work_for(ints), np.empty(n))
+
+    def _checked(self, x: np.ndarray) -> np.ndarray:
+        """x if it is a state of this robot (float64, (2 n + LuGre joints,)); a UserInputError
+        naming the sizes otherwise (the loops index their scratch by the model's size)."""
+        if x.shape != (self.size,) or x.dtype != np.float64:
+            raise UserInputError(f"compiled loop: the state x = [q, v, z] needs {self.size} float64 values; got "
+                                 f"shape {x.shape}, dtype {x.dtype}")
+        return x
 
     def __call__(self, method: str, t: float, x: np.ndarray, t_target: float, dt: float, single: bool,
                  bounds: np.ndarray, previous: np.ndarray) -> tuple[float, float, float, int]:
-        return fixed_steps(METHOD_CODES[method], *self.system, x, float(t), float(t_target), float(dt), bool(single),
-                           bounds, previous, self.stages, *self.scratch)
+        return fixed_steps(METHOD_CODES[method], *self.system, self._checked(x), float(t), float(t_target), float(dt),
+                           bool(single), bounds, previous, self.stages, *self.scratch)
 
     def derivative(self, x: np.ndarray) -> np.ndarray:
         """dx/dt at x (a new array; see the module docstring)."""
         dx = np.empty(x.shape[0])
-        _derivative(*self.system, np.ascontiguousarray(x, dtype=float), *self.scratch, dx)
+        _derivative(*self.system, self._checked(np.ascontiguousarray(x, dtype=float)), *self.scratch, dx)
         return dx
 
     def dop853(self, t: float, x: np.ndarray, f: np.ndarray, h_abs: float, t_target: float, t_end: float,
                limits: np.ndarray, atol: np.ndarray, single: bool, bounds: np.ndarray, budget: int,
                x_old: np.ndarray, K: np.ndarray, x_new: np.ndarray) -> tuple[int, float, float, float, int, int]:
         """DOP853 steps towards t_target (s): :func:`dop853_steps`."""
-        return dop853_steps(*self.system, float(t), x, f, float(h_abs), float(t_target), float(t_end), limits, atol,
+        return dop853_steps(*self.system, float(t), self._checked(x), f, float(h_abs), float(t_target), float(t_end), limits, atol,
                             bool(single), bounds, int(budget), x_old, K, x_new, *self.scratch)
 
     def dop853_dense(self, K: np.ndarray, h: float, x_old: np.ndarray, x: np.ndarray, F: np.ndarray,

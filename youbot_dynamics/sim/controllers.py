@@ -28,8 +28,9 @@ import pinocchio as pin
 from numba import njit, types
 from numba.extending import register_jitable
 
-from youbot_dynamics.dynamics.friction import (FLOAT, NO_BRISTLES, READ_VECTOR, WRITTEN_VECTOR,
-                                               JointFriction, accumulate_friction_torque, unchecked)
+from youbot_dynamics.compiled import FLOAT, unchecked
+from youbot_dynamics.dynamics.friction import (NO_BRISTLES, READ_VECTOR, WRITTEN_VECTOR, JointFriction,
+                                               accumulate_friction_torque)
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.rigid_body import gravity_torque, inverse_dynamics
 from youbot_dynamics.model.robot import Robot

@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
-from youbot_dynamics.dynamics.friction import unchecked
+from youbot_dynamics.compiled import unchecked
 from youbot_dynamics.dynamics.mobile.base_controller import WheelSpeedPI
 from youbot_dynamics.dynamics.mobile.mecanum import (MecanumBase, mecanum_base_from_robot,
                                                      wheel_speeds)

@@ -63,13 +63,13 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
+from youbot_dynamics.compiled import FLOAT, unchecked
 from youbot_dynamics.dynamics.compiled_tree import tree_of
 from youbot_dynamics.dynamics.contact_model import ContactModel
 from youbot_dynamics.dynamics.contact_stepper import ConstraintStepper
-from youbot_dynamics.dynamics.friction import (FLOAT, JOINTS, READ_VECTOR, TABLE, WRITTEN_VECTOR,
-                                               JointFriction, accumulate_friction_torque,
-                                               friction_left_and_rates_unchecked,
-                                               left_torque_and_rates, unchecked)
+from youbot_dynamics.dynamics.friction import (JOINTS, READ_VECTOR, TABLE, WRITTEN_VECTOR, JointFriction,
+                                               accumulate_friction_torque, friction_left_and_rates_unchecked,
+                                               left_torque_and_rates)
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.rigid_body import (forward_dynamics, kinetic_energy, potential_energy,
                                                  symmetrised)

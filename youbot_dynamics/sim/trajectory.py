@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import register_jitable
 
-from youbot_dynamics.dynamics.friction import unchecked
+from youbot_dynamics.compiled import unchecked
 from youbot_dynamics.errors import UserInputError
 
 
