@@ -509,7 +509,7 @@ def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | No
     output spacing is refused; at most ``limits.max_steps`` steps; ``progress(t)`` is told
     the time reached (s) after each output."""
     scene = model.scene
-    state = (initial_state(model) if state0 is None else state0).copy()
+    state = initial_state(model) if state0 is None else state0.copy()
     state.events, state.deepest, state.touching = [], 0.0, frozenset()
     times = scene.output_times + state.t if t_eval is None else np.asarray(t_eval, dtype=float)
     checked_output_spacing(model.integrator.dt, times, f"{scene.source}: integrator.dt "
