@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
+import pinocchio as pin
 
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.mobile.wheel_floor import TipOverError
@@ -197,6 +198,7 @@ class ConstraintStepping:
         self._base_block, self._integral = model.block("base"), model.block("wheel_i")
         self._joints, self._nv, self._moving = model.joint_velocities, nv, model.nv > 0
         self._wheels = None if model.base is None else np.arange(nv)[self._joints][model.base.wheels]
+        self._zero_tangent = np.zeros(nv)
 
     def _pack_robot(self) -> np.ndarray:
         """``x`` with the stepper's robot q, base pose and plant v written in, in place (what
@@ -219,8 +221,17 @@ class ConstraintStepping:
         pose, chart, offset = self._bodies
         x[pose] = self.q[offset:]
         x[chart] = 0.0
-        self._configuration = self.model.configuration(x)
+        self._configuration = self._unfolded_configuration(x)
         return self.model.recentred(x, self._configuration)
+
+    def _unfolded_configuration(self, x: np.ndarray) -> np.ndarray:
+        """:meth:`SimModel.configuration` of ``x`` as packed (the stepper's robot q and body
+        poses, charts 0). Without a moving base (whose root it rebuilds from x's yaw) that is
+        pin.integrate of the stepper's own q by a zero tangent: the same call on the same
+        numbers, without assembling them from x."""
+        if self.model.base is not None:
+            return self.model.configuration(x)
+        return pin.integrate(self.model.plant.model, self.q, self._zero_tangent)
 
     def output_configuration(self, x: np.ndarray) -> np.ndarray:
         """The plant configuration (nq) of output state ``x``, the stepper's state at its time
