@@ -198,7 +198,9 @@ class ConstraintStepping:
         self._base_block, self._integral = model.block("base"), model.block("wheel_i")
         self._joints, self._nv, self._moving = model.joint_velocities, nv, model.nv > 0
         self._wheels = None if model.base is None else np.arange(nv)[self._joints][model.base.wheels]
-        self._zero_tangent = np.zeros(nv)
+        self._zero_tangent, self._no_force = np.zeros(nv), np.zeros(nv)
+        self._no_force.setflags(write=False)
+        self._unforced = not self._moving and model.base is None
 
     def _pack_robot(self) -> np.ndarray:
         """``x`` with the stepper's robot q, base pose and plant v written in, in place (what
@@ -243,7 +245,10 @@ class ConstraintStepping:
     def _generalised_force(self, h: float) -> np.ndarray:
         """The plant's applied generalised force (nv; N, N m) over the next step of h (s): the
         robot's torque less its joint friction (explicit) and a dynamic base's floor forces;
-        the base's PI integral terms move on by explicit Euler."""
+        the base's PI integral terms move on by explicit Euler. Nothing acts on a plant of
+        free bodies alone: the same zeros every step, read-only (a write into them raises)."""
+        if self._unforced:
+            return self._no_force
         tau = np.zeros(self._nv)
         if self._moving:
             joints, friction = self._joints, self.model.friction
