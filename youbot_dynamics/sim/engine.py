@@ -180,7 +180,7 @@ class ConstraintStepping:
                  deepest_allowed: float, record: bool = False) -> None:
         self.model, self.data, self.torque, self.twist = model, state.data, torque, state.reference.base_twist
         self.t, self.q, self.v = state.t, model.configuration(state.x), model.velocity(state.x).copy()
-        self.x = model.recentred(state.x, self.q).copy() if model.body_names else state.x.copy()
+        self.x = model.recentred(state.x, self.q) if model.body_names else state.x.copy()  # a copy either way
         self._configuration = self.q if model.body_names else None
         self.h, self.steps, self.iterations = 0.0, 0, 0
         self.touching = state.touching
@@ -414,9 +414,10 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
     keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
     outcome.quaternion_drift = model.quaternion_drift(s.x[keep])
     # outputs with every chart folded into its pose: the pose block is the body's pose
-    x = s.x[keep] if outcome.folded else np.array([
-        model.imposed(model.recentred(x), model.base_motion(t, reference.base_twist)) for t, x in zip(s.t[keep], s.x[keep])])
-    outcome.solution = Solution(s.t[keep], x, s.stats, s.state_names)
+    outputs = s.x[keep] if outcome.folded else np.array([
+        model.imposed(model.recentred(x), model.base_motion(t, reference.base_twist))
+        for t, x in zip(s.t[keep], s.x[keep])])
+    outcome.solution = Solution(s.t[keep], outputs, s.stats, s.state_names)
     return outcome
 
 
