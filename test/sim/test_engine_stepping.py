@@ -74,3 +74,20 @@ def test_the_stepper_ledger_sees_energy_put_in_between_two_calls():
     simulator.set_state(kicked)
     with pytest.raises(DivergenceError, match="energy grew by"):
         simulator.advance(0.3)
+
+
+def test_after_a_run_the_simulator_continues_from_its_end():
+    # Simulator.run leaves the run's end as its state (time, state, contact record, the
+    # controller's torque there); a step-wise call goes on from it as the longer run does
+    # (the restart folds the state once more: bound 1e-12 m, measured 0 here)
+    simulator = ball_drop(duration=0.5)
+    result = simulator.run()
+    assert simulator.t == result.t[-1] and np.array_equal(simulator.x, result.x[-1])
+    assert simulator.events == result.contact_events and simulator.state.deepest == result.max_penetration
+    assert result.contact_events  # the ball landed at about 0.45 s
+    longer = ball_drop(duration=0.6).run()
+    after = int(np.searchsorted(longer.t, result.t[-1])) + 1
+    snapshots = simulator.advance_through(longer.t[after:])
+    position = simulator.model.body_motion(np.array([s.kinematics[1] for s in snapshots]))["position"]
+    expected = simulator.model.body_motion(longer.x[after:])["position"]
+    assert np.max(np.abs(position - expected)) <= 1e-12
