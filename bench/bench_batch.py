@@ -1,12 +1,13 @@
 """Batch dynamics over N samples on the youBot arm (5 joints, URDF friction): milliseconds per
-batch. Goals (issue 14): inverse_dynamics_batch within 1.3x of a bare
-pin.rneaInParallel (1 thread) plus the friction laws in numpy on the whole batch, and at least
-5x faster than the per-sample inverse_dynamics loop; forward_dynamics_batch likewise against
+batch. Goals (issue 25): inverse_dynamics_batch within 1.1x of a bare
+pin.rneaInParallel (1 thread) plus the friction laws in numpy on the whole batch (the
+per-sample inverse_dynamics loop beside it); forward_dynamics_batch likewise against
 pin.abaInParallel.
 
 Run: python bench/bench_batch.py [--samples 2000] [--repeat 7]. Best of ``repeat``
-alternating runs; both batch functions get a prebuilt pin.ModelPool, as the bare calls do.
-The batches are checked against the per-sample functions first.
+alternating runs (CPU time of the measuring thread, bench/timing.py); both batch functions
+get a prebuilt pin.ModelPool, as the bare calls do. The batches are checked against the
+per-sample functions first.
 """
 from __future__ import annotations
 

@@ -1,12 +1,12 @@
 """Rigid-body dynamics with joint friction vs bare Pinocchio on the youBot arm (5 joints;
 wheels and fingers locked): microseconds per call, side by side, with the ratio. Goals
-(issue 14): RNEA + friction within 2x of a bare pin.rnea, ABA + friction within 1.6x of a
+(issue 25): RNEA + friction within 1.5x of a bare pin.rnea, ABA + friction within 1.3x of a
 bare pin.aba.
 
 Run: python bench/bench_dynamics.py [--calls 300] [--repeat 15]. Each figure is the best of
-``repeat`` loops of ``calls`` calls at one random state (time.perf_counter), ours and
-Pinocchio's loops alternating, so both see the same machine load and both pay the Python
-call overhead. Friction: the URDF default (viscous + regularised Coulomb on every joint),
+``repeat`` loops of ``calls`` calls at one random state (CPU time of the measuring thread,
+bench/timing.py), ours and Pinocchio's loops alternating, so both see the same machine load
+and both pay the Python call overhead. Friction: the URDF default (viscous + regularised Coulomb on every joint),
 then a mixed one (LuGre on joint 2, Stribeck on joint 3). The inverse pair is checked
 (ABA(RNEA(a)) = a) before timing. The friction alone is compared with the same laws
 evaluated by numpy on the whole joint vector (b v + F_c tanh(v / v_s)).

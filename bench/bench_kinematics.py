@@ -1,11 +1,13 @@
 """Screw-axis (PoE) kinematics vs Pinocchio on the youBot arm: microseconds per call, side by
-side, with the ratio. Goals (issue 14): PoE forward kinematics within 4x of Pinocchio's
-forward kinematics + frame placement, PoE Jacobians within 6x of Pinocchio's frame Jacobian.
+side, with the ratio. Goals: PoE forward kinematics within 4x of Pinocchio's forward
+kinematics + frame placement (issue 14), PoE Jacobians within 2x of Pinocchio's frame
+Jacobian (issue 25).
 
 Run: python bench/bench_kinematics.py [--calls 300] [--repeat 15]. Each figure is the best
-of ``repeat`` alternating loops of ``calls`` calls at one random configuration
-(time.perf_counter), so it includes the Python call overhead both sides pay. The pose and
-Jacobians of the gripper palm are checked against Pinocchio's before timing.
+of ``repeat`` alternating loops of ``calls`` calls at one random configuration (CPU time of
+the measuring thread, bench/timing.py), so it includes the Python call overhead both sides
+pay. The pose and Jacobians of the gripper palm are checked against Pinocchio's before
+timing.
 """
 from __future__ import annotations
 

@@ -46,7 +46,7 @@ def test_replay_json_and_time_scale(monkeypatch: pytest.MonkeyPatch, capsys, tmp
     assert record["messages"] == 3 and record["bag"] == "run.mcap" and record["topics"] == ["/clock", "/joint_states"]
     assert main(["replay", "run.mcap"]) == 0
     assert capsys.readouterr().out.startswith("replay: 3 messages from run.mcap in ")
-    assert [call["rate"] for call in calls] == [0.0, 1.0]  # 0: as fast as possible; default: as recorded
+    assert [call["time_scale"] for call in calls] == [0.0, 1.0]  # 0: as fast as possible; default: as recorded
     assert main(["replay", "run.mcap", "--time-scale", "-1"]) == 2
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and "--time-scale" in error[0] and "as fast as possible" in error[0]

@@ -175,3 +175,18 @@ def test_wrong_velocity_size_is_refused_before_the_compiled_loop(youbot, mixed):
             mixed.add_torque(out, v, z)
     with pytest.raises(UserInputError, match="2 LuGre bristle states"):
         mixed.torque(np.zeros((4, youbot.nv)), np.zeros((4, 3)))
+
+
+def test_the_rows_loop_checks_its_sizes_once_before_writing(youbot, mixed):
+    """The batch loop checks the sizes of the whole batch, then runs the rows without
+    checks: a z of the wrong width or rows, or an out of other rows, is a ValueError and
+    out is untouched."""
+    v, z = np.ones((3, youbot.nv)), np.zeros((3, 2))
+    for wrong_z, out in ((np.zeros((3, 3)), np.zeros((3, youbot.nv))), (np.zeros((2, 2)), np.zeros((3, youbot.nv))),
+                         (z, np.zeros((2, youbot.nv))), (z, np.zeros((3, youbot.nv + 1)))):
+        with pytest.raises(ValueError, match="one row of values per joint"):
+            fr._accumulate_rows(v, wrong_z, mixed.table, 1.0, out)
+        assert not out.any()
+    out = np.zeros((3, youbot.nv))
+    fr._accumulate_rows(v, z, mixed.table, 1.0, out)
+    np.testing.assert_array_equal(out, mixed.torque(v, z))

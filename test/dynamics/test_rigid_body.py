@@ -89,6 +89,12 @@ def test_the_unchecked_friction_path_equals_the_checked_one_and_refuses_bad_stat
         strided = np.repeat(v, 2)[::2]
         for velocity in (v, strided):
             np.testing.assert_array_equal(forward_dynamics(arm, data, q, velocity, tau, friction, z), expected)
+        # what the in-line type checks send the other way: lists, a float32 torque, a strided z
+        np.testing.assert_array_equal(forward_dynamics(arm, data, q, v, list(tau), friction, list(z)), expected)
+        np.testing.assert_array_equal(forward_dynamics(arm, data, q, v, tau.astype(np.float32), friction, z),
+                                      pin.aba(arm.model, data, q, v, tau.astype(np.float32) - friction.torque(v, z)))
+        np.testing.assert_array_equal(inverse_dynamics(arm, data, q, v, a, friction, list(z)), tau)
+        np.testing.assert_array_equal(inverse_dynamics(arm, data, q, v, a, friction, np.repeat(z, 2)[::2]), tau)
         v32 = v.astype(np.float32)
         np.testing.assert_array_equal(forward_dynamics(arm, data, q, v32, tau, friction, z),
                                       pin.aba(arm.model, data, q, v32, tau - friction.torque(v32.astype(float), z)))

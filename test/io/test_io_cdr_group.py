@@ -54,9 +54,9 @@ def test_topics_filled_together_are_the_built_messages() -> None:
     batch = entries(refilled, len(STAMPS))
     filled = batches.fill(STAMPS, batch)
     assert len(batches._groups) == 1                                 # filled together
-    assert [topic for topic, _ in filled] == list(BUILDERS)
-    for (topic, _, values, build), (_, got) in zip(batch, filled):
-        assert [m.cdr for m in got] == [cdr(build(s, row)) for s, row in zip(STAMPS, values)]
+    assert [[topic for topic, _ in sample] for sample in filled] == [list(BUILDERS)] * len(STAMPS)
+    for k, (topic, _, values, build) in enumerate(batch):
+        assert [sample[k][1].cdr for sample in filled] == [cdr(build(s, row)) for s, row in zip(STAMPS, values)]
 
 
 @pytest.mark.parametrize("topic, field", [("/joints", "effort[2]"), ("/pose", "pose.orientation")])

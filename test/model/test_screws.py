@@ -1,5 +1,8 @@
 """Screw axes from the URDF and product-of-exponentials kinematics against the seed exercise
-(youbot_facts.md section 5) and Pinocchio's frame placements and frame Jacobians."""
+(youbot_facts.md section 5) and Pinocchio's frame placements and frame Jacobians; the
+compiled loops (running transform held in registers, called through their entry points)
+against the previous implementation, to the bit, and the direct path (one float64
+configuration) against the general one."""
 from __future__ import annotations
 
 import math
@@ -7,12 +10,13 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from numba import njit
 
 from youbot_dynamics import default_urdf
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.lie import exp_se3
 from youbot_dynamics.model.robot import Robot, keep_joints, load_robot, lock_joints
-from youbot_dynamics.model.screws import (fkin_body, fkin_space, jacobian_body, jacobian_space,
+from youbot_dynamics.model.screws import (ScrewChain, fkin_body, fkin_space, jacobian_body, jacobian_space,
                                           screw_chain)
 
 N_CONFIGURATIONS = 1000
@@ -299,3 +303,128 @@ def test_locking_a_primary_locks_its_mimic_joints() -> None:
         np.testing.assert_allclose(fkin_space(screw_chain(reduced, link), q_reduced),
                                    fkin_space(screw_chain(robot, link), q_full), rtol=0, atol=1e-14)
         assert max(_max_errors(reduced, link, q_reduced).values()) < TOLERANCE
+
+
+# ---- the compiled loops ------------------------------------------------------------------
+FUNCTIONS = (fkin_space, fkin_body, jacobian_space, jacobian_body)
+BY_NAME = {f.__name__: f for f in FUNCTIONS}
+
+
+# ---- the previous implementation (4x4 arrays, the exponential by its own call), kept as the
+# ---- reference the loops must equal to the bit ---------------------------------------------
+@njit
+def _multiply_exponential(transform, terms, theta, out):
+    s, c = np.sin(theta), 1.0 - np.cos(theta)
+    for r in range(3):
+        for col in range(4):
+            total = transform[r, 3] if col == 3 else 0.0
+            for k in range(3):
+                factor = terms[0, k, col] + theta * terms[1, k, col] + s * terms[2, k, col] + c * terms[3, k, col]
+                total += transform[r, k] * factor
+            out[r, col] = total
+    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
+@njit
+def _previous_pose(q, angles, terms, out):
+    running, scratch = np.eye(4), np.empty((4, 4))
+    for i in range(terms.shape[0]):
+        theta = angles[1, i] * q[int(angles[0, i])] + angles[2, i]
+        _multiply_exponential(running, terms[i], theta, scratch)
+        running, scratch = scratch, running
+    out[:, :] = running
+
+
+@njit
+def _previous_columns(q, angles, terms, axes, out):
+    running, scratch = np.eye(4), np.empty((4, 4))
+    for i in range(terms.shape[0]):
+        for r in range(3):
+            omega = running[r, 0] * axes[0, i] + running[r, 1] * axes[1, i] + running[r, 2] * axes[2, i]
+            out[r, i] = omega
+            out[r + 3, i] = running[r, 0] * axes[3, i] + running[r, 1] * axes[4, i] + running[r, 2] * axes[5, i]
+        w0, w1, w2 = out[0, i], out[1, i], out[2, i]
+        p0, p1, p2 = running[0, 3], running[1, 3], running[2, 3]
+        out[3, i] += p1 * w2 - p2 * w1
+        out[4, i] += p2 * w0 - p0 * w2
+        out[5, i] += p0 * w1 - p1 * w0
+        if i + 1 < terms.shape[0]:
+            theta = angles[1, i] * q[int(angles[0, i])] + angles[2, i]
+            _multiply_exponential(running, terms[i], theta, scratch)
+            running, scratch = scratch, running
+
+
+def previous(chain: ScrewChain, q: np.ndarray) -> dict[str, np.ndarray]:
+    """The four results of the previous loops at one configuration (fixed root, no mimic)."""
+    poses = {}
+    for name, (angles, terms) in (("fkin_space", chain._space_pose), ("fkin_body", chain._body_pose)):
+        poses[name] = np.empty((4, 4))
+        _previous_pose(q, angles, terms, poses[name])
+    for name, loop in (("jacobian_space", chain._space_jacobian), ("jacobian_body", chain._body_jacobian)):
+        poses[name] = np.empty((6, chain.n))
+        _previous_columns(q, *loop, poses[name])
+    poses["jacobian_body"] = poses["jacobian_body"][:, ::-1]
+    return poses
+
+
+def robots() -> dict[str, Robot]:
+    return {"youbot": load_robot(default_urdf()), "seed": load_robot(seed_urdf()),
+            "offset_arm": load_robot(offset_arm_urdf())}
+
+
+@pytest.mark.parametrize("name", ["youbot", "seed", "offset_arm"])
+def test_loops_equal_the_previous_implementation_to_the_bit(name: str) -> None:
+    """Every link's chain, 200 configurations (wide angles, signed zeros, prismatic joints):
+    the same operations in the same order, so the same bits (signed zeros included)."""
+    robot = robots()[name]
+    rng = np.random.default_rng(11)
+    configurations = rng.uniform(-4.0, 4.0, (200, robot.nq))
+    configurations[::7] = 0.0
+    configurations[1::7] = -0.0
+    for link in robot.link_names:
+        chain = screw_chain(robot, link)
+        if not chain.n:
+            continue
+        batch = {f.__name__: f(chain, configurations) for f in FUNCTIONS}
+        for k, q in enumerate(configurations):
+            for key, reference in previous(chain, q).items():
+                ours = BY_NAME[key](chain, q)
+                assert ours.tobytes() == np.ascontiguousarray(reference).tobytes(), (link, key, k)
+                assert batch[key][k].tobytes() == ours.tobytes(), (link, key, k)
+
+
+def test_direct_path_equals_the_general_one_and_checks_sizes() -> None:
+    """A float64 vector takes the direct path; a list, float32 values (converted), a strided
+    view and a (1, nq) batch take the general one: the same values. The results are fresh
+    arrays; a wrong size is the UserInputError naming nq, whichever path."""
+    robot = robots()["youbot"]
+    chain = screw_chain(robot)
+    q = np.random.default_rng(4).uniform(-3.0, 3.0, robot.nq)
+    for f in FUNCTIONS:
+        direct = f(chain, q)
+        assert direct.flags.c_contiguous and direct.flags.writeable
+        assert f(chain, q) is not direct
+        np.testing.assert_array_equal(f(chain, list(q)), direct)
+        np.testing.assert_array_equal(f(chain, np.repeat(q, 2)[::2]), direct)
+        np.testing.assert_array_equal(f(chain, q[None])[0], direct)
+        q32 = q.astype(np.float32)
+        np.testing.assert_array_equal(f(chain, q32), f(chain, q32.astype(float)))
+        for wrong in (q[:-1], np.append(q, 0.0), np.float64(1.0), q.reshape(1, 1, -1)[..., :-1]):
+            with pytest.raises(UserInputError, match=f"nq = {robot.nq}"):
+                f(chain, wrong)
+
+
+def test_mimic_chains_and_movable_roots_keep_the_general_path() -> None:
+    """A chain with mimic joints or a movable root is not answered by the loop alone: its
+    Jacobian maps the screw columns to the robot's joints (and root); against the batch of
+    one configuration, which never takes the direct path."""
+    floating = load_robot(default_urdf(), root="floating")
+    for robot in (load_robot(mimic_arm_urdf()), floating):
+        chain = screw_chain(robot)
+        assert not chain._direct
+        q = np.zeros(robot.nq)
+        q[robot.root_nq:] = np.random.default_rng(5).uniform(-1.0, 1.0, robot.nv - robot.root_nv)
+        if robot.root == "floating":
+            q[3:7] = (0.1, -0.2, 0.3, 0.9) / np.linalg.norm((0.1, -0.2, 0.3, 0.9))
+        for f in FUNCTIONS:
+            np.testing.assert_array_equal(f(chain, q), f(chain, q[None])[0])

@@ -48,7 +48,7 @@ def simulate(offset: int, mcap: Path, duration: float, time_scale: float = 0.0, 
             wait_until(lambda: node.finished, what="the simulate run")
 
 
-def replay_into_inverse_node(offset: int, bag: Path, rate: float, expected: int,
+def replay_into_inverse_node(offset: int, bag: Path, time_scale: float, expected: int,
                              listener: subprocess.Popen | None = None) -> list:
     """Replay ``bag``'s /joint_states into an inverse-mode node; the /computed_torques. A
     ``listener`` process must also have subscribed and said "ready" first."""
@@ -56,7 +56,7 @@ def replay_into_inverse_node(offset: int, bag: Path, rate: float, expected: int,
         node = DynamicsNode(context=context, parameter_overrides=[
             Parameter("scene", value="arm_ptp"), Parameter("mode", value="inverse")])
         collector = Collector(context, TORQUES)
-        replay = ReplayNode(bag, rate, ["/joint_states"], context=context)
+        replay = ReplayNode(bag, time_scale, ["/joint_states"], context=context)
         with spinning(context, node, collector, replay):
             subscribers = 1 if listener is None else 2
             assert replay.wait_for_subscribers("/joint_states", subscribers, timeout=WAIT)
@@ -99,7 +99,7 @@ def acceleration_error_bound(times: np.ndarray, q: np.ndarray, h: float) -> np.n
 def test_a_replayed_run_gives_back_its_efforts_within_the_estimate_bound(recorded: Path) -> None:
     states = [m.message for m in read_bag(recorded) if m.topic == "/joint_states"]
     assert len(states) == 101
-    torques = replay_into_inverse_node(11, recorded, rate=1.0, expected=len(states))
+    torques = replay_into_inverse_node(11, recorded, time_scale=1.0, expected=len(states))
     by_stamp = {stamp_ns(m): m for m in states}
     assert [stamp_ns(t) for t in torques] == [stamp_ns(m) for m in states[1:-1]]
     times = np.array([stamp_ns(t) * 1e-9 for t in torques])
@@ -175,7 +175,7 @@ def test_c_a_rosbags_written_bag_replays_into_the_node_and_another_process(tmp_p
                                 env={**os.environ, "ROS_DOMAIN_ID": str(domain_id(14))},
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        torques = replay_into_inverse_node(14, bag, rate=0.0, expected=len(samples), listener=listener)
+        torques = replay_into_inverse_node(14, bag, time_scale=0.0, expected=len(samples), listener=listener)
         out, err = listener.communicate(timeout=WAIT + 30)
     finally:
         if listener.poll() is None:
@@ -258,4 +258,4 @@ def test_replay_refuses_topics_the_bag_does_not_replay(recorded: Path) -> None:
                              capture_output=True, text=True, timeout=120)
     lines = process.stderr.strip().splitlines()
     assert process.returncode == 2 and len(lines) == 1, process.stderr
-    assert lines[0].startswith("youbot-dynamics replay: error: ") and "rate" in lines[0] and "5000" in lines[0]
+    assert lines[0].startswith("youbot-dynamics replay: error: ") and "time_scale" in lines[0] and "5000" in lines[0]

@@ -9,6 +9,7 @@ import pytest
 
 from youbot_dynamics.dynamics import contact_stepper
 from youbot_dynamics.dynamics.contact_stepper import ContactSet, contact_rotation
+from youbot_dynamics.scene.row import youbot_row_scene
 from youbot_dynamics.scene.schema import load_scene
 from youbot_dynamics.sim import engine
 from youbot_dynamics.sim.build import compile as compile_scene
@@ -123,17 +124,22 @@ def test_delassus_drift_and_velocity_kernels_against_numpy():
     gaps, restitutions = np.array([1e-4, 0.5, -2e-4]), np.array([0.5, 0.7, 0.9])
     assert approach[0] < threshold and gaps[0] + h * approach[0] < 0 and approach[1:].min() > threshold
     mass_jt, delassus, drift = np.empty((nv, 9)), np.empty((9, 9)), np.empty(9)
-    contact_stepper._delassus_and_drift(upper, jacobian, v_free, v, gaps, restitutions, h, threshold, baumgarte,
-                                        mass_jt, delassus, drift)
+    one_tree = np.zeros(nv, dtype=np.int64)  # every dof in one subtree: no entry skipped
+    contact_stepper._delassus_and_drift(upper, jacobian, one_tree, v_free, v, gaps, restitutions, h, threshold,
+                                        baumgarte, mass_jt, delassus, drift)
     expected_drift = jacobian @ v_free
     expected_drift[2::3] += [restitutions[0] * approach[0], gaps[1] / h, baumgarte * gaps[2] / h]
     np.testing.assert_allclose(mass_jt, inverse_mass @ jacobian.T, rtol=1e-13)
     np.testing.assert_allclose(delassus, jacobian @ inverse_mass @ jacobian.T, rtol=1e-13)
     assert np.array_equal(delassus, delassus.T)
     np.testing.assert_allclose(drift, expected_drift, rtol=1e-13)
-    impulses, v_next = rng.normal(size=9), np.empty(nv)
-    contact_stepper._velocity_after(v_free, mass_jt, impulses, v_next)
+    impulses, v_next, displacement = rng.normal(size=9), np.empty(nv), np.empty(nv)
+    contact_stepper._velocity_after(v_free, mass_jt, impulses, h, v_next, displacement)
     np.testing.assert_allclose(v_next, v_free + inverse_mass @ jacobian.T @ impulses, rtol=1e-13)
+    assert np.array_equal(displacement, h * v_next)
+    a, free = rng.normal(size=nv), np.empty(nv)
+    contact_stepper._free_velocity(v, a, h, free)
+    assert np.array_equal(free, v + h * a)  # numpy's two operations, no fused multiply-add
 
 
 def test_delassus_kernel_on_a_sparse_jacobian_equals_the_dense_sums_to_the_bit():
@@ -151,18 +157,59 @@ def test_delassus_kernel_on_a_sparse_jacobian_equals_the_dense_sums_to_the_bit()
     jacobian[4, 17] = 0.0  # a zero inside a row's support
     v_free, v = rng.normal(size=nv), rng.normal(size=nv)
     gaps, restitutions = np.array([1e-4, -2e-4]), np.array([0.5, 0.9])
-    mass_jt, delassus, drift = np.empty((nv, 6)), np.empty((6, 6)), np.empty(6)
-    contact_stepper._delassus_and_drift(upper, jacobian, v_free, v, gaps, restitutions, h, -0.05, 0.2,
+    assert_dense_sums(upper, jacobian, np.zeros(nv, dtype=np.int64), v_free, v, gaps, restitutions, h)
+
+
+def assert_dense_sums(upper, jacobian, trees, v_free, v, gaps, restitutions, h) -> None:
+    """The kernel's M^-1 J^T, J M^-1 J^T and the drift's tangential rows equal the dense
+    sums over every column in the kernels' order (a plain Python loop), to the bit."""
+    nv, rows = upper.shape[0], jacobian.shape[0]
+    mass_jt, delassus, drift = np.empty((nv, rows)), np.empty((rows, rows)), np.empty(rows)
+    contact_stepper._delassus_and_drift(upper, jacobian, trees, v_free, v, gaps, restitutions, h, -0.05, 0.2,
                                         mass_jt, delassus, drift)
     full = np.triu(upper) + np.triu(upper, 1).T
-    dense_mass_jt = np.array([[sum_in_order(full[a, b] * jacobian[i, b] for b in range(nv)) for i in range(6)]
+    dense_mass_jt = np.array([[sum_in_order(full[a, b] * jacobian[i, b] for b in range(nv)) for i in range(rows)]
                               for a in range(nv)])
     dense_delassus = np.array([[sum_in_order(jacobian[i, a] * dense_mass_jt[a, j] for a in range(nv))
-                                for j in range(6)] for i in range(6)])
-    dense_drift = np.array([sum_in_order(jacobian[i, a] * v_free[a] for a in range(nv)) for i in range(6)])
-    assert np.array_equal(mass_jt, dense_mass_jt)
+                                for j in range(rows)] for i in range(rows)])
+    dense_drift = np.array([sum_in_order(jacobian[i, a] * v_free[a] for a in range(nv)) for i in range(rows)])
+    tangential = [i for i in range(rows) if i % 3 != 2]
+    assert np.array_equal(mass_jt, dense_mass_jt) and not np.any(np.signbit(mass_jt[mass_jt == 0.0]))
     assert np.array_equal(delassus, np.triu(dense_delassus) + np.triu(dense_delassus, 1).T)
-    assert np.array_equal(drift[[0, 1, 3, 4]], dense_drift[[0, 1, 3, 4]])
+    assert np.array_equal(drift[tangential], dense_drift[tangential])
+
+
+def test_inverse_mass_is_plus_zero_between_subtrees_and_the_kernel_skips_it_to_the_bit():
+    """Three youBots in a row, each with its sphere (six subtrees of the universe): at
+    random states Pinocchio's M^-1 (upper triangle, computeMinverse after ABA) is +0 between
+    two subtrees and non-zero within one, which the kernel reads to write +0 between
+    contact components without their sums; its results equal the dense sums to the bit on
+    points within one robot, on a point joining a robot and its sphere, and on one joining
+    two robots' subtrees (then one component)."""
+    model = compile_scene(youbot_row_scene(3, 0.1)).plant.model
+    trees = contact_stepper.subtrees(model)
+    assert trees.max() + 1 == 6
+    across = trees[:, None] != trees[None, :]
+    upper_triangle = np.triu(np.ones((model.nv, model.nv), dtype=bool))
+    data, rng = model.createData(), np.random.default_rng(8)
+    columns = [np.flatnonzero(trees == k) for k in range(6)]
+    for draw in range(6):
+        q = pin.integrate(model, pin.neutral(model), rng.normal(size=model.nv))  # finite, unlike randomConfiguration
+        pin.aba(model, data, q, rng.normal(size=model.nv), rng.normal(size=model.nv), pin.Convention.WORLD)
+        upper = pin.computeMinverse(model, data).copy()
+        assert np.all(upper[across & upper_triangle] == 0.0) and not np.any(np.signbit(upper[across]))
+        assert np.all(np.isfinite(upper)) and np.all(upper[~across & upper_triangle] != 0.0)
+        jacobian = np.zeros((9, model.nv))
+        jacobian[0:3, columns[0]] = rng.normal(size=(3, columns[0].size))  # within robot 1
+        joined = np.concatenate([columns[draw % 3], columns[3 + draw % 3]])  # a robot and a sphere
+        jacobian[3:6, joined] = rng.normal(size=(3, joined.size))
+        if draw % 2:  # robots 2 and 3 joined by one point: one component
+            jacobian[6:9, np.concatenate([columns[1], columns[2]])] = rng.normal(size=(3, columns[1].size
+                                                                                        + columns[2].size))
+        else:
+            jacobian[6:9, columns[2]] = rng.normal(size=(3, columns[2].size))
+        assert_dense_sums(upper, jacobian, trees, rng.normal(size=model.nv), rng.normal(size=model.nv),
+                          np.array([1e-4, -2e-4, 3e-4]), np.array([0.5, 0.9, 0.6]), 1e-3)
 
 
 def sum_in_order(terms) -> float:

@@ -156,7 +156,7 @@ def test_lagrange_form_by_sympy_equals_pinocchio_rnea():
     assert worst < 1e-12
 
 
-def test_document_lagrange_code_has_no_kinetic_energy():
+def test_our_lagrange_m11_is_the_kinetic_energy_the_printed_code_drops():
     """The printed symbolic_dynamics sets T_total = 0 and never adds to it: its tau is
     dU/dq, G(q) alone (M = 0). Ours has M11 = ZZ1R + ZZ2 + 2 l1 MX2 = 1.61375 kg m^2 at q2 = 0."""
     _, mass = planar.symbolic_torques()

@@ -71,7 +71,7 @@ def run_replay(args: argparse.Namespace) -> int:
     from youbot_dynamics.ros.replay_node import replay_once
 
     start = time.monotonic()
-    count, bag, topics = replay_once([], bag=args.bag, rate=args.time_scale, topics=args.topic,
+    count, bag, topics = replay_once([], bag=args.bag, time_scale=args.time_scale, topics=args.topic,
                                      wait_for=args.wait_for)
     wall = time.monotonic() - start
     if args.json:

@@ -38,8 +38,9 @@ import pinocchio as pin
 from numba import njit, types
 from numba.extending import register_jitable
 
+from youbot_dynamics.dynamics.collision import ContactPoint
 from youbot_dynamics.dynamics.contact_model import ContactModel
-from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR
+from youbot_dynamics.dynamics.friction import READ_VECTOR, WRITTEN_VECTOR, unchecked
 
 #: PGS stops when a sweep moves no impulse by more than this fraction of the largest (see
 #: :class:`ContactSet`); ``tolerance`` is ADMM's.
@@ -105,6 +106,7 @@ def contact_rotation(normal: np.ndarray) -> np.ndarray:
 
 
 _READ_MATRIX, _WRITTEN_MATRIX = types.Array(types.float64, 2, "A", readonly=True), types.Array(types.float64, 2, "A")
+_TREES = types.Array(types.int64, 1, "C", readonly=True)
 
 
 @njit(types.void(READ_VECTOR, READ_VECTOR, READ_VECTOR, _READ_MATRIX, READ_VECTOR, _READ_MATRIX, READ_VECTOR,
@@ -142,8 +144,12 @@ def _contact_placements(normal: np.ndarray, point1: np.ndarray, point2: np.ndarr
 # over the columns where the constraint's row of J is non-zero, in increasing order: a term
 # of a zero column is +-0 times a finite number, which leaves every partial sum as it was,
 # so the result is bit for bit that of the dense sums (for a finite M^-1), at a cost that
-# grows with the dofs a contact touches rather than with the whole model's (N robots with
-# a contact each: linear in N, not quadratic).
+# grows with the dofs a contact touches rather than with the whole model's. And M^-1 is
+# zero between two subtrees of the universe (two robots, a robot and a free body:
+# computeMinverse writes nothing there, the +0 of a new Data stays), so an entry of M^-1 J^T
+# or J M^-1 J^T between two contact components (trees joined by the rows that touch them,
+# :func:`_components`) is a sum of +-0 terms, +0: written as such without its sum (N robots
+# with a contact each: linear in N, not quadratic).
 @register_jitable(inline="always")
 def _support(jacobian: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(columns, counts): row i of J (3p x nv) is non-zero in columns[i, :counts[i]], in
@@ -161,33 +167,68 @@ def _support(jacobian: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return columns, counts
 
 
+@register_jitable
+def _root(parent: np.ndarray, tree: int) -> int:
+    """The representative of ``tree`` in the union-find forest ``parent``."""
+    root = tree
+    while parent[root] != root:
+        root = parent[root]
+    return root
+
+
+@register_jitable(inline="always")
+def _components(trees: np.ndarray, columns: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(per dof, per row of J) its contact component: the subtrees of the universe
+    (``trees``: per dof its subtree, numbered from 0) joined where one row of J moves dofs of
+    several; a row that moves none is in component -1, with no dof."""
+    parent = np.arange(trees.max() + 1 if trees.shape[0] else 0)
+    for i in range(counts.shape[0]):
+        if counts[i]:
+            first = _root(parent, trees[columns[i, 0]])
+            for k in range(1, counts[i]):
+                other = _root(parent, trees[columns[i, k]])
+                if other != first:
+                    parent[other] = first
+    dof_component = np.empty(trees.shape[0], np.int64)
+    for a in range(trees.shape[0]):
+        dof_component[a] = _root(parent, trees[a])
+    row_component = np.full(counts.shape[0], -1, np.int64)
+    for i in range(counts.shape[0]):
+        if counts[i]:
+            row_component[i] = dof_component[columns[i, 0]]
+    return dof_component, row_component
+
+
 @register_jitable(inline="always")
 def _inverse_mass_jt(upper: np.ndarray, jacobian: np.ndarray, columns: np.ndarray, counts: np.ndarray,
-                     mass_jt: np.ndarray) -> None:
+                     dof_component: np.ndarray, row_component: np.ndarray, mass_jt: np.ndarray) -> None:
     """mass_jt = M^-1 J^T (nv x 3p) from the upper triangle of M^-1 (nv x nv) and J (3p x nv)
-    on J's support (:func:`_support`)."""
+    on J's support (:func:`_support`), +0 between components (:func:`_components`)."""
     rows, nv = jacobian.shape
     for a in range(nv):
         for i in range(rows):
             total = 0.0
-            for k in range(counts[i]):
-                b = columns[i, k]  # M^-1[a, b] = upper[b, a] below the diagonal
-                total += (upper[b, a] if b < a else upper[a, b]) * jacobian[i, b]
+            if dof_component[a] == row_component[i]:
+                for k in range(counts[i]):
+                    b = columns[i, k]  # M^-1[a, b] = upper[b, a] below the diagonal
+                    total += (upper[b, a] if b < a else upper[a, b]) * jacobian[i, b]
             mass_jt[a, i] = total
 
 
 @register_jitable(inline="always")
 def _delassus_and_free_drift(jacobian: np.ndarray, mass_jt: np.ndarray, v_free: np.ndarray, columns: np.ndarray,
-                             counts: np.ndarray, delassus: np.ndarray, drift: np.ndarray) -> None:
-    """delassus = J M^-1 J^T (3p x 3p, symmetric to the bit) and drift = J v_free (m/s), on
-    J's support."""
+                             counts: np.ndarray, row_component: np.ndarray, delassus: np.ndarray,
+                             drift: np.ndarray) -> None:
+    """delassus = J M^-1 J^T (3p x 3p, symmetric to the bit; +0 between components) and
+    drift = J v_free (m/s), on J's support."""
     rows = jacobian.shape[0]
     for i in range(rows):
         for j in range(i, rows):
             total = 0.0
-            for k in range(counts[i]):
-                a = columns[i, k]
-                total += jacobian[i, a] * mass_jt[a, j]
+            if row_component[i] == row_component[j]:
+                for k in range(counts[i]):
+                    a = columns[i, k]
+                    total += jacobian[i, a] * mass_jt[a, j]
             delassus[i, j] = total
             delassus[j, i] = total
         total = 0.0
@@ -218,42 +259,84 @@ def _add_gap_drift(jacobian: np.ndarray, v: np.ndarray, gaps: np.ndarray, restit
             drift[row] += baumgarte * gap / h
 
 
-@njit(types.void(_READ_MATRIX, _READ_MATRIX, READ_VECTOR, READ_VECTOR, READ_VECTOR, READ_VECTOR, types.float64,
-                 types.float64, types.float64, _WRITTEN_MATRIX, _WRITTEN_MATRIX, WRITTEN_VECTOR), cache=True)
-def _delassus_and_drift(upper: np.ndarray, jacobian: np.ndarray, v_free: np.ndarray, v: np.ndarray,
-                        gaps: np.ndarray, restitutions: np.ndarray, h: float, threshold: float, baumgarte: float,
-                        mass_jt: np.ndarray, delassus: np.ndarray, drift: np.ndarray) -> None:
+@njit(types.void(_READ_MATRIX, _READ_MATRIX, _TREES, READ_VECTOR, READ_VECTOR, READ_VECTOR, READ_VECTOR,
+                 types.float64, types.float64, types.float64, _WRITTEN_MATRIX, _WRITTEN_MATRIX, WRITTEN_VECTOR),
+      cache=True)
+def _delassus_and_drift(upper: np.ndarray, jacobian: np.ndarray, trees: np.ndarray, v_free: np.ndarray,
+                        v: np.ndarray, gaps: np.ndarray, restitutions: np.ndarray, h: float, threshold: float,
+                        baumgarte: float, mass_jt: np.ndarray, delassus: np.ndarray, drift: np.ndarray) -> None:
     """Step 3 of the module docstring in one compiled pass. From the upper triangle of M^-1
-    (nv x nv, what computeMinverse fills) and the constraints' Jacobian J (3p x nv; point
+    (nv x nv, what computeMinverse fills: zero between the universe's subtrees, per dof its
+    subtree in ``trees``, numbered from 0) and the constraints' Jacobian J (3p x nv; point
     i's normal row 3i + 2): mass_jt = M^-1 J^T (nv x 3p), delassus = J M^-1 J^T (3p x 3p,
     symmetric to the bit), drift = J v_free (m/s) plus per point, with its gap (m, < 0
     overlapping), restitution and approach speed J_n v before the step: the rebound
     restitution J_n v if J_n v < ``threshold`` (m/s, negative) and the gap closes within h
     (s), else gap / h for a gap, ``baumgarte`` gap / h for an overlap."""
     rows, nv = jacobian.shape
-    if (upper.shape[0] != nv or upper.shape[1] != nv or v_free.shape[0] != nv or v.shape[0] != nv
-            or rows != 3 * gaps.shape[0] or restitutions.shape[0] != gaps.shape[0] or mass_jt.shape[0] != nv
-            or mass_jt.shape[1] != rows or delassus.shape[0] != rows or delassus.shape[1] != rows
+    if (upper.shape[0] != nv or upper.shape[1] != nv or trees.shape[0] != nv or v_free.shape[0] != nv
+            or v.shape[0] != nv or rows != 3 * gaps.shape[0] or restitutions.shape[0] != gaps.shape[0]
+            or mass_jt.shape[0] != nv or mass_jt.shape[1] != rows or delassus.shape[0] != rows or delassus.shape[1] != rows
             or drift.shape[0] != rows):
-        raise ValueError("contact step: M^-1 (nv x nv), J (3p x nv), velocities (nv,), gaps and restitutions "
-                         "(p,) and outputs of matching sizes")
+        raise ValueError("contact step: M^-1 (nv x nv), J (3p x nv), subtrees and velocities (nv,), gaps and "
+                         "restitutions (p,) and outputs of matching sizes")
+    if trees.shape[0] and (trees.min() < 0 or trees.max() >= nv):
+        raise ValueError("contact step: subtrees numbered from 0, fewer than the dofs")
     columns, counts = _support(jacobian)
-    _inverse_mass_jt(upper, jacobian, columns, counts, mass_jt)
-    _delassus_and_free_drift(jacobian, mass_jt, v_free, columns, counts, delassus, drift)
+    dof_component, row_component = _components(trees, columns, counts)
+    _inverse_mass_jt(upper, jacobian, columns, counts, dof_component, row_component, mass_jt)
+    _delassus_and_free_drift(jacobian, mass_jt, v_free, columns, counts, row_component, delassus, drift)
     _add_gap_drift(jacobian, v, gaps, restitutions, h, threshold, baumgarte, columns, counts, drift)
 
 
-@njit(types.void(READ_VECTOR, _READ_MATRIX, READ_VECTOR, WRITTEN_VECTOR), cache=True)
-def _velocity_after(v_free: np.ndarray, mass_jt: np.ndarray, impulses: np.ndarray, out: np.ndarray) -> None:
-    """out = v_free + M^-1 J^T lambda (m/s, rad/s) from mass_jt = M^-1 J^T and the impulses."""
+@njit(types.void(READ_VECTOR, READ_VECTOR, types.float64, WRITTEN_VECTOR), cache=True)
+def _free_velocity(v: np.ndarray, a: np.ndarray, h: float, out: np.ndarray) -> None:
+    """out = v + h a (m/s, rad/s): step 1's free velocity from the accelerations a and the
+    step h (s), numpy's two operations per entry."""
+    if a.shape[0] != v.shape[0] or out.shape[0] != v.shape[0]:
+        raise ValueError("contact step: v, a and out (nv,)")
+    for i in range(v.shape[0]):
+        out[i] = v[i] + h * a[i]
+
+
+@njit(types.void(READ_VECTOR, _READ_MATRIX, READ_VECTOR, types.float64, WRITTEN_VECTOR, WRITTEN_VECTOR),
+      cache=True)
+def _velocity_after(v_free: np.ndarray, mass_jt: np.ndarray, impulses: np.ndarray, h: float, out: np.ndarray,
+                    displacement: np.ndarray) -> None:
+    """out = v_free + M^-1 J^T lambda (m/s, rad/s) from mass_jt = M^-1 J^T and the impulses,
+    and displacement = h out (what ``pin.integrate`` moves q by over the step h, s)."""
     nv, rows = mass_jt.shape
-    if v_free.shape[0] != nv or impulses.shape[0] != rows or out.shape[0] != nv:
-        raise ValueError("contact step: v_free (nv,), M^-1 J^T (nv x 3p), impulses (3p,), out (nv,)")
+    if v_free.shape[0] != nv or impulses.shape[0] != rows or out.shape[0] != nv or displacement.shape[0] != nv:
+        raise ValueError("contact step: v_free (nv,), M^-1 J^T (nv x 3p), impulses (3p,), outputs (nv,)")
     for a in range(nv):
         total = 0.0
         for i in range(rows):
             total += mass_jt[a, i] * impulses[i]
         out[a] = v_free[a] + total
+        displacement[a] = h * out[a]
+
+
+#: The step's kernels without numba's type dispatch (about 1.5 us of a step): the step hands
+#: them float64 arrays only (coal's points and normals, Pinocchio's matrices and vectors, the
+#: stepper's own scratch; v checked by :meth:`ConstraintStepper.step`), the kernels check sizes.
+_contact_placements_unchecked = unchecked(_contact_placements)
+_delassus_and_drift_unchecked = unchecked(_delassus_and_drift)
+_free_velocity_unchecked = unchecked(_free_velocity)
+_velocity_after_unchecked = unchecked(_velocity_after)
+
+
+def subtrees(model: pin.Model) -> np.ndarray:
+    """Per dof of ``model`` its subtree of the universe (a robot, a free body), numbered from
+    0 in joint order (int64, read-only): what :func:`_delassus_and_drift` reads."""
+    roots = []
+    for joint in range(1, model.njoints):
+        root = joint
+        while model.parents[root] != 0:
+            root = model.parents[root]
+        roots += [root] * model.joints[joint].nv
+    trees = np.unique(np.array(roots, dtype=np.int64), return_inverse=True)[1].astype(np.int64).reshape(-1)
+    trees.setflags(write=False)
+    return trees
 
 
 class ContactSet:
@@ -294,6 +377,8 @@ class ContactSet:
         self.pairs = list(zip(self.constraints, self.datas))
         size = 3 * len(self.points)
         self.restitutions = np.array(restitutions, dtype=float)
+        #: per point its gap (m, < 0 overlapping), written by :meth:`place`
+        self.gaps = np.empty(len(self.points))
         #: scratch for M^-1 J^T, the Delassus matrix and the drift (see :func:`_delassus_and_drift`)
         self.mass_jt, self.delassus, self.drift = np.empty((model.nv, size)), np.empty((size, size)), np.empty(size)
         if settings.solver == "pgs":
@@ -319,6 +404,33 @@ class ContactSet:
             self.options.absolute_feasibility_tol = settings.tolerance
             self.options.absolute_complementarity_tol = settings.tolerance
 
+    def place(self, touching: list[tuple[int, list[ContactPoint]]],
+              joints: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]) -> tuple[list[ContactPoint], float]:
+        """Move every point's contact frame to its ``touching`` point (pair k's points, in the
+        set's order) in its joints' frames (per pair the world rotations and translations of
+        its owner joints, :meth:`ConstraintStepper.joint_placements`) and write its gap:
+        (the points in order, the deepest overlap (m, >= 0))."""
+        placements, gaps, placed, deepest, i = self.placements, self.gaps, [], 0.0, 0
+        for k, points in touching:
+            rotation1, translation1, rotation2, translation2 = joints[k]
+            placed += points
+            for c in points:
+                placed1, at1, placed2, at2 = placements[i]
+                _contact_placements_unchecked(c.normal, c.point1, c.point2, rotation1, translation1, rotation2,
+                                              translation2, placed1, at1, placed2, at2)
+                gaps[i] = -c.depth
+                deepest = max(deepest, c.depth)
+                i += 1
+        return placed, deepest
+
+    def normal_impulses(self, impulses: np.ndarray) -> dict[str, float]:
+        """Per pair name the sum of its points' normal impulses (N s; rows 3i + 2), added in
+        point order from 0."""
+        totals = dict.fromkeys(self.names, 0.0)
+        for name, impulse in zip(self.names, impulses[2::3].tolist()):
+            totals[name] += impulse
+        return totals
+
     def solve(self, delassus: np.ndarray, drift: np.ndarray) -> tuple[np.ndarray, int]:
         """Impulses (N s, 3 per point: tangential x, y and normal along the contact frames)
         and the solver's iterations for the Delassus matrix and drift (m/s)."""
@@ -333,6 +445,7 @@ class ConstraintStepper:
     def __init__(self, contact: ContactModel, settings: StepperSettings) -> None:
         self.contact, self.model, self.settings = contact, contact.model, settings
         self.owners = [(contact.owner_joint(p.first), contact.owner_joint(p.second)) for p in contact.pairs]
+        self.trees = subtrees(self.model)
         self.sets: dict[tuple[tuple[int, int], ...], ContactSet] = {}
         self._placed_in: pin.Data | None = None  # the Data whose joint placements _joint_views shows
         self._joint_views: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
@@ -360,39 +473,32 @@ class ConstraintStepper:
     def step(self, data: pin.Data, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
              h: float) -> tuple[np.ndarray, np.ndarray, StepReport]:
         """(q+, v+, report) after one step of h seconds under generalised forces tau (nv,);
-        ``data`` is a Data of the model (scratch)."""
+        ``data`` is a Data of the model (scratch); v a vector (ValueError otherwise: the
+        compiled kernels read it as float64 unchecked)."""
         model, settings = self.model, self.settings
-        report = StepReport()
+        v = np.asarray(v, dtype=float)
+        if v.ndim != 1:
+            raise ValueError(f"contact step: v must be a vector, got shape {v.shape}")
         # ABA in the world convention places the joints and fills the joint Jacobians, and
         # computeMinverse(model, data) takes the upper triangle of M^-1 from that same pass
         # (only when a pair touches: the contact search reads the placements alone)
-        v_free = v + h * pin.aba(model, data, q, v, tau, pin.Convention.WORLD)
+        v_free = np.empty(v.shape[0])
+        _free_velocity_unchecked(v, pin.aba(model, data, q, v, tau, pin.Convention.WORLD), h, v_free)
         touching = self.contact.touching(data, settings.margin)
         if not touching:
-            return pin.integrate(model, q, h * v_free), v_free, report
+            return pin.integrate(model, q, h * v_free), v_free, StepReport()
         inverse_mass = pin.computeMinverse(model, data)
         active = self.contact_set(tuple([(k, len(points)) for k, points in touching]))
-        gaps, i, joints = [], 0, self.joint_placements(data)
-        for k, points in touching:
-            rotation1, translation1, rotation2, translation2 = joints[k]
-            report.points += points
-            for c in points:
-                placed1, at1, placed2, at2 = active.placements[i]
-                _contact_placements(c.normal, c.point1, c.point2, rotation1, translation1, rotation2, translation2,
-                                    placed1, at1, placed2, at2)
-                gaps.append(-c.depth)
-                report.penetration = max(report.penetration, c.depth)
-                i += 1
+        points, deepest = active.place(touching, self.joint_placements(data))
+        report = StepReport(penetration=deepest, names=active.names, points=points)
         for constraint, cdata in active.pairs:
             constraint.calc(model, data, cdata)
         jacobian = pin.getConstraintsJacobian(model, data, active.constraints, active.datas)
-        _delassus_and_drift(inverse_mass, jacobian, v_free, v, np.array(gaps), active.restitutions, h,
-                            -settings.restitution_threshold, settings.baumgarte, active.mass_jt, active.delassus,
-                            active.drift)
-        impulses, report.iterations = active.solve(active.delassus, active.drift)
-        report.names, report.impulses = active.names, impulses
-        v_next = np.empty_like(v_free)
-        _velocity_after(v_free, active.mass_jt, impulses, v_next)
-        for name, impulse in zip(active.names, impulses[2::3].tolist()):
-            report.normal_impulse[name] = report.normal_impulse.get(name, 0.0) + impulse
-        return pin.integrate(model, q, h * v_next), v_next, report
+        _delassus_and_drift_unchecked(inverse_mass, jacobian, self.trees, v_free, v, active.gaps,
+                                      active.restitutions, h, -settings.restitution_threshold, settings.baumgarte,
+                                      active.mass_jt, active.delassus, active.drift)
+        report.impulses, report.iterations = active.solve(active.delassus, active.drift)
+        v_next, displacement = np.empty(v_free.shape[0]), np.empty(v_free.shape[0])
+        _velocity_after_unchecked(v_free, active.mass_jt, report.impulses, h, v_next, displacement)
+        report.normal_impulse = active.normal_impulses(report.impulses)
+        return pin.integrate(model, q, displacement), v_next, report

@@ -27,10 +27,10 @@ A wrong size is a UserInputError naming nq or nv.
 scratch space; each call overwrites it. Returned arrays are fresh (not views of ``data``).
 
 Speed: with a fixed root and float64 vectors the friction is the compiled loop called
-without numba's type dispatch (its entry point: :func:`~youbot_dynamics.dynamics.friction
-.unchecked`; :func:`_float_vectors` checks the types, the loop the sizes); anything else
-takes JointFriction.add_torque, which converts or names what is wrong. About 1.1 us over
-pin.aba and 0.7 us over pin.rnea on the youBot arm (bench/bench_dynamics.py).
+without numba's type dispatch or reference counting (:mod:`youbot_dynamics.compiled`; the
+types are checked in line, the loop checks the sizes); anything else takes
+JointFriction.add_torque, which converts or names what is wrong. About 0.3 us over pin.rnea
+and 0.6 us over pin.aba on the youBot arm (bench/bench_dynamics.py).
 
 Batches: :func:`inverse_dynamics_batch` and :func:`forward_dynamics_batch` take N samples as
 rows (q (N, nq), v, a, tau (N, nv), z (N, n_states)) and run Pinocchio's C++ loops
@@ -51,6 +51,9 @@ from youbot_dynamics.model.configuration import sized
 from youbot_dynamics.model.robot import Robot
 
 Vector = np.ndarray
+#: np.ndarray under one global name: the in-line type checks below are on the hot path, where
+#: ``np.ndarray`` costs a global and an attribute lookup per check (together 0.03 us a call).
+_ARRAY = np.ndarray
 
 
 def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vector,
@@ -58,10 +61,11 @@ def inverse_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, a: Vect
     """tau = RNEA(q, v, a) + tau_friction(v, z) (nv): joint torques (N m) or forces (N)
     giving accelerations a (nv; rad/s^2, m/s^2) at positions q (nq) and velocities v (nv)."""
     try:
-        tau = pin.rnea(robot.model, data, q, v, a)
+        tau = pin.rnea(robot.model, data, q, v, a)  # a fresh float64 vector; q, v and a are arrays
         if friction is not None:
             states = NO_BRISTLES if z is None else z
-            if robot.root == "fixed" and _float_vectors(v, states, tau):
+            if robot.root == "fixed" and v.dtype is FLOAT and v.ndim == 1 \
+                    and type(states) is _ARRAY and states.dtype is FLOAT and states.ndim == 1:
                 add_friction_torque_unchecked(v, states, friction.table, tau)
             else:
                 friction.add_torque(tau[robot.root_nv:], v[robot.root_nv:], z)
@@ -86,7 +90,9 @@ def forward_dynamics(robot: Robot, data: pin.Data, q: Vector, v: Vector, tau: Ve
     try:
         if friction is not None:
             states = NO_BRISTLES if z is None else z
-            if robot.root == "fixed" and _float_vectors(v, states, tau):
+            if robot.root == "fixed" and type(v) is _ARRAY and v.dtype is FLOAT and v.ndim == 1 \
+                    and type(tau) is _ARRAY and tau.dtype is FLOAT and tau.ndim == 1 \
+                    and type(states) is _ARRAY and states.dtype is FLOAT and states.ndim == 1:
                 tau = tau.copy()
                 subtract_friction_torque_unchecked(v, states, friction.table, tau)
             else:
@@ -157,15 +163,6 @@ def _same_rows(q: np.ndarray, **others: np.ndarray) -> None:
     for name, x in others.items():
         if len(x) != len(q):
             raise UserInputError(f"{name}: {len(x)} samples (rows) against {len(q)} in q")
-
-
-def _float_vectors(v: object, z: object, tau: object) -> bool:
-    """Whether v, z and tau are float64 vectors (what the unchecked friction loop may take;
-    written out, not looped: this is on the hot path)."""
-    try:
-        return v.dtype is FLOAT is z.dtype is tau.dtype and v.ndim == z.ndim == tau.ndim == 1
-    except AttributeError:  # not an array
-        return False
 
 
 def _check_friction(robot: Robot, friction: JointFriction | None, v: Vector, z: Vector | None) -> None:

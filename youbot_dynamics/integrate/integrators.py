@@ -3,7 +3,8 @@
 The names, their kinds and their stepper factories are the table in integrate/registry.py:
 ``euler``, ``symplectic_euler``, ``rk4`` (fixed step, hand-written loops, integrate/fixed_step.py);
 ``rk45`` (Dormand-Prince 5(4)), ``dop853``, ``radau``, ``bdf``, ``lsoda`` (scipy.integrate,
-integrate/adaptive.py); ``cvode_bdf``, ``cvode_adams`` and ``ida`` (SUNDIALS through
+integrate/adaptive.py); ``dop853_compiled`` (scipy's DOP853 in compiled code for a right-hand
+side with a compiled loop, integrate/dop853.py; scipy's own elsewhere); ``cvode_bdf``, ``cvode_adams`` and ``ida`` (SUNDIALS through
 scikit-sundae, integrate/sundials.py).
 
 :func:`integrate` solves x' = rhs(t, x); :func:`integrate_dae` solves F(t, y, y') = 0 with
@@ -157,7 +158,7 @@ def integrate(rhs: Rhs, x0, t_eval, integrator: str, *, dt: float | None = None,
     if max_order is not None and integrator not in CVODE_METHODS:
         raise UserInputError(f"max_order applies to cvode_bdf and cvode_adams, not {integrator}")
     problem = OdeProblem(rhs, times[0], x, times[-1], dt, rtol, atol, jac, max_step, min_step,
-                         n, tuple(events), check, max_order)
+                         n, tuple(events), check, max_order, max_steps)
     stepper = entry.factory(integrator, problem)
     solution = drive(stepper, integrator, times, events, check, names, max_steps=max_steps,
                      progress=progress)

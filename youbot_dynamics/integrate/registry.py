@@ -6,6 +6,12 @@ time stepper (velocity level, impulses, fixed dt; the engine builds it from its 
 model, so its entries carry no factory here). Fixed-step methods take ``dt`` (s); adaptive
 ones ``tol`` or ``rtol``/``atol``. ``stiff`` methods are implicit (they use a Jacobian).
 
+``dop853_compiled`` is scipy's DOP853 (the same step-size control: steps and states equal
+to rounding) run in compiled code (integrate/dop853.py) where the right-hand side carries a compiled loop for it
+(``rhs.compiled_steps``: a robot alone under a held torque or no controller,
+sim/compiled_steps.py); any other right-hand side falls back to scipy's DOP853 itself, the
+same method in Python, so the name is valid in every scene and only the speed differs.
+
 Every other module asks this table: the scene validator (names and options), ``integrate``
 (the factory), the engine's dispatch (:func:`integrator_kind`), the command line (choices)
 and the work-precision sweep (which methods are fixed-step or stiff).
@@ -19,6 +25,7 @@ import numpy as np
 
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.adaptive import ScipyStepper
+from youbot_dynamics.integrate.dop853 import CompiledDop853Stepper
 from youbot_dynamics.integrate.drive import Event, StateCheck, Stepper, finite_rhs
 from youbot_dynamics.integrate.fixed_step import FixedStepStepper
 from youbot_dynamics.integrate.sundials import CVODE_METHODS, CvodeStepper
@@ -33,7 +40,9 @@ class OdeProblem:
     """What an ODE stepper factory needs: x' = rhs(t, x) from (t0, x0) to t_end (s), the
     step dt (s, fixed-step) or rtol/atol (adaptive), the Jacobian d rhs / dx if known, step
     limits (s), ``n_positions`` (x = [q, v, ...], symplectic Euler), the events and the
-    divergence checks; ``max_order`` caps a multistep method's order (CVODE)."""
+    divergence checks; ``max_order`` caps a multistep method's order (CVODE); ``max_steps``
+    is the run's step budget (None: none), for a stepper that takes many steps per
+    ``advance``."""
 
     rhs: Callable[[float, np.ndarray], np.ndarray]
     t0: float
@@ -49,6 +58,7 @@ class OdeProblem:
     events: tuple[Event, ...]
     check: StateCheck
     max_order: int | None = None
+    max_steps: int | None = None
 
 
 @dataclass(frozen=True)
@@ -83,6 +93,17 @@ def scipy_stepper(name: str, problem: OdeProblem) -> Stepper:
                         problem.max_step, problem.min_step)
 
 
+def compiled_dop853_stepper(name: str, problem: OdeProblem) -> Stepper:
+    """DOP853 in compiled code (integrate/dop853.py) through the right-hand side's compiled
+    loop (``rhs.compiled_steps``); scipy's DOP853 where the right-hand side has none."""
+    loop = getattr(problem.rhs, "compiled_steps", None)
+    if loop is None:
+        return scipy_stepper("dop853", problem)
+    return CompiledDop853Stepper(name, loop, problem.t0, problem.x0, problem.t_end, problem.rtol, problem.atol,
+                                 problem.max_step, problem.min_step, bool(problem.events), problem.check.bounds,
+                                 problem.max_steps)
+
+
 def cvode_stepper(name: str, problem: OdeProblem) -> Stepper:
     """SUNDIALS CVODE through scikit-sundae (integrate/sundials.py); it locates events itself."""
     return CvodeStepper(CVODE_METHODS[name], name, problem.rhs, problem.t0, problem.x0,
@@ -96,6 +117,7 @@ REGISTRY: dict[str, IntegratorEntry] = {entry.name: entry for entry in (
     IntegratorEntry("rk4", "ode", False, False, fixed_step_stepper, 4),
     IntegratorEntry("rk45", "ode", True, False, scipy_stepper),  # Dormand-Prince 5(4)
     IntegratorEntry("dop853", "ode", True, False, scipy_stepper),
+    IntegratorEntry("dop853_compiled", "ode", True, False, compiled_dop853_stepper),  # the same, compiled
     IntegratorEntry("radau", "ode", True, True, scipy_stepper),  # Radau IIA, order 5
     IntegratorEntry("bdf", "ode", True, True, scipy_stepper),
     IntegratorEntry("lsoda", "ode", True, True, scipy_stepper),  # Adams / BDF, switching on stiffness

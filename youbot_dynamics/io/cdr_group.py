@@ -72,19 +72,22 @@ class TemplateGroup:
                                            ).reshape(-1, 4).astype(np.intp)
         self.unit_squares = templates[0].unit_squares
 
-    def fill_many(self, stamps_ns: np.ndarray, values: np.ndarray) -> list[list[Serialized]] | None:
-        """Each template's N messages at ``stamps_ns`` (int64 (N,)) with ``values`` (N,
-        fields: each template's refilled fields in turn); None when a value is not finite, a
-        quaternion not of unit norm or a stamp not a valid builtin_interfaces/Time."""
+    def fill_many(self, stamps_ns: np.ndarray, values: np.ndarray, topics: Sequence[str]
+                  ) -> list[list[tuple[str, Serialized]]] | None:
+        """Each of N samples' messages, (topic, message) of each template in turn (``topics``
+        name them), at ``stamps_ns`` (int64 (N,)) with ``values`` (N, fields: each template's
+        refilled fields in turn); None when a value is not finite, a quaternion not of unit
+        norm or a stamp not a valid builtin_interfaces/Time."""
         stamps = np.ascontiguousarray(stamps_ns, dtype=np.int64)
         values = np.ascontiguousarray(values, dtype=np.float64)
-        data = np.empty((len(stamps), len(self.template_bytes)), dtype=np.uint8)
+        width = len(self.template_bytes)
+        data = np.empty((len(stamps), width), dtype=np.uint8)
         if not _checked_refill_unchecked(self.template_bytes, self.float_offsets, values, values.view(np.uint8),
                                          self.stamp_offsets, stamps, self.quaternions, *self.unit_squares, data):
             return None
-        rows = [row.tobytes() for row in data]
-        return [[Serialized(msgtype, row[start:end]) for row in rows]
-                for msgtype, start, end in zip(self.msgtypes, self.cuts[:-1], self.cuts[1:])]
+        filled, cuts = data.tobytes(), list(zip(topics, self.msgtypes, self.cuts[:-1], self.cuts[1:]))
+        return [[(topic, Serialized(msgtype, filled[row + start:row + end])) for topic, msgtype, start, end in cuts]
+                for row in range(0, len(stamps) * width, width)]
 
 
 class TopicBatches:
@@ -94,19 +97,22 @@ class TopicBatches:
     def __init__(self) -> None:
         self._groups: dict[tuple[CdrTemplate, ...], TemplateGroup] = {}
 
-    def fill(self, stamps_ns: Sequence[int], entries: Sequence[Entry]) -> list[tuple[str, list[object]]]:
-        """(topic, its N messages) of each entry at ``stamps_ns``: together when every topic
-        has its template and every value passes, else each topic's ``Refilled.many``."""
+    def fill(self, stamps_ns: Sequence[int], entries: Sequence[Entry]) -> list[list[tuple[str, object]]]:
+        """Each of N samples' (topic, message) of each entry in turn, at ``stamps_ns``:
+        together when every topic has its template and every value passes, else each topic's
+        ``Refilled.many``."""
         templates = tuple(refilled.template for _, refilled, _, _ in entries)
         if len(stamps_ns) and templates and None not in templates:
             group = self._groups.get(templates)
             if group is None:
                 group = self._groups[templates] = TemplateGroup(templates)
             count = len(stamps_ns)
-            values = np.reshape(entries[0][2], (count, -1)) if len(entries) == 1 else np.concatenate(
-                [np.reshape(v, (count, -1)) for _, _, v, _ in entries], axis=1)
+            blocks = [np.asarray(v).reshape(count, -1) for _, _, v, _ in entries]
+            values = blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=1)
             if values.shape[1] == group.fields:
-                filled = group.fill_many(np.asarray(stamps_ns, dtype=np.int64), values)
+                filled = group.fill_many(stamps_ns, values, [entry[0] for entry in entries])
                 if filled is not None:
-                    return [(entry[0], messages) for entry, messages in zip(entries, filled)]
-        return [(topic, refilled.many(stamps_ns, values, build)) for topic, refilled, values, build in entries]
+                    return filled
+        columns = [[(topic, message) for message in refilled.many(stamps_ns, values, build)]
+                   for topic, refilled, values, build in entries]
+        return [list(sample) for sample in zip(*columns)] if columns else [[] for _ in stamps_ns]

@@ -32,17 +32,24 @@ compiled loop (numba) over the joints: per joint one exponential, one 3x4 produc
 running transform T_i = (R_i, p_i) and, for the Jacobians, the column
 [Ad_{T_i}] S_i = (R_i omega_i, p_i x R_i omega_i + R_i v_i). A batch (..., nq) is the same
 loop over its rows, so the cost grows linearly with the number of joints and of
-configurations.
+configurations. The loops hold T_i as three rows of four numbers (registers, no array), so
+they allocate nothing and run without numba's reference counting; one float64 configuration
+of a fixed-root chain without mimic joints calls them through their entry points
+(:mod:`youbot_dynamics.compiled`) after a dtype and size check in line: about 0.7 us per
+Jacobian of the youBot arm, where Pinocchio's frame Jacobian takes 0.5 us
+(bench/bench_kinematics.py).
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import register_jitable
 
+from youbot_dynamics.compiled import BORROWED, FLOAT, unchecked
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.lie import adjoint, inverse_transform, matrix_from_quaternion, skew
 from youbot_dynamics.model.robot import ROOT_COORDINATES, Robot
@@ -81,14 +88,12 @@ class ScrewChain:
     coupling: MimicCoupling | None = None
     root: str = "fixed"
     B: np.ndarray = field(init=False)
-    _space_pose: np.ndarray = field(init=False, repr=False)
-    _body_pose: np.ndarray = field(init=False, repr=False)
-    _space_factors: np.ndarray = field(init=False, repr=False)
-    _body_factors: np.ndarray = field(init=False, repr=False)
-    _space_axes: np.ndarray = field(init=False, repr=False)
-    _body_axes: np.ndarray = field(init=False, repr=False)
-    _angles: np.ndarray = field(init=False, repr=False)
-    _reversed_angles: np.ndarray = field(init=False, repr=False)
+    _space_pose: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False)
+    _body_pose: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False)
+    _space_jacobian: tuple[np.ndarray, np.ndarray, np.ndarray] = field(init=False, repr=False)
+    _body_jacobian: tuple[np.ndarray, np.ndarray, np.ndarray] = field(init=False, repr=False)
+    _direct: bool = field(init=False, repr=False)
+    _columns_shape: tuple[int, int] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         body = adjoint(inverse_transform(self.M)) @ self.S
@@ -101,17 +106,20 @@ class ScrewChain:
             body_pose_terms[0] = self.M @ body_terms[0]
         # J_b is J_s's formula applied to the factors exp([-B_i] q_i) from the tip down (see
         # jacobian_body), so the body factors, axes and angles are in reverse joint order.
+        # The arrays each compiled loop reads after q, C-ordered: the angle map and the
+        # factors' terms (FK), and the axes (Jacobians).
         reversed_body = body[:, ::-1]
         angles = angle_map(self.joints, self.coupling)
-        derived = {"B": body, "_space_pose": space_pose_terms, "_body_pose": body_pose_terms,
-                   "_space_factors": space_terms, "_body_factors": exponential_terms(-reversed_body),
-                   "_space_axes": np.ascontiguousarray(self.S), "_body_axes": np.ascontiguousarray(reversed_body),
-                   "_angles": angles, "_reversed_angles": np.ascontiguousarray(angles[:, ::-1])}
-        for name, value in derived.items():
-            value.setflags(write=False)
-            object.__setattr__(self, name, value)
-        for array in (self.joints, self.S, self.M):
+        loops = {"_space_pose": (angles, space_pose_terms), "_body_pose": (angles, body_pose_terms),
+                 "_space_jacobian": (angles, space_terms, np.ascontiguousarray(self.S)),
+                 "_body_jacobian": (np.ascontiguousarray(angles[:, ::-1]), exponential_terms(-reversed_body),
+                                    np.ascontiguousarray(reversed_body))}
+        for array in (body, *(array for loop in loops.values() for array in loop), self.joints, self.S, self.M):
             array.setflags(write=False)
+        derived = {"B": body, **loops, "_direct": self.root == "fixed" and self.coupling is None and self.n > 0,
+                   "_columns_shape": (6, self.n)}
+        for name, value in derived.items():
+            object.__setattr__(self, name, value)
 
     @property
     def n(self) -> int:
@@ -213,67 +221,126 @@ def exponential_terms(axes: np.ndarray) -> np.ndarray:
     return terms
 
 
-@njit(cache=True)
-def _multiply_exponential(transform: np.ndarray, terms: np.ndarray, theta: float, out: np.ndarray) -> None:
-    """out = transform exp([X] theta) for rigid 4x4 transforms (last rows (0, 0, 0, 1)), the
-    exponential from its terms (A0, A1, A2, A3) (4, 4, 4): A0 + theta A1 + sin A2 + (1 - cos) A3."""
+#: The top three rows (R | p) of the identity transform. The compiled loops hold their
+#: running transform as such a tuple of rows (numbers in registers, not an array: the loops
+#: allocate nothing, see :mod:`youbot_dynamics.compiled`).
+_IDENTITY_ROWS = ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0))
+
+
+@register_jitable
+def _entry_times_exponential(row: tuple, terms: np.ndarray, theta: float, s: float, c: float, col: int) -> float:
+    """Entry ``col`` of (one row (r_0, r_1, r_2, p) of a rigid transform) exp([X] theta):
+    (p if col == 3 else 0) + sum_k r_k (A0 + theta A1 + s A2 + c A3)[k, col], the
+    exponential from its terms (A0, A1, A2, A3) (4, 4, 4), s = sin(theta), c = 1 - cos(theta)
+    (its last row is (0, 0, 0, 1))."""
+    total = row[3] if col == 3 else 0.0
+    for k in range(3):
+        factor = terms[0, k, col] + theta * terms[1, k, col] + s * terms[2, k, col] + c * terms[3, k, col]
+        total += row[k] * factor
+    return total
+
+
+@register_jitable
+def _row_times_exponential(row: tuple, terms: np.ndarray, theta: float, s: float, c: float) -> tuple:
+    """One row (4 numbers) of T exp([X] theta) (see :func:`_entry_times_exponential`)."""
+    return (_entry_times_exponential(row, terms, theta, s, c, 0), _entry_times_exponential(row, terms, theta, s, c, 1),
+            _entry_times_exponential(row, terms, theta, s, c, 2), _entry_times_exponential(row, terms, theta, s, c, 3))
+
+
+@register_jitable
+def _times_exponential(rows: tuple, terms: np.ndarray, theta: float) -> tuple:
+    """The top rows of T exp([X] theta) for the top rows of a rigid transform T, the
+    exponential A0 + theta A1 + sin(theta) A2 + (1 - cos(theta)) A3 from its terms (4, 4, 4)."""
     s, c = np.sin(theta), 1.0 - np.cos(theta)
+    return (_row_times_exponential(rows[0], terms, theta, s, c), _row_times_exponential(rows[1], terms, theta, s, c),
+            _row_times_exponential(rows[2], terms, theta, s, c))
+
+
+@register_jitable
+def _angle(q: np.ndarray, angles: np.ndarray, i: int) -> float:
+    """theta_i = multiplier_i q[index_i] + offset_i of the angle map ``angles`` (3, n)."""
+    return angles[1, i] * q[int(angles[0, i])] + angles[2, i]
+
+
+@register_jitable
+def _product_of_exponentials(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, out: np.ndarray) -> None:
+    """out = exp([X_1] theta_1) ... exp([X_n] theta_n) (4, 4), theta from q (nq) by the
+    angle map ``angles`` (3, n), the exponentials' terms (n, 4, 4, 4)."""
+    rows = _IDENTITY_ROWS
+    for i in range(terms.shape[0]):
+        rows = _times_exponential(rows, terms[i], _angle(q, angles, i))
     for r in range(3):
         for col in range(4):
-            total = transform[r, 3] if col == 3 else 0.0
-            for k in range(3):
-                factor = terms[0, k, col] + theta * terms[1, k, col] + s * terms[2, k, col] + c * terms[3, k, col]
-                total += transform[r, k] * factor
-            out[r, col] = total
+            out[r, col] = rows[r][col]
     out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
-@njit(cache=True)
-def _product_of_exponentials(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, out: np.ndarray) -> None:
-    """out = exp([X_1] theta_1) ... exp([X_n] theta_n) (4, 4), theta from q (nq) by the
-    angle map ``angles`` (3, n), the exponentials' terms (n, 4, 4, 4); n >= 1."""
-    running, scratch = np.eye(4), np.empty((4, 4))
-    for i in range(terms.shape[0]):
-        theta = angles[1, i] * q[int(angles[0, i])] + angles[2, i]
-        _multiply_exponential(running, terms[i], theta, scratch)
-        running, scratch = scratch, running
-    out[:, :] = running
-
-
-@njit(cache=True)
+@register_jitable
 def _adjoint_columns(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, axes: np.ndarray,
                      out: np.ndarray) -> None:
     """out[:, i] = [Ad_{T_i}] X_i = (R_i omega_i, p_i x R_i omega_i + R_i v_i) (6, n) for
     T_i = F_1 ... F_{i-1} = (R_i, p_i), the factors F_j = exp([X_j] theta_j) from their terms
     (n, 4, 4, 4), the axes X_j = (omega_j, v_j) the columns of ``axes`` (6, n)."""
-    running, scratch = np.eye(4), np.empty((4, 4))
+    rows = _IDENTITY_ROWS
     for i in range(terms.shape[0]):
         for r in range(3):
-            omega = running[r, 0] * axes[0, i] + running[r, 1] * axes[1, i] + running[r, 2] * axes[2, i]
+            row = rows[r]
+            omega = row[0] * axes[0, i] + row[1] * axes[1, i] + row[2] * axes[2, i]
             out[r, i] = omega
-            out[r + 3, i] = running[r, 0] * axes[3, i] + running[r, 1] * axes[4, i] + running[r, 2] * axes[5, i]
+            out[r + 3, i] = row[0] * axes[3, i] + row[1] * axes[4, i] + row[2] * axes[5, i]
         w0, w1, w2 = out[0, i], out[1, i], out[2, i]
-        p0, p1, p2 = running[0, 3], running[1, 3], running[2, 3]
+        p0, p1, p2 = rows[0][3], rows[1][3], rows[2][3]
         out[3, i] += p1 * w2 - p2 * w1
         out[4, i] += p2 * w0 - p0 * w2
         out[5, i] += p0 * w1 - p1 * w0
         if i + 1 < terms.shape[0]:
-            theta = angles[1, i] * q[int(angles[0, i])] + angles[2, i]
-            _multiply_exponential(running, terms[i], theta, scratch)
-            running, scratch = scratch, running
+            rows = _times_exponential(rows, terms[i], _angle(q, angles, i))
 
 
-@njit(cache=True)
+# The compiled entry points, each for one explicit signature and without reference counting
+# (see youbot_dynamics.compiled): one configuration q (nq,) of float64 (any stride) read, the
+# chain's constant arrays (its angle map (3, n), terms (n, 4, 4, 4), axes (6, n)) read, out
+# written. They trust the sizes: q has the chain's nq values (checked by the caller).
+_Q, _TABLE, _TERMS = (types.Array(types.float64, 1, "A", readonly=True), types.Array(types.float64, 2, "C", readonly=True),
+                      types.Array(types.float64, 4, "C", readonly=True))
+_OUT = types.Array(types.float64, 2, "C")
+
+
+@njit(types.void(_Q, _TABLE, _TERMS, _OUT), **BORROWED)
+def _pose(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, out: np.ndarray) -> None:
+    """out (4, 4) = :func:`_product_of_exponentials` at one configuration."""
+    _product_of_exponentials(q, angles, terms, out)
+
+
+@njit(types.void(_Q, _TABLE, _TERMS, _TABLE, _OUT), **BORROWED)
+def _space_columns(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, axes: np.ndarray, out: np.ndarray) -> None:
+    """out (6, n) = :func:`_adjoint_columns` at one configuration."""
+    _adjoint_columns(q, angles, terms, axes, out)
+
+
+@njit(types.void(_Q, _TABLE, _TERMS, _TABLE, _OUT), **BORROWED)
+def _body_columns(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, axes: np.ndarray, out: np.ndarray) -> None:
+    """out (6, n) = :func:`_adjoint_columns` at one configuration, columns in reverse order
+    (the body Jacobian's factors, axes and angles are stored tip first)."""
+    _adjoint_columns(q, angles, terms, axes, out[:, ::-1])
+
+
+_pose_unchecked, _space_columns_unchecked, _body_columns_unchecked = (
+    unchecked(_pose), unchecked(_space_columns), unchecked(_body_columns))
+
+
+@njit(**BORROWED)
 def _product_of_exponentials_rows(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, out: np.ndarray) -> None:
     """:func:`_product_of_exponentials` of each row of q (N, nq) into out (N, 4, 4)."""
     for row in range(q.shape[0]):
         _product_of_exponentials(q[row], angles, terms, out[row])
 
 
-@njit(cache=True)
+@njit(**BORROWED)
 def _adjoint_columns_rows(q: np.ndarray, angles: np.ndarray, terms: np.ndarray, axes: np.ndarray,
                           out: np.ndarray) -> None:
-    """:func:`_adjoint_columns` of each row of q (N, nq) into out (N, 6, n)."""
+    """:func:`_adjoint_columns` of each row of q (N, nq) into out (N, 6, n) (or a view of it
+    with its columns reversed)."""
     for row in range(q.shape[0]):
         _adjoint_columns(q[row], angles, terms, axes, out[row])
 
@@ -327,33 +394,48 @@ def _adjoint_apply(rotation: np.ndarray, position: np.ndarray, twists: np.ndarra
     return np.concatenate((omega, linear), axis=-2)
 
 
-def _products(chain: ScrewChain, q: np.ndarray, terms: np.ndarray) -> np.ndarray:
-    """exp([X_1] theta_1) ... exp([X_n] theta_n) (..., 4, 4) at q (..., nq), the factors' terms
-    ``terms`` (the space or body pose terms, constants folded in); M without moving joints."""
+def _products(chain: ScrewChain, q: np.ndarray, loop: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """exp([X_1] theta_1) ... exp([X_n] theta_n) (..., 4, 4) at q (..., nq, float), the
+    angle map and the factors' terms ``loop`` (the space or body pose terms, constants folded
+    in); M without moving joints."""
     if not chain.n:
         return np.broadcast_to(chain.M, (*q.shape[:-1], 4, 4)).copy()
     if q.ndim == 1:
         out = np.empty((4, 4))
-        _product_of_exponentials(q, chain._angles, terms, out)
+        _pose_unchecked(q, *loop, out)
         return out
     rows = np.ascontiguousarray(q.reshape(math.prod(q.shape[:-1]), chain.nq))
     out = np.empty((len(rows), 4, 4))
-    _product_of_exponentials_rows(rows, chain._angles, terms, out)
+    _product_of_exponentials_rows(rows, *loop, out)
     return out.reshape(*q.shape[:-1], 4, 4)
 
 
-def _columns(chain: ScrewChain, q: np.ndarray, angles: np.ndarray, terms: np.ndarray,
-             axes: np.ndarray) -> np.ndarray:
-    """[Ad_{F_1 ... F_{i-1}}] X_i (..., 6, n) at q (..., nq) for the factors' terms and axes
-    of the space Jacobian or (reversed) of the body one (see :func:`_adjoint_columns`)."""
+def _columns(chain: ScrewChain, q: np.ndarray, body: bool) -> np.ndarray:
+    """The chain's columns (..., 6, n) at q (..., nq, float): [Ad_{F_1 ... F_{i-1}}] X_i of
+    the space Jacobian's factors and axes, or (``body``) of the body Jacobian's (stored tip
+    first, written back in joint order); see :func:`_adjoint_columns`."""
+    angles, terms, axes = chain._body_jacobian if body else chain._space_jacobian
     if q.ndim == 1:
-        out = np.empty((6, chain.n))
-        _adjoint_columns(q, angles, terms, axes, out)
+        out = np.empty(chain._columns_shape)
+        (_body_columns_unchecked if body else _space_columns_unchecked)(q, angles, terms, axes, out)
         return out
     rows = np.ascontiguousarray(q.reshape(math.prod(q.shape[:-1]), chain.nq))
     out = np.empty((len(rows), 6, chain.n))
-    _adjoint_columns_rows(rows, angles, terms, axes, out)
+    _adjoint_columns_rows(rows, angles, terms, axes, out[..., ::-1] if body else out)
     return out.reshape(*q.shape[:-1], 6, chain.n)
+
+
+def _direct_call(chain: ScrewChain, q: object, loop: Any, arrays: tuple[np.ndarray, ...],
+                 shape: tuple[int, int]) -> np.ndarray | None:
+    """loop(q, *arrays, out) into a fresh out of ``shape`` when that is the answer as it
+    stands: a chain with a fixed root, no mimic joints and at least one joint, and q one
+    configuration the loop may read as it is (a float64 vector of nq values); else None.
+    (Beside the loop, these checks are most of a call's cost: written in line.)"""
+    if chain._direct and type(q) is np.ndarray and q.dtype is FLOAT and q.ndim == 1 and len(q) == chain.nq:
+        out = np.empty(shape)
+        loop(q, *arrays, out)
+        return out
+    return None
 
 
 def _with_root(chain: ScrewChain, q: np.ndarray, pose: np.ndarray) -> np.ndarray:
@@ -365,12 +447,18 @@ def fkin_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     """T_sb(q) = T_root(q) exp([S_1] q_1) ... exp([S_n] q_n) M, the pose of the chain's end
     link in the world (the root link's frame for a fixed root) (4x4, m) (FKinSpace).
     q: robot configuration(s), shape (nq,) or (..., nq)."""
+    pose = _direct_call(chain, q, _pose_unchecked, chain._space_pose, (4, 4))
+    if pose is not None:
+        return pose
     q = _configurations(chain, q)
     return _with_root(chain, q, _products(chain, q, chain._space_pose))
 
 
 def fkin_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     """T_sb(q) = T_root(q) M exp([B_1] q_1) ... exp([B_n] q_n) (4x4, m) (FKinBody)."""
+    pose = _direct_call(chain, q, _pose_unchecked, chain._body_pose, (4, 4))
+    if pose is not None:
+        return pose
     q = _configurations(chain, q)
     return _with_root(chain, q, _products(chain, q, chain._body_pose))
 
@@ -381,9 +469,11 @@ def jacobian_space(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     root) (JacobianSpace); columns ``chain.columns`` of v. Chain column i is
     [Ad_{exp([S_1] q_1) ... exp([S_{i-1}] q_{i-1})}] S_i; with a movable root every column
     is carried by [Ad_{T_root}] and the root's columns P come first."""
+    columns = _direct_call(chain, q, _space_columns_unchecked, chain._space_jacobian, chain._columns_shape)
+    if columns is not None:
+        return columns
     q = _configurations(chain, q)
-    chain_columns = _joint_columns(chain, _columns(chain, q, chain._angles, chain._space_factors,
-                                                   chain._space_axes))
+    chain_columns = _joint_columns(chain, _columns(chain, q, False))
     if chain.root == "fixed":
         return chain_columns
     root = root_pose(chain, q)
@@ -399,9 +489,11 @@ def jacobian_body(chain: ScrewChain, q: np.ndarray) -> np.ndarray:
     for the factors exp([-B_j] q_j) from j = n down, columns reversed. With a movable root
     the root's columns [Ad_{T_chain^-1}] P come first (T_chain the end link's pose in the
     root link's frame)."""
+    columns = _direct_call(chain, q, _body_columns_unchecked, chain._body_jacobian, chain._columns_shape)
+    if columns is not None:
+        return columns
     q = _configurations(chain, q)
-    reversed_columns = _columns(chain, q, chain._reversed_angles, chain._body_factors, chain._body_axes)
-    chain_columns = _joint_columns(chain, reversed_columns[..., ::-1])
+    chain_columns = _joint_columns(chain, _columns(chain, q, True))
     if chain.root == "fixed":
         return chain_columns
     pose = _products(chain, q, chain._space_pose)

@@ -57,7 +57,7 @@ from numba import njit, types
 
 from youbot_dynamics.dynamics.friction import JointFriction, unchecked
 from youbot_dynamics.dynamics.rigid_body import inverse_dynamics_batch
-from youbot_dynamics.io.stamps import NS_PER_S
+from youbot_dynamics.io.stamps import NS_PER_S, STAMP_LIMIT_NS
 from youbot_dynamics.model.robot import Robot
 from youbot_dynamics.node.commands import DEFAULT_EFFORT_LIMIT, InputRejected, JointSample
 
@@ -150,6 +150,56 @@ _central_differences_unchecked = unchecked(_central_differences)
 """The same without numba's type dispatch (callers pass exactly the signature's types)."""
 
 
+@njit(types.int64(types.Array(types.float64, 2, "C", readonly=True), types.Array(types.float64, 1, "C", readonly=True)),
+      cache=True)
+def _plausible_rows(torques: np.ndarray, bound: np.ndarray) -> int:
+    """The number of leading rows of ``torques`` (N, nv; N m, N) with |tau_i| <= bound_i on
+    every joint (a NaN is not)."""
+    for row in range(torques.shape[0]):
+        for j in range(torques.shape[1]):
+            if not abs(torques[row, j]) <= bound[j]:
+                return row
+    return torques.shape[0]
+
+
+_plausible_rows_unchecked = unchecked(_plausible_rows)
+"""The same without numba's type dispatch (callers pass exactly the signature's types)."""
+
+
+def plausible_rows(torques: np.ndarray, bound: np.ndarray) -> int:
+    """The number of leading rows of ``torques`` (N, nv; N m, N: a C-ordered float array)
+    whose every |tau_i| is within ``bound`` (nv,; :func:`plausible_limit`); N when all are."""
+    if not (torques.dtype == bound.dtype == np.float64 and torques.ndim == 2 and torques.flags.c_contiguous
+            and bound.shape == torques.shape[1:] and bound.flags.c_contiguous):
+        raise ValueError(f"plausible_rows: float64 torques (N, n) and bound (n,); got {torques.dtype} "
+                         f"{torques.shape}, {bound.dtype} {bound.shape}")
+    return _plausible_rows_unchecked(torques, bound)
+
+
+@njit(types.boolean(types.Array(types.int64, 1, "C", readonly=True), types.Array(types.float64, 2, "C", readonly=True),
+                    types.Array(types.float64, 4, "C", readonly=True), types.int64), cache=True)
+def clean_rows(stamps: np.ndarray, values: np.ndarray, bounds: np.ndarray, previous: int) -> bool:
+    """True if N samples can all be taken as they are: every stamp (int ns, (N,)) in (0,
+    ``STAMP_LIMIT_NS``) and unlike the one before it (``previous`` for the first), every
+    position (``values`` rows 0 to N - 1) and velocity (rows N to 2N - 1) within ``bounds``
+    (2, 2, 1, columns: lowest then highest; position then velocity) of its column."""
+    count = stamps.shape[0]
+    for k in range(count):
+        if not 0 < stamps[k] < STAMP_LIMIT_NS or stamps[k] == previous:
+            return False
+        previous = stamps[k]
+        for quantity in range(2):
+            for j in range(values.shape[1]):
+                value = values[quantity * count + k, j]
+                if not bounds[0, quantity, 0, j] <= value <= bounds[1, quantity, 0, j]:
+                    return False
+    return True
+
+
+clean_rows_unchecked = unchecked(clean_rows)
+"""The same without numba's type dispatch (callers pass exactly the signature's types)."""
+
+
 class Estimates(NamedTuple):
     """The estimates of rows pushed (:meth:`AccelerationEstimator.push_rows`), in order: the
     middle samples' stamps (int64 ns, (M,)), q (M, nq), v (M, nv), their accelerations
@@ -176,6 +226,8 @@ class AccelerationEstimator:
         if not max_gap_ns > 0:
             raise ValueError(f"largest sample gap must be > 0 ns, got {max_gap_ns}")
         self.time_constant, self.max_gap_ns = float(time_constant), int(max_gap_ns)
+        self._gap_bound = min(self.max_gap_ns, _LARGEST_INT64)
+        """``max_gap_ns`` as the compiled loop takes it (an int64)."""
         self.restarts = dict.fromkeys(RESTART_CAUSES, 0)
         self.clear()
 
@@ -220,11 +272,11 @@ class AccelerationEstimator:
         all_q, all_v = ((np.concatenate((self._q, q)), np.concatenate((self._v, v))) if held
                         else (q, np.asarray(v, dtype=float)))
         filtered, known = (np.empty(all_v.shape[1]), False) if self.filtered is None else (self.filtered.copy(), True)
-        ends, failed = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
+        ends, failed = np.empty((2, count), dtype=np.int64)
         estimates = np.empty((count, all_v.shape[1]))
         kept, bad, run, backwards, gaps, known = _central_differences_unchecked(     # the types it was compiled for
-            all_stamps, np.array(taken, dtype=bool), all_v, held, min(self.max_gap_ns, _LARGEST_INT64),
-            self.time_constant, filtered, known, ends, estimates, failed)
+            all_stamps, np.array(taken, dtype=bool), all_v, held, self._gap_bound, self.time_constant, filtered,
+            known, ends, estimates, failed)
         if backwards or gaps or bad:
             self.restarts["backwards"] += backwards
             self.restarts["gap"] += gaps
@@ -233,10 +285,8 @@ class AccelerationEstimator:
         keep = min(run, 3)
         self._stamps, self._q, self._v = ((all_stamps[-keep:].tolist(), all_q[-keep:], all_v[-keep:]) if keep
                                           else ([], _NO_ROWS, _NO_ROWS))
-        if kept and ends[kept - 1] - ends[0] == kept - 1:     # one stream: slices
-            middle = slice(int(ends[0]) - 1, int(ends[0]) - 1 + kept)
-        else:
-            middle = ends[:kept] - 1
+        first, last = (int(ends[0]), int(ends[kept - 1])) if kept else (0, -1)
+        middle = slice(first - 1, last) if last - first == kept - 1 else ends[:kept] - 1    # one stream: a slice
         errors = [InputRejected("non_finite", f"acceleration estimate at {all_stamps[k - 1]} ns is not finite "
                                 "(velocities too large to difference)") for k in failed[:bad].tolist()] if bad else []
         return Estimates(all_stamps[middle], all_q[middle], all_v[middle], estimates[:kept], errors,

@@ -1,6 +1,7 @@
 """The inverse-mode session: torques from measured joint states, taken in batches (a single
 sample is a batch of one). Each batch is checked (:mod:`youbot_dynamics.node.commands`; the
-samples that name the joints as the last accepted one did as arrays), differenced
+samples that name the joints as the last accepted one did as arrays, and a batch whose every
+sample passes in one compiled pass, :func:`~youbot_dynamics.node.inverse.clean_rows`), differenced
 (:class:`~youbot_dynamics.node.inverse.AccelerationEstimator`), its torques computed at once
 (Pinocchio's batch RNEA and the friction model, :class:`~youbot_dynamics.node.inverse.InverseDynamics`)
 and its messages built together; what is built and logged: :mod:`youbot_dynamics.node.session`.
@@ -35,7 +36,8 @@ from youbot_dynamics.node.commands import STAMP_LIMIT_NS, InputRejected, JointSa
 from youbot_dynamics.node.frames import SampleFrames, end_effector_row
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.inverse import (DEFAULT_MAX_GAP_NS, PLAUSIBLE_FACTOR, AccelerationEstimator, Estimates,
-                                          InverseDynamics, implausible_joints, plausible_limit, position_bounds)
+                                          InverseDynamics, clean_rows_unchecked, implausible_joints, plausible_limit,
+                                          plausible_rows, position_bounds)
 from youbot_dynamics.node.mobile_base import WheelOdometry
 from youbot_dynamics.node.session import Session
 from youbot_dynamics.scene.schema import Scene
@@ -139,31 +141,71 @@ class InverseSession(Session):
         """:meth:`joint_state` of each sample in turn ((names, position, velocity, stamp_ns,
         received_ns)), the same outputs in the same order, the rejected samples' errors
         returned (counted) instead of raised. The samples are checked, differenced and
-        their torques computed as arrays (Pinocchio's batch RNEA)."""
+        their torques computed as arrays (Pinocchio's batch RNEA); a clean batch
+        (:meth:`_clean_rows`) is taken in one compiled check."""
+        clean = self._clean_rows(samples)
+        if clean is not None:
+            return self._torques_of_rows(*clean, [True] * len(samples)), []
         log_times = self._log_times(samples)
         self._observe_input(samples)
         stamps, q, v, taken, rejected = self._checked(samples)
         kept = self._without_duplicates(stamps, taken, rejected)
         if kept is not None:
-            stamps, taken, log_times = [stamps[k] for k in kept], [taken[k] for k in kept], log_times[kept]
+            stamps, taken, log_times = [stamps[k] for k in kept], [taken[k] for k in kept], [log_times[k] for k in kept]
             q, v = q[kept], v[kept]
+        return self._torques_of_rows(stamps, q, v, log_times, taken), rejected
+
+    def _torques_of_rows(self, stamps: list[int], q: np.ndarray, v: np.ndarray, log_times: list[int],
+                         taken: list[bool]) -> Outputs:
+        """The outputs of checked rows (stamps int ns, q and v rows in joint order, which were
+        ``taken``, logged at ``log_times``): ``_torques_from`` until every row is done."""
         outputs: Outputs = []
         start = 0
         while start < len(stamps):
             start = self._torques_from(stamps, q, v, taken, log_times, start, outputs)
-        return outputs, rejected
+        return outputs
 
-    def _log_times(self, samples: Sequence[JointStateFields]) -> np.ndarray:
-        """The log time (int64 ns) of each sample: its receive time (now on the receive clock
+    def _clean_rows(self, samples: Sequence[JointStateFields]
+                    ) -> tuple[list[int], np.ndarray, np.ndarray, list[int]] | None:
+        """(stamps, q, v, log times) of a clean batch, counted and observed as ``joint_states``
+        would (every sample accepted: stamped with an int in (0, ``STAMP_LIMIT_NS``), none
+        stamped as the one taken before it, received at an int time or None, naming the
+        joints as the last accepted one did, every value within ``_row_bounds``); None, with
+        nothing changed, for any other batch."""
+        key, count = self._names_key, len(samples)
+        if key is None or not count or not all(tuple(sample[0]) == key for sample in samples):
+            return None
+        stamps, received = [sample[3] for sample in samples], [sample[4] for sample in samples]
+        if set(map(type, stamps)) != {int} or not set(map(type, received)) <= {int, type(None)}:
+            return None
+        try:
+            values = np.array([sample[1] for sample in samples] + [sample[2] for sample in samples], dtype=float)
+            stamp_array = np.array(stamps, dtype=np.int64)
+        except (ValueError, TypeError, OverflowError):
+            return None
+        previous = -1 if self._last_taken_ns is None else self._last_taken_ns
+        if values.shape != (2 * count, len(key)) or not clean_rows_unchecked(stamp_array, values, self._row_bounds,
+                                                                             previous):
+            return None
+        log_times = self._log_times(samples)
+        self._quiet_since_ns = min(stamps) if self._quiet_since_ns is None else min(self._quiet_since_ns, *stamps)
+        self._input_ns = stamps[-1]
+        self.last_unstamped = False
+        self.counters.accepted += count
+        self._last_taken_ns = stamps[-1]
+        return stamps, values[:count, self._columns], values[count:, self._columns], log_times
+
+    def _log_times(self, samples: Sequence[JointStateFields]) -> list[int]:
+        """The log time (int ns) of each sample: its receive time (now on the receive clock
         when not given), never before the one logged last."""
-        now = None
-        times = np.empty(len(samples), dtype=np.int64)
-        for k, sample in enumerate(samples):
+        now, times = None, []
+        for sample in samples:
             received = sample[4]
             if received is None:
                 now = receive_time_ns() if now is None else now
                 received = now
-            self.log_ns = times[k] = max(self.log_ns, int(received))
+            self.log_ns = max(self.log_ns, int(received))
+            times.append(self.log_ns)
         return times
 
     def _observe_input(self, samples: Sequence[JointStateFields]) -> None:
@@ -316,7 +358,7 @@ class InverseSession(Session):
         self._names_key, self._columns, self._row_bounds = key, slice(None) if in_order else index, bounds
 
     def _torques_from(self, stamps: list[int], q: np.ndarray, v: np.ndarray, taken: list[bool],
-                      log_times: np.ndarray, start: int, outputs: Outputs) -> int:
+                      log_times: list[int], start: int, outputs: Outputs) -> int:
         """Difference the checked rows from ``start`` on (stamps int ns, q and v rows in joint
         order, which were ``taken``, logged at ``log_times``), compute their torques and append
         (and log, a torque at the log time of the row that completes it) the outputs
@@ -327,8 +369,7 @@ class InverseSession(Session):
         state = self.estimator.state()
         estimates = self.estimator.push_rows(stamps[start:], q[start:], v[start:], taken[start:])
         tau = self.dynamics.torques(estimates.q, estimates.v, estimates.a)
-        plausible = (np.abs(tau) <= self._effort_bound).all(axis=1)     # NaN too
-        count = len(tau) if plausible.all() else int(np.argmin(plausible))
+        count = plausible_rows(tau, self._effort_bound)
         base = None
         if self.odometry is not None and count:
             base = self._base_rows(stamps[start:], v[start:], taken[start:], estimates.ends[:count])
@@ -341,19 +382,20 @@ class InverseSession(Session):
             estimates = self.estimator.push_rows(stamps[start:end], q[start:end], v[start:end], taken[start:end])
         for error in estimates.errors:
             self.counters.reject(error)
-        torque_at = dict(zip((estimates.ends + start).tolist(), range(len(estimates.ends))))
-        log_ns_of, moving = log_times.tolist(), self.odometry is not None
-        for row in range(start, end):
+        torque_rows, torque_stamps = (estimates.ends + start).tolist(), estimates.stamps.tolist()
+        torque_at = dict(zip(torque_rows, range(len(torque_rows))))
+        moving, rerun = self.odometry is not None, self.recorder.samples
+        for row in range(start, end) if moving else torque_rows:    # a fixed base: only the torques' rows give outputs
             if not taken[row]:
                 continue
-            log_ns = log_ns_of[row]
+            log_ns = log_times[row]
             odom = self._odometry(stamps[row], v[row], log_ns) if moving else []
             k = torque_at.get(row)
             if k is not None and k == bad:
                 outputs += self._rejected_torque(estimates, tau[k], failure, odom)
             elif k is not None:
                 outputs += odom
-                outputs += self._logged(estimates, tau, k, log_ns, *built[k])
+                outputs += self._logged(torque_stamps[k], log_ns, (estimates, tau, k) if rerun else None, *built[k])
                 self._quiet_since_ns = max(self._quiet_since_ns or 0, stamps[row])
             else:
                 outputs += odom
@@ -436,22 +478,23 @@ class InverseSession(Session):
             entries += self.frames.ee_entries(samples, wanted, base)
             if "/tf" in wanted:
                 entries.append(self.frames.tf_entry(count, samples, None, base))
-        columns = self._batches.fill(stamps, entries)
-        return [([(topic, messages_[k]) for topic, messages_ in columns], None if samples is None else samples[k],
-                 None if base is None else base[k]) for k in range(count)]
+        filled = self._batches.fill(stamps, entries)
+        return [(filled[k], None if samples is None else samples[k], None if base is None else base[k])
+                for k in range(count)]
 
     def _joint_state(self, stamp_ns: int, values: np.ndarray) -> object:
         """sensor_msgs/JointState of the robot's joints: ``values`` are q, v, tau in a row."""
         return messages.joint_state(stamp_ns, self.robot.joint_names, *np.split(values, 3))
 
-    def _logged(self, estimates: Estimates, torques: np.ndarray, k: int, log_ns: int, outputs: Outputs,
+    def _logged(self, stamp: int, log_ns: int, rerun: tuple[Estimates, np.ndarray, int] | None, outputs: Outputs,
                 sample: SampleFrames | None, base: np.ndarray | None = None) -> Outputs:
-        """``outputs``, the messages of torque k of ``estimates`` (``torques`` their rows),
-        logged at ``log_ns`` (the Rerun recording takes the sample at its stamp, its energy
-        (J), end effector in the root frame and a moving base's ``base`` rows)."""
-        stamp = int(estimates.stamps[k])
+        """``outputs``, the messages of a torque stamped ``stamp`` (int ns), logged at
+        ``log_ns``; with ``rerun`` (the estimates, their torques' rows and the torque's index
+        k), the Rerun recording takes the sample at its stamp, its energy (J), end effector
+        in the root frame and a moving base's ``base`` rows."""
         self.recorder.write(outputs, log_ns)
-        if self.recorder.samples:
+        if rerun is not None:
+            estimates, torques, k = rerun
             q, v, tau = estimates.q[k], estimates.v[k], torques[k]
             data = self.dynamics.data
             energy = kinetic_energy(self.robot, data, q, v) + potential_energy(self.robot, data, q)

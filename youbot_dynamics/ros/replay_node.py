@@ -2,8 +2,8 @@
 
 A bag is a single .mcap file or a rosbag2 folder with metadata.yaml (read by
 :func:`youbot_dynamics.io.bag_reader.read_bag`). Messages go out in log-time order with the
-recorded spacing scaled by ``rate`` (1.0: as recorded), or as fast as possible
-(``rate`` 0). Paced topics are offered reliable, keep-last 1000; as fast as possible they are
+recorded spacing scaled by ``time_scale`` (1.0: as recorded), or as fast as possible
+(``time_scale`` 0). Paced topics are offered reliable, keep-last 1000; as fast as possible they are
 offered reliable, keep-all, and a publish that finds the writer's history full (a reader
 behind) is retried until the readers have made room, so a keep-all subscriber gets every
 message however slow it is. Before leaving, the node waits until its subscribers have
@@ -20,8 +20,8 @@ the root namespace every topic goes out as recorded; ``--ros-args -r __ns:=/youb
 a dynamics node's bag under /youbot1. The ``topics`` and ``wait_for`` parameters take the
 recorded names.
 
-Run: ``ros2 run youbot_dynamics replay_node --ros-args -p bag:=out/run.mcap -p rate:=0.0``
-or ``youbot-dynamics replay BAG [--time-scale X]`` (X is ``rate``; 0: as fast as possible).
+Run: ``ros2 run youbot_dynamics replay_node --ros-args -p bag:=out/run.mcap -p time_scale:=0.0``
+or ``youbot-dynamics replay BAG [--time-scale X]`` (X is ``time_scale``, the dynamics node's parameter of that name; 0: as fast as possible).
 """
 from __future__ import annotations
 
@@ -59,12 +59,12 @@ every message (a keep-all reader acknowledges a sample once it has room for it).
 class ReplayNode(Node):
     """Publishers for the topics of ``bag`` (all, or those named in ``topics``)."""
 
-    def __init__(self, bag: str | Path = "", rate: float = 1.0, topics: Sequence[str] = (), wait_for: str = "",
+    def __init__(self, bag: str | Path = "", time_scale: float = 1.0, topics: Sequence[str] = (), wait_for: str = "",
                  **node_options) -> None:
         super().__init__("replay_node", **node_options)
         bag = self.declare_parameter("bag", str(bag), ParameterDescriptor(
             description="bag to replay: a .mcap file or a rosbag2 folder", read_only=True)).value
-        self.rate = self.declare_parameter("rate", float(rate), ParameterDescriptor(
+        self.time_scale = self.declare_parameter("time_scale", float(time_scale), ParameterDescriptor(
             description="playback speed (1.0: as recorded); 0: as fast as possible", read_only=True,
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)])).value
         wanted = self.declare_parameter("topics", list(topics) or [""], ParameterDescriptor(
@@ -92,7 +92,7 @@ class ReplayNode(Node):
                 self.get_logger().warning(f"{topic.topic}: no rclpy message {topic.msgtype} here; not replayed")
                 continue
             self.publishers_[topic.topic] = self.create_publisher(
-                cls, graph_name(topic.topic), profile(topic.latched, keep_all=self.rate == 0.0))
+                cls, graph_name(topic.topic), profile(topic.latched, keep_all=self.time_scale == 0.0))
         self.clock = None if "/clock" in self.publishers_ else \
             self.create_publisher(Clock, graph_name("/clock"), RELIABLE_DEEP)
         if self.wait_for and self.wait_for not in self.publishers_:
@@ -109,9 +109,9 @@ class ReplayNode(Node):
         return True
 
     def replay(self, keep_going: Callable[[], bool] = lambda: True) -> int:
-        """Publish the bag's messages (paced by ``rate``); returns how many were published."""
+        """Publish the bag's messages (paced by ``time_scale``); returns how many were published."""
         count = 0
-        for item in paced(read_bag(self.bag), rate=self.rate or None):
+        for item in paced(read_bag(self.bag), rate=self.time_scale or None):
             if not keep_going():
                 break
             publisher = self.publishers_.get(item.topic)
@@ -134,7 +134,7 @@ class ReplayNode(Node):
                 publisher.publish(message)
                 return True
             except _rclpy.RCLError:
-                if self.rate != 0.0:
+                if self.time_scale != 0.0:
                     raise
                 if not keep_going():
                     return False
@@ -151,7 +151,7 @@ class ReplayNode(Node):
 def replay_once(args: list[str] | None = None, **node_arguments) -> tuple[int, Path, list[str]]:
     """Start ROS 2, replay a bag once (SIGINT/SIGTERM stop it early), shut ROS 2 down.
 
-    ``node_arguments`` go to :class:`ReplayNode` (bag, rate, topics, wait_for); ``args`` are
+    ``node_arguments`` go to :class:`ReplayNode` (bag, time_scale, topics, wait_for); ``args`` are
     ROS arguments (--ros-args -p bag:=...). Returns the number of messages published, the
     bag and the topics it went out on. UserInputError for a bag that cannot be read, a
     parameter out of range or a topic the bag does not have."""
@@ -166,7 +166,7 @@ def replay_once(args: list[str] | None = None, **node_arguments) -> tuple[int, P
             node.get_logger().warning(f"no subscriber on {node.wait_for} after {WAIT_FOR_TIMEOUT:g} s; "
                                       "replaying anyway")
         count = node.replay(lambda: not stop)
-        timeout = ACK_TIMEOUT_FAST if node.rate == 0.0 and not stop else ACK_TIMEOUT
+        timeout = ACK_TIMEOUT_FAST if node.time_scale == 0.0 and not stop else ACK_TIMEOUT
         if not wait_for_acknowledgements(node.all_publishers, timeout):
             node.get_logger().warning(f"some subscribers did not acknowledge every message within {timeout:g} s")
         node.destroy_node()

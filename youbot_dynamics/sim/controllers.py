@@ -29,12 +29,11 @@ from numba import njit, types
 from numba.extending import register_jitable
 
 from youbot_dynamics.dynamics.friction import (FLOAT, NO_BRISTLES, READ_VECTOR, WRITTEN_VECTOR,
-                                               JointFriction, add_friction_torque_unchecked,
-                                               unchecked)
+                                               JointFriction, accumulate_friction_torque, unchecked)
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.rigid_body import gravity_torque, inverse_dynamics
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+from youbot_dynamics.sim.trajectory import POINTS, TIMING, PointToPointTrajectory, desired_motion
 
 #: A Python controller: (t s, q rad, v rad/s) of the robot's moving joints -> joint torques (N m).
 ControllerCallback = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
@@ -150,14 +149,40 @@ def _commanded_acceleration(q: np.ndarray, v: np.ndarray, q_d: np.ndarray, v_d: 
     commanded_acceleration(q, v, q_d, v_d, a_d, kp, kd, out)
 
 
-@njit(types.void(READ_VECTOR, WRITTEN_VECTOR), cache=True)
-def _clip_to_limits(limit: np.ndarray, tau: np.ndarray) -> None:
-    """tau = clip(tau, -limit, limit) in place (see :func:`clip_to_limits`)."""
+@njit(types.void(POINTS, TIMING, types.float64, *(READ_VECTOR,) * 4, types.Array(types.float64, 2, "C"),
+                 WRITTEN_VECTOR), cache=True)
+def _tracking_acceleration(points: np.ndarray, timing: np.ndarray, t: float, q: np.ndarray, v: np.ndarray,
+                           kp: np.ndarray, kd: np.ndarray, motion: np.ndarray, out: np.ndarray) -> None:
+    """motion = (q_d, v_d, a_d) of the trajectory at t (s) (:func:`~youbot_dynamics.sim
+    .trajectory.desired_motion`, (3, n)) and out = a_d + Kp (q_d - q) + Kd (v_d - v)
+    (:func:`commanded_acceleration`): what :meth:`ComputedTorque.torque` feeds the RNEA,
+    in one call."""
+    desired_motion(points, timing, t, motion)
+    commanded_acceleration(q, v, motion[0], motion[1], motion[2], kp, kd, out)
+
+
+@njit(types.void(READ_VECTOR, READ_VECTOR, types.Array(types.float64, 2, "A", readonly=True), types.boolean,
+                 READ_VECTOR, READ_VECTOR, WRITTEN_VECTOR), cache=True)
+def _feedforward_and_clip(v_d: np.ndarray, bristles: np.ndarray, table: np.ndarray, with_friction: bool,
+                          urdf_limit: np.ndarray, effort_limit: np.ndarray, tau: np.ndarray) -> None:
+    """tau += tau_friction(v_d, bristles) (with ``with_friction``; the friction ``table``),
+    then tau = clip(tau, -limit, limit) with limit = np.minimum(urdf_limit, effort_limit)
+    (N m, N; a NaN in either passes through as numpy's minimum passes it), in place."""
+    if with_friction:
+        accumulate_friction_torque(v_d, bristles, table, 1.0, tau)
+    n = tau.shape[0]
+    if urdf_limit.shape[0] != n or effort_limit.shape[0] != n:
+        raise ValueError("computed torque: one effort limit per joint")
+    limit = np.empty(n)
+    for i in range(n):
+        urdf, effort = urdf_limit[i], effort_limit[i]
+        limit[i] = urdf if urdf != urdf else effort if effort != effort else urdf if urdf <= effort else effort
     clip_to_limits(limit, tau)
 
 
 _commanded_acceleration_unchecked = unchecked(_commanded_acceleration)
-_clip_to_limits_unchecked = unchecked(_clip_to_limits)
+_tracking_acceleration_unchecked = unchecked(_tracking_acceleration)
+_feedforward_and_clip_unchecked = unchecked(_feedforward_and_clip)
 
 
 class ComputedTorque:
@@ -177,25 +202,56 @@ class ComputedTorque:
         self.limit = np.asarray(robot.effort_limit)
 
     def torque(self, t: float, q: np.ndarray, v: np.ndarray, reference: Reference) -> np.ndarray:
+        effort = self.limit if reference.effort_limit is None else reference.effort_limit
+        if _float_vector(q) and _float_vector(v) and _float_vector(effort):
+            tau = self._compiled_torque(t, q, v, effort, reference)
+            if tau is not None:
+                return tau
         q_d, v_d, a_d = reference.at(t)
-        friction = self.friction
-        if (type(q) is np.ndarray and q.dtype is FLOAT and q.ndim == 1 and type(v) is np.ndarray
-                and v.dtype is FLOAT and v.ndim == 1 and q_d.dtype is FLOAT and v_d.dtype is FLOAT
-                and a_d.dtype is FLOAT):
-            a_command = np.empty(len(self.kp))
-            _commanded_acceleration_unchecked(q, v, q_d, v_d, a_d, self.kp, self.kd, a_command)
-            tau = pin.rnea(self.robot.model, self.data, q, v, a_command)
-            if friction is not None:
-                bristles = NO_BRISTLES if friction.lugre is None else friction.steady_state_bristles(v_d)
-                add_friction_torque_unchecked(v_d, bristles, friction.table, tau)
-            _clip_to_limits_unchecked(reference.limit(self.limit), tau)
-            return tau
         a_command = a_d + self.kp * (q_d - q) + self.kd * (v_d - v)
         tau = inverse_dynamics(self.robot, self.data, q, v, a_command)
+        friction = self.friction
         if friction is not None:
             tau += friction.torque(v_d, friction.steady_state_bristles(v_d))
         limit = reference.limit(self.limit)
         return np.clip(tau, -limit, limit)
+
+    def _compiled_torque(self, t: float, q: np.ndarray, v: np.ndarray, effort: np.ndarray,
+                         reference: Reference) -> np.ndarray | None:
+        """:meth:`torque` for float64 q, v and ``effort`` (the reference's effort limit, N m,
+        N; the URDF's without one): the desired motion and commanded acceleration in one
+        compiled call (the trajectory's ``compiled`` arrays; another trajectory's ``at``),
+        the RNEA, then the friction feedforward and the clip in another; the same operations
+        in the same order as numpy's. None for a desired motion that is not float64."""
+        compiled, n = reference.compiled, self.kp.shape[0]
+        a_command = np.empty(n)
+        if compiled is not None:
+            motion = np.empty((3, n))
+            _tracking_acceleration_unchecked(compiled[0], compiled[1], float(t), q, v, self.kp, self.kd, motion,
+                                             a_command)
+            v_d = motion[1]
+        else:
+            q_d, v_d, a_d = reference.at(t)
+            if not (_float_vector(q_d) and _float_vector(v_d) and _float_vector(a_d)):
+                return None
+            _commanded_acceleration_unchecked(q, v, q_d, v_d, a_d, self.kp, self.kd, a_command)
+        tau = pin.rnea(self.robot.model, self.data, q, v, a_command)
+        friction = self.friction
+        if friction is None:
+            _feedforward_and_clip_unchecked(v_d, NO_BRISTLES, NO_TABLE, False, self.limit, effort, tau)
+        else:
+            bristles = NO_BRISTLES if friction.lugre is None else friction.steady_state_bristles(v_d)
+            _feedforward_and_clip_unchecked(v_d, bristles, friction.table, True, self.limit, effort, tau)
+        return tau
+
+
+def _float_vector(array: np.ndarray) -> bool:
+    """Whether ``array`` is a float64 vector (what the compiled controller loops may take)."""
+    return type(array) is np.ndarray and array.dtype is FLOAT and array.ndim == 1
+
+
+#: The friction table handed to :func:`_feedforward_and_clip` without friction (not read).
+NO_TABLE = np.zeros((0, 0))
 
 
 def make_controller(kind: str, robot: Robot, kp: np.ndarray, kd: np.ndarray,

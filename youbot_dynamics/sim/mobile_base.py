@@ -35,7 +35,9 @@ from typing import Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin
+from numba import njit, types
 
+from youbot_dynamics.dynamics.friction import unchecked
 from youbot_dynamics.dynamics.mobile.base_controller import WheelSpeedPI
 from youbot_dynamics.dynamics.mobile.mecanum import (MecanumBase, mecanum_base_from_robot,
                                                      wheel_speeds)
@@ -44,7 +46,34 @@ from youbot_dynamics.dynamics.mobile.floor_kernel import roller_floor_force
 from youbot_dynamics.dynamics.rigid_body import symmetrised
 from youbot_dynamics.model.robot import Robot, URDFDocument, keep_joints, robot_from_urdf
 from youbot_dynamics.scene.base import BaseSpec
-from youbot_dynamics.sim.trajectory import PointToPointTrajectory
+from youbot_dynamics.sim.trajectory import POINTS, TIMING, PointToPointTrajectory, desired_motion
+
+
+@njit(types.void(POINTS, TIMING, types.float64, types.Array(types.float64, 2, "C"),
+                 types.Array(types.float64, 2, "C")), cache=True)
+def _path_command(points: np.ndarray, timing: np.ndarray, t: float, motion: np.ndarray, out: np.ndarray) -> None:
+    """A base path's command at t (s), :meth:`BaseModel.command`'s formula in one compiled
+    call: motion = the path's (x, y, yaw), its rate and acceleration (world frame;
+    :func:`~youbot_dynamics.sim.trajectory.desired_motion`, (3, 3)), out = the pose, the
+    body-frame twist V = (R^T p', yaw') and dV/dt = (R^T p'' - yaw' S V_xy, yaw'') (3, 3;
+    the Python form's operations in its order)."""
+    if out.shape[0] != 3 or out.shape[1] != 3 or points.shape[1] != 3:
+        raise ValueError("base command: a path of (x, y, yaw) points and a (3, 3) output")
+    desired_motion(points, timing, t, motion)
+    pose, rate, acceleration = motion[0], motion[1], motion[2]
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    vx, vy = c * rate[0] + s * rate[1], -s * rate[0] + c * rate[1]
+    ax, ay = c * acceleration[0] + s * acceleration[1], -s * acceleration[0] + c * acceleration[1]
+    for i in range(3):
+        out[0, i] = pose[i]
+    out[1, 0], out[1, 1], out[1, 2] = vx, vy, rate[2]
+    out[2, 0], out[2, 1], out[2, 2] = ax + rate[2] * vy, ay - rate[2] * vx, acceleration[2]
+
+
+#: :func:`_path_command` without numba's type dispatch (a path's ``compiled`` arrays, a float t).
+_path_command_unchecked = unchecked(_path_command)
+#: the roller law without numba's type dispatch (float64 arrays: :meth:`BaseModel.floor_force`)
+_roller_floor_force_unchecked = unchecked(roller_floor_force)
 
 #: Labels of the base's state blocks: the pose (world frame) and the body-frame twist.
 POSE_LABELS = ("base.x", "base.y", "base.yaw")
@@ -96,7 +125,7 @@ class BaseModel:
         """The base of ``spec`` for the scene's reduced fixed-root ``robot`` (its wheel
         geometry) on a plant of ``plant_nv`` velocities with a planar root."""
         mecanum = mecanum_base_from_robot(robot, spec.wheels)
-        wheels = np.array([robot.joint_index(name) for name in spec.wheels])
+        wheels = np.array([robot.joint_index(name) for name in spec.wheels], dtype=np.int64)
         prescribed = np.concatenate([np.arange(3), 3 + wheels])
         free = np.setdiff1d(np.arange(plant_nv), prescribed)
         path = None if spec.path is None else PointToPointTrajectory.through(
@@ -125,11 +154,10 @@ class BaseModel:
             return None, *twist.at(t)
         if self.path is None:
             return self.pose0, np.zeros(3), np.zeros(3)
-        pose, rate, acceleration = self.path.evaluate(t)
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        vx, vy = c * rate[0] + s * rate[1], -s * rate[0] + c * rate[1]
-        ax, ay = c * acceleration[0] + s * acceleration[1], -s * acceleration[0] + c * acceleration[1]
-        return pose, np.array([vx, vy, rate[2]]), np.array([ax + rate[2] * vy, ay - rate[2] * vx, acceleration[2]])
+        points, timing = self.path.compiled
+        motion, out = np.empty((3, 3)), np.empty((3, 3))
+        _path_command_unchecked(points, timing, float(t), motion, out)
+        return out[0], out[1], out[2]
 
     def motion(self, t: float, twist: TwistRamp | None = None) -> BaseMotion:
         """The commanded motion at t (s) (of a ``twist`` command if given) with the wheels rolling
@@ -162,7 +190,8 @@ class BaseModel:
         centre of mass (the root joint's subtree: free bodies left out) at configuration q."""
         pin.centerOfMass(plant, data, q, True)  # subtree centres of mass, each in its joint's frame
         # wheel_normal_forces without a load transfer (its checks hold by construction here)
-        return self.mecanum.support.loads(data.com[1][:2], float(data.mass[1]) * self.gravity)
+        x, y, _ = data.com[1].tolist()
+        return self.mecanum.support.loads_at(x, y, data.mass[1] * self.gravity)
 
     def floor_force(self, plant: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Generalised force (plant nv; N, N m) of the roller friction at the four contacts
@@ -171,9 +200,13 @@ class BaseModel:
         if self.mu == 0.0:
             return generalised
         mecanum = self.mecanum
-        roller_floor_force(v, self.wheel_loads(plant, data, q), mecanum.hub_velocities(v[:3]), mecanum.positions,
-                           mecanum.drive_directions, mecanum.across, mecanum.radius, self.mu, self.velocity_scale,
-                           self.wheels, generalised)
+        v = np.asarray(v, dtype=float)
+        if v.ndim != 1:
+            raise ValueError(f"floor force: v must be a vector, got shape {v.shape}")
+        # the loads, hub velocities (numpy's product) and the base's tables are float64 too
+        _roller_floor_force_unchecked(v, self.wheel_loads(plant, data, q), mecanum.hub_velocities(v[:3]),
+                                      mecanum.positions, mecanum.drive_directions, mecanum.across, mecanum.radius,
+                                      self.mu, self.velocity_scale, self.wheels, generalised)
         return generalised
 
     def wheel_torques(self, t: float, speeds: np.ndarray, integral: np.ndarray,

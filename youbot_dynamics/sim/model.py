@@ -224,24 +224,30 @@ class SimModel:
         return self.plant is self.robot and self.base is None and self.contact is None
 
     @functools.cached_property
+    def _fixed_robot_alone(self) -> bool:
+        """Whether the compiled paths apply: a fixed-root robot alone (``robot_alone``), no
+        mimic joints, a regular mass matrix, state [q, v, z]."""
+        robot = self.robot
+        return (self.robot_alone and robot.root == "fixed" and not robot.mimic and not robot.mass_matrix_defect
+                and self.slices["v"] == slice(robot.nv, 2 * robot.nv))
+
+    @functools.cached_property
     def _compiled_derivative(self) -> tuple | None:
         """(nv, end of the v block, Pinocchio model, friction table, LuGre joints) for
-        :meth:`robot_derivative`'s compiled path: a fixed-root robot alone with friction, no
-        mimic joints and a regular mass matrix, state [q, v, z]; None otherwise."""
-        robot, slices = self.robot, self.slices
-        if not (self.robot_alone and self.friction is not None and robot.root == "fixed" and not robot.mimic
-                and not robot.mass_matrix_defect and slices["v"] == slice(robot.nv, 2 * robot.nv)):
+        :meth:`robot_derivative`'s compiled path: a :attr:`_fixed_robot_alone` with friction;
+        None otherwise."""
+        robot = self.robot
+        if not (self._fixed_robot_alone and self.friction is not None):
             return None
         return robot.nv, 2 * robot.nv, robot.model, self.friction.table, self.friction.lugre_indices
 
     @functools.cached_property
     def _tree(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
-        """(ints, reals, friction table, LuGre joints) of :meth:`compiled_steps`: a fixed-root
-        robot alone of one-degree-of-freedom joints (compiled_tree.tree_of), regular mass
-        matrix, state [q, v, z]; None otherwise. Without friction, a table of zero damping."""
-        robot, slices = self.robot, self.slices
-        if not (self.robot_alone and robot.root == "fixed" and not robot.mimic and not robot.mass_matrix_defect
-                and slices["v"] == slice(robot.nv, 2 * robot.nv)):
+        """(ints, reals, friction table, LuGre joints) of :meth:`compiled_steps`: a
+        :attr:`_fixed_robot_alone` of one-degree-of-freedom joints (compiled_tree.tree_of);
+        None otherwise. Without friction, a table of zero damping."""
+        robot = self.robot
+        if not self._fixed_robot_alone:
             return None
         tree = tree_of(robot.model)
         if tree is None:
@@ -253,9 +259,10 @@ class SimModel:
         return (*tree, table, joints) if self.layout.size == 2 * robot.nv + len(joints) else None
 
     def compiled_steps(self, command: np.ndarray | None) -> CompiledSteps | None:
-        """The compiled fixed-step loop (sim/compiled_steps.py) of a robot alone under the
-        held torque ``command`` (N m, joint order) or, without one, under no controller
-        (zero torque); None where it does not apply (another controller; see :attr:`_tree`)."""
+        """The compiled loops (sim/compiled_steps.py: the fixed-step ones and DOP853's) of a
+        robot alone under the held torque ``command`` (N m, joint order) or, without one,
+        under no controller (zero torque); None where they do not apply (another controller;
+        see :attr:`_tree`)."""
         tree = self._tree
         if tree is None or (command is None and self.control.controller.kind != "none"):
             return None

@@ -92,6 +92,10 @@ class SupportRule:
         """Vertical loads (N, ``positions`` order) carrying ``weight`` (N) applied at
         ``centre`` (x, y) (m). Raises :class:`TipOverError` outside the support polygon."""
         x, y = np.asarray(centre, dtype=float).ravel().tolist()
+        return self.loads_at(x, y, weight)
+
+    def loads_at(self, x: float, y: float, weight: float) -> np.ndarray:
+        """:meth:`loads` with the centre's coordinates x, y (m) as floats."""
         loads = np.empty(len(self.positions))
         if not shift_to_non_negative(self.pseudo_inverse @ np.array([weight, weight * x, weight * y]), self._free,
                                      weight, loads):
