@@ -48,7 +48,7 @@ from youbot_dynamics.integrate.registry import integrator_kind
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.rotations import adaptive_angles
 from youbot_dynamics.sim.contact_events import MODE, ContactGuards
-from youbot_dynamics.sim.divergence import (Monitor, all_of, energy_ledger_monitor,
+from youbot_dynamics.sim.divergence import (Monitor, all_of, body_energy, energy_ledger_monitor,
                                             penetration_monitor)
 from youbot_dynamics.sim.model import CARDAN_SEQUENCES, MIN_APPROACH_SPEED, SimModel
 from youbot_dynamics.sim.results import SimulationResult, Snapshot
@@ -325,8 +325,11 @@ def _monitor(model: SimModel, state: SimState, command: np.ndarray | None, energ
     ledger = None
     if model.is_passive(command):
         reference = model.stored_energy(data, state.x) if energy0 is None else energy0
+        plant = model.plant
+        estimate = None if model.compliant or plant.mimic or plant.model.armature.any() else \
+            (lambda x: body_energy(plant, data, configuration(x), model.velocity(x)))
         ledger = energy_ledger_monitor(lambda x: model.stored_energy(data, x, configuration(x)), reference,
-                                       model.integrator.energy_tolerance)
+                                       model.integrator.energy_tolerance, estimate)
     overlap = None
     if model.contact and model.stepper is None:
         overlap = penetration_monitor(
