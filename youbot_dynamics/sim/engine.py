@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
+import pinocchio as pin
 
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.mobile.wheel_floor import TipOverError
@@ -47,7 +48,7 @@ from youbot_dynamics.integrate.registry import integrator_kind
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.rotations import adaptive_angles
 from youbot_dynamics.sim.contact_events import MODE, ContactGuards
-from youbot_dynamics.sim.divergence import (Monitor, all_of, energy_ledger_monitor,
+from youbot_dynamics.sim.divergence import (Monitor, all_of, body_energy, energy_ledger_monitor,
                                             penetration_monitor)
 from youbot_dynamics.sim.model import CARDAN_SEQUENCES, MIN_APPROACH_SPEED, SimModel
 from youbot_dynamics.sim.results import SimulationResult, Snapshot
@@ -170,13 +171,17 @@ class ConstraintStepping:
     each output time (a sliver of a step left over by round-off would turn the overlap
     correction, depth / dt, into a huge impulse); joint friction applied explicitly. After
     every step: a non-finite velocity or an overlap beyond ``deepest_allowed`` (m) is
-    divergence; a pair that starts carrying an impulse is a ``contact`` event."""
+    divergence; a pair that starts carrying an impulse is a ``contact`` event. Its state at
+    each output time (and at the start) is the output itself: every body's chart folded into
+    its pose (:meth:`SimModel.recentred`), the plant configuration it was folded from kept
+    for the energy ledger (:meth:`output_configuration`)."""
 
     def __init__(self, model: SimModel, state: SimState, torque: Callable[[float, np.ndarray], np.ndarray],
                  deepest_allowed: float, record: bool = False) -> None:
         self.model, self.data, self.torque, self.twist = model, state.data, torque, state.reference.base_twist
-        self.t, self.x = state.t, state.x.copy()
-        self.q, self.v = model.configuration(self.x), model.velocity(self.x).copy()
+        self.t, self.q, self.v = state.t, model.configuration(state.x), model.velocity(state.x).copy()
+        self.x = model.recentred(state.x, self.q) if model.body_names else state.x.copy()  # a copy either way
+        self._configuration = self.q if model.body_names else None
         self.h, self.steps, self.iterations = 0.0, 0, 0
         self.touching = state.touching
         self.events: list[ContactEvent] = []
@@ -184,69 +189,116 @@ class ConstraintStepping:
         self.t_previous, self.x_previous = self.t, self.x
         #: with ``record``: per output time, the last step's (report, acceleration, h)
         self.records: dict[float, tuple] | None = {} if record else None
-        # where the plant's q and v go in x, looked up once (packed at every step)
-        root = model.plant.root_nq
+        # what every step reads, looked up once: where the plant's q and v go in x (packed
+        # before each controller call), the robot's joints in the plant's v, the base's wheels
+        root, nv = model.plant.root_nq, model.plant.nv
         self._robot_q, self._q_block, self._v_block = slice(root, root + model.robot.nq), model.block("q"), \
             model.velocity_block
         self._bodies = (model.block("pose"), model.block("chart"), model.body_offset) if model.body_names else None
-        self._base_block = model.block("base")
+        self._base_block, self._integral = model.block("base"), model.block("wheel_i")
+        self._joints, self._nv, self._moving = model.joint_velocities, nv, model.nv > 0
+        self._wheels = None if model.base is None else np.arange(nv)[self._joints][model.base.wheels]
+        self._zero_tangent, self._no_force = np.zeros(nv), np.zeros(nv)
+        self._no_force.setflags(write=False)
+        self._unforced = not self._moving and model.base is None
 
-    def _pack(self) -> np.ndarray:
-        """``x`` with the stepper's q and v written in, in place: :meth:`advance` steps its own
-        copy of the state (the previous one stays as ``x_previous``)."""
+    def _pack_robot(self) -> np.ndarray:
+        """``x`` with the stepper's robot q, base pose and plant v written in, in place (what
+        the controller reads before a step): :meth:`advance` steps its own copy of the state
+        (the previous one stays as ``x_previous``)."""
         model, x = self.model, self.x
         x[self._q_block] = self.q[self._robot_q]
         if model.base is not None:
             pose = self._base_block
             x[pose] = model.base.unwrapped_pose(self.q[:self._robot_q.start], x[pose.stop - 1])
         x[self._v_block] = self.v
-        if self._bodies is not None:
-            pose, chart, offset = self._bodies
-            x[pose] = self.q[offset:]
-            x[chart] = 0.0
         return x
 
-    def advance(self, t_target: float) -> None:
-        model, dt = self.model, self.model.integrator.dt
-        count = max(1, math.ceil((t_target - self.t) / dt - 1e-9))
-        start, h = self.t, (t_target - self.t) / count
-        self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
-        joints, friction, stepper, nv, moving = model.joint_velocities, model.friction, model.stepper, \
-            model.plant.nv, model.nv > 0
-        base, integral, plant = model.base, model.block("wheel_i"), model.plant.model
-        wheels = None if base is None else np.arange(nv)[joints][base.wheels]  # the wheels' rates in v
-        for i in range(1, count + 1):
-            tau = np.zeros(nv)
-            if moving:
-                tau[joints] = self.torque(self.t, self._pack())
-                if friction is not None:
-                    friction.add_torque(tau[joints], self.v[joints], None, -1.0)
-            if base is not None:  # dynamic (a kinematic base refuses the stepper)
-                try:
-                    tau += base.floor_force(plant, self.data, self.q, self.v)
-                except TipOverError as error:
-                    raise DivergenceError(self.t, model.integrator.method, h, f"the base tips over: {error}") from None
-                if integral.stop > integral.start:  # the PI's integral terms, explicit Euler
-                    self.x[integral] += h * base.wheel_torques(self.t, self.v[wheels], self.x[integral],
-                                                               self.twist)[1]
-            v_before = self.v
-            self.q, self.v, report = stepper.step(self.data, self.q, self.v, tau, h)
-            self.t = t_target if i == count else start + i * h
-            self.steps += 1
-            self.iterations += report.iterations
-            self.deepest = max(self.deepest, report.penetration)
+    def _output_state(self) -> np.ndarray:
+        """``x`` packed whole at an output time: the free bodies' poses from the stepper's q,
+        their charts 0, then recentred (the plant configuration it was folded from kept)."""
+        x = self._pack_robot()
+        if self._bodies is None:
+            return x
+        pose, chart, offset = self._bodies
+        x[pose] = self.q[offset:]
+        x[chart] = 0.0
+        self._configuration = self._unfolded_configuration(x)
+        return self.model.recentred(x, self._configuration)
+
+    def _unfolded_configuration(self, x: np.ndarray) -> np.ndarray:
+        """:meth:`SimModel.configuration` of ``x`` as packed (the stepper's robot q and body
+        poses, charts 0). Without a moving base (whose root it rebuilds from x's yaw) that is
+        pin.integrate of the stepper's own q by a zero tangent: the same call on the same
+        numbers, without assembling them from x."""
+        if self.model.base is not None:
+            return self.model.configuration(x)
+        return pin.integrate(self.model.plant.model, self.q, self._zero_tangent)
+
+    def output_configuration(self, x: np.ndarray) -> np.ndarray:
+        """The plant configuration (nq) of output state ``x``, the stepper's state at its time
+        t: the one its free bodies' charts were folded from (:meth:`SimModel.configuration`
+        of the state before folding), so that the energy at an output is the same to the bit
+        as the unfolded state's."""
+        return self.model.configuration(x) if self._configuration is None else self._configuration
+
+    def _generalised_force(self, h: float) -> np.ndarray:
+        """The plant's applied generalised force (nv; N, N m) over the next step of h (s): the
+        robot's torque less its joint friction (explicit) and a dynamic base's floor forces;
+        the base's PI integral terms move on by explicit Euler. Nothing acts on a plant of
+        free bodies alone: the same zeros every step, read-only (a write into them raises)."""
+        if self._unforced:
+            return self._no_force
+        tau = np.zeros(self._nv)
+        if self._moving:
+            joints, friction = self._joints, self.model.friction
+            tau[joints] = self.torque(self.t, self._pack_robot())
+            if friction is not None:
+                friction.add_torque(tau[joints], self.v[joints], None, -1.0)
+        base = self.model.base
+        if base is not None:  # dynamic (a kinematic base refuses the stepper)
+            model, integral = self.model, self._integral
+            try:
+                tau += base.floor_force(model.plant.model, self.data, self.q, self.v)
+            except TipOverError as error:
+                raise DivergenceError(self.t, model.integrator.method, h, f"the base tips over: {error}") from None
+            if integral.stop > integral.start:
+                self.x[integral] += h * base.wheel_torques(self.t, self.v[self._wheels], self.x[integral],
+                                                           self.twist)[1]
+        return tau
+
+    def _account(self, report, h: float) -> None:
+        """After a step of h (s) that reached t: its counters, the contact events and the
+        divergence checks (a non-finite velocity, an overlap beyond the limit)."""
+        self.steps += 1
+        self.iterations += report.iterations
+        if report.penetration > self.deepest:
+            self.deepest = report.penetration
+        if report.normal_impulse or self.touching:
             touching = frozenset(name for name, impulse in report.normal_impulse.items() if impulse > 0)
             if touching != self.touching:
                 self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
                                 for name in sorted(touching - self.touching)]
                 self.touching = touching
-            if not math.isfinite(self.v.dot(self.v)):  # a NaN, an infinity, or |v| beyond 1e154
-                raise DivergenceError(self.t, model.integrator.method, h, "non-finite velocity")
-            if not report.penetration <= self.deepest_allowed:
-                raise DivergenceError(self.t, model.integrator.method, h, f"overlap {report.penetration:.3g} m "
-                                      f"beyond the penetration limit {self.deepest_allowed:.3g} m")
+        if not math.isfinite(self.v.dot(self.v)):  # a NaN, an infinity, or |v| beyond 1e154
+            raise DivergenceError(self.t, self.model.integrator.method, h, "non-finite velocity")
+        if not report.penetration <= self.deepest_allowed:
+            raise DivergenceError(self.t, self.model.integrator.method, h, f"overlap {report.penetration:.3g} m "
+                                  f"beyond the penetration limit {self.deepest_allowed:.3g} m")
+
+    def advance(self, t_target: float) -> None:
+        stepper, data = self.model.stepper, self.data
+        count = max(1, math.ceil((t_target - self.t) / self.model.integrator.dt - 1e-9))
+        start, h = self.t, (t_target - self.t) / count
+        self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
+        for i in range(1, count + 1):
+            tau = self._generalised_force(h)
+            v_before = self.v
+            self.q, self.v, report = stepper.step(data, self.q, self.v, tau, h)
+            self.t = t_target if i == count else start + i * h
+            self._account(report, h)
         self.h = h
-        self.x = self._pack()
+        self.x = self._output_state()
         if self.records is not None:
             self.records[self.t] = (report, (self.v - v_before) / h, h)
 
@@ -263,16 +315,21 @@ class ConstraintStepping:
 
 
 # ---- solving ---------------------------------------------------------------------------------
-def _monitor(model: SimModel, state: SimState, command: np.ndarray | None, energy0: float | None) -> Monitor | None:
+def _monitor(model: SimModel, state: SimState, command: np.ndarray | None, energy0: float | None,
+             configuration: Callable[[np.ndarray], np.ndarray]) -> Monitor | None:
     """The output-time checks: the energy ledger when the run is passive (against
-    ``energy0``, J, default the state's stored energy) and the pairs' penetration limits (the
-    constraint stepper holds every step to the smallest of them itself)."""
+    ``energy0``, J, default the state's stored energy; ``configuration(x)``: the plant
+    configuration of an output state) and the pairs' penetration limits (the constraint
+    stepper holds every step to the smallest of them itself)."""
     data = state.data
     ledger = None
     if model.is_passive(command):
         reference = model.stored_energy(data, state.x) if energy0 is None else energy0
-        ledger = energy_ledger_monitor(lambda x: model.stored_energy(data, x), reference,
-                                       model.integrator.energy_tolerance)
+        plant = model.plant
+        estimate = None if model.compliant or plant.mimic or plant.model.armature.any() else \
+            (lambda x: body_energy(plant, data, configuration(x), model.velocity(x)))
+        ledger = energy_ledger_monitor(lambda x: model.stored_energy(data, x, configuration(x)), reference,
+                                       model.integrator.energy_tolerance, estimate)
     overlap = None
     if model.contact and model.stepper is None:
         overlap = penetration_monitor(
@@ -289,6 +346,8 @@ class _Outcome:
     touching: frozenset[str]
     held: HeldTorque | None = None
     records: dict[float, tuple] | None = None
+    #: whether the solution's states are the outputs already (charts folded, nothing imposed)
+    folded: bool = False
     attitude_events: dict[str, int] = dataclasses.field(default_factory=dict)
     quaternion_drift: float | None = None
 
@@ -336,40 +395,44 @@ def _solve(model: SimModel, state: SimState, t_eval: np.ndarray, command: np.nda
     """Integrate from the state over t_eval (its first time is the state's) with the checks."""
     data = state.data
     x0 = model.recentred(state.x)
-    monitor = _monitor(model, state, command, energy0)
     held = HeldTorque(model, state.t, x0) if model.control.callback is not None and command is None else None
-    grid = t_eval
-    if held is not None:
-        grid = np.union1d(t_eval, held.ticks(t_eval[-1]))
-        chained = monitor
+    grid = t_eval if held is None else np.union1d(t_eval, held.ticks(t_eval[-1]))
 
-        def monitor(t: float, x: np.ndarray) -> str | None:
+    def checks(configuration: Callable[[np.ndarray], np.ndarray] = model.configuration) -> Monitor | None:
+        """The output-time checks (:func:`_monitor`), after a Python controller's tick."""
+        monitor = _monitor(model, state, command, energy0, configuration)
+        if held is None:
+            return monitor
+
+        def ticked(t: float, x: np.ndarray) -> str | None:
             held.at_output(t, x)
-            return chained(t, x) if chained is not None else None
+            return monitor(t, x) if monitor is not None else None
+        return ticked
 
     reference = state.reference
     torque, rhs = right_hand_side(model, data, reference, command, held)
-    outcome = _integrate(model, state, x0, grid, rhs, torque, monitor, max_steps, progress, record)
+    outcome = _integrate(model, state, x0, grid, rhs, torque, checks, max_steps, progress, record)
     outcome.held = held
     s = outcome.solution
     keep = np.searchsorted(s.t, t_eval) if grid is not t_eval else slice(None)
     outcome.quaternion_drift = model.quaternion_drift(s.x[keep])
     # outputs with every chart folded into its pose: the pose block is the body's pose
-    outcome.solution = Solution(s.t[keep], np.array([model.imposed(model.recentred(x), model.base_motion(t, reference.base_twist))
-                                                     for t, x in zip(s.t[keep], s.x[keep])]), s.stats,
-                                s.state_names)
+    outputs = s.x[keep] if outcome.folded else np.array([
+        model.imposed(model.recentred(x), model.base_motion(t, reference.base_twist))
+        for t, x in zip(s.t[keep], s.x[keep])])
+    outcome.solution = Solution(s.t[keep], outputs, s.stats, s.state_names)
     return outcome
 
 
 def _integrate(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndarray, rhs, torque,
-               monitor: Monitor | None, max_steps: int | None, progress: Progress | None,
+               checks: Callable[..., Monitor | None], max_steps: int | None, progress: Progress | None,
                record: bool = False) -> _Outcome:
     spec, names = model.integrator, model.layout.names
     kind = integrator_kind(spec.method)
     if kind == "stepper":
-        return _step_constraints(model, state, x0, t_eval, torque, monitor, max_steps, progress, record)
+        return _step_constraints(model, state, x0, t_eval, torque, checks, max_steps, progress, record)
     options = {"rtol": spec.rtol, "atol": spec.absolute_tolerance(x0), "state_names": names,
-               "bounds": model.bounds, "monitor": monitor, "max_steps": max_steps, "progress": progress}
+               "bounds": model.bounds, "monitor": checks(), "max_steps": max_steps, "progress": progress}
     if model.contact:
         guards = ContactGuards(model, state.data)
         if spec.dt is not None:
@@ -401,8 +464,10 @@ def _shortest_flight(model: SimModel) -> float:
 
 
 def _step_constraints(model: SimModel, state: SimState, x0: np.ndarray, t_eval: np.ndarray, torque,
-                      monitor: Monitor | None, max_steps: int | None, progress: Progress | None,
+                      checks: Callable[..., Monitor | None], max_steps: int | None, progress: Progress | None,
                       record: bool = False) -> _Outcome:
+    """The constraint stepper over t_eval; its states are the outputs (``folded``), checked
+    with the plant configurations it kept (:meth:`ConstraintStepping.output_configuration`)."""
     start = time.perf_counter()
     z = model.block("z")
     if z.stop > z.start:
@@ -410,12 +475,14 @@ def _step_constraints(model: SimModel, state: SimState, x0: np.ndarray, t_eval: 
     checked_fixed_step(model.integrator.method, model.integrator.dt, t_eval, max_steps)
     stepping = ConstraintStepping(model, dataclasses.replace(state, x=x0), torque,
                                   min(model.penetration_limits.values(), default=math.inf), record)
-    check = StateCheck(model.integrator.method, model.layout.names, model.bounds, monitor)
+    check = StateCheck(model.integrator.method, model.layout.names, model.bounds,
+                       checks(stepping.output_configuration))
     solution = drive(stepping, model.integrator.method, t_eval, [], check, model.layout.names,
                      max_steps=max_steps, progress=progress)
     solution.stats.events = len(stepping.events)
     solution.stats.wall_time = time.perf_counter() - start
-    return _Outcome(solution, stepping.events, stepping.deepest, stepping.touching, records=stepping.records)
+    return _Outcome(solution, stepping.events, stepping.deepest, stepping.touching, records=stepping.records,
+                    folded=True)
 
 
 # ---- public entry points ---------------------------------------------------------------------
@@ -462,7 +529,7 @@ def run(model: SimModel, state0: SimState | None = None, t_eval: np.ndarray | No
     output spacing is refused; at most ``limits.max_steps`` steps; ``progress(t)`` is told
     the time reached (s) after each output."""
     scene = model.scene
-    state = (initial_state(model) if state0 is None else state0).copy()
+    state = initial_state(model) if state0 is None else state0.copy()
     state.events, state.deepest, state.touching = [], 0.0, frozenset()
     times = scene.output_times + state.t if t_eval is None else np.asarray(t_eval, dtype=float)
     checked_output_spacing(model.integrator.dt, times, f"{scene.source}: integrator.dt "

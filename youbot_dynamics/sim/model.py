@@ -421,14 +421,15 @@ class SimModel:
         quaternions = pose[:, list(self.bodies_in["quaternion"]), 3:]
         return float(np.max(np.abs(np.linalg.norm(quaternions, axis=-1) - 1.0)))
 
-    def recentred(self, x: np.ndarray) -> np.ndarray:
+    def recentred(self, x: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
         """The same state with every body's chart folded into its reference pose (chart 0)
         and every ``pose`` block at its body's pose (a quaternion body's q / |q|, a Cardan
-        body's attitude from its angles)."""
+        body's attitude from its angles); ``q``: x's configuration, if known."""
         if not self.body_names:
             return x
+        q = self.configuration(x) if q is None else q
         x = x.copy()
-        x[self.block("pose")] = self.configuration(x)[self.body_offset:]
+        x[self.block("pose")] = q[self.body_offset:]
         x[self.block("chart")] = 0.0
         return x
 
@@ -518,12 +519,14 @@ class SimModel:
         q, v = self.configuration(x) if q is None else q, self.velocity(x)
         return kinetic_energy(self.plant, data, q, v) + potential_energy(self.plant, data, q)
 
-    def stored_energy(self, data: pin.Data, x: np.ndarray) -> float:
-        """Kinetic, potential and contact-spring energy (J): what a passive scene may only lose."""
+    def stored_energy(self, data: pin.Data, x: np.ndarray, q: np.ndarray | None = None) -> float:
+        """Kinetic, potential and contact-spring energy (J): what a passive scene may only lose
+        (``q``: x's configuration, if known)."""
         springs = 0.0
         if self.compliant:
-            springs = self.contact.elastic_energy(self.geometry_poses(data, self.configuration(x)), self.compliant)
-        return self.energy(data, x) + springs
+            q = self.configuration(x) if q is None else q
+            springs = self.contact.elastic_energy(self.geometry_poses(data, q), self.compliant)
+        return self.energy(data, x, q) + springs
 
     def body_poses(self, data: pin.Data, x: np.ndarray, q: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """World pose (4x4, m) of every free body at state x (``q``: its configuration, if

@@ -150,12 +150,11 @@ class Simulator:
     def run(self, t_eval: np.ndarray | None = None, progress: Callable[[float], None] | None = None) -> SimulationResult:
         """The scene from its initial state over ``t_eval`` (default: the scene's output
         times); the wrapper's state is then the run's end."""
-        start = engine.initial_state(self.model)
-        result = engine.run(self.model, start, t_eval, progress)
-        start.t, start.x, start.stats = float(result.t[-1]), result.x[-1].copy(), result.stats
-        start.events, start.deepest = list(result.contact_events), result.max_penetration or 0.0
-        start.tau = engine.robot_torque(self.model, start.reference, start.t, start.x, None)
-        self.state = start
+        result = engine.run(self.model, None, t_eval, progress)
+        t, x, reference = float(result.t[-1]), result.x[-1].copy(), self.model.control.reference
+        self.state = SimState(t, x, reference, engine.robot_torque(self.model, reference, t, x, None),
+                              self.state.data, result.stats, list(result.contact_events),
+                              result.max_penetration or 0.0)  # Pinocchio's scratch space kept
         return result
 
     # ---- step-wise API ------------------------------------------------------------------

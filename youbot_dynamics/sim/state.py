@@ -17,6 +17,7 @@ it and a saved copy can be run on again.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
@@ -43,7 +44,8 @@ class StateBlock:
 
 @dataclass(frozen=True)
 class StateLayout:
-    """Blocks in state order: q and v over ``joint_names`` first, then the extra blocks."""
+    """Blocks in state order: q and v over ``joint_names`` first, then the extra blocks (its
+    blocks, size and names computed once: every run reads them)."""
 
     joint_names: tuple[str, ...]
     extra: tuple[StateBlock, ...] = ()
@@ -57,7 +59,7 @@ class StateLayout:
                        for symbol, labels in (extra or {}).items() if labels)
         return cls(tuple(joint_names), blocks)
 
-    @property
+    @functools.cached_property
     def blocks(self) -> tuple[StateBlock, ...]:
         """Every block in state order: q, v, then the extra blocks."""
         return (StateBlock("q", self.joint_names), StateBlock("v", self.joint_names), *self.extra)
@@ -67,12 +69,12 @@ class StateLayout:
         """Number of joint coordinates (== number of joint rates)."""
         return len(self.joint_names)
 
-    @property
+    @functools.cached_property
     def size(self) -> int:
         """Dimension of the continuous state x."""
         return sum(block.size for block in self.blocks)
 
-    @property
+    @functools.cached_property
     def names(self) -> tuple[str, ...]:
         """One name per component of x, e.g. ``q[arm_joint_1]``."""
         return tuple(f"{block.symbol}[{label}]" for block in self.blocks for label in block.labels)
