@@ -44,6 +44,7 @@ between runs).
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import NamedTuple
@@ -114,6 +115,19 @@ def durations(stamps: np.ndarray) -> np.ndarray:
     return np.asarray(stamps, dtype=np.int64).astype("timedelta64[ns]")
 
 
+def _float_rows(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
+    """Rows of ``width`` Python floats (Rerun's lists of tuples) as a float64 array (rows,
+    width), read in one pass (``np.array`` of tuples costs about twice as much)."""
+    return np.fromiter(itertools.chain.from_iterable(rows), np.float64, width * len(rows)).reshape(-1, width)
+
+
+def repeated_names(names: Sequence[str], count: int) -> object:
+    """Each of ``names`` (frame ids) ``count`` times in a row, as the Arrow string array Rerun
+    takes: the names converted once, then gathered (Rerun converts each repeated string)."""
+    frame_ids = rr.components.TransformFrameIdBatch(list(names)).as_arrow_array()
+    return frame_ids.take(np.repeat(np.arange(len(names)), count))
+
+
 def joint_transform_columns(joints: Sequence[UrdfJoint], q: np.ndarray) -> rr.ComponentColumnList:
     """One Transform3D column of every joint's transforms at the samples' positions ``q``
     (samples, joints; rad or m), joint after joint (the index repeats the samples' times
@@ -121,15 +135,17 @@ def joint_transform_columns(joints: Sequence[UrdfJoint], q: np.ndarray) -> rr.Co
     computation, unclamped) gathered into arrays, one ``columns`` call for all joints
     instead of one per joint (each costs about 0.5 ms whatever its length)."""
     translations, quaternions, parents, children = [], [], [], []
-    for joint, values in zip(joints, np.asarray(q, dtype=np.float64).T):
+    q = np.asarray(q, dtype=np.float64)
+    for joint, values in zip(joints, q.T):
         result = joint._inner.compute_transform_columns(values.tolist(), clamp=False)  # the public call, less lists
         translations += result["translations"]
         quaternions += result["quaternions_xyzw"]
-        parents += [result["parent_frame"]] * len(values)
-        children += [result["child_frame"]] * len(values)
-    return rr.Transform3D.columns(translation=np.array(translations, dtype=np.float64).reshape(-1, 3),
-                                  quaternion=np.array(quaternions, dtype=np.float64).reshape(-1, 4),
-                                  parent_frame=parents, child_frame=children)
+        parents.append(result["parent_frame"])
+        children.append(result["child_frame"])
+    samples = q.shape[0]
+    return rr.Transform3D.columns(translation=_float_rows(translations, 3), quaternion=_float_rows(quaternions, 4),
+                                  parent_frame=repeated_names(parents, samples),
+                                  child_frame=repeated_names(children, samples))
 
 
 def shape_archetype(name: str, shape: Shape, placement: np.ndarray | None = None) -> rr.AsComponents:
@@ -497,7 +513,8 @@ class RerunLogger(ClosesOnExit):
         poses = np.array([pose for _, pose in rows])    # (samples, edges, 7)
         for k, (entity, parent, child) in enumerate(edges):
             columns = rr.Transform3D.columns(translation=poses[:, k, :3], quaternion=poses[:, k, 3:],
-                                             parent_frame=[parent] * len(rows), child_frame=[child] * len(rows))
+                                             parent_frame=repeated_names([parent], len(rows)),
+                                             child_frame=repeated_names([child], len(rows)))
             self._recording().send_columns(entity, indexes=index, columns=columns)
         self._recording().flush(timeout_sec=0.0)
 
