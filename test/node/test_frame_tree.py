@@ -161,6 +161,26 @@ def test_frames_of_many_samples_equal_each_samples_frames(scene_name: str) -> No
         assert np.array_equal(many.link_poses, one.link_poses) and np.array_equal(many.ee, one.ee)
 
 
+def test_ee_rows_of_a_batch_equal_each_samples_composition() -> None:
+    """ee_rows composes a moving base's odometry pose with every sample's end effectors in one
+    call; each row equals, to the bit, end_effector_row's product of that sample alone (the
+    reference the Rerun sample took one by one) and the kinematics' own rows without a base.
+    A batch that fell back to LinkFrames.at (no compiled form) carries the same rows."""
+    from youbot_dynamics.node.frames import LinkFrames, end_effector_row, ee_rows, planar_row
+    links = LinkFrames(load_scene("mobile_pick").robot)
+    rng = np.random.default_rng(11)
+    q = rng.uniform(-1.0, 1.0, (7, links.robot.nq))
+    batch = links.at_many(q)
+    base = np.array([[planar_row(*rng.uniform(-2.0, 2.0, 3)), planar_row(0.0, 0.0, 0.0)] for _ in q])
+    composed = ee_rows(batch, base)
+    for k, sample in enumerate(batch):
+        assert np.array_equal(composed[k, sample.ee_index], end_effector_row(sample, base[k]))
+        assert np.array_equal(ee_rows(batch)[k], sample.ee)
+    links._tree = None                                     # the row-by-row fallback
+    fallback = links.at_many(q)
+    assert np.array_equal(fallback.poses, batch.poses) and fallback.moving == batch.moving
+
+
 def test_pose_matrices_keep_matrix_from_quaternion_roundings() -> None:
     """The compiled pose_matrices gives, bit for bit, the rotation of the numpy formula
     (lie.matrix_from_quaternion, unnormalised quaternions included) and the translation, in

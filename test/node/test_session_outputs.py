@@ -20,10 +20,10 @@ RATE = 500.0
 
 @pytest.fixture
 def kinematics_passes(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    """Counts LinkFrames.at calls."""
+    """Counts kinematics passes (LinkFrames.at_many calls: one per batch of samples)."""
     calls: list[int] = []
-    original = frames.LinkFrames.at
-    monkeypatch.setattr(frames.LinkFrames, "at", lambda self, q: calls.append(1) or original(self, q))
+    original = frames.LinkFrames.at_many
+    monkeypatch.setattr(frames.LinkFrames, "at_many", lambda self, q: calls.append(1) or original(self, q))
     return calls
 
 

@@ -47,8 +47,7 @@ from youbot_dynamics.io.cdr_group import Entry
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.robot import Robot
-from youbot_dynamics.node.frames import (FramesBatch, LinkFrames, LinkTransform, SampleFrames, ee_rows,
-                                         frame_tree, pose_rows)
+from youbot_dynamics.node.frames import FramesBatch, LinkFrames, LinkTransform, ee_rows, frame_tree, pose_rows
 
 FREE_BODY_RGBA = (0.80, 0.60, 0.35, 1.0)
 """Colour (r, g, b, a in 0..1) of the free bodies' markers (light wood)."""
@@ -119,23 +118,17 @@ class FrameMessages:
         the world frame, in the scene's order, from their world poses (4x4, m) in N samples."""
         return pose_rows([pose for poses in samples for pose in poses.values()]).reshape(len(samples), -1, 7)
 
-    def tf(self, stamps: Sequence[int], samples: Sequence[SampleFrames] | None,
-           bodies: Sequence[np.ndarray] | None = None, base: np.ndarray | None = None) -> list[object]:
-        """/tf of N samples (``stamps`` ns): ``base`` (N, 2, 7), the rows of a moving base's
-        odom -> base_footprint and odom -> world (``tree.moving``), the moving links of each
-        sample's kinematics (none without a robot), then the free bodies (rows of
-        :meth:`body_poses`, in the world frame)."""
-        _, refilled, values, build = self.tf_entry(len(stamps), samples, bodies, base)
-        return refilled.many(stamps, values, build)
-
-    def tf_entry(self, count: int, samples: Sequence[SampleFrames] | None, bodies: Sequence[np.ndarray] | None = None,
+    def tf_entry(self, count: int, samples: FramesBatch | None, bodies: Sequence[np.ndarray] | None = None,
                  base: np.ndarray | None = None) -> Entry:
-        """/tf of :meth:`tf` for ``count`` samples as an :data:`~youbot_dynamics.io.cdr_group.Entry`
-        (its values and the builder of its first message), for :class:`~youbot_dynamics.io.cdr_group.TopicBatches`."""
+        """/tf of ``count`` samples as an :data:`~youbot_dynamics.io.cdr_group.Entry` (its
+        values and the builder of its first message), for
+        :class:`~youbot_dynamics.io.cdr_group.TopicBatches`: ``base`` (N, 2, 7), the rows of a
+        moving base's odom -> base_footprint and odom -> world (``tree.moving``), the moving
+        links of the samples' kinematics (:meth:`LinkFrames.at_many`; none without a robot),
+        then the free bodies (rows of :meth:`body_poses`, in the world frame)."""
         blocks = [] if base is None else [np.reshape(base, (count, -1))]
         if samples is not None:
-            blocks.append(samples.poses[:, :samples.moving].reshape(count, -1) if isinstance(samples, FramesBatch)
-                          else np.array([sample.link_poses.reshape(-1) for sample in samples]))
+            blocks.append(samples.poses[:, :samples.moving].reshape(count, -1))
         if bodies is not None and len(self.body_shapes):
             blocks.append(np.reshape(bodies, (count, -1)))
         values = np.hstack(blocks) if blocks else np.zeros((count, 0))
@@ -150,16 +143,17 @@ class FrameMessages:
 
         return "/tf", self._refilled["/tf"], values, build
 
-    def free_bodies(self, stamps: Sequence[int], bodies: Sequence[np.ndarray]) -> list[object]:
-        """/free_bodies of N samples: the bodies' poses in the world frame, in order."""
-        return self._refilled["/free_bodies"].many(
-            stamps, np.reshape(bodies, (len(stamps), -1)), lambda stamp_ns, values: messages.pose_array(
-                stamp_ns, self.world_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)]))
+    def free_bodies_entry(self, bodies: np.ndarray) -> Entry:
+        """/free_bodies of N samples as an :data:`~youbot_dynamics.io.cdr_group.Entry`: the
+        bodies' poses (rows (N, k, 7) of :meth:`body_poses`) in the world frame, in order."""
+        return "/free_bodies", self._refilled["/free_bodies"], np.reshape(bodies, (len(bodies), -1)), \
+            lambda stamp_ns, values: messages.pose_array(
+                stamp_ns, self.world_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)])
 
-    def free_body_markers(self, stamps: Sequence[int], poses: Sequence[dict[str, np.ndarray]]) -> list[object]:
-        """/free_bodies_markers of N samples: each body's shape at its world pose (4x4, m;
-        ``poses`` by name) in the world frame (namespace: the body's name; the same ids every
-        sample, so each replaces the last)."""
+    def free_body_markers_entry(self, poses: Sequence[dict[str, np.ndarray]]) -> Entry:
+        """/free_bodies_markers of N samples as an :data:`~youbot_dynamics.io.cdr_group.Entry`:
+        each body's shape at its world pose (4x4, m; ``poses`` by name) in the world frame
+        (namespace: the body's name; the same ids every sample, so each replaces the last)."""
         values = pose_rows([sample[name] @ local for sample in poses for name, locals_ in self._marker_poses.items()
                             for local in locals_]).reshape(len(poses), -1)
 
@@ -169,7 +163,7 @@ class FrameMessages:
                 for marker in messages.shape_markers(stamp_ns, self.world_frame, name, shape,
                                                      poses[0][name] @ placement, FREE_BODY_RGBA))
 
-        return self._refilled["/free_bodies_markers"].many(stamps, values, build)
+        return "/free_bodies_markers", self._refilled["/free_bodies_markers"], values, build
 
     def scene_markers(self) -> object:
         """/scene_markers (latched, stamp 0): the static world geometry in the world frame and
@@ -184,20 +178,13 @@ class FrameMessages:
         """The frame static geometry is placed in: the world frame, or its link's frame."""
         return self.world_frame if geometry.owner == "world" else self.prefix + geometry.owner_name
 
-    def ee_messages(self, stamps: Sequence[int], samples: Sequence[SampleFrames],
-                    wanted: frozenset[str] | None = None, base: np.ndarray | None = None
-                    ) -> list[tuple[str, list[object]]]:
-        """(topic, its N messages) of /ee_pose and, for a model of several robots, /ee_poses,
-        from N samples' kinematics at ``stamps`` (ns), in the root frame (``base``: the rows
-        (N, 2, 7) of :meth:`tf`; the odometry pose composed with the kinematics); only those
-        in ``wanted`` if given."""
-        return [(topic, refilled.many(stamps, values, build))
-                for topic, refilled, values, build in self.ee_entries(samples, wanted, base)]
-
-    def ee_entries(self, samples: Sequence[SampleFrames], wanted: frozenset[str] | None = None,
+    def ee_entries(self, samples: FramesBatch, wanted: frozenset[str] | None = None,
                    base: np.ndarray | None = None) -> list[Entry]:
-        """The topics of :meth:`ee_messages` as :data:`~youbot_dynamics.io.cdr_group.Entry`
-        (values and the builder of the first message)."""
+        """/ee_pose and, for a model of several robots, /ee_poses (only those in ``wanted`` if
+        given) as :data:`~youbot_dynamics.io.cdr_group.Entry` (values and the builder of the
+        first message), from N samples' kinematics in the root frame (``base``: a moving
+        base's rows (N, 2, 7) of :meth:`tf_entry`; the odometry pose composed with the
+        kinematics)."""
         topics: list[Entry] = []
         ee, first = ee_rows(samples, base), samples[0]
         if wanted is None or "/ee_pose" in wanted:

@@ -252,14 +252,15 @@ class FramesBatch(list):
         self.poses, self.moving = poses, moving
 
 
-def ee_rows(samples: Sequence[SampleFrames], base: np.ndarray | None = None) -> np.ndarray:
+def ee_rows(samples: FramesBatch, base: np.ndarray | None = None) -> np.ndarray:
     """(N, k, 7) the ``ee`` rows of N samples in the root frame, or with ``base`` (N, 2, 7;
-    a moving base's odom -> base_footprint first) composed with the odometry pose."""
-    if base is None and isinstance(samples, FramesBatch):
-        return samples.poses[:, samples.moving:]
+    a moving base's odom -> base_footprint first) composed with the odometry pose (each
+    sample's product as :func:`composed_rows` forms it, all samples in one call)."""
+    ee = samples.poses[:, samples.moving:]
     if base is None:
-        return np.array([sample.ee for sample in samples])
-    return np.array([composed_rows(rows[0], sample.ee) for sample, rows in zip(samples, base)])
+        return ee
+    odometry = pose_matrices(np.asarray(base)[:, 0])[:, None]
+    return pose_rows(odometry @ pose_matrices(ee)).reshape(ee.shape)
 
 
 def end_effector_row(sample: SampleFrames, base: np.ndarray | None = None) -> np.ndarray:
@@ -324,12 +325,14 @@ class LinkFrames:
         moving = len(self._edges)
         return SampleFrames(self._edges, poses[:moving], poses[moving:], len(self.ee_links), self._ee_index)
 
-    def at_many(self, q: np.ndarray) -> list[SampleFrames]:
+    def at_many(self, q: np.ndarray) -> FramesBatch:
         """``at`` of every row of q (N, nq): one compiled kinematics pass for them all
         (compiled_tree.frame_poses: Pinocchio's products in its order, so the same numbers)
         where the model has a compiled form, else row by row."""
         if self._tree is None:
-            return [self.at(row) for row in q]
+            samples = [self.at(row) for row in q]
+            poses = np.array([np.vstack((sample.link_poses, sample.ee)) for sample in samples])
+            return FramesBatch(samples, poses.reshape(len(samples), len(self._parents), 7), len(self._edges))
         q = np.ascontiguousarray(q, dtype=float)
         placements = np.empty((len(q), len(self._frames), 4, 4))
         frame_poses(*self._tree, q, *self._placements, self._work, placements)

@@ -11,6 +11,7 @@ from collections.abc import Collection, Sequence
 import numpy as np
 
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_group import Entry
 from youbot_dynamics.io.cdr_template import Refilled, not_covariance
 from youbot_dynamics.node.interface import pair_topic
 from youbot_dynamics.sim.engine import Snapshot
@@ -41,22 +42,21 @@ class SensorMessages:
         self.imu_frame = prefix + "base_link"
         self._templates: dict[str, Refilled] = {}
 
-    def columns(self, stamps: Sequence[int], snapshots: Sequence[Snapshot], wanted: Collection[str]
-                ) -> list[tuple[str, list[object]]]:
-        """(topic, its messages at ``stamps`` (ns)) of the wanted sensor topics."""
-        columns: list[tuple[str, list[object]]] = []
+    def entries(self, snapshots: Sequence[Snapshot], wanted: Collection[str]) -> list[Entry]:
+        """The wanted sensor topics of N snapshots as :data:`~youbot_dynamics.io.cdr_group.Entry`
+        (values and the builder of the first message)."""
+        entries: list[Entry] = []
         if "/wrist_wrench" in wanted:
-            columns.append(("/wrist_wrench", self._wrenches("/wrist_wrench", self.wrist_frame, stamps,
-                                                            [s.sensors.wrist for s in snapshots])))
+            entries.append(self._wrenches("/wrist_wrench", self.wrist_frame, [s.sensors.wrist for s in snapshots]))
         if "/imu" in wanted:
             values = np.array([np.concatenate([s.sensors.imu[2], s.sensors.imu[0], s.sensors.imu[1]])
                                for s in snapshots])
-            columns.append(("/imu", self._refilled("/imu").many(stamps, values, lambda stamp, row: messages.imu(
-                stamp, self.imu_frame, row[:4], row[4:7], row[7:], IMU_COVARIANCES))))
+            entries.append(("/imu", self._refilled("/imu"), values, lambda stamp, row: messages.imu(
+                stamp, self.imu_frame, row[:4], row[4:7], row[7:], IMU_COVARIANCES)))
         for topic, name, frame in self.pairs:
             if topic in wanted:
-                columns.append((topic, self._wrenches(topic, frame, stamps, [s.sensors.pairs[name] for s in snapshots])))
-        return columns
+                entries.append(self._wrenches(topic, frame, [s.sensors.pairs[name] for s in snapshots]))
+        return entries
 
     def _refilled(self, topic: str) -> Refilled:
         """The topic's refilled messages (the covariances stay the first message's)."""
@@ -64,9 +64,8 @@ class SensorMessages:
             self._templates[topic] = Refilled(not_covariance)
         return self._templates[topic]
 
-    def _wrenches(self, topic: str, frame: str, stamps: Sequence[int],
-                  wrenches: Sequence[tuple[np.ndarray, np.ndarray]]) -> list[object]:
-        """geometry_msgs/WrenchStamped in ``frame`` of (force, torque) pairs at ``stamps``."""
+    def _wrenches(self, topic: str, frame: str, wrenches: Sequence[tuple[np.ndarray, np.ndarray]]) -> Entry:
+        """geometry_msgs/WrenchStamped in ``frame`` of (force, torque) pairs, as an Entry."""
         values = np.array([np.concatenate(wrench) for wrench in wrenches])
-        return self._refilled(topic).many(stamps, values, lambda stamp, row: messages.wrench_stamped(
-            stamp, frame, row[:3], row[3:]))
+        return topic, self._refilled(topic), values, lambda stamp, row: messages.wrench_stamped(
+            stamp, frame, row[:3], row[3:])

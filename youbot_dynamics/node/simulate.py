@@ -27,11 +27,12 @@ import numpy as np
 
 from youbot_dynamics.integrate.integrators import DivergenceError, checked_output_spacing
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_group import Entry, TopicBatches
 from youbot_dynamics.io.cdr_template import Refilled
 from youbot_dynamics.io.stamps import NS_PER_S
 from youbot_dynamics.node.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands, InputCounters, InputRejected,
                                            follow, joint_trajectory, node_time_of_stamp)
-from youbot_dynamics.node.frames import SampleFrames, end_effector_row
+from youbot_dynamics.node.frames import FramesBatch, ee_rows
 from youbot_dynamics.node.interface import Outputs
 from youbot_dynamics.node.mobile_base import MobileBase
 from youbot_dynamics.node.sensors import SensorMessages
@@ -100,6 +101,8 @@ class SimulationSession(Session):
         self.commands = EffortCommands(self.robot, command_timeout, on_timeout, self.counters, default_effort_limit)
         self.locked_names = tuple(j.name for j in self.robot.tree if j.name in self.robot.locked)
         self._joint_states = Refilled()
+        self._clock = Refilled(stamped=lambda path: path == "clock")
+        self._batches = TopicBatches()
         self._locked_q = np.array([self.robot.locked[name] for name in self.locked_names])
         self.paused = False
         self.failure: str | None = None
@@ -231,58 +234,64 @@ class SimulationSession(Session):
 
     def _sample_messages(self, snapshots: Sequence[Snapshot], stamps: Sequence[int],
                          based: Sequence[tuple[Outputs, np.ndarray]]
-                         ) -> list[tuple[Outputs, SampleFrames | None, np.ndarray | None, np.ndarray | None]]:
+                         ) -> list[tuple[Outputs, np.ndarray | None, np.ndarray | None, np.ndarray | None]]:
         """The messages of the topics in ``wanted`` of N samples at ``stamps`` (ns), built
-        together, with each sample's kinematics (one pass per sample feeds /tf, /ee_pose and
-        the Rerun sample; none when nothing takes them) and its free bodies' rows. A moving
-        base's outputs (``based``, per sample: see :meth:`_base_outputs`) add /odom and
-        /base_pose_ground_truth; their rows (odom -> base_footprint, odom -> world) place
-        /ee_pose(s) and go on /tf. Raises MessageFieldError."""
+        together, with each sample's end-effector row for the Rerun sample (the samples'
+        kinematics in one pass feed /tf, /ee_pose and it; none when nothing takes them) and
+        its free bodies' rows. A moving base's outputs (``based``, per sample: see
+        :meth:`_base_outputs`) add /odom and /base_pose_ground_truth; their rows (odom ->
+        base_footprint, odom -> world) place /ee_pose(s) and go on /tf. Raises
+        MessageFieldError."""
         bodies = self.frames.body_poses([snapshot.bodies for snapshot in snapshots]) if self.frames.body_shapes \
             else None
-        samples = [self.frames.links.at(snapshot.q) for snapshot in snapshots] \
+        samples = self.frames.links.at_many(np.array([snapshot.q for snapshot in snapshots])) \
             if self.frames.has_robot and self.kinematics_wanted else None
         base = np.array([rows for _, rows in based]) if based else None
-        per_sample: list[Outputs] = [[] for _ in snapshots]
-        for topic, built in self._motion_messages(stamps, snapshots, samples, bodies, base):
-            for outputs, message in zip(per_sample, built):
-                outputs.append((topic, message))
-        for outputs, (odometry, _) in zip(per_sample, based):
-            outputs += [(topic, message) for topic, message in odometry if topic in self.wanted]
+        entries = self._motion_entries(stamps, snapshots, samples, bodies, base)
         if "/tf" in self.wanted:
-            for outputs, message in zip(per_sample, self.frames.tf(stamps, samples, bodies, base)):
-                outputs.append(("/tf", message))
-        return [(outputs, None if samples is None else samples[k], None if bodies is None else bodies[k],
+            entries.append(self.frames.tf_entry(len(stamps), samples, bodies, base))
+        per_sample = self._per_sample(self._batches.fill(stamps, entries), based)
+        ee = None if samples is None else ee_rows(samples, base)[:, samples[0].ee_index]
+        return [(outputs, None if ee is None else ee[k], None if bodies is None else bodies[k],
                  None if base is None else base[k]) for k, outputs in enumerate(per_sample)]
 
-    def _motion_messages(self, stamps: Sequence[int], snapshots: Sequence[Snapshot],
-                         samples: Sequence[SampleFrames] | None, bodies: np.ndarray | None,
-                         base: np.ndarray | None) -> list[tuple[str, list[object]]]:
-        """(topic, its N messages) of the wanted topics before the base's and /tf: /clock,
-        /joint_states, /ee_pose(s) (from the kinematics ``samples`` and a moving base's rows
-        ``base``), /free_bodies and /free_bodies_markers (from the body rows ``bodies``)."""
+    def _per_sample(self, built: list[list[tuple[str, object]]], based: Sequence[tuple[Outputs, np.ndarray]]
+                    ) -> list[Outputs]:
+        """Each sample's outputs in topic order from the (topic, message) lists ``built`` (one
+        per sample, /tf last if wanted): those before /tf, a moving base's (``based``), then
+        /tf."""
+        for outputs, (odometry, _) in zip(built, based):
+            tf = [outputs.pop()] if "/tf" in self.wanted else []
+            outputs += [(topic, message) for topic, message in odometry if topic in self.wanted] + tf
+        return built
+
+    def _motion_entries(self, stamps: Sequence[int], snapshots: Sequence[Snapshot], samples: FramesBatch | None,
+                        bodies: np.ndarray | None, base: np.ndarray | None) -> list[Entry]:
+        """The wanted topics before the base's and /tf, as :data:`~youbot_dynamics.io.cdr_group.Entry`
+        of N samples at ``stamps`` (ns): /clock, /joint_states, /ee_pose(s) (from the
+        kinematics ``samples`` and a moving base's rows ``base``), /free_bodies and
+        /free_bodies_markers (from the body rows ``bodies``), then the sensors'."""
         wanted = self.wanted
-        columns: list[tuple[str, list[object]]] = []
+        entries: list[Entry] = []
         if "/clock" in wanted:
-            columns.append(("/clock", [messages.clock(stamp) for stamp in stamps]))
+            entries.append(("/clock", self._clock, np.zeros((len(stamps), 0)),
+                            lambda stamp_ns, _: messages.clock(stamp_ns)))
         if "/joint_states" in wanted:
-            columns.append(("/joint_states", self._joint_states_of(stamps, snapshots)))
+            entries.append(self._joint_states_entry(snapshots))
         if samples is not None:
-            columns += self.frames.ee_messages(stamps, samples, wanted, base)
+            entries += self.frames.ee_entries(samples, wanted, base)
         if bodies is not None and "/free_bodies" in wanted:
-            columns.append(("/free_bodies", self.frames.free_bodies(stamps, bodies)))
+            entries.append(self.frames.free_bodies_entry(bodies))
         if bodies is not None and "/free_bodies_markers" in wanted:
-            columns.append(("/free_bodies_markers",
-                            self.frames.free_body_markers(stamps, [s.bodies for s in snapshots])))
-        columns += self._sensors.columns(stamps, snapshots, wanted)
-        return columns
+            entries.append(self.frames.free_body_markers_entry([s.bodies for s in snapshots]))
+        return entries + self._sensors.entries(snapshots, wanted)
 
     def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None, based: tuple[Outputs, np.ndarray] | None
                  ) -> Outputs:
-        """The sample's messages (``prebuilt``: (wanted, messages, kinematics, body rows, base
-        rows) of :meth:`_block`, or built now; ``based``: a moving base's outputs of the
-        sample), logged (the Rerun recording's end effector in the root frame: a moving
-        base's odometry pose times the kinematics)."""
+        """The sample's messages (``prebuilt``: (wanted, messages, end-effector row, body rows,
+        base rows) of :meth:`_block`, or built now; ``based``: a moving base's outputs of the
+        sample), logged (the Rerun recording's end effector in the root frame, or in odom
+        with a moving base: :func:`~youbot_dynamics.node.frames.ee_rows`)."""
         stamp = self.stamp_ns
         self.snapshot = snapshot
         if self.simulator.conservative:
@@ -290,7 +299,7 @@ class SimulationSession(Session):
         if self.moving_base is not None:
             self.moving_base.track_slip(snapshot)
         try:
-            outputs, sample, bodies, base = prebuilt[1:] if prebuilt is not None else \
+            outputs, ee, bodies, base = prebuilt[1:] if prebuilt is not None else \
                 self._sample_messages([snapshot], [stamp], [based] if based is not None else [])[0]
             self.recorder.write(outputs, stamp)
         except messages.MessageFieldError as error:
@@ -298,24 +307,24 @@ class SimulationSession(Session):
             return []
         if base is not None:
             self.recorder.base(stamp, base)
-        if sample is not None:
-            ee = end_effector_row(sample, base)
+        if ee is not None:
             self.recorder.sample(stamp, snapshot.joint_names, snapshot.q, snapshot.v, snapshot.tau, snapshot.energy,
                                  ee[:3])
         if bodies is not None:
             self.recorder.bodies(stamp, bodies)
         return outputs
 
-    def _joint_states_of(self, stamps: Sequence[int], snapshots: Sequence[Snapshot]) -> list[object]:
-        """/joint_states of N samples: the moving joints (joint order), then every locked
-        joint (URDF tree order) at its locked value with velocity and effort 0, so that
-        every movable joint of the URDF has a position (robot_state_publisher needs wheels
-        and fingers)."""
-        locked, zeros = np.tile(self._locked_q, (len(stamps), 1)), np.zeros((len(stamps), len(self.locked_names)))
+    def _joint_states_entry(self, snapshots: Sequence[Snapshot]) -> Entry:
+        """/joint_states of N samples as an :data:`~youbot_dynamics.io.cdr_group.Entry`: the
+        moving joints (joint order), then every locked joint (URDF tree order) at its locked
+        value with velocity and effort 0, so that every movable joint of the URDF has a
+        position (robot_state_publisher needs wheels and fingers)."""
+        count = len(snapshots)
+        locked, zeros = np.tile(self._locked_q, (count, 1)), np.zeros((count, len(self.locked_names)))
         values = np.hstack([np.array([s.q for s in snapshots]), locked, np.array([s.v for s in snapshots]), zeros,
                             np.array([s.tau for s in snapshots]), zeros])
-        return self._joint_states.many(stamps, values, lambda stamp_ns, row: messages.joint_state(
-            stamp_ns, (*snapshots[0].joint_names, *self.locked_names), *np.split(row, 3)))
+        return "/joint_states", self._joint_states, values, lambda stamp_ns, row: messages.joint_state(
+            stamp_ns, (*snapshots[0].joint_names, *self.locked_names), *np.split(row, 3))
 
     def diagnostics(self, real_time_factor: float, progress: float | None = None) -> Outputs:
         """/diagnostics now: real-time factor (simulated s per wall s), integrator statistics,
