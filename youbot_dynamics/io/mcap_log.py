@@ -214,18 +214,13 @@ class McapLogger(ClosesOnExit):
             if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**64:
                 topics = ", ".join(topic for topic, _ in messages)
                 raise UserInputError(f"{self.path}: {label} on {topics} must be integer ns >= 0, got {value!r}")
-        records = []
+        records, channels = [], self._channels
         for topic, message in messages:
-            if topic not in self._channels:
-                raise UserInputError(f"{self.path}: topic {topic} was not added before writing")
-            channel, msgtype = self._channels[topic]
-            if type(message) is Serialized and message.__msgtype__ == msgtype:
-                records.append((channel, message.cdr))
-                continue
-            actual = getattr(message, "__msgtype__", type(message).__name__)
-            if actual != msgtype:
-                raise UserInputError(f"{self.path}: topic {topic} carries {msgtype}, got {actual}")
-            records.append((channel, bytes(TYPESTORE.serialize_cdr(message, msgtype))))
+            known = channels.get(topic)
+            if known is not None and type(message) is Serialized and message.__msgtype__ == known[1]:
+                records.append((known[0], message.cdr))     # the bytes as they are (the common case)
+            else:
+                records.append(self._record(topic, message))
         if not records:
             return
         try:
@@ -233,6 +228,19 @@ class McapLogger(ClosesOnExit):
             self._writer.add_messages(records, log_time_ns, publish_time_ns)    # sequence numbers: 1, 2, ... per topic
         except OSError as error:
             self.stop_on_write_error(error)
+
+    def _record(self, topic: str, message: object) -> tuple[int, bytes]:
+        """(channel id, CDR bytes) of ``message`` on ``topic``; a topic not added or a message
+        of another type is a UserInputError."""
+        if topic not in self._channels:
+            raise UserInputError(f"{self.path}: topic {topic} was not added before writing")
+        channel, msgtype = self._channels[topic]
+        if type(message) is Serialized and message.__msgtype__ == msgtype:
+            return channel, message.cdr
+        actual = getattr(message, "__msgtype__", type(message).__name__)
+        if actual != msgtype:
+            raise UserInputError(f"{self.path}: topic {topic} carries {msgtype}, got {actual}")
+        return channel, bytes(TYPESTORE.serialize_cdr(message, msgtype))
 
     def _close_chunk_if_due(self, log_time_ns: int) -> None:
         """Close the open chunk if a message at ``log_time_ns`` would make it span

@@ -31,6 +31,8 @@ CHUNK_SIZE = 1024 * 1024
 _MESSAGE = struct.Struct("<BQHIQQ")
 """A Message record's opcode, length and fixed fields: channel id, sequence, log time and
 publish time (ns); the data follows."""
+_MESSAGE_OPCODE = int(Opcode.MESSAGE)
+"""A Message record's opcode (a plain int: packed without the enum's lookup)."""
 _MESSAGE_FIXED = _MESSAGE.size - 9
 """Bytes of a Message record's fixed fields (its length counts them and the data)."""
 _MESSAGE_INDEX = struct.Struct("<BQHI")
@@ -95,15 +97,19 @@ class ChunkedWriter:
             [log_time, log_time]
         if self._chunk_times:
             self._chunk_times = [min(self._chunk_times[0], log_time), max(self._chunk_times[1], log_time)]
-        chunk, index, counts, header = self._chunk, self._chunk_index, self._counts, _MESSAGE.pack
+        chunk, index, counts, header, limit = self._chunk, self._chunk_index, self._counts, _MESSAGE.pack, \
+            self.chunk_size
         for channel, data in messages:
             if not self._chunk_times:             # the first message of a chunk
                 self._chunk_times = [log_time, log_time]
-            index.setdefault(channel, []).extend((log_time, len(chunk)))
+            entries = index.get(channel)
+            if entries is None:
+                entries = index[channel] = []
+            entries += (log_time, len(chunk))
             sequence = counts[channel] = counts.get(channel, 0) + 1
-            chunk += header(Opcode.MESSAGE, _MESSAGE_FIXED + len(data), channel, sequence, log_time, publish_time)
+            chunk += header(_MESSAGE_OPCODE, _MESSAGE_FIXED + len(data), channel, sequence, log_time, publish_time)
             chunk += data
-            if len(chunk) > self.chunk_size:
+            if len(chunk) > limit:
                 self._close_chunk()
                 chunk, index = self._chunk, self._chunk_index
 

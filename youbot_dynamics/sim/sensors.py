@@ -32,6 +32,8 @@ from youbot_dynamics.dynamics.contact_stepper import StepReport, contact_rotatio
 from youbot_dynamics.model.robot import Robot, TreeJoint
 
 PointForce = tuple[int, np.ndarray, np.ndarray]
+_NO_ROTATION = np.zeros(3)
+"""The angular part of gravity's spatial acceleration (rad/s^2: none)."""
 """(pair index, point (world, m), force on the pair's second geometry (world, N))."""
 
 
@@ -82,7 +84,7 @@ class SensorModel:
         plant = self.plant
         pin.forwardKinematics(plant, data, q, v, a)
         pin.updateFramePlacements(plant, data)
-        wrist = None if self.wrist is None else self.wrist.wrench(plant, data, forces, self.contact)
+        wrist = None if self.wrist is None else self.wrist.wrench(data, forces, self.contact)
         pairs = {} if self.contact is None else pair_wrenches(self.contact, self.pair_frames, data, forces)
         return Readings(wrist, pairs, None if self.imu_frame is None else imu(plant, data, self.imu_frame))
 
@@ -125,9 +127,9 @@ def pair_wrenches(contact: ContactModel, frames: list[int | None], data: pin.Dat
     totals = [pin.Force.Zero() for _ in contact.pairs]
     for k, point, force in forces:
         totals[k] += _world_wrench(point, force)
-    result = {}
+    result, placements = {}, data.oMf
     for pair, frame, total in zip(contact.pairs, frames, totals):
-        local = total if frame is None else data.oMf[frame].actInv(total)
+        local = total if frame is None else placements[frame].actInv(total)
         result[pair.name] = (local.linear.copy(), local.angular.copy())
     return result
 
@@ -158,6 +160,8 @@ class WristSensor:
         #: the distal links' frames (what contact geometry hangs on)
         self.distal = frozenset(plant.getFrameId(name, pin.BODY) for name in links)
         own = link_inertias(pin.buildModelFromXML(urdf))
+        self.gravity = plant.gravity.linear.copy()
+        """The plant's gravity (m/s^2, world frame)."""
         self.parts = tuple((plant.frames[f].parentJoint, plant.frames[f].placement.act(own[plant.frames[f].name]))
                            for f in sorted(self.distal) if plant.frames[f].name in own)
 
@@ -166,16 +170,15 @@ class WristSensor:
         """The distal links' mass (kg)."""
         return float(sum(inertia.mass for _, inertia in self.parts))
 
-    def wrench(self, plant: pin.Model, data: pin.Data, forces: list[PointForce],
+    def wrench(self, data: pin.Data, forces: list[PointForce],
                contact: ContactModel | None) -> tuple[np.ndarray, np.ndarray]:
         """(force N, torque N m) the proximal side exerts on the distal side, at the link's
         origin in its frame, from data's kinematics (velocities and accelerations placed)
         and the contact ``forces``."""
-        total = pin.Force.Zero()
+        total, placements, velocities, accelerations = pin.Force.Zero(), data.oMi, data.v, data.a
         for joint, inertia in self.parts:
-            placement = data.oMi[joint]
-            velocity = data.v[joint]
-            acceleration = data.a[joint] - pin.Motion(placement.rotation.T @ plant.gravity.linear, np.zeros(3))
+            placement, velocity = placements[joint], velocities[joint]
+            acceleration = accelerations[joint] - pin.Motion(placement.rotation.T @ self.gravity, _NO_ROTATION)
             total += placement.act(inertia * acceleration + velocity.cross(inertia * velocity))
         for k, point, force in forces:
             pair = contact.pairs[k]
