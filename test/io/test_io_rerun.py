@@ -155,23 +155,22 @@ def test_joint_transforms_follow_q(recording) -> None:
 
 def test_joint_transform_columns_equal_rerun_s_own_per_joint_columns(urdf: Path) -> None:
     """joint_transform_columns (the joints' lists read into arrays, the frame names gathered
-    as one Arrow array) carries, joint after joint, exactly what the public
-    UrdfJoint.compute_transform_columns gives each joint: translations, quaternions and
-    the parent and child frame of every sample."""
+    as one Arrow array, rows sample after sample) carries, for joint j of J, in rows j, j + J,
+    ..., exactly what the public UrdfJoint.compute_transform_columns gives that joint:
+    translations, quaternions and the parent and child frame of every sample."""
     from rerun.urdf import UrdfTree
 
     from youbot_dynamics.io.rerun_log import joint_transform_columns
     joints = [joint for joint in UrdfTree.from_file_path(urdf).joints() if joint.name in JOINTS]
     q = trajectory(9)["q"]
-    expected: dict[str, list] = defaultdict(list)
-    for joint, values in zip(joints, q.T):
-        for column in joint.compute_transform_columns(values, clamp=False):
-            expected[column.component_descriptor().component] += column.as_arrow_array().to_pylist()
     columns = {column.component_descriptor().component: column.as_arrow_array().to_pylist()
                for column in joint_transform_columns(joints, q)}
-    assert set(expected) >= {"Transform3D:translation", "Transform3D:quaternion", "Transform3D:parent_frame",
-                             "Transform3D:child_frame"}
-    assert columns == dict(expected)
+    assert {"Transform3D:translation", "Transform3D:quaternion", "Transform3D:parent_frame",
+            "Transform3D:child_frame"} <= set(columns)
+    for j, (joint, values) in enumerate(zip(joints, q.T)):
+        own = {column.component_descriptor().component: column.as_arrow_array().to_pylist()
+               for column in joint.compute_transform_columns(values, clamp=False)}
+        assert {name: rows[j::len(joints)] for name, rows in columns.items()} == own, joint.name
 
 
 def test_refuses_unknown_joints_nan_and_missing_urdf(urdf: Path, tmp_path: Path) -> None:
