@@ -1,6 +1,7 @@
-"""The messages of frames and shapes a session publishes, built from one sample's kinematics
-(:meth:`~youbot_dynamics.node.frames.LinkFrames.at`) and the free bodies' poses: /tf,
-/tf_static, /ee_pose, /ee_poses, /free_bodies, /free_bodies_markers and /scene_markers.
+"""The messages of frames and shapes a session publishes, built from a batch of samples'
+kinematics (:meth:`~youbot_dynamics.node.frames.LinkFrames.at_many`) and the free bodies'
+poses: /tf, /tf_static, /ee_pose, /ee_poses, /free_bodies, /free_bodies_markers and
+/scene_markers.
 
 Frame names: every frame the node names itself (the robot's links, the free bodies, the
 default root frame, odom and world) carries ``prefix`` (robot_state_publisher's

@@ -14,9 +14,10 @@ CDR bytes (:mod:`youbot_dynamics.io.cdr_template`: ``Serialized`` messages, whic
 the rosbags ones), and the MCAP and the node's publishers take those bytes. Topics are named
 as logged, as in the root namespace (``/joint_states``); the node publishes them under their
 graph names (:mod:`youbot_dynamics.node.topics`). Frame names carry ``frame_prefix``
-(:mod:`youbot_dynamics.node.frame_messages`). One kinematics pass per sample
-(:meth:`~youbot_dynamics.node.frames.LinkFrames.at`) gives /tf, /ee_pose, /ee_poses and the
-Rerun sample, and none runs when nothing takes them. ``session.latched`` holds what is sent
+(:mod:`youbot_dynamics.node.frame_messages`). One compiled kinematics pass per batch of
+samples (:meth:`~youbot_dynamics.node.frames.LinkFrames.at_many`) gives /tf, /ee_pose,
+/ee_poses and the Rerun samples, and none runs when nothing takes them; the messages of a
+batch are refilled together (:class:`~youbot_dynamics.io.cdr_group.TopicBatches`). ``session.latched`` holds what is sent
 once, latched (transient local), and logged at t = 0: /tf_static (every fixed link), with a
 robot /robot_description (std_msgs/String: the URDF of what is simulated, the composed URDF
 for a composed scene), named as robot_state_publisher names them, and /scene_markers with
