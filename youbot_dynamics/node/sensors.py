@@ -49,8 +49,8 @@ class SensorMessages:
         if "/wrist_wrench" in wanted:
             entries.append(self._wrenches("/wrist_wrench", self.wrist_frame, [s.sensors.wrist for s in snapshots]))
         if "/imu" in wanted:
-            values = np.array([np.concatenate([s.sensors.imu[2], s.sensors.imu[0], s.sensors.imu[1]])
-                               for s in snapshots])
+            readings = [s.sensors.imu for s in snapshots]    # (angular velocity, acceleration, orientation)
+            values = np.hstack([np.array([reading[k] for reading in readings]) for k in (2, 0, 1)])
             entries.append(("/imu", self._refilled("/imu"), values, lambda stamp, row: messages.imu(
                 stamp, self.imu_frame, row[:4], row[4:7], row[7:], IMU_COVARIANCES)))
         for topic, name, frame in self.pairs:
@@ -66,6 +66,6 @@ class SensorMessages:
 
     def _wrenches(self, topic: str, frame: str, wrenches: Sequence[tuple[np.ndarray, np.ndarray]]) -> Entry:
         """geometry_msgs/WrenchStamped in ``frame`` of (force, torque) pairs, as an Entry."""
-        values = np.array([np.concatenate(wrench) for wrench in wrenches])
+        values = np.array(wrenches).reshape(len(wrenches), 6)
         return topic, self._refilled(topic), values, lambda stamp, row: messages.wrench_stamped(
             stamp, frame, row[:3], row[3:])
