@@ -52,11 +52,13 @@ def test_each_output_is_the_unfolded_state_recentred_and_keeps_its_configuration
 
 @pytest.mark.parametrize("method", ["pgs", "admm"])
 def test_run_outputs_equal_the_step_wise_snapshots(method):
-    # run() and advance() drive the same loop: the same states at the same times
+    # run() and advance() drive the same loop: the same states at the same times (the whole
+    # state: ball_drop has no robot, so its q block is empty)
     run = ball_drop(method).run()
     simulator = ball_drop(method)
     snapshots = simulator.advance_through(run.t[1:])
-    assert np.array_equal(np.array([s.q for s in snapshots]), run.x[1:, simulator.model.block("q")])
+    assert run.x.shape[1] > 0 and simulator.model.block("q").stop == 0
+    assert np.array_equal(np.array([s.kinematics[1] for s in snapshots]), run.x[1:])
     assert np.array_equal(simulator.x, run.x[-1])
 
 
