@@ -158,6 +158,9 @@ def test_frames_of_many_samples_equal_each_samples_frames(scene_name: str) -> No
     q = rng.uniform(-1.0, 1.0, (6, robot.nq))
     batch = links.at_many(q)
     assert len(batch) == len(q) and len(list(batch)) == len(q)
+    tail = batch[2:]
+    assert len(tail) == len(q) - 2 and np.array_equal(tail[0].ee, batch[2].ee) and np.array_equal(tail.poses,
+                                                                                                   batch.poses[2:])
     for many, one in zip([*batch, batch[-1]], [*(links.at(row) for row in q), links.at(q[-1])]):
         assert many.edges == one.edges and many.ee_index == one.ee_index and many.ee_count == one.ee_count
         assert np.array_equal(many.link_poses, one.link_poses) and np.array_equal(many.ee, one.ee)

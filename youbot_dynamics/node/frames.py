@@ -264,7 +264,10 @@ class FramesBatch(Sequence[SampleFrames]):
     def __len__(self) -> int:
         return len(self.poses)
 
-    def __getitem__(self, k: int) -> SampleFrames:
+    def __getitem__(self, k: int | slice) -> SampleFrames | FramesBatch:
+        """Sample k's :class:`SampleFrames`, or for a slice the batch of those samples."""
+        if isinstance(k, slice):
+            return FramesBatch(self.poses[k], self.edges, self.ee_count, self.ee_index)
         rows = self.poses[k]
         return SampleFrames(self.edges, rows[:self.moving], rows[self.moving:], self.ee_count, self.ee_index)
 
