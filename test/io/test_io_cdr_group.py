@@ -49,14 +49,18 @@ def entries(refilled: dict, count: int) -> list[tuple]:
 
 
 def test_topics_filled_together_are_the_built_messages() -> None:
+    """Batches of several sizes in turn, and the same templates under other topic names, are
+    each cut into the messages built from their own numbers, named by their own topics."""
     refilled, batches = {topic: Refilled() for topic in BUILDERS}, TopicBatches()
     batches.fill(STAMPS[:1], entries(refilled, 1))                   # the first: built, templates made
-    batch = entries(refilled, len(STAMPS))
-    filled = batches.fill(STAMPS, batch)
-    assert len(batches._groups) == 1                                 # filled together
-    assert [[topic for topic, _ in sample] for sample in filled] == [list(BUILDERS)] * len(STAMPS)
-    for k, (topic, _, values, build) in enumerate(batch):
-        assert [sample[k][1].cdr for sample in filled] == [cdr(build(s, row)) for s, row in zip(STAMPS, values)]
+    for count, suffix in ((4, ""), (2, ""), (2, "_renamed"), (4, "")):
+        batch = [(topic + suffix, *rest) for topic, *rest in entries(refilled, count)]
+        filled = batches.fill(STAMPS[:count], batch)
+        assert len(batches._groups) == 1                             # filled together
+        assert [[topic for topic, _ in sample] for sample in filled] == [[t + suffix for t in BUILDERS]] * count
+        for k, (topic, _, values, build) in enumerate(batch):
+            assert [sample[k][1].cdr for sample in filled] == [cdr(build(s, row))
+                                                               for s, row in zip(STAMPS[:count], values)]
 
 
 @pytest.mark.parametrize("topic, field", [("/joints", "effort[2]"), ("/pose", "pose.orientation")])

@@ -156,9 +156,25 @@ def test_frames_of_many_samples_equal_each_samples_frames(scene_name: str) -> No
     links = LinkFrames(robot)
     rng = np.random.default_rng(4)
     q = rng.uniform(-1.0, 1.0, (6, robot.nq))
-    for many, one in zip(links.at_many(q), (links.at(row) for row in q)):
+    batch = links.at_many(q)
+    assert len(batch) == len(q) and len(list(batch)) == len(q)
+    tail = batch[2:]
+    assert len(tail) == len(q) - 2 and np.array_equal(tail[0].ee, batch[2].ee) and np.array_equal(tail.poses,
+                                                                                                   batch.poses[2:])
+    for many, one in zip([*batch, batch[-1]], [*(links.at(row) for row in q), links.at(q[-1])]):
         assert many.edges == one.edges and many.ee_index == one.ee_index and many.ee_count == one.ee_count
         assert np.array_equal(many.link_poses, one.link_poses) and np.array_equal(many.ee, one.ee)
+
+
+def test_frames_of_many_samples_refuse_rows_of_another_size() -> None:
+    """The compiled kinematics pass reads q unchecked: rows not of nq values, or not rows,
+    are a UserInputError naming the shape needed."""
+    from youbot_dynamics.errors import UserInputError
+    from youbot_dynamics.node.frames import LinkFrames
+    links = LinkFrames(load_scene("arm_ptp").robot)
+    for q in (np.zeros((3, links.robot.nq + 1)), np.zeros(links.robot.nq)):
+        with pytest.raises(UserInputError, match="nq"):
+            links.at_many(q)
 
 
 def test_ee_rows_of_a_batch_equal_each_samples_composition() -> None:

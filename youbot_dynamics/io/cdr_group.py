@@ -70,6 +70,9 @@ class TemplateGroup:
         self.quaternions = np.concatenate([t.quaternions + s for t, s in zip(templates, field_starts)]
                                            ).reshape(-1, 4).astype(np.intp)
         self.unit_squares = templates[0].unit_squares
+        self._spans_key: tuple[tuple[str, ...], int] | None = None
+        self._spans: list[tuple[str, str, int, int]] = []
+        """The (topics, count) of the last fill and its messages' :meth:`_message_spans`."""
 
     def fill_many(self, stamps_ns: np.ndarray, values: np.ndarray, topics: Sequence[str]
                   ) -> list[list[tuple[str, Serialized]]] | None:
@@ -89,9 +92,19 @@ class TemplateGroup:
         if not _checked_refill_unchecked(self.template_bytes, self.float_offsets, values, values.view(np.uint8),
                                          self.stamp_offsets, stamps, self.quaternions, *self.unit_squares, data):
             return None
-        filled, cuts = data.tobytes(), list(zip(topics, self.msgtypes, self.cuts[:-1], self.cuts[1:]))
-        return [[(topic, Serialized(msgtype, filled[row + start:row + end])) for topic, msgtype, start, end in cuts]
-                for row in range(0, len(stamps) * width, width)]
+        key = (tuple(topics), len(stamps))
+        if key != self._spans_key:          # a steady stream's batches keep their size
+            self._spans_key, self._spans = key, self._message_spans(*key)
+        filled, per_row = data.tobytes(), len(self.msgtypes)
+        messages = [(topic, Serialized(msgtype, filled[start:end])) for topic, msgtype, start, end in self._spans]
+        return [messages[k:k + per_row] for k in range(0, len(messages), per_row)]
+
+    def _message_spans(self, topics: tuple[str, ...], count: int) -> list[tuple[str, str, int, int]]:
+        """(topic, msgtype, first byte, byte after the last) of each message of ``count``
+        samples in the filled bytes, sample after sample."""
+        width = len(self.template_bytes)
+        return [(topic, msgtype, row + start, row + end) for row in range(0, count * width, width)
+                for topic, msgtype, start, end in zip(topics, self.msgtypes, self.cuts[:-1], self.cuts[1:])]
 
 
 class TopicBatches:

@@ -132,7 +132,7 @@ class FrameMessages:
             blocks.append(samples.poses[:, :samples.moving].reshape(count, -1))
         if bodies is not None and len(self.body_shapes):
             blocks.append(np.reshape(bodies, (count, -1)))
-        values = np.hstack(blocks) if blocks else np.zeros((count, 0))
+        values = np.hstack(blocks) if len(blocks) > 1 else blocks[0] if blocks else np.zeros((count, 0))
 
         def build(stamp_ns: int, values: np.ndarray) -> object:
             edges = [] if base is None else list(self.tree.moving)
@@ -187,12 +187,12 @@ class FrameMessages:
         base's rows (N, 2, 7) of :meth:`tf_entry`; the odometry pose composed with the
         kinematics)."""
         topics: list[Entry] = []
-        ee, first = ee_rows(samples, base), samples[0]
+        ee = ee_rows(samples, base)
         if wanted is None or "/ee_pose" in wanted:
-            topics.append(("/ee_pose", self._refilled["/ee_pose"], ee[:, first.ee_index],
+            topics.append(("/ee_pose", self._refilled["/ee_pose"], ee[:, samples.ee_index],
                            lambda stamp_ns, row: messages.pose_stamped(stamp_ns, self.root_frame, row[:3], row[3:])))
         if len(self.links.ee_links) > 1 and (wanted is None or "/ee_poses" in wanted):
-            topics.append(("/ee_poses", self._refilled["/ee_poses"], ee[:, :first.ee_count].reshape(len(ee), -1),
+            topics.append(("/ee_poses", self._refilled["/ee_poses"], ee[:, :samples.ee_count].reshape(len(ee), -1),
                            lambda stamp_ns, values: messages.pose_array(
                                stamp_ns, self.root_frame, [(row[:3], row[3:]) for row in values.reshape(-1, 7)])))
         return topics

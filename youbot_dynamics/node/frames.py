@@ -41,6 +41,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit, types
 
+from youbot_dynamics.compiled import unchecked
 from youbot_dynamics.dynamics.compiled_tree import frame_placements_of, frame_poses, tree_of, work_for
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
@@ -202,6 +203,13 @@ def _relative_pose_batch(poses: np.ndarray, parents: np.ndarray, children: np.nd
         _relative_pose_rows(poses[n], parents, children, out[n])
 
 
+_relative_pose_batch_unchecked = unchecked(_relative_pose_batch)
+"""The same without numba's type dispatch (``LinkFrames.at_many`` passes exactly its types)."""
+_frame_poses_unchecked = unchecked(frame_poses)
+"""compiled_tree.frame_poses without numba's type dispatch (``LinkFrames.at_many`` passes
+exactly its types)."""
+
+
 def pose_rows(poses: Sequence[np.ndarray]) -> np.ndarray:
     """(k, 7) rows of translation (m) and quaternion (x, y, z, w), w >= 0, of k poses (4x4, m)."""
     stacked = np.ascontiguousarray(np.reshape(poses, (-1, 4, 4)), dtype=np.float64)
@@ -242,14 +250,26 @@ def composed_rows(first: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return pose_rows(pose_matrices(first) @ pose_matrices(rows))
 
 
-class FramesBatch(list):
-    """The samples of :meth:`LinkFrames.at_many` (a list of :class:`SampleFrames`) and their
-    rows as one array: ``poses`` (N, moving + end effectors, 7), each sample's
-    ``link_poses`` then its ``ee``; ``moving`` the number of moving links."""
+class FramesBatch(Sequence[SampleFrames]):
+    """The kinematics of :meth:`LinkFrames.at_many` as one array, ``poses`` (N, moving + end
+    effectors, 7): each sample's ``link_poses`` then its ``ee`` (rows of translation m and
+    quaternion (x, y, z, w) in the frames of :class:`SampleFrames`); ``moving`` the number of
+    moving links. Item k is sample k's :class:`SampleFrames` (views of its rows), made only
+    when asked for."""
 
-    def __init__(self, samples: list[SampleFrames], poses: np.ndarray, moving: int) -> None:
-        super().__init__(samples)
-        self.poses, self.moving = poses, moving
+    def __init__(self, poses: np.ndarray, edges: tuple[tuple[str, str], ...], ee_count: int, ee_index: int) -> None:
+        self.poses, self.moving, self.edges, self.ee_count, self.ee_index = poses, len(edges), edges, ee_count, \
+            ee_index
+
+    def __len__(self) -> int:
+        return len(self.poses)
+
+    def __getitem__(self, k: int | slice) -> SampleFrames | FramesBatch:
+        """Sample k's :class:`SampleFrames`, or for a slice the batch of those samples."""
+        if isinstance(k, slice):
+            return FramesBatch(self.poses[k], self.edges, self.ee_count, self.ee_index)
+        rows = self.poses[k]
+        return SampleFrames(self.edges, rows[:self.moving], rows[self.moving:], self.ee_count, self.ee_index)
 
 
 def ee_rows(samples: FramesBatch, base: np.ndarray | None = None) -> np.ndarray:
@@ -330,14 +350,14 @@ class LinkFrames:
         (compiled_tree.frame_poses: Pinocchio's products in its order, so the same numbers)
         where the model has a compiled form, else row by row."""
         if self._tree is None:
-            samples = [self.at(row) for row in q]
-            poses = np.array([np.vstack((sample.link_poses, sample.ee)) for sample in samples])
-            return FramesBatch(samples, poses.reshape(len(samples), len(self._parents), 7), len(self._edges))
-        q = np.ascontiguousarray(q, dtype=float)
-        placements = np.empty((len(q), len(self._frames), 4, 4))
-        frame_poses(*self._tree, q, *self._placements, self._work, placements)
-        poses = np.empty((len(q), len(self._parents), 7))
-        _relative_pose_batch(placements, self._parents, self._children, poses)
-        moving, count = len(self._edges), len(self.ee_links)
-        return FramesBatch([SampleFrames(self._edges, rows[:moving], rows[moving:], count, self._ee_index)
-                            for rows in poses], poses, moving)
+            poses = np.array([np.vstack((sample.link_poses, sample.ee)) for sample in map(self.at, q)])
+            poses = poses.reshape(len(q), len(self._parents), 7)
+        else:
+            q = np.ascontiguousarray(q, dtype=float)
+            if q.ndim != 2 or q.shape[1] != self.robot.nq:      # the compiled loops read it unchecked
+                raise UserInputError(f"at_many: q needs shape (N, nq = {self.robot.nq}); got {q.shape}")
+            placements = np.empty((len(q), len(self._frames), 4, 4))
+            _frame_poses_unchecked(*self._tree, q, *self._placements, self._work, placements)
+            poses = np.empty((len(q), len(self._parents), 7))
+            _relative_pose_batch_unchecked(placements, self._parents, self._children, poses)
+        return FramesBatch(poses, self._edges, len(self.ee_links), self._ee_index)

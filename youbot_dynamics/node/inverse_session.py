@@ -47,8 +47,8 @@ JointStateFields = tuple[Sequence[str], Sequence[float], Sequence[float], int, i
 """One /joint_states sample as the node hands it over: (names, position, velocity,
 stamp_ns, received_ns)."""
 Built = list[tuple[Outputs, SampleFrames | None, np.ndarray | None]]
-"""Each torque's messages and, when built, its sample's kinematics; with a moving base, its
-rows (2, 7) of odom -> base_footprint and odom -> world."""
+"""Each torque's messages and, when built and recorded (Rerun), its sample's kinematics; with
+a moving base, its rows (2, 7) of odom -> base_footprint and odom -> world."""
 IDENTITY_ROW = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
 """The row (translation m, quaternion x, y, z, w) of the identity: odom -> world in inverse mode."""
 _WALL_OFFSET_NS = time.time_ns() - time.monotonic_ns()
@@ -465,7 +465,7 @@ class InverseSession(Session):
                       base: np.ndarray | None = None) -> Built:
         """/computed_torques, /ee_pose(s) and /tf of N torques (stamps int ns; rows of q, v,
         tau; ``base`` (N, 2, 7) a moving base's rows of :meth:`_base_rows`), those wanted, with
-        each sample's kinematics (None when nothing takes it) and base rows. Raises
+        each sample's kinematics (None unless Rerun records the samples) and base rows. Raises
         MessageFieldError."""
         wanted, count = self.wanted, len(stamps)
         if not count:
@@ -480,7 +480,8 @@ class InverseSession(Session):
             if "/tf" in wanted:
                 entries.append(self.frames.tf_entry(count, samples, None, base))
         filled = self._batches.fill(stamps, entries)
-        return [(filled[k], None if samples is None else samples[k], None if base is None else base[k])
+        kept = samples if samples is not None and self.recorder.samples else None     # only Rerun reads them
+        return [(filled[k], None if kept is None else kept[k], None if base is None else base[k])
                 for k in range(count)]
 
     def _joint_state(self, stamp_ns: int, values: np.ndarray) -> object:
