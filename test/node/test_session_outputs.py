@@ -10,6 +10,8 @@ import pinocchio as pin
 import pytest
 from rosbags.highlevel import AnyReader
 
+from youbot_dynamics.dynamics.mobile.mecanum import base_twist
+from youbot_dynamics.dynamics.mobile.odometry import odometry_step
 from youbot_dynamics.node import frames
 from youbot_dynamics.node.simulate import SimulationSession
 from youbot_dynamics.scene.schema import load_scene
@@ -138,3 +140,29 @@ def test_moving_base_odometry_advances_once_per_sample() -> None:
     assert [row[0] for row in plain] == [k * 2_000_000 for k in range(30)]
     assert plain[-1][1] != plain[0][1]      # the base moved: a doubled step would change x
     assert flipped == plain
+
+
+def test_moving_base_outputs_follow_the_odometry_step_and_the_slip_formula() -> None:
+    """Each sample's /odom (the block's batch fill, each sample's twist computed once) against
+    the reference path: odometry_step of the previous sample's wheel speeds from
+    /joint_states held over the samples' times (s, from their stamps), the twist base_twist
+    of the sample's own, to the bit; base.slip in
+    /diagnostics the largest hub speed of the twist's difference from the true twist
+    (/base_pose_ground_truth) over the samples published since the last report."""
+    session = SimulationSession(load_scene("mobile_pick"), RATE, samples_per_solve=10)
+    mecanum, wheels = session.moving_base.base.mecanum, session.moving_base.base.wheels
+    pose, speeds_before, slip = session.moving_base.odometry.pose0.copy(), None, 0.0
+    for k in range(25):
+        sample = dict(session.step())
+        speeds = np.array(sample["/joint_states"].velocity)[:len(session.robot.joint_names)][wheels]
+        if speeds_before is not None:
+            pose = odometry_step(mecanum, pose, speeds_before, k * session.step_ns / 1e9 - (k - 1) * session.step_ns / 1e9)
+        twist, speeds_before = base_twist(mecanum, speeds), speeds
+        odom, truth = sample["/odom"].twist.twist, sample["/base_pose_ground_truth"].twist.twist
+        assert (odom.linear.x, odom.linear.y, odom.angular.z) == tuple(twist)
+        position = sample["/odom"].pose.pose.position
+        assert (position.x, position.y) == (pose[0], pose[1])
+        difference = twist - np.array([truth.linear.x, truth.linear.y, truth.angular.z])
+        slip = max(slip, float(np.max(np.linalg.norm(mecanum.hub_velocities(difference), axis=1))))
+    assert slip > 0.0                                   # the rollers creep as the base drives
+    assert session.moving_base.report()[1]["base.slip"] == slip

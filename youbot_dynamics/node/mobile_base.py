@@ -34,13 +34,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from youbot_dynamics.dynamics.mobile.mecanum import MecanumBase, base_twist
-from youbot_dynamics.dynamics.mobile.odometry import odometry_step
+from youbot_dynamics.dynamics.mobile.odometry import se2_step
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.io import messages
+from youbot_dynamics.io.cdr_group import Entry
 from youbot_dynamics.io.cdr_template import Refilled, not_covariance
 from youbot_dynamics.node.commands import InputCounters, InputRejected
 from youbot_dynamics.node.frames import ODOM_FRAME, WORLD_FRAME, planar_row
@@ -78,35 +80,45 @@ class WheelOdometry:
                  max_gap: float = math.inf) -> None:
         self.mecanum, self.pose0, self.max_gap = mecanum, np.array(pose0, dtype=float), float(max_gap)
         self.odom_frame, self.child_frame = prefix + ODOM_FRAME, prefix + base_link
-        self._odom = Refilled(not_covariance)
+        self.odom_messages = Refilled(not_covariance)
+        """/odom's refilled template."""
         self.reset()
 
     def reset(self) -> None:
         """Back to the initial pose, no sample seen."""
         self.pose = self.pose0.copy()
+        #: the last sample: (t s, its base twist (vx, vy, wz) from its wheel speeds)
         self.last: tuple[float, np.ndarray] | None = None
 
     def outputs(self, stamp_ns: int, t: float, speeds: np.ndarray) -> tuple[object, np.ndarray]:
         """(/odom, the row (7,) of odom -> base_footprint: translation m, quaternion x, y, z,
         w) of a sample at time t (s) with wheel speeds ``speeds``; advances the pose
         (``pose``: x, y, yaw in odom) by the previous sample's speeds."""
-        self.pose, self.last = self._advanced(self.pose, self.last, t, speeds)
-        x, y, yaw = self.pose
-        twist = base_twist(self.mecanum, speeds)
-        row = planar_row(x, y, yaw)
-        odom = self._odom(stamp_ns, odometry_values(row, (twist[0], twist[1], twist[2])), lambda stamp, values:
-                          messages.odometry(stamp, self.odom_frame, self.child_frame, values[:3], values[3:7],
-                                            values[7:], POSE_COVARIANCE, TWIST_COVARIANCE))
+        twist, row = self.advance(t, speeds)
+        odom = self.odom_messages(stamp_ns, odometry_values(row, (twist[0], twist[1], twist[2])), self.build_odom)
         return odom, row
+
+    def advance(self, t: float, speeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(the sample's base twist (vx, vy, wz) from its wheel ``speeds``, the row (7,) of
+        odom -> base_footprint) of a sample at time t (s); advances the pose by the previous
+        sample's twist (see :meth:`outputs`)."""
+        self.pose, self.last = self._advanced(self.pose, self.last, t, speeds)
+        return self.last[1], planar_row(*self.pose)
+
+    def build_odom(self, stamp_ns: int, values: np.ndarray) -> object:
+        """/odom at ``stamp_ns`` from its refilled ``values`` (:func:`odometry_values`)."""
+        return messages.odometry(stamp_ns, self.odom_frame, self.child_frame, values[:3], values[3:7], values[7:],
+                                 POSE_COVARIANCE, TWIST_COVARIANCE)
 
     def _advanced(self, pose: np.ndarray, last: tuple[float, np.ndarray] | None, t: float, speeds: np.ndarray
                   ) -> tuple[np.ndarray, tuple[float, np.ndarray]]:
         """(pose, last sample) after a sample at t (s) with wheel ``speeds``: ``pose`` (x, y,
-        yaw) moved by the ``last`` sample's speeds held since its time, unless the stream
-        broke between them (see the class)."""
-        if last is not None and 0.0 <= t - last[0] <= self.max_gap:
-            pose = odometry_step(self.mecanum, pose, last[1], t - last[0])
-        return pose, (t, np.array(speeds, dtype=float))
+        yaw) moved by the ``last`` sample's twist held since its time, unless the stream
+        broke between them (see the class): :func:`~youbot_dynamics.dynamics.mobile.odometry
+        .odometry_step`'s arithmetic, each sample's twist computed once."""
+        if last is not None and 0.0 <= t - last[0] <= self.max_gap:  # t - last[0] finite: times of stamps
+            pose = se2_step(pose, last[1], t - last[0])
+        return pose, (t, base_twist(self.mecanum, np.array(speeds, dtype=float)))
 
     def preview(self, times: Sequence[float], speeds: Sequence[np.ndarray]) -> np.ndarray:
         """Rows (k, 7) of odom -> base_footprint that :meth:`outputs` would give for the next k
@@ -117,6 +129,19 @@ class WheelOdometry:
             pose, last = self._advanced(pose, last, t, wheel_speeds)
             rows[k] = planar_row(*pose)
         return rows
+
+
+@dataclass(frozen=True)
+class BaseSample:
+    """A moving base's outputs of one sample (:meth:`MobileBase.sample`): the refilled values
+    (:func:`odometry_values`) of /odom and of /base_pose_ground_truth, the rows (2, 7) of
+    odom -> base_footprint and odom -> world, and the sample's slip (m/s, the largest hub
+    speed of the difference between the /odom twist and the true one)."""
+
+    odom: np.ndarray
+    truth: np.ndarray
+    rows: np.ndarray
+    slip: float
 
 
 class MobileBase:
@@ -173,28 +198,42 @@ class MobileBase:
         return self.ramp
 
     # ---- outputs ---------------------------------------------------------------------------
-    def outputs(self, stamp_ns: int, t: float, snapshot: Snapshot) -> tuple[list[tuple[str, object]], np.ndarray]:
-        """(/odom and /base_pose_ground_truth, the rows (2, 7) of odom -> base_footprint and
-        odom -> world) of the sample at simulated time t (s); advances the odometry by the
-        previous sample's wheel speeds (call once per sample, in order; :meth:`track_slip`
-        when the sample is published). odom -> world is T_odom_base(odometry)
-        T_world_base(true)^-1, a planar pose: yaw e - yaw t, p_e - R(yaw e - yaw t) p_t."""
-        odom, row = self.odometry.outputs(stamp_ns, t, snapshot.v[self.base.wheels])
+    def sample(self, t: float, snapshot: Snapshot) -> BaseSample:
+        """The outputs of the sample at simulated time t (s) (:class:`BaseSample`); advances
+        the odometry by the previous sample's wheel speeds (call once per sample, in order;
+        :meth:`track_slip` when the sample is published). odom -> world is
+        T_odom_base(odometry) T_world_base(true)^-1, a planar pose: yaw e - yaw t,
+        p_e - R(yaw e - yaw t) p_t."""
+        twist, row = self.odometry.advance(t, snapshot.v[self.base.wheels])
         x, y, yaw = self.odometry.pose
         tx, ty, tyaw, vx, vy, wz = snapshot.base
-        truth = self._truth(stamp_ns, odometry_values(planar_row(tx, ty, tyaw), (vx, vy, wz)), lambda stamp, values:
-                            messages.odometry(stamp, self.world_frame, self.odometry.child_frame, values[:3],
-                                              values[3:7], values[7:], np.zeros(36), np.zeros(36)))
         drift = yaw - tyaw
         c, s = math.cos(drift), math.sin(drift)
         rows = np.array([row, planar_row(x - (c * tx - s * ty), y - (s * tx + c * ty), drift)])
-        return [("/odom", odom), ("/base_pose_ground_truth", truth)], rows
+        slip = float(np.max(np.linalg.norm(self.base.mecanum.hub_velocities(twist - snapshot.base[3:]), axis=1)))
+        return BaseSample(odometry_values(row, (twist[0], twist[1], twist[2])),
+                          odometry_values(planar_row(tx, ty, tyaw), (vx, vy, wz)), rows, slip)
 
-    def track_slip(self, snapshot: Snapshot) -> None:
-        """Count a published sample's slip in ``base.slip``: the largest hub speed of the
-        difference between the wheel speeds' twist and the true one."""
-        difference = base_twist(self.base.mecanum, snapshot.v[self.base.wheels]) - snapshot.base[3:]
-        self.slip = max(self.slip, float(np.max(np.linalg.norm(self.base.mecanum.hub_velocities(difference), axis=1))))
+    def entries(self, samples: Sequence[BaseSample], wanted: frozenset[str] | set[str]) -> list[Entry]:
+        """/odom and /base_pose_ground_truth of N ``samples``, those in ``wanted``, as
+        :data:`~youbot_dynamics.io.cdr_group.Entry`."""
+        entries: list[Entry] = []
+        if "/odom" in wanted:
+            entries.append(("/odom", self.odometry.odom_messages, np.array([sample.odom for sample in samples]),
+                            self.odometry.build_odom))
+        if "/base_pose_ground_truth" in wanted:
+            entries.append(("/base_pose_ground_truth", self._truth, np.array([sample.truth for sample in samples]),
+                            self._build_truth))
+        return entries
+
+    def _build_truth(self, stamp_ns: int, values: np.ndarray) -> object:
+        """/base_pose_ground_truth at ``stamp_ns`` from its refilled ``values``."""
+        return messages.odometry(stamp_ns, self.world_frame, self.odometry.child_frame, values[:3], values[3:7],
+                                 values[7:], np.zeros(36), np.zeros(36))
+
+    def track_slip(self, sample: BaseSample) -> None:
+        """Count a published sample's slip in ``base.slip`` (the largest since the report)."""
+        self.slip = max(self.slip, sample.slip)
 
     def report(self) -> tuple[str, dict[str, float]]:
         """(level, /diagnostics values) of the base since the previous report: ``base.slip``

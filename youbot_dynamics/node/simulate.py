@@ -34,7 +34,7 @@ from youbot_dynamics.node.commands import (DEFAULT_EFFORT_LIMIT, EffortCommands,
                                            follow, joint_trajectory, node_time_of_stamp)
 from youbot_dynamics.node.frames import FramesBatch, ee_rows
 from youbot_dynamics.node.interface import Outputs
-from youbot_dynamics.node.mobile_base import MobileBase
+from youbot_dynamics.node.mobile_base import BaseSample, MobileBase
 from youbot_dynamics.node.sensors import SensorMessages
 from youbot_dynamics.node.session import Session
 from youbot_dynamics.scene.schema import Scene
@@ -211,16 +211,16 @@ class SimulationSession(Session):
         return self._outputs(self._pending.pop(), prebuilt if prebuilt is not None and prebuilt[0] == self.wanted
                              else None, based)
 
-    def _base_outputs(self, snapshots: list[Snapshot], first: int) -> list[tuple[Outputs, np.ndarray]]:
-        """A moving base's outputs (/odom and /base_pose_ground_truth, rows (2, 7)) of samples
-        ``first``, ``first + 1``, ... (``snapshots``, in time order), advancing its odometry
-        once per sample in order ([] for a fixed base)."""
+    def _base_outputs(self, snapshots: list[Snapshot], first: int) -> list[BaseSample]:
+        """A moving base's outputs (:class:`~youbot_dynamics.node.mobile_base.BaseSample`) of
+        samples ``first``, ``first + 1``, ... (``snapshots``, in time order), advancing its
+        odometry once per sample in order ([] for a fixed base)."""
         if self.moving_base is None:
             return []
-        return [self.moving_base.outputs(self.epoch_ns + k * self.step_ns, k * self.step_ns / NS_PER_S, snapshot)
+        return [self.moving_base.sample(k * self.step_ns / NS_PER_S, snapshot)
                 for k, snapshot in enumerate(snapshots, start=first)]
 
-    def _block(self, snapshots: list[Snapshot], based: list[tuple[Outputs, np.ndarray]]) -> list[tuple]:
+    def _block(self, snapshots: list[Snapshot], based: list[BaseSample]) -> list[tuple]:
         """The messages of the next samples (``snapshots``, in time order; ``based``: a moving
         base's outputs of each) built at once, in pop order, each with the ``wanted`` they
         were built for; none when a message would be invalid (then each is built at its own
@@ -233,37 +233,29 @@ class SimulationSession(Session):
         return [(self.wanted, *sample) for sample in reversed(built)]
 
     def _sample_messages(self, snapshots: Sequence[Snapshot], stamps: Sequence[int],
-                         based: Sequence[tuple[Outputs, np.ndarray]]
+                         based: Sequence[BaseSample]
                          ) -> list[tuple[Outputs, np.ndarray | None, np.ndarray | None, np.ndarray | None]]:
         """The messages of the topics in ``wanted`` of N samples at ``stamps`` (ns), built
         together, with each sample's end-effector row for the Rerun sample (the samples'
         kinematics in one pass feed /tf, /ee_pose and it; none when nothing takes them) and
         its free bodies' rows. A moving base's outputs (``based``, per sample: see
-        :meth:`_base_outputs`) add /odom and /base_pose_ground_truth; their rows (odom ->
-        base_footprint, odom -> world) place /ee_pose(s) and go on /tf. Raises
+        :meth:`_base_outputs`) add /odom and /base_pose_ground_truth (before /tf); their rows
+        (odom -> base_footprint, odom -> world) place /ee_pose(s) and go on /tf. Raises
         MessageFieldError."""
         bodies = self.frames.body_poses([snapshot.bodies for snapshot in snapshots]) if self.frames.body_shapes \
             else None
         samples = self.frames.links.at_many(np.array([snapshot.q for snapshot in snapshots])) \
             if self.frames.has_robot and self.kinematics_wanted else None
-        base = np.array([rows for _, rows in based]) if based else None
+        base = np.array([sample.rows for sample in based]) if based else None
         entries = self._motion_entries(stamps, snapshots, samples, bodies, base)
+        if based:
+            entries += self.moving_base.entries(based, self.wanted)
         if "/tf" in self.wanted:
             entries.append(self.frames.tf_entry(len(stamps), samples, bodies, base))
-        per_sample = self._per_sample(self._batches.fill(stamps, entries), based)
+        per_sample = self._batches.fill(stamps, entries)
         ee = None if samples is None else ee_rows(samples, base)[:, samples[0].ee_index]
         return [(outputs, None if ee is None else ee[k], None if bodies is None else bodies[k],
                  None if base is None else base[k]) for k, outputs in enumerate(per_sample)]
-
-    def _per_sample(self, built: list[list[tuple[str, object]]], based: Sequence[tuple[Outputs, np.ndarray]]
-                    ) -> list[Outputs]:
-        """Each sample's outputs in topic order from the (topic, message) lists ``built`` (one
-        per sample, /tf last if wanted): those before /tf, a moving base's (``based``), then
-        /tf."""
-        for outputs, (odometry, _) in zip(built, based):
-            tf = [outputs.pop()] if "/tf" in self.wanted else []
-            outputs += [(topic, message) for topic, message in odometry if topic in self.wanted] + tf
-        return built
 
     def _motion_entries(self, stamps: Sequence[int], snapshots: Sequence[Snapshot], samples: FramesBatch | None,
                         bodies: np.ndarray | None, base: np.ndarray | None) -> list[Entry]:
@@ -286,8 +278,7 @@ class SimulationSession(Session):
             entries.append(self.frames.free_body_markers_entry([s.bodies for s in snapshots]))
         return entries + self._sensors.entries(snapshots, wanted)
 
-    def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None, based: tuple[Outputs, np.ndarray] | None
-                 ) -> Outputs:
+    def _outputs(self, snapshot: Snapshot, prebuilt: tuple | None, based: BaseSample | None) -> Outputs:
         """The sample's messages (``prebuilt``: (wanted, messages, end-effector row, body rows,
         base rows) of :meth:`_block`, or built now; ``based``: a moving base's outputs of the
         sample), logged (the Rerun recording's end effector in the root frame, or in odom
@@ -297,7 +288,7 @@ class SimulationSession(Session):
         if self.simulator.conservative:
             self.energy_error = max(self.energy_error, abs(snapshot.energy - self.energy0))
         if self.moving_base is not None:
-            self.moving_base.track_slip(snapshot)
+            self.moving_base.track_slip(based)
         try:
             outputs, ee, bodies, base = prebuilt[1:] if prebuilt is not None else \
                 self._sample_messages([snapshot], [stamp], [based] if based is not None else [])[0]

@@ -187,8 +187,8 @@ class ConstraintStepping:
         self.events: list[ContactEvent] = []
         self.deepest, self.deepest_allowed = 0.0, deepest_allowed
         self.t_previous, self.x_previous = self.t, self.x
-        #: with ``record``: per output time, the last step's (report, acceleration, h)
-        self.records: dict[float, tuple] | None = {} if record else None
+        #: with ``record``, per output time: the last step's (report, acceleration, h); the next step's robot torque
+        self.records, self.torques = ({}, {}) if record else (None, None)
         # what every step reads, looked up once: where the plant's q and v go in x (packed
         # before each controller call), the robot's joints in the plant's v, the base's wheels
         root, nv = model.plant.root_nq, model.plant.nv
@@ -242,17 +242,20 @@ class ConstraintStepping:
         as the unfolded state's."""
         return self.model.configuration(x) if self._configuration is None else self._configuration
 
-    def _generalised_force(self, h: float) -> np.ndarray:
+    def _generalised_force(self, h: float, keep: bool = False) -> np.ndarray:
         """The plant's applied generalised force (nv; N, N m) over the next step of h (s): the
         robot's torque less its joint friction (explicit) and a dynamic base's floor forces;
         the base's PI integral terms move on by explicit Euler. Nothing acts on a plant of
-        free bodies alone: the same zeros every step, read-only (a write into them raises)."""
+        free bodies alone: the same zeros every step, read-only (a write into them raises).
+        ``keep``: the robot's torque kept in ``torques`` at the step's start time."""
         if self._unforced:
             return self._no_force
         tau = np.zeros(self._nv)
         if self._moving:
             joints, friction = self._joints, self.model.friction
             tau[joints] = self.torque(self.t, self._pack_robot())
+            if keep:
+                self.torques[self.t] = tau[joints].copy()
             if friction is not None:
                 friction.add_torque(tau[joints], self.v[joints], None, -1.0)
         base = self.model.base
@@ -292,7 +295,7 @@ class ConstraintStepping:
         start, h = self.t, (t_target - self.t) / count
         self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
         for i in range(1, count + 1):
-            tau = self._generalised_force(h)
+            tau = self._generalised_force(h, i == 1 and self.torques is not None)
             v_before = self.v
             self.q, self.v, report = stepper.step(data, self.q, self.v, tau, h)
             self.t = t_target if i == count else start + i * h
@@ -346,6 +349,7 @@ class _Outcome:
     touching: frozenset[str]
     held: HeldTorque | None = None
     records: dict[float, tuple] | None = None
+    torques: dict[float, np.ndarray] | None = None  # ConstraintStepping.torques
     #: whether the solution's states are the outputs already (charts folded, nothing imposed)
     folded: bool = False
     attitude_events: dict[str, int] = dataclasses.field(default_factory=dict)
@@ -482,7 +486,7 @@ def _step_constraints(model: SimModel, state: SimState, x0: np.ndarray, t_eval: 
     solution.stats.events = len(stepping.events)
     solution.stats.wall_time = time.perf_counter() - start
     return _Outcome(solution, stepping.events, stepping.deepest, stepping.touching, records=stepping.records,
-                    folded=True)
+                    torques=stepping.torques, folded=True)
 
 
 # ---- public entry points ---------------------------------------------------------------------
@@ -509,10 +513,19 @@ def advance(model: SimModel, state: SimState, times: Sequence[float] | np.ndarra
     snapshots = []
     for t, x in zip(outcome.solution.t[1:], outcome.solution.x[1:]):
         state.t, state.x = float(t), x.copy()
-        state.tau = np.array(outcome.held.value if outcome.held is not None else
-                             robot_torque(model, state.reference, state.t, x, command), dtype=float)
+        state.tau = _output_torque(model, state, outcome, command)
         snapshots.append(snapshot(model, state, sensors, outcome.records and outcome.records.get(state.t)))
     return snapshots
+
+
+def _output_torque(model: SimModel, state: SimState, outcome: _Outcome, command: np.ndarray | None) -> np.ndarray:
+    """The robot's applied torque (N m, a new array) at ``state``, an output of ``outcome``: a
+    Python controller's held torque, the constraint stepper's for its step from there (the
+    same call on the same numbers), else :func:`robot_torque`."""
+    kept = None if outcome.torques is None or outcome.held is not None else outcome.torques.get(state.t)
+    return kept if kept is not None else np.array(outcome.held.value if outcome.held is not None else
+                                                  robot_torque(model, state.reference, state.t, state.x, command),
+                                                  dtype=float)
 
 
 def _record(state: SimState, outcome: _Outcome) -> None:
