@@ -32,9 +32,10 @@ from youbot_dynamics.dynamics.contact_stepper import StepReport, contact_rotatio
 from youbot_dynamics.model.robot import Robot, TreeJoint
 
 PointForce = tuple[int, np.ndarray, np.ndarray]
+"""(pair index, point (world, m), force on the pair's second geometry (world, N))."""
 _NO_ROTATION = np.zeros(3)
 """The angular part of gravity's spatial acceleration (rad/s^2: none)."""
-"""(pair index, point (world, m), force on the pair's second geometry (world, N))."""
+_NO_ROTATION.setflags(write=False)
 
 
 @dataclass(frozen=True)
