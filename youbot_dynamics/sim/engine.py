@@ -28,6 +28,7 @@ commanded effort) a stored energy that grows by more than ``integrator.energy_to
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -56,6 +57,7 @@ from youbot_dynamics.sim.sensors import contact_forces
 from youbot_dynamics.sim.state import ContactEvent, SimState
 
 Progress = Callable[[float], None]
+TorqueAndRate = tuple[np.ndarray, np.ndarray | None]  #: joint torque (N m), a base's PI integral rate (N m/s) or None
 
 
 # ---- state ------------------------------------------------------------------------------------
@@ -96,22 +98,26 @@ def initial_state(model: SimModel, q: np.ndarray | None = None, v: np.ndarray | 
 def robot_torque(model: SimModel, reference, t: float, x: np.ndarray, command: np.ndarray | None) -> np.ndarray:
     """The robot's applied joint torque (N m) at (t, x): the command if given, else the
     scene's controller tracking ``reference``."""
-    if command is not None:
-        return command
+    return command if command is not None else controlled_torque(model, reference, t, x)[0]
+
+
+def controlled_torque(model: SimModel, reference, t: float, x: np.ndarray) -> TorqueAndRate:
+    """(joint torque (N m) of the scene's controller tracking ``reference`` at (t, x), a moving
+    base's PI integral rate dI/dt (N m/s) from the same wheel-loop call, or None)."""
     tau = model.control.controller.torque(t, x[model.block("q")], x[model.block("v")], reference)
     if model.base is None:
-        return tau
+        return tau, None
     base = model.base
     tau = np.array(tau, dtype=float)
-    tau[base.wheels] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[model.block("wheel_i")],
-                                          reference.base_twist)[0]
-    return tau
+    tau[base.wheels], rate = base.wheel_torques(t, x[model.block("v")][base.wheels], x[model.block("wheel_i")],
+                                                reference.base_twist)
+    return tau, rate
 
 
 def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float = 0.0,
-               twist: TwistRamp | None = None) -> np.ndarray:
-    """dx/dt at state x and time t (s) under robot joint torques tau (N m, N) and a moving
-    base's ``twist`` command (None: its path)."""
+               twist: TwistRamp | None = None, integral_rate: np.ndarray | None = None) -> np.ndarray:
+    """dx/dt at state x and time t (s) under robot joint torques tau (N m, N), a moving base's
+    ``twist`` command (None: its path) and PI ``integral_rate`` (N m/s; None: the base asked)."""
     if model.robot_alone:
         return model.robot_derivative(data, x, tau)
     motion = model.base_motion(t, twist)
@@ -133,7 +139,8 @@ def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float =
         dx[model.block("base")] = base.pose_rate(x[model.block("base")], x[model.block("base_v")])
         integral = model.block("wheel_i")
         if integral.stop > integral.start:
-            dx[integral] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[integral], twist)[1]
+            dx[integral] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[integral], twist)[1] \
+                if integral_rate is None else integral_rate
     return dx
 
 
@@ -176,7 +183,7 @@ class ConstraintStepping:
     its pose (:meth:`SimModel.recentred`), the plant configuration it was folded from kept
     for the energy ledger (:meth:`output_configuration`)."""
 
-    def __init__(self, model: SimModel, state: SimState, torque: Callable[[float, np.ndarray], np.ndarray],
+    def __init__(self, model: SimModel, state: SimState, torque: Callable[[float, np.ndarray], TorqueAndRate],
                  deepest_allowed: float, record: bool = False) -> None:
         self.model, self.data, self.torque, self.twist = model, state.data, torque, state.reference.base_twist
         self.t, self.q, self.v = state.t, model.configuration(state.x), model.velocity(state.x).copy()
@@ -249,10 +256,10 @@ class ConstraintStepping:
         free bodies alone: the same zeros every step, read-only (a write into them raises)."""
         if self._unforced:
             return self._no_force
-        tau = np.zeros(self._nv)
+        tau, rate = np.zeros(self._nv), None
         if self._moving:
             joints, friction = self._joints, self.model.friction
-            tau[joints] = self.torque(self.t, self._pack_robot())
+            tau[joints], rate = self.torque(self.t, self._pack_robot())
             if friction is not None:
                 friction.add_torque(tau[joints], self.v[joints], None, -1.0)
         base = self.model.base
@@ -263,8 +270,8 @@ class ConstraintStepping:
             except TipOverError as error:
                 raise DivergenceError(self.t, model.integrator.method, h, f"the base tips over: {error}") from None
             if integral.stop > integral.start:
-                self.x[integral] += h * base.wheel_torques(self.t, self.v[self._wheels], self.x[integral],
-                                                           self.twist)[1]
+                self.x[integral] += h * (base.wheel_torques(self.t, self.v[self._wheels], self.x[integral], self.twist)[1]
+                                         if rate is None else rate)
         return tau
 
     def _account(self, report, h: float) -> None:
@@ -353,31 +360,37 @@ class _Outcome:
 
 
 def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None = None,
-                    held: HeldTorque | None = None) -> tuple[Callable, Callable]:
-    """(torque(t, x), rhs(t, x)): the robot's applied torque (N m) and dx/dt, under a held
-    ``command``, a Python controller's ``held`` torque or the scene's controller tracking
-    ``reference``; each chosen once here, so the integrators' calls take the shortest path
-    (for a robot alone: the controller and one ABA with friction; under computed torque the
-    two fused, :meth:`~youbot_dynamics.sim.model.SimModel.computed_torque_derivative`)."""
+                    held: HeldTorque | None = None) -> tuple[Callable[[float, np.ndarray], TorqueAndRate], Callable]:
+    """(torque(t, x), rhs(t, x)): the robot's applied torque (N m) with a moving base's PI integral
+    rate from the same call (:func:`controlled_torque`; None: the base asked) and dx/dt, under a
+    held ``command``, a Python controller's ``held`` torque or the scene's controller tracking
+    ``reference``; each chosen once here, so the integrators' calls take the shortest path (a robot
+    alone: the controller and one ABA with friction, fused under computed torque: SimModel's)."""
     if held is not None:
-        def torque(t: float, x: np.ndarray) -> np.ndarray:
+        def applied(t: float, x: np.ndarray) -> np.ndarray:
             return held.value
     elif command is not None:
-        def torque(t: float, x: np.ndarray) -> np.ndarray:
+        def applied(t: float, x: np.ndarray) -> np.ndarray:
             return command
     elif model.base is None:
         controller, q_block, v_block = model.control.controller, model.slices["q"], model.slices["v"]
 
-        def torque(t: float, x: np.ndarray) -> np.ndarray:
+        def applied(t: float, x: np.ndarray) -> np.ndarray:
             return controller.torque(t, x[q_block], x[v_block], reference)
     else:
-        def torque(t: float, x: np.ndarray) -> np.ndarray:
-            return robot_torque(model, reference, t, x, None)
+        def rhs(t: float, x: np.ndarray) -> np.ndarray:
+            tau, rate = controlled_torque(model, reference, t, x)
+            return derivative(model, data, x, tau, t, reference.base_twist, rate)
+        return functools.partial(controlled_torque, model, reference), rhs
+
+    def torque(t: float, x: np.ndarray) -> TorqueAndRate:
+        return applied(t, x), None
+
     if model.robot_alone:
         robot_derivative = model.robot_derivative
 
         def rhs(t: float, x: np.ndarray) -> np.ndarray:
-            return robot_derivative(data, x, torque(t, x))
+            return robot_derivative(data, x, applied(t, x))
 
         if held is None and command is None:
             rhs = model.computed_torque_derivative(data, reference, rhs) or rhs
@@ -386,7 +399,7 @@ def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None
             rhs.compiled_steps = loop
     else:
         def rhs(t: float, x: np.ndarray) -> np.ndarray:
-            return derivative(model, data, x, torque(t, x), t, reference.base_twist)
+            return derivative(model, data, x, applied(t, x), t, reference.base_twist)
     return torque, rhs
 
 
