@@ -125,3 +125,22 @@ def test_compiled_law_is_numpys_formula_bit_for_bit():
         assert np.array_equal(rate, pi.ki * error + (expected - raw) / pi.tracking_time)
         saturated += int(np.sum(expected != raw))
     assert 0 < saturated < 8000  # both branches of the clip are exercised
+
+
+def test_torques_take_lists_strided_and_readonly_arrays_and_refuse_a_matrix():
+    """torques calls the compiled law without numba's dispatch: speeds and integral terms as
+    a list, a strided view or a read-only array give the float64 vector's result, bit for
+    bit; a wrong size or a matrix is an error naming it (not read as a vector)."""
+    pi, rng = WheelSpeedPI(BASE, 2.0, 30.0, 4.0), np.random.default_rng(8)
+    twist, speeds, integral = rng.normal(size=3), rng.normal(size=4) * 20.0, rng.normal(size=4) * 5.0
+    expected = pi.torques(twist, speeds, integral)
+    strided = np.repeat(integral, 2)[::2]
+    frozen = speeds.copy()
+    frozen.setflags(write=False)
+    for s, i in ((speeds.tolist(), integral.tolist()), (frozen, strided)):
+        got = pi.torques(twist.tolist(), s, i)
+        assert all(np.array_equal(a, b) for a, b in zip(got, expected))
+    with pytest.raises(ValueError, match="vectors"):
+        pi.torques(twist, speeds[None, :], integral)
+    with pytest.raises(ValueError, match="one set point"):
+        pi.torques(twist, speeds[:3], integral)

@@ -27,6 +27,7 @@ from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.integrators import DivergenceError
 from youbot_dynamics.scene.schema import Scene, SceneError, load_scene, scene_dir
 from youbot_dynamics.sim.build import compile
+from youbot_dynamics.sim import engine
 from youbot_dynamics.sim.engine import advance, initial_state, robot_torque, run
 from youbot_dynamics.sim.trajectory import PointToPointTrajectory
 
@@ -233,18 +234,42 @@ def test_a_tipping_base_is_divergence_with_its_time():
     assert error.value.time == 0.0
 
 
-def test_wheel_torques_kept_result_answers_only_the_same_arguments():
-    """BaseModel.wheel_torques keeps its last result for the step's second ask (same t,
-    speeds, integral and twist command); another t, speed or integral gets the PI law afresh,
-    equal to WheelSpeedPI.torques on the commanded twist."""
+def test_wheel_torques_are_the_pi_law_on_the_commanded_twist():
+    """BaseModel.wheel_torques is WheelSpeedPI.torques on the path's commanded twist at t,
+    afresh at each call (another t, speed or integral: another torque)."""
     base = compile(load_scene("mobile_pick")).base
     reference = wheel_speeds(base.mecanum, base.command(0.5)[1])  # rad/s: small errors, below the limits
     speeds, integral = reference + [0.01, -0.02, 0.005, 0.03], np.array([0.1, 0.0, -0.2, 0.3])
     first = base.wheel_torques(0.5, speeds, integral)
-    assert base.wheel_torques(0.5, speeds.copy(), integral.copy()) is first
-    for t, s, i in ((0.6, speeds, integral), (0.5, speeds + 0.01, integral), (0.5, speeds, integral + 0.01)):
+    for t, s, i in ((0.5, speeds, integral), (0.6, speeds, integral), (0.5, speeds + 0.01, integral),
+                    (0.5, speeds, integral + 0.01)):
         got = base.wheel_torques(t, s, i)
         expected = base.pi.torques(base.command(t)[1], s, i)
-        assert got is not first and all(np.array_equal(a, b) for a, b in zip(got, expected))
-        # another speed or integral: another torque (kp 0.01 or 0.01 N m), not the kept one
-        assert t != 0.5 or not np.array_equal(got[0], first[0])
+        assert all(np.array_equal(a, b) for a, b in zip(got, expected))
+        # another speed or integral: another torque (kp 0.01 or 0.01 N m)
+        assert t != 0.5 or (s is speeds and i is integral) or not np.array_equal(got[0], first[0])
+
+
+def test_the_torque_hands_on_the_wheel_loops_integral_rate():
+    """The engine's torque(t, x) returns the wheel loop's integral rate from the same call
+    (the rhs and the constraint stepper take it instead of asking the base again): it is the
+    base's own rate at x, the torque is robot_torque's, and dx/dt with the rate handed on
+    equals dx/dt asking the base, to the bit, along the drive (mobile_pick never releases its
+    wheel loop)."""
+    model = compile(load_scene("mobile_pick"))
+    state = initial_state(model)
+    base, v, wheel_i = model.base, model.block("v"), model.block("wheel_i")
+    torque, rhs = engine.right_hand_side(model, state.data, state.reference)
+    rng = np.random.default_rng(3)
+    assert base.release == math.inf
+    for t in (0.0, 0.5, 1.3, 2.7):
+        x = state.x.copy()
+        x[v] += rng.normal(0.0, 0.1, v.stop - v.start)
+        x[wheel_i] = rng.normal(0.0, 0.2, wheel_i.stop - wheel_i.start)
+        tau, rate = torque(t, x)
+        expected = base.wheel_torques(t, x[v][base.wheels], x[wheel_i], state.reference.base_twist)
+        assert np.array_equal(rate, expected[1]) and np.array_equal(tau[base.wheels], expected[0])
+        assert np.array_equal(tau, robot_torque(model, state.reference, t, x, None))
+        assert np.any(rate != 0.0)  # the loop acts
+        asked = engine.derivative(model, state.data, x, tau, t, state.reference.base_twist)
+        assert np.array_equal(rhs(t, x), asked)

@@ -16,8 +16,10 @@ from dataclasses import dataclass, field
 from typing import Callable, Protocol, Sequence
 
 import numpy as np
+from numba import njit, types
 from scipy.optimize import brentq
 
+from youbot_dynamics.compiled import BORROWED, FLOAT, unchecked
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.errors import DivergenceError, StepBudgetError
 from youbot_dynamics.integrate.statistics import IntegratorStats
@@ -87,6 +89,30 @@ def state_names_or_default(state_names: Sequence[str] | None, size: int) -> tupl
     return names
 
 
+_ANY_VECTOR = types.Array(types.float64, 1, "A", readonly=True)
+
+
+@njit(types.boolean(_ANY_VECTOR, _ANY_VECTOR), **BORROWED)
+def _finite_within(x: np.ndarray, bounds: np.ndarray) -> bool:
+    """Whether every entry of x is finite and (with ``bounds``, one per entry; empty: none)
+    |x_i| <= bounds_i: the common case of :meth:`StateCheck.step` in one pass, which looks no
+    further when it holds."""
+    bounded = bounds.shape[0] > 0
+    if bounded and bounds.shape[0] != x.shape[0]:
+        return False  # numpy's comparison decides (and names the mismatch)
+    for i in range(x.shape[0]):
+        value = x[i]
+        if not value - value == 0.0 or (bounded and abs(value) > bounds[i]):  # inf - inf, NaN: NaN
+            return False
+    return True
+
+
+#: :func:`_finite_within` without numba's dispatch (float64 vectors: :meth:`StateCheck.step`).
+_finite_within_unchecked = unchecked(_finite_within)
+#: The bounds handed to :func:`_finite_within` without bounds (none read).
+_NO_BOUNDS = np.empty(0)
+
+
 class StateCheck:
     """Divergence checks: non-finite state and ``bounds`` after every step, ``monitor`` at
     output times. Each failure raises :class:`DivergenceError` naming the offending
@@ -98,6 +124,7 @@ class StateCheck:
         self.names = names
         self.bounds = None if bounds is None else np.broadcast_to(
             np.asarray(bounds, dtype=float), (len(names),))
+        self._bounds_vector = _NO_BOUNDS if self.bounds is None else self.bounds
         self.monitor = monitor
 
     def _fail(self, t: float, h: float, reason: str, mask: np.ndarray, x: np.ndarray) -> None:
@@ -106,7 +133,11 @@ class StateCheck:
                               {self.names[i]: float(x[i]) for i in indices})
 
     def step(self, t: float, x: np.ndarray, h: float) -> None:
-        """After a step of size h (s) reaching (t, x): non-finite values and bounds."""
+        """After a step of size h (s) reaching (t, x): non-finite values and bounds (a float64
+        state vector within them passes in one compiled call)."""
+        if type(x) is np.ndarray and x.dtype is FLOAT and x.ndim == 1 and \
+                _finite_within_unchecked(x, self._bounds_vector):
+            return
         if not math.isfinite(x.sum()):
             bad = ~np.isfinite(x)
             if bad.any():

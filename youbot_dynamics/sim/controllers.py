@@ -109,12 +109,21 @@ class GravityCompensatedPD:
 
     def __init__(self, robot: Robot, kp: np.ndarray, kd: np.ndarray) -> None:
         self.robot, self.data = robot, robot.model.createData()
-        self.kp, self.kd = np.asarray(kp), np.asarray(kd)
+        self.kp, self.kd = (np.array(np.broadcast_to(k, robot.nv), dtype=float) for k in (kp, kd))
         self.limit = np.asarray(robot.effort_limit)
 
     def torque(self, t: float, q: np.ndarray, v: np.ndarray, reference: Reference) -> np.ndarray:
-        q_d, v_d, _ = reference.at(t)
         gravity = gravity_torque(self.robot, self.data, q)
+        effort = self.limit if reference.effort_limit is None else reference.effort_limit
+        compiled = reference.compiled
+        if compiled is not None and _float_vector(q) and _float_vector(v) and _float_vector(effort):
+            # float64 q, v and limits and the trajectory's arrays: the law in one compiled call
+            n = self.kp.shape[0]
+            tau, motion = np.empty(n), np.empty((3, n))
+            _pd_torque_unchecked(compiled[0], compiled[1], float(t), q, v, gravity, self.kp, self.kd, self.limit,
+                                 effort, motion, tau)
+            return tau
+        q_d, v_d, _ = reference.at(t)
         limit = reference.limit(self.limit)
         return np.clip(gravity + self.kp * (q_d - q) + self.kd * (v_d - v), -limit, limit)
 
@@ -141,6 +150,20 @@ def clip_to_limits(limit: np.ndarray, tau: np.ndarray) -> None:
             tau[i] = -limit[i]
         if tau[i] > limit[i]:
             tau[i] = limit[i]
+
+
+@register_jitable
+def clip_to_lower_limits(urdf_limit: np.ndarray, effort_limit: np.ndarray, tau: np.ndarray) -> None:
+    """tau = clip(tau, -limit, limit) in place with limit = np.minimum(urdf_limit, effort_limit)
+    (N m, N; a NaN in either passes through as numpy's minimum passes it)."""
+    n = tau.shape[0]
+    if urdf_limit.shape[0] != n or effort_limit.shape[0] != n:
+        raise ValueError("controller: one effort limit per joint")
+    limit = np.empty(n)
+    for i in range(n):
+        urdf, effort = urdf_limit[i], effort_limit[i]
+        limit[i] = urdf if urdf != urdf else effort if effort != effort else urdf if urdf <= effort else effort
+    clip_to_limits(limit, tau)
 
 
 @njit(types.void(*(READ_VECTOR,) * 7, WRITTEN_VECTOR), cache=True)
@@ -171,19 +194,27 @@ def _feedforward_and_clip(v_d: np.ndarray, bristles: np.ndarray, table: np.ndarr
     (N m, N; a NaN in either passes through as numpy's minimum passes it), in place."""
     if with_friction:
         accumulate_friction_torque(v_d, bristles, table, 1.0, tau)
-    n = tau.shape[0]
-    if urdf_limit.shape[0] != n or effort_limit.shape[0] != n:
-        raise ValueError("computed torque: one effort limit per joint")
-    limit = np.empty(n)
-    for i in range(n):
-        urdf, effort = urdf_limit[i], effort_limit[i]
-        limit[i] = urdf if urdf != urdf else effort if effort != effort else urdf if urdf <= effort else effort
-    clip_to_limits(limit, tau)
+    clip_to_lower_limits(urdf_limit, effort_limit, tau)
+
+
+@njit(types.void(POINTS, TIMING, types.float64, *(READ_VECTOR,) * 7, types.Array(types.float64, 2, "C"),
+                 WRITTEN_VECTOR), cache=True)
+def _pd_torque(points: np.ndarray, timing: np.ndarray, t: float, q: np.ndarray, v: np.ndarray, gravity: np.ndarray,
+               kp: np.ndarray, kd: np.ndarray, urdf_limit: np.ndarray, effort_limit: np.ndarray, motion: np.ndarray,
+               tau: np.ndarray) -> None:
+    """:meth:`GravityCompensatedPD.torque` in one call: motion = (q_d, v_d, a_d) of the
+    trajectory at t (s), tau = g + Kp (q_d - q) + Kd (v_d - v) (:func:`commanded_acceleration`
+    with g in place of a_d: numpy's operations in its order), clipped to
+    np.minimum(urdf_limit, effort_limit) (N m, N)."""
+    desired_motion(points, timing, t, motion)
+    commanded_acceleration(q, v, motion[0], motion[1], gravity, kp, kd, tau)
+    clip_to_lower_limits(urdf_limit, effort_limit, tau)
 
 
 _commanded_acceleration_unchecked = unchecked(_commanded_acceleration)
 _tracking_acceleration_unchecked = unchecked(_tracking_acceleration)
 _feedforward_and_clip_unchecked = unchecked(_feedforward_and_clip)
+_pd_torque_unchecked = unchecked(_pd_torque)
 
 
 class ComputedTorque:

@@ -28,13 +28,13 @@ commanded effort) a stored energy that grows by more than ``integrator.energy_to
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
-import pinocchio as pin
 
 from youbot_dynamics.dynamics.mobile.ramp import TwistRamp
 from youbot_dynamics.dynamics.mobile.wheel_floor import TipOverError
@@ -47,6 +47,7 @@ from youbot_dynamics.integrate.integrators import (DivergenceError, IntegratorSt
 from youbot_dynamics.integrate.registry import integrator_kind
 from youbot_dynamics.model.lie import matrix_from_quaternion
 from youbot_dynamics.model.rotations import adaptive_angles
+from youbot_dynamics.sim.constraint_stepping import ConstraintStepping, TorqueAndRate
 from youbot_dynamics.sim.contact_events import MODE, ContactGuards
 from youbot_dynamics.sim.divergence import (Monitor, all_of, body_energy, energy_ledger_monitor,
                                             penetration_monitor)
@@ -96,22 +97,26 @@ def initial_state(model: SimModel, q: np.ndarray | None = None, v: np.ndarray | 
 def robot_torque(model: SimModel, reference, t: float, x: np.ndarray, command: np.ndarray | None) -> np.ndarray:
     """The robot's applied joint torque (N m) at (t, x): the command if given, else the
     scene's controller tracking ``reference``."""
-    if command is not None:
-        return command
+    return command if command is not None else controlled_torque(model, reference, t, x)[0]
+
+
+def controlled_torque(model: SimModel, reference, t: float, x: np.ndarray) -> TorqueAndRate:
+    """(joint torque (N m) of the scene's controller tracking ``reference`` at (t, x), a moving
+    base's PI integral rate dI/dt (N m/s) from the same wheel-loop call, or None)."""
     tau = model.control.controller.torque(t, x[model.block("q")], x[model.block("v")], reference)
     if model.base is None:
-        return tau
+        return tau, None
     base = model.base
     tau = np.array(tau, dtype=float)
-    tau[base.wheels] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[model.block("wheel_i")],
-                                          reference.base_twist)[0]
-    return tau
+    tau[base.wheels], rate = base.wheel_torques(t, x[model.block("v")][base.wheels], x[model.block("wheel_i")],
+                                                reference.base_twist)
+    return tau, rate
 
 
 def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float = 0.0,
-               twist: TwistRamp | None = None) -> np.ndarray:
-    """dx/dt at state x and time t (s) under robot joint torques tau (N m, N) and a moving
-    base's ``twist`` command (None: its path)."""
+               twist: TwistRamp | None = None, integral_rate: np.ndarray | None = None) -> np.ndarray:
+    """dx/dt at state x and time t (s) under robot joint torques tau (N m, N), a moving base's
+    ``twist`` command (None: its path) and PI ``integral_rate`` (N m/s; None: the base asked)."""
     if model.robot_alone:
         return model.robot_derivative(data, x, tau)
     motion = model.base_motion(t, twist)
@@ -133,7 +138,8 @@ def derivative(model: SimModel, data, x: np.ndarray, tau: np.ndarray, t: float =
         dx[model.block("base")] = base.pose_rate(x[model.block("base")], x[model.block("base_v")])
         integral = model.block("wheel_i")
         if integral.stop > integral.start:
-            dx[integral] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[integral], twist)[1]
+            dx[integral] = base.wheel_torques(t, x[model.block("v")][base.wheels], x[integral], twist)[1] \
+                if integral_rate is None else integral_rate
     return dx
 
 
@@ -163,158 +169,6 @@ class HeldTorque:
             self.value = self._ask(t, x)
             self.next = (math.floor(t / self.period + 1e-9) + 1) * self.period
         self.applied[t] = self.value
-
-
-# ---- the constraint stepper as a Stepper -------------------------------------------------------
-class ConstraintStepping:
-    """The constraint stepper behind ``drive()``: equal steps of at most ``dt`` that end on
-    each output time (a sliver of a step left over by round-off would turn the overlap
-    correction, depth / dt, into a huge impulse); joint friction applied explicitly. After
-    every step: a non-finite velocity or an overlap beyond ``deepest_allowed`` (m) is
-    divergence; a pair that starts carrying an impulse is a ``contact`` event. Its state at
-    each output time (and at the start) is the output itself: every body's chart folded into
-    its pose (:meth:`SimModel.recentred`), the plant configuration it was folded from kept
-    for the energy ledger (:meth:`output_configuration`)."""
-
-    def __init__(self, model: SimModel, state: SimState, torque: Callable[[float, np.ndarray], np.ndarray],
-                 deepest_allowed: float, record: bool = False) -> None:
-        self.model, self.data, self.torque, self.twist = model, state.data, torque, state.reference.base_twist
-        self.t, self.q, self.v = state.t, model.configuration(state.x), model.velocity(state.x).copy()
-        self.x = model.recentred(state.x, self.q) if model.body_names else state.x.copy()  # a copy either way
-        self._configuration = self.q if model.body_names else None
-        self.h, self.steps, self.iterations = 0.0, 0, 0
-        self.touching = state.touching
-        self.events: list[ContactEvent] = []
-        self.deepest, self.deepest_allowed = 0.0, deepest_allowed
-        self.t_previous, self.x_previous = self.t, self.x
-        #: with ``record``, per output time: the last step's (report, acceleration, h); the next step's robot torque
-        self.records, self.torques = ({}, {}) if record else (None, None)
-        # what every step reads, looked up once: where the plant's q and v go in x (packed
-        # before each controller call), the robot's joints in the plant's v, the base's wheels
-        root, nv = model.plant.root_nq, model.plant.nv
-        self._robot_q, self._q_block, self._v_block = slice(root, root + model.robot.nq), model.block("q"), \
-            model.velocity_block
-        self._bodies = (model.block("pose"), model.block("chart"), model.body_offset) if model.body_names else None
-        self._base_block, self._integral = model.block("base"), model.block("wheel_i")
-        self._joints, self._nv, self._moving = model.joint_velocities, nv, model.nv > 0
-        self._wheels = None if model.base is None else np.arange(nv)[self._joints][model.base.wheels]
-        self._zero_tangent, self._no_force = np.zeros(nv), np.zeros(nv)
-        self._no_force.setflags(write=False)
-        self._unforced = not self._moving and model.base is None
-
-    def _pack_robot(self) -> np.ndarray:
-        """``x`` with the stepper's robot q, base pose and plant v written in, in place (what
-        the controller reads before a step): :meth:`advance` steps its own copy of the state
-        (the previous one stays as ``x_previous``)."""
-        model, x = self.model, self.x
-        x[self._q_block] = self.q[self._robot_q]
-        if model.base is not None:
-            pose = self._base_block
-            x[pose] = model.base.unwrapped_pose(self.q[:self._robot_q.start], x[pose.stop - 1])
-        x[self._v_block] = self.v
-        return x
-
-    def _output_state(self) -> np.ndarray:
-        """``x`` packed whole at an output time: the free bodies' poses from the stepper's q,
-        their charts 0, then recentred (the plant configuration it was folded from kept)."""
-        x = self._pack_robot()
-        if self._bodies is None:
-            return x
-        pose, chart, offset = self._bodies
-        x[pose] = self.q[offset:]
-        x[chart] = 0.0
-        self._configuration = self._unfolded_configuration(x)
-        return self.model.recentred(x, self._configuration)
-
-    def _unfolded_configuration(self, x: np.ndarray) -> np.ndarray:
-        """:meth:`SimModel.configuration` of ``x`` as packed (the stepper's robot q and body
-        poses, charts 0). Without a moving base (whose root it rebuilds from x's yaw) that is
-        pin.integrate of the stepper's own q by a zero tangent: the same call on the same
-        numbers, without assembling them from x."""
-        if self.model.base is not None:
-            return self.model.configuration(x)
-        return pin.integrate(self.model.plant.model, self.q, self._zero_tangent)
-
-    def output_configuration(self, x: np.ndarray) -> np.ndarray:
-        """The plant configuration (nq) of output state ``x``, the stepper's state at its time
-        t: the one its free bodies' charts were folded from (:meth:`SimModel.configuration`
-        of the state before folding), so that the energy at an output is the same to the bit
-        as the unfolded state's."""
-        return self.model.configuration(x) if self._configuration is None else self._configuration
-
-    def _generalised_force(self, h: float, keep: bool = False) -> np.ndarray:
-        """The plant's applied generalised force (nv; N, N m) over the next step of h (s): the
-        robot's torque less its joint friction (explicit) and a dynamic base's floor forces;
-        the base's PI integral terms move on by explicit Euler. Nothing acts on a plant of
-        free bodies alone: the same zeros every step, read-only (a write into them raises).
-        ``keep``: the robot's torque kept in ``torques`` at the step's start time."""
-        if self._unforced:
-            return self._no_force
-        tau = np.zeros(self._nv)
-        if self._moving:
-            joints, friction = self._joints, self.model.friction
-            tau[joints] = self.torque(self.t, self._pack_robot())
-            if keep:
-                self.torques[self.t] = tau[joints].copy()
-            if friction is not None:
-                friction.add_torque(tau[joints], self.v[joints], None, -1.0)
-        base = self.model.base
-        if base is not None:  # dynamic (a kinematic base refuses the stepper)
-            model, integral = self.model, self._integral
-            try:
-                tau += base.floor_force(model.plant.model, self.data, self.q, self.v)
-            except TipOverError as error:
-                raise DivergenceError(self.t, model.integrator.method, h, f"the base tips over: {error}") from None
-            if integral.stop > integral.start:
-                self.x[integral] += h * base.wheel_torques(self.t, self.v[self._wheels], self.x[integral],
-                                                           self.twist)[1]
-        return tau
-
-    def _account(self, report, h: float) -> None:
-        """After a step of h (s) that reached t: its counters, the contact events and the
-        divergence checks (a non-finite velocity, an overlap beyond the limit)."""
-        self.steps += 1
-        self.iterations += report.iterations
-        if report.penetration > self.deepest:
-            self.deepest = report.penetration
-        if report.normal_impulse or self.touching:
-            touching = frozenset(name for name, impulse in report.normal_impulse.items() if impulse > 0)
-            if touching != self.touching:
-                self.events += [ContactEvent(self.t, name, "contact", report.normal_impulse[name])
-                                for name in sorted(touching - self.touching)]
-                self.touching = touching
-        if not math.isfinite(self.v.dot(self.v)):  # a NaN, an infinity, or |v| beyond 1e154
-            raise DivergenceError(self.t, self.model.integrator.method, h, "non-finite velocity")
-        if not report.penetration <= self.deepest_allowed:
-            raise DivergenceError(self.t, self.model.integrator.method, h, f"overlap {report.penetration:.3g} m "
-                                  f"beyond the penetration limit {self.deepest_allowed:.3g} m")
-
-    def advance(self, t_target: float) -> None:
-        stepper, data = self.model.stepper, self.data
-        count = max(1, math.ceil((t_target - self.t) / self.model.integrator.dt - 1e-9))
-        start, h = self.t, (t_target - self.t) / count
-        self.t_previous, self.x_previous, self.x = self.t, self.x, self.x.copy()
-        for i in range(1, count + 1):
-            tau = self._generalised_force(h, i == 1 and self.torques is not None)
-            v_before = self.v
-            self.q, self.v, report = stepper.step(data, self.q, self.v, tau, h)
-            self.t = t_target if i == count else start + i * h
-            self._account(report, h)
-        self.h = h
-        self.x = self._output_state()
-        if self.records is not None:
-            self.records[self.t] = (report, (self.v - v_before) / h, h)
-
-    def interpolate(self, t: float) -> np.ndarray:
-        share = (t - self.t_previous) / (self.t - self.t_previous)
-        return self.x_previous + share * (self.x - self.x_previous)
-
-    def finish(self, stats: IntegratorStats) -> None:
-        # one dynamics pass (Delassus operator and solve) per step; no Jacobian counter applies
-        stats.steps = stats.rhs_evals = self.steps
-        stats.nonlinear_iterations = self.iterations
-        stats.jac_evals = stats.nonlinear_convergence_failures = None
-        stats.rejected_steps = 0
 
 
 # ---- solving ---------------------------------------------------------------------------------
@@ -357,31 +211,37 @@ class _Outcome:
 
 
 def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None = None,
-                    held: HeldTorque | None = None) -> tuple[Callable, Callable]:
-    """(torque(t, x), rhs(t, x)): the robot's applied torque (N m) and dx/dt, under a held
-    ``command``, a Python controller's ``held`` torque or the scene's controller tracking
-    ``reference``; each chosen once here, so the integrators' calls take the shortest path
-    (for a robot alone: the controller and one ABA with friction; under computed torque the
-    two fused, :meth:`~youbot_dynamics.sim.model.SimModel.computed_torque_derivative`)."""
+                    held: HeldTorque | None = None) -> tuple[Callable[[float, np.ndarray], TorqueAndRate], Callable]:
+    """(torque(t, x), rhs(t, x)): the robot's applied torque (N m) with a moving base's PI integral
+    rate from the same call (:func:`controlled_torque`; None: the base asked) and dx/dt, under a
+    held ``command``, a Python controller's ``held`` torque or the scene's controller tracking
+    ``reference``; each chosen once here, so the integrators' calls take the shortest path (a robot
+    alone: the controller and one ABA with friction, fused under computed torque: SimModel's)."""
     if held is not None:
-        def torque(t: float, x: np.ndarray) -> np.ndarray:
+        def applied(t: float, x: np.ndarray) -> np.ndarray:
             return held.value
     elif command is not None:
-        def torque(t: float, x: np.ndarray) -> np.ndarray:
+        def applied(t: float, x: np.ndarray) -> np.ndarray:
             return command
     elif model.base is None:
         controller, q_block, v_block = model.control.controller, model.slices["q"], model.slices["v"]
 
-        def torque(t: float, x: np.ndarray) -> np.ndarray:
+        def applied(t: float, x: np.ndarray) -> np.ndarray:
             return controller.torque(t, x[q_block], x[v_block], reference)
     else:
-        def torque(t: float, x: np.ndarray) -> np.ndarray:
-            return robot_torque(model, reference, t, x, None)
+        def rhs(t: float, x: np.ndarray) -> np.ndarray:
+            tau, rate = controlled_torque(model, reference, t, x)
+            return derivative(model, data, x, tau, t, reference.base_twist, rate)
+        return functools.partial(controlled_torque, model, reference), rhs
+
+    def torque(t: float, x: np.ndarray) -> TorqueAndRate:
+        return applied(t, x), None
+
     if model.robot_alone:
         robot_derivative = model.robot_derivative
 
         def rhs(t: float, x: np.ndarray) -> np.ndarray:
-            return robot_derivative(data, x, torque(t, x))
+            return robot_derivative(data, x, applied(t, x))
 
         if held is None and command is None:
             rhs = model.computed_torque_derivative(data, reference, rhs) or rhs
@@ -390,7 +250,7 @@ def right_hand_side(model: SimModel, data, reference, command: np.ndarray | None
             rhs.compiled_steps = loop
     else:
         def rhs(t: float, x: np.ndarray) -> np.ndarray:
-            return derivative(model, data, x, torque(t, x), t, reference.base_twist)
+            return derivative(model, data, x, applied(t, x), t, reference.base_twist)
     return torque, rhs
 
 

@@ -30,7 +30,7 @@ torques come from the PI wheel-speed loop (:class:`~youbot_dynamics.dynamics.mob
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -117,8 +117,6 @@ class BaseModel:
     release: float
     gravity: float
     a_max: np.ndarray
-    #: (twist, (t, speeds, integral), result) of the last :meth:`wheel_torques` call
-    _last_wheel_torques: list = field(default_factory=list, init=False, repr=False)
 
     @classmethod
     def compile(cls, spec: BaseSpec, robot: Robot, plant_nv: int, gravity: np.ndarray) -> BaseModel:
@@ -213,18 +211,11 @@ class BaseModel:
                       twist: TwistRamp | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(torque N m, d integral/dt N m/s) of the PI loop per wheel (``mecanum.names``
         order) toward the commanded twist at t (s) (``twist`` if given, else the path's);
-        zero once released or without a loop. The last call's result is kept: a step asks
-        twice with the same arguments (the torque, then the integral's rate); callers do not
-        write into the arrays returned."""
+        zero once released or without a loop (a step asks once: the engine hands the rate on
+        with the torque, :func:`~youbot_dynamics.sim.engine.controlled_torque`)."""
         if self.pi is None or t >= self.release:
             return np.zeros(len(self.wheels)), np.zeros(len(self.wheels))
-        key = (t, tuple(speeds.tolist()), tuple(integral.tolist()))
-        last = self._last_wheel_torques
-        if last and last[0] is twist and last[1] == key:
-            return last[2]
-        result = self.pi.torques(self.command(t, twist)[1], speeds, integral)
-        last[:] = twist, key, result
-        return result
+        return self.pi.torques(self.command(t, twist)[1], speeds, integral)
 
     def prescribed_accelerations(self, plant: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray,
                                  generalised: np.ndarray, imposed: np.ndarray) -> np.ndarray:

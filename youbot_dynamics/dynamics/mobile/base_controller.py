@@ -26,6 +26,7 @@ from typing import Sequence
 import numpy as np
 from numba import njit, types
 
+from youbot_dynamics.compiled import FLOAT, unchecked
 from youbot_dynamics.dynamics.mobile.mecanum import WHEEL_JOINTS, MecanumBase, wheel_speeds
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
@@ -51,6 +52,20 @@ def pi_law(reference: np.ndarray, speeds: np.ndarray, integral: np.ndarray, kp: 
         low = raw if raw >= -limit[i] or raw != raw else -limit[i]
         tau[i] = low if low <= limit[i] or low != low else limit[i]
         rate[i] = ki * error + (tau[i] - raw) / tracking_time
+
+
+#: :func:`pi_law` without numba's type dispatch (float64 vectors: :func:`_float_vector`).
+_pi_law_unchecked = unchecked(pi_law)
+
+
+def _float_vector(values: np.ndarray) -> np.ndarray:
+    """``values`` as a float64 vector (any strides: the law's arrays are of layout "A"); an
+    array of another shape is refused."""
+    if not (type(values) is np.ndarray and values.dtype is FLOAT):
+        values = np.asarray(values, dtype=float)
+    if values.ndim != 1:
+        raise ValueError(f"wheel speed PI: speeds and integral terms are vectors, got shape {values.shape}")
+    return values
 
 
 @dataclass(frozen=True)
@@ -86,8 +101,9 @@ class WheelSpeedPI:
         measured wheel speeds (rad/s) and the integral terms I (N m)."""
         n = len(self.base.names)
         tau, rate = np.empty(n), np.empty(n)
-        pi_law(wheel_speeds(self.base, twist_command), np.asarray(speeds, dtype=float),
-               np.asarray(integral, dtype=float), self.kp, self.ki, self.torque_limit, self.tracking_time, tau, rate)
+        speeds, integral = _float_vector(speeds), _float_vector(integral)
+        _pi_law_unchecked(wheel_speeds(self.base, twist_command), speeds, integral, self.kp, self.ki,
+                          self.torque_limit, self.tracking_time, tau, rate)  # the sizes checked in the law
         return tau, rate
 
     def step(self, twist_command: np.ndarray, speeds: np.ndarray, integral: np.ndarray,

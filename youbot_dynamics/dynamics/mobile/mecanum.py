@@ -45,6 +45,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from youbot_dynamics.compiled import FLOAT
 from youbot_dynamics.dynamics.mobile.support import SupportRule
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.model.robot import Robot
@@ -206,7 +207,10 @@ def mecanum_base_from_robot(robot: Robot, names: Sequence[str] = WHEEL_JOINTS,
 
 
 def _twist(twist: np.ndarray) -> np.ndarray:
-    """(vx, vy, wz) as a float array of 3, or a UserInputError."""
+    """(vx, vy, wz) as a float array of 3, or a UserInputError (a float64 vector of 3 as it is:
+    the step's twists, without numpy's conversion calls)."""
+    if type(twist) is np.ndarray and twist.dtype is FLOAT and twist.shape == (3,):
+        return twist
     v = np.asarray(twist, dtype=float).ravel()
     if v.shape != (3,):
         raise UserInputError(f"base twist: expected 3 values (vx m/s, vy m/s, wz rad/s), got {v.size}")
