@@ -273,3 +273,16 @@ def test_the_torque_hands_on_the_wheel_loops_integral_rate():
         assert np.any(rate != 0.0)  # the loop acts
         asked = engine.derivative(model, state.data, x, tau, t, state.reference.base_twist)
         assert np.array_equal(rhs(t, x), asked)
+
+
+def test_the_floor_force_refuses_a_velocity_of_another_size():
+    """The roller kernel reads v at the base's and the wheels' dofs without checks: a v of
+    another size than the plant's nv is a ValueError naming it, never forces made up from
+    memory past the array (a 5-vector once gave different forces on two calls)."""
+    model = compile(load_scene("mobile_pick"))
+    plant, data = model.plant.model, model.plant.model.createData()
+    q = pin.neutral(plant)
+    assert model.base.floor_force(plant, data, q, np.zeros(plant.nv)).shape == (plant.nv,)
+    for size in (3, 5, plant.nv + 1):
+        with pytest.raises(ValueError, match=rf"v needs the plant's nv = {plant.nv} velocities, got shape \({size},\)"):
+            model.base.floor_force(plant, data, q, np.zeros(size))

@@ -99,7 +99,7 @@ def test_after_a_run_the_simulator_continues_from_its_end():
 @pytest.mark.parametrize("held", [False, True])
 def test_output_torques_are_the_controllers_at_the_outputs(monkeypatch: pytest.MonkeyPatch, held: bool) -> None:
     """A step-wise advance with sensors takes each output's applied torque from the step that
-    starts there (ConstraintStepping.torques), robot_torque called again only for the call's
+    starts there (ConstraintStepping.torques), the controller asked again only for the call's
     last output: every snapshot's torque is robot_torque at its state, to the bit, under the
     scene's controller (mobile_pick: the arm's trajectory and the base's wheel PI, which
     change from output to output) and under a held command."""
@@ -107,14 +107,15 @@ def test_output_torques_are_the_controllers_at_the_outputs(monkeypatch: pytest.M
     model, state = simulator.model, simulator.state
     command = model.clipped(np.linspace(-0.5, 0.5, model.robot.nv)) if held else None
     calls = []
-    direct = engine.robot_torque
-    monkeypatch.setattr(engine, "robot_torque", lambda *arguments: calls.append(arguments[2]) or direct(*arguments))
+    controlled = engine.controlled_torque
+    monkeypatch.setattr(engine, "controlled_torque",
+                        lambda *arguments: calls.append(arguments[2]) or controlled(*arguments))
     for _ in range(3):
-        snapshots = engine.advance(model, state, state.t + 2e-3 * np.arange(1, 11), command, sensors=True)
-        assert len(calls) == (0 if held else 20) + 1     # each of the 20 steps of 1 ms, the last output
         calls.clear()
+        snapshots = engine.advance(model, state, state.t + 2e-3 * np.arange(1, 11), command, sensors=True)
+        assert len(calls) == (0 if held else 20 + 1)     # each of the 20 steps of 1 ms, the last output
         for snapshot in snapshots:
-            expected = direct(model, state.reference, snapshot.t, snapshot.kinematics[1], command)
+            expected = engine.robot_torque(model, state.reference, snapshot.t, snapshot.kinematics[1], command)
             assert np.array_equal(snapshot.tau, expected)
     if not held:
         assert not np.array_equal(snapshots[0].tau, snapshots[1].tau)   # a torque one output late would show

@@ -147,7 +147,7 @@ def _contact_placements(normal: np.ndarray, point1: np.ndarray, point2: np.ndarr
 # so the result is bit for bit that of the dense sums (for a finite M^-1), at a cost that
 # grows with the dofs a contact touches rather than with the whole model's. And M^-1 is
 # zero between two subtrees of the universe (two robots, a robot and a free body:
-# computeMinverse writes nothing there, the +0 of a new Data stays), so an entry of M^-1 J^T
+# computeMinverse writes an exact +0 there, whatever the Data held), so an entry of M^-1 J^T
 # or J M^-1 J^T between two contact components (trees joined by the rows that touch them,
 # :func:`_components`) is a sum of +-0 terms, +0: written as such without its sum (N robots
 # with a contact each: linear in N, not quadratic).

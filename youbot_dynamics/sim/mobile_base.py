@@ -199,8 +199,8 @@ class BaseModel:
             return generalised
         mecanum = self.mecanum
         v = np.asarray(v, dtype=float)
-        if v.ndim != 1:
-            raise ValueError(f"floor force: v must be a vector, got shape {v.shape}")
+        if v.shape != (plant.nv,):      # the kernel reads v at the base's and wheels' dofs unchecked
+            raise ValueError(f"floor force: v needs the plant's nv = {plant.nv} velocities, got shape {v.shape}")
         # the loads, hub velocities (numpy's product) and the base's tables are float64 too
         _roller_floor_force_unchecked(v, self.wheel_loads(plant, data, q), mecanum.hub_velocities(v[:3]),
                                       mecanum.positions, mecanum.drive_directions, mecanum.across, mecanum.radius,
