@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from youbot_dynamics.integrate.drive import StateCheck, _finite_within
+from youbot_dynamics.integrate.drive import StateCheck, finite_within
 from youbot_dynamics.integrate.errors import DivergenceError
 
 NAMES = tuple(f"x{i}" for i in range(6))
@@ -24,7 +24,7 @@ def test_compiled_pass_agrees_with_numpy():
         x[rng.integers(6)] = specials[rng.integers(len(specials))]
         for b in (bounds, None):
             expected = numpy_passes(x, b)
-            assert _finite_within(x, np.empty(0) if b is None else b) == expected
+            assert finite_within(x, np.empty(0) if b is None else b) == expected
             passed, failed = passed + expected, failed + (not expected)
     assert passed > 1000 and failed > 1000  # both outcomes exercised
 

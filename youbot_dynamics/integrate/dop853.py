@@ -105,15 +105,6 @@ def step_factor(norm: float, after_rejection: bool) -> float:
 
 
 @njit(cache=True)
-def finite_within(x: np.ndarray, bounds: np.ndarray) -> bool:
-    """Whether every x_i is finite and |x_i| <= bounds_i (bounds may be inf)."""
-    for i in range(x.shape[0]):
-        if not (math.isfinite(x[i]) and abs(x[i]) <= bounds[i]):
-            return False
-    return True
-
-
-@njit(cache=True)
 def minimum_step(t: float) -> float:
     """The smallest step (s) at time t (s): 10 ulp of t."""
     return 10.0 * abs(np.nextafter(t, np.inf) - t)
@@ -149,7 +140,8 @@ def dense_state(F: np.ndarray, x_old: np.ndarray, theta: float, out: np.ndarray)
 
 
 def rms(values: np.ndarray) -> float:
-    """Root mean square of a vector."""
+    """Root mean square of a vector in scipy's form (its ``norm``: |values| / sqrt(n)), so the
+    initial step is scipy's to the bit; radau_dae's ``rms`` is Hairer's mean of squares."""
     return float(np.linalg.norm(values)) / math.sqrt(values.size)
 
 

@@ -93,10 +93,11 @@ _ANY_VECTOR = types.Array(types.float64, 1, "A", readonly=True)
 
 
 @njit(types.boolean(_ANY_VECTOR, _ANY_VECTOR), **BORROWED)
-def _finite_within(x: np.ndarray, bounds: np.ndarray) -> bool:
+def finite_within(x: np.ndarray, bounds: np.ndarray) -> bool:
     """Whether every entry of x is finite and (with ``bounds``, one per entry; empty: none)
-    |x_i| <= bounds_i: the common case of :meth:`StateCheck.step` in one pass, which looks no
-    further when it holds."""
+    |x_i| <= bounds_i (a NaN bound holds nothing back, as numpy's ``|x| > bounds`` reads it):
+    the common case of :meth:`StateCheck.step` in one pass, which looks no further when it
+    holds, and the compiled loops' check after each step (sim/compiled_steps.py)."""
     bounded = bounds.shape[0] > 0
     if bounded and bounds.shape[0] != x.shape[0]:
         return False  # numpy's comparison decides (and names the mismatch)
@@ -107,9 +108,9 @@ def _finite_within(x: np.ndarray, bounds: np.ndarray) -> bool:
     return True
 
 
-#: :func:`_finite_within` without numba's dispatch (float64 vectors: :meth:`StateCheck.step`).
-_finite_within_unchecked = unchecked(_finite_within)
-#: The bounds handed to :func:`_finite_within` without bounds (none read).
+#: :func:`finite_within` without numba's dispatch (float64 vectors: :meth:`StateCheck.step`).
+_finite_within_unchecked = unchecked(finite_within)
+#: The bounds handed to :func:`finite_within` without bounds (none read).
 _NO_BOUNDS = np.empty(0)
 
 

@@ -30,8 +30,9 @@ from youbot_dynamics.dynamics.compiled_tree import aba, work_for
 from youbot_dynamics.dynamics.friction import left_torque_and_rates
 from youbot_dynamics.errors import UserInputError
 from youbot_dynamics.integrate.dop853 import (BAD_STATE, BELOW_MIN_STEP, COLLAPSED, NON_FINITE, REACHED, STAGES,
-                                              STAGES_DENSE, dense_coefficients, error_norm, finite_within,
-                                              minimum_step, stage_state, step_factor)
+                                              STAGES_DENSE, dense_coefficients, error_norm, minimum_step, stage_state,
+                                              step_factor)
+from youbot_dynamics.integrate.drive import finite_within
 
 METHOD_CODES = {"euler": 0, "symplectic_euler": 1, "rk4": 2}
 
